@@ -1,0 +1,658 @@
+//! Biovision BVH reader and writer.
+//!
+//! Reads any rotation channel order, joints with 0, 3 or 6 channels, `End Site`s, CRLF line ends
+//! and frames split over several lines. Writes tab-indented files with 6 decimals (error below
+//! 5e-7 of a unit), through a temporary file renamed into place.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+
+use crate::motion::Motion;
+use crate::skeleton::{Channel, Joint, Skeleton};
+
+/// What went wrong while reading or writing a BVH file.
+#[derive(Debug, thiserror::Error)]
+pub enum BvhErrorKind {
+    /// The file ended where more was expected.
+    #[error("unexpected end of file: expected {expected}")]
+    UnexpectedEof {
+        /// What was expected.
+        expected: String,
+    },
+    /// A token other than the expected one.
+    #[error("expected {expected}, found `{found}`")]
+    Unexpected {
+        /// What was expected.
+        expected: String,
+        /// What was found.
+        found: String,
+    },
+    /// A channel name that is not one of the six BVH channels.
+    #[error("unknown channel `{0}`")]
+    UnknownChannel(String),
+    /// A `CHANNELS n` line whose count is not 0..=6 or does not match the names listed.
+    #[error("CHANNELS declares {declared} channels but lists {listed}")]
+    ChannelCount {
+        /// The declared count.
+        declared: String,
+        /// The number of channel names on the line.
+        listed: usize,
+    },
+    /// The same channel appears twice on one joint.
+    #[error("channel {0} listed twice")]
+    DuplicateChannel(String),
+    /// A value that does not parse as a number.
+    #[error("not a number: `{0}`")]
+    NotANumber(String),
+    /// NaN or infinity.
+    #[error("non-finite value `{0}`")]
+    NonFinite(String),
+    /// A motion line with the wrong number of values.
+    #[error("frame {frame}: expected {expected} values, found {found}")]
+    FrameLength {
+        /// 0-based frame index.
+        frame: usize,
+        /// Channels per frame.
+        expected: usize,
+        /// Values on the line.
+        found: usize,
+    },
+    /// Fewer frames than the `Frames:` line declares.
+    #[error("too few frames: `Frames:` declares {declared}, file has {found}")]
+    TooFewFrames {
+        /// Declared count.
+        declared: usize,
+        /// Frames present.
+        found: usize,
+    },
+    /// More frames than declared.
+    #[error("too many frames: `Frames:` declares {declared}")]
+    TooManyFrames {
+        /// Declared count.
+        declared: usize,
+    },
+    /// `Frames: 0` (or a hierarchy without channels): there is no motion to read.
+    #[error("the file has no frames (or no channels)")]
+    NoFrames,
+    /// A frame time that is not a positive finite number.
+    #[error("frame time must be positive and finite, found {0}")]
+    BadFrameTime(f64),
+    /// A second `ROOT` (multi-root files are not supported).
+    #[error("a second ROOT `{0}` (only one hierarchy per file is supported)")]
+    SecondRoot(String),
+    /// Two `End Site`s under one joint.
+    #[error("joint `{0}` has more than one End Site")]
+    SecondEndSite(String),
+    /// The bytes are not UTF-8 text.
+    #[error("file is not UTF-8 text")]
+    NotUtf8,
+    /// Writing: a NaN or infinite value in the motion.
+    #[error("cannot write non-finite value at frame {frame}, channel {channel}")]
+    WriteNonFinite {
+        /// 0-based frame index.
+        frame: usize,
+        /// 0-based channel index.
+        channel: usize,
+    },
+    /// Writing: the frame buffer length is not a multiple of the channel count, or a joint is
+    /// invalid.
+    #[error("motion shape: {0}")]
+    BadMotion(String),
+}
+
+/// A BVH read or write error with its place: the file (when known) and the 1-based line number
+/// (0 when the error has no line, such as an I/O failure).
+#[derive(Debug, thiserror::Error)]
+pub enum BvhError {
+    /// An error in the file's content.
+    #[error("{}:{line}: {kind}", path.as_deref().map_or("<bvh>".into(), |p| p.display().to_string()))]
+    Syntax {
+        /// The file, when known.
+        path: Option<PathBuf>,
+        /// 1-based line number.
+        line: usize,
+        /// What went wrong.
+        kind: BvhErrorKind,
+    },
+    /// Reading or writing the file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+}
+
+impl BvhError {
+    /// 1-based line number of a content error (`None` for I/O errors and motion-wide write errors).
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            BvhError::Syntax { line, .. } if *line > 0 => Some(*line),
+            _ => None,
+        }
+    }
+
+    /// The file, when known.
+    pub fn path(&self) -> Option<&Path> {
+        match self {
+            BvhError::Syntax { path, .. } => path.as_deref(),
+            BvhError::Io { path, .. } => Some(path),
+        }
+    }
+
+    /// The content error kind (`None` for I/O errors).
+    pub fn kind(&self) -> Option<&BvhErrorKind> {
+        match self {
+            BvhError::Syntax { kind, .. } => Some(kind),
+            BvhError::Io { .. } => None,
+        }
+    }
+
+    fn with_path(self, p: &Path) -> BvhError {
+        match self {
+            BvhError::Syntax { line, kind, .. } => BvhError::Syntax {
+                path: Some(p.to_path_buf()),
+                line,
+                kind,
+            },
+            e => e,
+        }
+    }
+}
+
+fn err(line: usize, kind: BvhErrorKind) -> BvhError {
+    BvhError::Syntax {
+        path: None,
+        line,
+        kind,
+    }
+}
+
+/// Tokens of the hierarchy part, each with its 1-based line.
+struct Tokens<'a> {
+    toks: Vec<(usize, &'a str)>,
+    pos: usize,
+    last_line: usize,
+}
+
+impl<'a> Tokens<'a> {
+    fn next(&mut self, expected: &str) -> Result<(usize, &'a str), BvhError> {
+        match self.toks.get(self.pos) {
+            Some(&t) => {
+                self.pos += 1;
+                Ok(t)
+            }
+            None => Err(err(
+                self.last_line,
+                BvhErrorKind::UnexpectedEof {
+                    expected: expected.to_string(),
+                },
+            )),
+        }
+    }
+
+    fn peek(&self) -> Option<(usize, &'a str)> {
+        self.toks.get(self.pos).copied()
+    }
+
+    fn expect(&mut self, word: &str) -> Result<usize, BvhError> {
+        let (line, t) = self.next(&format!("`{word}`"))?;
+        if t.eq_ignore_ascii_case(word) {
+            Ok(line)
+        } else {
+            Err(err(
+                line,
+                BvhErrorKind::Unexpected {
+                    expected: format!("`{word}`"),
+                    found: t.into(),
+                },
+            ))
+        }
+    }
+
+    fn number(&mut self, what: &str) -> Result<f64, BvhError> {
+        let (line, t) = self.next(what)?;
+        parse_f64(t).map_err(|k| err(line, k))
+    }
+}
+
+fn parse_f64(t: &str) -> Result<f64, BvhErrorKind> {
+    match t.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(BvhErrorKind::NonFinite(t.into())),
+        Err(_) => Err(BvhErrorKind::NotANumber(t.into())),
+    }
+}
+
+/// Parses BVH text. Errors carry the 1-based line number (no path; see [`read_bvh`]).
+///
+/// Position channels replace the matching OFFSET component (see
+/// [`Skeleton::local_transform`]); Euler values stay in degrees.
+pub fn parse_bvh(text: &str) -> Result<Motion, BvhError> {
+    // Split at the MOTION keyword: hierarchy tokens before, numeric lines after.
+    let mut toks = Vec::new();
+    let mut lines = text.lines().enumerate();
+    let mut motion_line = None;
+    let mut last_line = 1;
+    'outer: for (i, line) in lines.by_ref() {
+        last_line = i + 1;
+        for t in line.split_ascii_whitespace() {
+            if t.eq_ignore_ascii_case("MOTION") {
+                motion_line = Some(i + 1);
+                break 'outer;
+            }
+            toks.push((i + 1, t));
+        }
+    }
+    let mut tk = Tokens {
+        toks,
+        pos: 0,
+        last_line,
+    };
+    let skeleton = parse_hierarchy(&mut tk)?;
+    if let Some((line, t)) = tk.peek() {
+        return Err(err(
+            line,
+            BvhErrorKind::Unexpected {
+                expected: "`MOTION`".into(),
+                found: t.into(),
+            },
+        ));
+    }
+    let Some(motion_line) = motion_line else {
+        return Err(err(
+            last_line,
+            BvhErrorKind::UnexpectedEof {
+                expected: "`MOTION`".into(),
+            },
+        ));
+    };
+    let nch = skeleton.channel_count();
+
+    // Header lines: "Frames: n" and "Frame Time: t", tokens possibly split over lines.
+    let mut header: Vec<(usize, &str)> = Vec::with_capacity(5);
+    let mut header_end_line = motion_line;
+    for (i, line) in lines.by_ref() {
+        header_end_line = i + 1;
+        for t in line.split_ascii_whitespace() {
+            header.push((i + 1, t));
+        }
+        if header.len() >= 5 {
+            break;
+        }
+    }
+    let mut ht = Tokens {
+        toks: header,
+        pos: 0,
+        last_line: header_end_line,
+    };
+    let frames_line = ht.expect("Frames:")?;
+    let (fl, ft) = ht.next("frame count")?;
+    let declared: usize = ft
+        .parse()
+        .map_err(|_| err(fl, BvhErrorKind::NotANumber(ft.into())))?;
+    ht.expect("Frame")?;
+    ht.expect("Time:")?;
+    let (tl, tt) = ht.next("frame time")?;
+    let frame_time = parse_f64(tt).map_err(|k| err(tl, k))?;
+    if frame_time <= 0.0 {
+        return Err(err(tl, BvhErrorKind::BadFrameTime(frame_time)));
+    }
+    if let Some((line, t)) = ht.peek() {
+        return Err(err(
+            line,
+            BvhErrorKind::Unexpected {
+                expected: "a new line".into(),
+                found: t.into(),
+            },
+        ));
+    }
+    if declared == 0 || nch == 0 {
+        return Err(err(frames_line, BvhErrorKind::NoFrames));
+    }
+
+    let mut frames = Vec::with_capacity(declared.saturating_mul(nch).min(1 << 28));
+    let mut frame = 0usize;
+    let mut end_line = header_end_line;
+    for (i, line) in lines {
+        end_line = i + 1;
+        let mut it = line.split_ascii_whitespace().peekable();
+        if it.peek().is_none() {
+            continue;
+        }
+        if frame == declared {
+            return Err(err(i + 1, BvhErrorKind::TooManyFrames { declared }));
+        }
+        let before = frames.len();
+        for t in it {
+            frames.push(parse_f64(t).map_err(|k| err(i + 1, k))?);
+        }
+        let found = frames.len() - before;
+        if found != nch {
+            return Err(err(
+                i + 1,
+                BvhErrorKind::FrameLength {
+                    frame,
+                    expected: nch,
+                    found,
+                },
+            ));
+        }
+        frame += 1;
+    }
+    if frame < declared {
+        return Err(err(
+            end_line,
+            BvhErrorKind::TooFewFrames {
+                declared,
+                found: frame,
+            },
+        ));
+    }
+    Ok(Motion {
+        skeleton,
+        frame_time,
+        frames,
+    })
+}
+
+fn parse_hierarchy(tk: &mut Tokens<'_>) -> Result<Skeleton, BvhError> {
+    tk.expect("HIERARCHY")?;
+    let (line, t) = tk.next("`ROOT`")?;
+    if !t.eq_ignore_ascii_case("ROOT") {
+        return Err(err(
+            line,
+            BvhErrorKind::Unexpected {
+                expected: "`ROOT`".into(),
+                found: t.into(),
+            },
+        ));
+    }
+    let mut joints = Vec::new();
+    parse_joint(tk, &mut joints, None)?;
+    if let Some((line, t)) = tk.peek() {
+        if t.eq_ignore_ascii_case("ROOT") {
+            let name = tk.toks.get(tk.pos + 1).map_or("", |x| x.1);
+            return Err(err(line, BvhErrorKind::SecondRoot(name.into())));
+        }
+    }
+    Ok(Skeleton { joints })
+}
+
+/// Parses `name { OFFSET .. CHANNELS .. (JOINT ..)* (End Site {..})? }` after ROOT/JOINT.
+fn parse_joint(
+    tk: &mut Tokens<'_>,
+    joints: &mut Vec<Joint>,
+    parent: Option<usize>,
+) -> Result<(), BvhError> {
+    let (_, name) = tk.next("joint name")?;
+    let idx = joints.len();
+    tk.expect("{")?;
+    tk.expect("OFFSET")?;
+    let offset = DVec3::new(
+        tk.number("offset x")?,
+        tk.number("offset y")?,
+        tk.number("offset z")?,
+    );
+    let mut channels = Vec::new();
+    if tk
+        .peek()
+        .is_some_and(|t| t.1.eq_ignore_ascii_case("CHANNELS"))
+    {
+        let (cline, _) = tk.next("CHANNELS")?;
+        let (nline, nt) = tk.next("channel count")?;
+        // Names on the CHANNELS line itself: count them to report a mismatch precisely.
+        let listed = tk.toks[tk.pos..]
+            .iter()
+            .take_while(|t| t.0 == cline)
+            .count();
+        let n: usize = match nt.parse() {
+            Ok(n) if n <= 6 && nline == cline => n,
+            _ => {
+                return Err(err(
+                    nline,
+                    BvhErrorKind::ChannelCount {
+                        declared: nt.into(),
+                        listed,
+                    },
+                ));
+            }
+        };
+        if listed != n {
+            return Err(err(
+                cline,
+                BvhErrorKind::ChannelCount {
+                    declared: nt.into(),
+                    listed,
+                },
+            ));
+        }
+        for _ in 0..n {
+            let (l, c) = tk.next("channel name")?;
+            let ch =
+                Channel::parse(c).ok_or_else(|| err(l, BvhErrorKind::UnknownChannel(c.into())))?;
+            if channels.contains(&ch) {
+                return Err(err(l, BvhErrorKind::DuplicateChannel(c.into())));
+            }
+            channels.push(ch);
+        }
+    }
+    joints.push(Joint {
+        name: name.to_string(),
+        parent,
+        offset,
+        channels,
+        end_site: None,
+    });
+    loop {
+        let (line, t) = tk.next("`JOINT`, `End Site` or `}`")?;
+        if t == "}" {
+            return Ok(());
+        } else if t.eq_ignore_ascii_case("JOINT") {
+            parse_joint(tk, joints, Some(idx))?;
+        } else if t.eq_ignore_ascii_case("End") {
+            tk.expect("Site")?;
+            tk.expect("{")?;
+            tk.expect("OFFSET")?;
+            let e = DVec3::new(
+                tk.number("offset x")?,
+                tk.number("offset y")?,
+                tk.number("offset z")?,
+            );
+            tk.expect("}")?;
+            if joints[idx].end_site.is_some() {
+                return Err(err(
+                    line,
+                    BvhErrorKind::SecondEndSite(joints[idx].name.clone()),
+                ));
+            }
+            joints[idx].end_site = Some(e);
+        } else {
+            return Err(err(
+                line,
+                BvhErrorKind::Unexpected {
+                    expected: "`JOINT`, `End Site` or `}`".into(),
+                    found: t.into(),
+                },
+            ));
+        }
+    }
+}
+
+/// Reads and parses a BVH file; errors name the file and the line.
+pub fn read_bvh(path: impl AsRef<Path>) -> Result<Motion, BvhError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| BvhError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        let line = 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        BvhError::Syntax {
+            path: Some(path.to_path_buf()),
+            line,
+            kind: BvhErrorKind::NotUtf8,
+        }
+    })?;
+    parse_bvh(text).map_err(|e| e.with_path(path))
+}
+
+/// Formats a motion as BVH text (tab indentation, 6 decimals, one frame per line).
+///
+/// Does not check values; [`write_bvh`] refuses non-finite ones.
+pub fn to_bvh_string(motion: &Motion) -> String {
+    let sk = &motion.skeleton;
+    let nf = motion.frame_count();
+    let nch = sk.channel_count();
+    let mut s = String::with_capacity(1024 + nf * nch * 12);
+    s.push_str("HIERARCHY\n");
+    // Depth-first emission following the parent links (joints are stored depth-first, but a
+    // hand-built skeleton may list siblings' subtrees interleaved, so walk children explicitly).
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); sk.joints.len()];
+    for (i, j) in sk.joints.iter().enumerate() {
+        if let Some(p) = j.parent {
+            if p < i {
+                children[p].push(i);
+            }
+        }
+    }
+    if !sk.joints.is_empty() {
+        write_joint(&mut s, sk, &children, 0, 0);
+    }
+    let _ = write!(
+        s,
+        "MOTION\nFrames: {nf}\nFrame Time: {:.7}\n",
+        motion.frame_time
+    );
+    for f in 0..nf {
+        let fr = motion.frame(f);
+        for (k, v) in fr.iter().enumerate() {
+            if k > 0 {
+                s.push(' ');
+            }
+            write_num(&mut s, *v);
+        }
+        s.push('\n');
+    }
+    s
+}
+
+fn write_num(s: &mut String, v: f64) {
+    // Avoid "-0.000000" noise for values that round to zero.
+    if v.abs() < 5e-7 {
+        s.push_str("0.000000");
+    } else {
+        let _ = write!(s, "{v:.6}");
+    }
+}
+
+fn write_joint(s: &mut String, sk: &Skeleton, children: &[Vec<usize>], j: usize, depth: usize) {
+    let joint = &sk.joints[j];
+    let ind = "\t".repeat(depth);
+    let kw = if depth == 0 { "ROOT" } else { "JOINT" };
+    let _ = writeln!(s, "{ind}{kw} {}", joint.name);
+    let _ = writeln!(s, "{ind}{{");
+    let o = joint.offset;
+    s.push_str(&ind);
+    s.push_str("\tOFFSET ");
+    write_vec(s, o);
+    s.push('\n');
+    if !joint.channels.is_empty() {
+        let _ = write!(s, "{ind}\tCHANNELS {}", joint.channels.len());
+        for c in &joint.channels {
+            s.push(' ');
+            s.push_str(c.name());
+        }
+        s.push('\n');
+    }
+    for &c in &children[j] {
+        write_joint(s, sk, children, c, depth + 1);
+    }
+    if let Some(e) = joint.end_site {
+        let _ = writeln!(s, "{ind}\tEnd Site\n{ind}\t{{");
+        s.push_str(&ind);
+        s.push_str("\t\tOFFSET ");
+        write_vec(s, e);
+        let _ = writeln!(s, "\n{ind}\t}}");
+    }
+    let _ = writeln!(s, "{ind}}}");
+}
+
+fn write_vec(s: &mut String, v: DVec3) {
+    write_num(s, v.x);
+    s.push(' ');
+    write_num(s, v.y);
+    s.push(' ');
+    write_num(s, v.z);
+}
+
+/// Checks that a motion can be written as a BVH file that reads back equal.
+fn check_writable(motion: &Motion) -> Result<(), BvhErrorKind> {
+    let sk = &motion.skeleton;
+    sk.validate()
+        .map_err(|e| BvhErrorKind::BadMotion(e.to_string()))?;
+    for j in &sk.joints {
+        if j.name.is_empty()
+            || j.name
+                .chars()
+                .any(|c| c.is_whitespace() || c == '{' || c == '}')
+        {
+            return Err(BvhErrorKind::BadMotion(format!(
+                "joint name `{}` cannot be written",
+                j.name
+            )));
+        }
+    }
+    let nch = sk.channel_count();
+    if nch == 0 || motion.frames.is_empty() || motion.frames.len() % nch != 0 {
+        return Err(BvhErrorKind::BadMotion(format!(
+            "{} values for {} channels per frame",
+            motion.frames.len(),
+            nch
+        )));
+    }
+    if !(motion.frame_time.is_finite() && motion.frame_time > 0.0) {
+        return Err(BvhErrorKind::BadFrameTime(motion.frame_time));
+    }
+    if let Some(i) = motion.frames.iter().position(|v| !v.is_finite()) {
+        return Err(BvhErrorKind::WriteNonFinite {
+            frame: i / nch,
+            channel: i % nch,
+        });
+    }
+    Ok(())
+}
+
+/// Writes a motion as a BVH file, atomically: the text goes to a temporary file in the same
+/// folder which is then renamed over `path`.
+///
+/// Refuses (before touching the disk) an invalid skeleton, a frame buffer whose length is not a
+/// multiple of the channel count, no frames, a bad frame time, or non-finite values.
+pub fn write_bvh(motion: &Motion, path: impl AsRef<Path>) -> Result<(), BvhError> {
+    let path = path.as_ref();
+    check_writable(motion).map_err(|kind| BvhError::Syntax {
+        path: Some(path.to_path_buf()),
+        line: 0,
+        kind,
+    })?;
+    let text = to_bvh_string(motion);
+    let file_name = path
+        .file_name()
+        .map_or_else(|| "out.bvh".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));
+    let io = |source| BvhError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    std::fs::write(&tmp, text.as_bytes()).map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(e)
+    })
+}

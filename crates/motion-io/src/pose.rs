@@ -1,0 +1,858 @@
+//! Pose vectors (paper section 3: root position, root orientation and joint rotations as
+//! exponential maps) and the layout that maps them to and from BVH channels.
+//!
+//! Rows (docs/architecture.md): `0..3` root position in metres, `3..6` root orientation
+//! (exp-map), `6` time increment (left 0 here), then 3 rows per rotating joint in the layout's
+//! joint order.
+
+use std::ops::Range;
+
+use glam::{DQuat, DVec3, Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::euler::{channels_to_quat, quat_to_channels};
+use crate::expmap::{exp_to_quat, exp_to_quat_f32, nearest_branch, quat_to_exp};
+use crate::motion::Motion;
+use crate::skeleton::{Skeleton, SkeletonError, Transform};
+
+/// Rows before the first joint: root position (3), root orientation (3), time increment (1).
+pub const ROOT_ROWS: usize = 7;
+/// Row of the time increment.
+pub const TIME_ROW: usize = 6;
+
+/// Errors of pose-vector construction and conversion.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PoseError {
+    /// No motion was given where at least one is needed.
+    #[error("no motions given")]
+    NoMotions,
+    /// The skeleton is invalid.
+    #[error("invalid skeleton: {0}")]
+    Skeleton(#[from] SkeletonError),
+    /// A motion's skeleton differs from the layout's (joint names or channels).
+    #[error("motion {motion}: skeleton differs from the layout's at joint {joint} ({what})")]
+    SkeletonMismatch {
+        /// Index of the motion in the list given (0 for single-motion calls).
+        motion: usize,
+        /// Joint index.
+        joint: usize,
+        /// What differs.
+        what: String,
+    },
+    /// A frame index beyond the motion.
+    #[error("frame {frame} out of range (motion has {count} frames)")]
+    FrameOutOfRange {
+        /// Requested frame.
+        frame: usize,
+        /// Frames in the motion.
+        count: usize,
+    },
+    /// A slice of the wrong length.
+    #[error("{what}: expected length {expected}, found {found}")]
+    Length {
+        /// Which slice.
+        what: &'static str,
+        /// Expected length.
+        expected: usize,
+        /// Actual length.
+        found: usize,
+    },
+    /// A pose-vector length that is not `7 + 3 n`, or a buffer that is not whole poses.
+    #[error(
+        "pose dimension {dof} with buffer length {len}: need dof = 7 + 3 n and len a multiple of dof"
+    )]
+    BadShape {
+        /// The pose dimension given.
+        dof: usize,
+        /// The buffer length.
+        len: usize,
+    },
+    /// A joint order that is not a permutation of the layout's rotating joints.
+    #[error("joint order is not a permutation of the rotating joints: {0}")]
+    BadJointOrder(String),
+    /// Units per metre must be positive and finite.
+    #[error("units per metre must be positive and finite, found {0}")]
+    BadUnits(f64),
+    /// A NaN or infinite value in the input.
+    #[error("non-finite value in {what} at index {index}")]
+    NonFinite {
+        /// Which input.
+        what: &'static str,
+        /// Index of the value.
+        index: usize,
+    },
+}
+
+/// How a joint is evaluated by the layout's forward kinematics.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+enum Role {
+    /// Not below the motion root: static, placed on the ground under the root by the pose FK.
+    Outside,
+    /// The motion root.
+    Root,
+    /// Rotating joint at position `k` of the joint order.
+    Rotating(usize),
+    /// Static joint below the root (constant rotation).
+    Static,
+}
+
+/// Maps between BVH frames and pose vectors for one skeleton, and evaluates pose vectors.
+///
+/// The motion root is the first joint whose position channels vary (joints above it are static:
+/// in the Bandai files `joint_Root` is all zero and `Hips` carries the root motion). Rotating
+/// joints are the joints below the root whose rotation channels vary; the others keep the constant
+/// rotation of a template frame. Joint translations are the OFFSETs, or for joints with position
+/// channels the template frame's values.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PoseLayout {
+    skeleton: Skeleton,
+    units_per_metre: f64,
+    root: usize,
+    order: Vec<usize>,
+    role: Vec<Role>,
+    /// Channel values used for everything the pose vector does not hold.
+    template: Vec<f64>,
+    channel_starts: Vec<usize>,
+    /// World transform of the root's parent in the template frame (identity when the root is 0).
+    root_parent_world: Transform,
+    /// Local rotation of every joint used when it is not evaluated from the pose (static joints:
+    /// the template's; rotating joints beyond the active count: the mean rotation).
+    rest: Vec<DQuat>,
+    rest_f32: Vec<Quat>,
+    /// Local translation of every joint in metres (f32, runtime FK).
+    offset_m_f32: Vec<Vec3>,
+    offset_m: Vec<DVec3>,
+}
+
+/// Rotation channels of joint `j` vary more than `tol` degrees over the motions.
+fn channel_ranges(motions: &[&Motion]) -> (Vec<f64>, Vec<f64>) {
+    let n = motions[0].skeleton.channel_count();
+    let mut lo = vec![f64::INFINITY; n];
+    let mut hi = vec![f64::NEG_INFINITY; n];
+    for m in motions {
+        for f in m.frames.chunks_exact(n) {
+            for ((l, h), &v) in lo.iter_mut().zip(hi.iter_mut()).zip(f) {
+                *l = l.min(v);
+                *h = h.max(v);
+            }
+        }
+    }
+    (lo, hi)
+}
+
+fn check_same_skeleton(a: &Skeleton, b: &Skeleton, motion: usize) -> Result<(), PoseError> {
+    if a.joints.len() != b.joints.len() {
+        return Err(PoseError::SkeletonMismatch {
+            motion,
+            joint: a.joints.len().min(b.joints.len()),
+            what: format!("{} vs {} joints", a.joints.len(), b.joints.len()),
+        });
+    }
+    for (i, (x, y)) in a.joints.iter().zip(&b.joints).enumerate() {
+        if x.name != y.name || x.parent != y.parent || x.channels != y.channels {
+            return Err(PoseError::SkeletonMismatch {
+                motion,
+                joint: i,
+                what: format!("`{}` vs `{}` (name, parent or channels)", x.name, y.name),
+            });
+        }
+    }
+    Ok(())
+}
+
+impl PoseLayout {
+    /// Layout from a skeleton alone: the root is the first joint with position channels (joint 0
+    /// when none has), every joint below it with rotation channels rotates, the template frame has
+    /// OFFSETs in position channels and zero rotations, and the rest rotation is the identity.
+    /// Use [`PoseLayout::from_motions`] for data with static joints (CMU's fingers) or a static
+    /// joint above the root (Bandai's `joint_Root`).
+    pub fn new(skeleton: &Skeleton, units_per_metre: f64) -> Result<PoseLayout, PoseError> {
+        skeleton.validate()?;
+        let root = skeleton
+            .joints
+            .iter()
+            .position(|j| j.channels.iter().any(|c| c.is_position()))
+            .unwrap_or(0);
+        let mut template = Vec::with_capacity(skeleton.channel_count());
+        for j in &skeleton.joints {
+            for c in &j.channels {
+                template.push(if c.is_position() {
+                    j.offset[c.axis()]
+                } else {
+                    0.0
+                });
+            }
+        }
+        let rotating: Vec<bool> = skeleton
+            .joints
+            .iter()
+            .map(|j| j.channels.iter().any(|c| c.is_rotation()))
+            .collect();
+        Self::build(
+            skeleton.clone(),
+            units_per_metre,
+            root,
+            &rotating,
+            template,
+            None,
+        )
+    }
+
+    /// Layout detected from a set of takes of one skeleton (same joint names, parents and channels;
+    /// offsets are taken from the first take): the root is the first joint whose position channels
+    /// vary by more than `1e-6` units, rotating joints are those below it whose rotation channels
+    /// vary by more than `1e-4` degrees, the template is the first frame of the first take, and
+    /// the rest rotation of every rotating joint is its mean rotation over all frames
+    /// (sign-aligned quaternion average).
+    pub fn from_motions(
+        motions: &[&Motion],
+        units_per_metre: f64,
+    ) -> Result<PoseLayout, PoseError> {
+        let first = *motions.first().ok_or(PoseError::NoMotions)?;
+        let sk = &first.skeleton;
+        sk.validate()?;
+        for (i, m) in motions.iter().enumerate() {
+            check_same_skeleton(sk, &m.skeleton, i)?;
+            if m.frame_count() == 0 {
+                return Err(PoseError::FrameOutOfRange { frame: 0, count: 0 });
+            }
+            if let Some(k) = m.frames.iter().position(|v| !v.is_finite()) {
+                return Err(PoseError::NonFinite {
+                    what: "motion frames",
+                    index: k,
+                });
+            }
+        }
+        let (lo, hi) = channel_ranges(motions);
+        let starts = sk.channel_starts();
+        let varies = |j: usize, pos: bool, tol: f64| {
+            sk.joints[j].channels.iter().enumerate().any(|(c, ch)| {
+                ch.is_position() == pos && hi[starts[j] + c] - lo[starts[j] + c] > tol
+            })
+        };
+        let root = (0..sk.joints.len())
+            .find(|&j| varies(j, true, 1e-6))
+            .unwrap_or(0);
+        let rotating: Vec<bool> = (0..sk.joints.len())
+            .map(|j| varies(j, false, 1e-4))
+            .collect();
+        let template = first.frame(0).to_vec();
+        let mut layout = Self::build(sk.clone(), units_per_metre, root, &rotating, template, None)?;
+        // Mean local rotation of each rotating joint over every frame.
+        let mut sums = vec![glam::DVec4::ZERO; sk.joints.len()];
+        let mut refq: Vec<Option<DQuat>> = vec![None; sk.joints.len()];
+        for m in motions {
+            for f in 0..m.frame_count() {
+                let fr = m.frame(f);
+                for &j in &layout.order {
+                    let ch = &sk.joints[j].channels;
+                    let q = channels_to_quat(ch, &fr[starts[j]..starts[j] + ch.len()]);
+                    let r = *refq[j].get_or_insert(q);
+                    let q = if q.dot(r) < 0.0 { -q } else { q };
+                    sums[j] += glam::DVec4::from(q);
+                }
+            }
+        }
+        for &j in &layout.order.clone() {
+            let s = sums[j];
+            if s.length() > 1e-12 {
+                layout.rest[j] = DQuat::from_vec4(s).normalize();
+            }
+        }
+        layout.refresh_f32();
+        Ok(layout)
+    }
+
+    fn build(
+        skeleton: Skeleton,
+        units_per_metre: f64,
+        root: usize,
+        rotating: &[bool],
+        template: Vec<f64>,
+        order: Option<Vec<usize>>,
+    ) -> Result<PoseLayout, PoseError> {
+        if !(units_per_metre.is_finite() && units_per_metre > 0.0) {
+            return Err(PoseError::BadUnits(units_per_metre));
+        }
+        let nj = skeleton.joints.len();
+        let order = order.unwrap_or_else(|| {
+            (0..nj)
+                .filter(|&j| j != root && rotating[j] && skeleton.is_ancestor_or_self(root, j))
+                .collect()
+        });
+        let mut role = vec![Role::Outside; nj];
+        for (j, r) in role.iter_mut().enumerate() {
+            if j == root {
+                *r = Role::Root;
+            } else if skeleton.is_ancestor_or_self(root, j) {
+                *r = Role::Static;
+            }
+        }
+        for (k, &j) in order.iter().enumerate() {
+            role[j] = Role::Rotating(k);
+        }
+        let channel_starts = skeleton.channel_starts();
+        let mut world = vec![Transform::IDENTITY; nj];
+        skeleton.forward_kinematics(&template, &mut world);
+        let root_parent_world = skeleton.joints[root]
+            .parent
+            .map_or(Transform::IDENTITY, |p| world[p]);
+        let mut rest = Vec::with_capacity(nj);
+        let mut offset_m = Vec::with_capacity(nj);
+        for (j, joint) in skeleton.joints.iter().enumerate() {
+            let s = channel_starts[j];
+            let local = skeleton.local_transform(j, &template[s..s + joint.channels.len()]);
+            rest.push(local.rotation);
+            offset_m.push(local.position / units_per_metre);
+        }
+        let mut layout = PoseLayout {
+            skeleton,
+            units_per_metre,
+            root,
+            order,
+            role,
+            template,
+            channel_starts,
+            root_parent_world,
+            rest,
+            rest_f32: Vec::new(),
+            offset_m_f32: Vec::new(),
+            offset_m,
+        };
+        layout.refresh_f32();
+        Ok(layout)
+    }
+
+    fn refresh_f32(&mut self) {
+        self.rest_f32 = self.rest.iter().map(|q| q.as_quat()).collect();
+        self.offset_m_f32 = self.offset_m.iter().map(|v| v.as_vec3()).collect();
+    }
+
+    /// The same layout with the rotating joints in a new order (skeleton joint indices, a
+    /// permutation of [`PoseLayout::joint_order`]); rows follow the new order.
+    pub fn with_joint_order(mut self, order: Vec<usize>) -> Result<PoseLayout, PoseError> {
+        let mut a = order.clone();
+        let mut b = self.order.clone();
+        a.sort_unstable();
+        b.sort_unstable();
+        if a != b {
+            return Err(PoseError::BadJointOrder(format!(
+                "{order:?} vs joints {b:?}"
+            )));
+        }
+        for (k, &j) in order.iter().enumerate() {
+            self.role[j] = Role::Rotating(k);
+        }
+        self.order = order;
+        Ok(self)
+    }
+
+    /// The skeleton this layout was built for.
+    pub fn skeleton(&self) -> &Skeleton {
+        &self.skeleton
+    }
+
+    /// File units per metre (100 for centimetres).
+    pub fn units_per_metre(&self) -> f64 {
+        self.units_per_metre
+    }
+
+    /// Skeleton index of the motion root.
+    pub fn root(&self) -> usize {
+        self.root
+    }
+
+    /// Rotating joints (skeleton indices) in row order.
+    pub fn joint_order(&self) -> &[usize] {
+        &self.order
+    }
+
+    /// Number of rotating joints.
+    pub fn joint_count(&self) -> usize {
+        self.order.len()
+    }
+
+    /// Pose dimension `P = 7 + 3 * rotating joints`.
+    pub fn dof(&self) -> usize {
+        ROOT_ROWS + 3 * self.order.len()
+    }
+
+    /// Rows of skeleton joint `j` (`None` unless it is a rotating joint).
+    pub fn joint_rows(&self, j: usize) -> Option<Range<usize>> {
+        match self.role.get(j) {
+            Some(Role::Rotating(k)) => Some(ROOT_ROWS + 3 * k..ROOT_ROWS + 3 * k + 3),
+            _ => None,
+        }
+    }
+
+    /// A name for every row: `root.px`, `root.py`, `root.pz`, `root.rx`, `root.ry`, `root.rz`,
+    /// `dt`, then `<joint>.rx`, `<joint>.ry`, `<joint>.rz` per rotating joint.
+    pub fn row_names(&self) -> Vec<String> {
+        let mut v: Vec<String> = [
+            "root.px", "root.py", "root.pz", "root.rx", "root.ry", "root.rz", "dt",
+        ]
+        .map(String::from)
+        .into();
+        for &j in &self.order {
+            let n = &self.skeleton.joints[j].name;
+            v.extend([format!("{n}.rx"), format!("{n}.ry"), format!("{n}.rz")]);
+        }
+        v
+    }
+
+    /// The channel values used for the channels a pose vector does not hold.
+    pub fn template_frame(&self) -> &[f64] {
+        &self.template
+    }
+
+    /// Rest (mean or template) local rotation of skeleton joint `j`.
+    pub fn rest_rotation(&self, j: usize) -> DQuat {
+        self.rest[j]
+    }
+
+    /// A pose vector with the root at the origin (identity orientation), `dt = 0` and every
+    /// rotating joint at its rest rotation: the `rest` argument of the runtime FK.
+    pub fn rest_pose(&self) -> Vec<f64> {
+        let mut p = vec![0.0; self.dof()];
+        for (k, &j) in self.order.iter().enumerate() {
+            let e = quat_to_exp(self.rest[j]);
+            p[ROOT_ROWS + 3 * k..ROOT_ROWS + 3 * k + 3].copy_from_slice(&e.to_array());
+        }
+        p
+    }
+
+    /// Sets the rest rotation of each rotating joint to its mean over the pose vectors `poses`
+    /// (`frames x dof`, sign-aligned quaternion average of the exp-maps).
+    pub fn set_rest_from_poses(&mut self, poses: &[f64]) -> Result<(), PoseError> {
+        let p = self.dof();
+        if poses.is_empty() || poses.len() % p != 0 {
+            return Err(PoseError::BadShape {
+                dof: p,
+                len: poses.len(),
+            });
+        }
+        for (k, &j) in self.order.iter().enumerate() {
+            let mut sum = glam::DVec4::ZERO;
+            let mut r: Option<DQuat> = None;
+            for pose in poses.chunks_exact(p) {
+                let v = DVec3::from_slice(&pose[ROOT_ROWS + 3 * k..]);
+                let q = exp_to_quat(v);
+                let rr = *r.get_or_insert(q);
+                sum += glam::DVec4::from(if q.dot(rr) < 0.0 { -q } else { q });
+            }
+            if sum.length() > 1e-12 && sum.is_finite() {
+                self.rest[j] = DQuat::from_vec4(sum).normalize();
+            }
+        }
+        self.refresh_f32();
+        Ok(())
+    }
+
+    fn check_motion(&self, motion: &Motion) -> Result<(), PoseError> {
+        let a = &self.skeleton;
+        let b = &motion.skeleton;
+        if a.joints.len() != b.joints.len() || a.channel_count() != b.channel_count() {
+            return check_same_skeleton(a, b, 0).and(Err(PoseError::SkeletonMismatch {
+                motion: 0,
+                joint: 0,
+                what: "channel count".into(),
+            }));
+        }
+        Ok(())
+    }
+
+    /// Pose vector of frame `frame_idx` of `motion` (world frame, not canonicalised), written into
+    /// `out` (length [`PoseLayout::dof`]): root position `p / units_per_metre`, root orientation
+    /// `log(q_root_world)`, `dt = 0`, joint rotations `log(q_local)` on the principal branch
+    /// (`|v| <= pi`; see [`unwrap_exp_maps`] for continuity over frames).
+    pub fn pose_from_frame(
+        &self,
+        motion: &Motion,
+        frame_idx: usize,
+        out: &mut [f64],
+    ) -> Result<(), PoseError> {
+        self.check_motion(motion)?;
+        let count = motion.frame_count();
+        if frame_idx >= count {
+            return Err(PoseError::FrameOutOfRange {
+                frame: frame_idx,
+                count,
+            });
+        }
+        if out.len() != self.dof() {
+            return Err(PoseError::Length {
+                what: "pose output",
+                expected: self.dof(),
+                found: out.len(),
+            });
+        }
+        let fr = motion.frame(frame_idx);
+        let sk = &motion.skeleton;
+        // World transform of the root: walk its ancestor chain.
+        let mut chain = [0usize; 64];
+        let mut n = 0;
+        let mut j = Some(self.root);
+        while let Some(k) = j {
+            if n < chain.len() {
+                chain[n] = k;
+                n += 1;
+            }
+            j = sk.joints[k].parent;
+        }
+        let mut world = Transform::IDENTITY;
+        for &k in chain[..n].iter().rev() {
+            let s = self.channel_starts[k];
+            world = world.mul(&sk.local_transform(k, &fr[s..s + sk.joints[k].channels.len()]));
+        }
+        let p = world.position / self.units_per_metre;
+        out[0..3].copy_from_slice(&p.to_array());
+        out[3..6].copy_from_slice(&quat_to_exp(world.rotation).to_array());
+        out[TIME_ROW] = 0.0;
+        for (k, &j) in self.order.iter().enumerate() {
+            let s = self.channel_starts[j];
+            let ch = &sk.joints[j].channels;
+            let q = channels_to_quat(ch, &fr[s..s + ch.len()]);
+            out[ROOT_ROWS + 3 * k..ROOT_ROWS + 3 * k + 3]
+                .copy_from_slice(&quat_to_exp(q).to_array());
+        }
+        Ok(())
+    }
+
+    /// Pose vectors of every frame of `motion` (`frames x dof`, row-major), exp-maps unwrapped
+    /// over time.
+    pub fn poses_from_motion(&self, motion: &Motion) -> Result<Vec<f64>, PoseError> {
+        let p = self.dof();
+        let n = motion.frame_count();
+        let mut out = vec![0.0; n * p];
+        for (f, row) in out.chunks_exact_mut(p).enumerate() {
+            self.pose_from_frame(motion, f, row)?;
+        }
+        unwrap_exp_maps(&mut out, p)?;
+        Ok(out)
+    }
+
+    /// Inverse of [`PoseLayout::pose_from_frame`]: BVH channel values (the file's own channel
+    /// orders, degrees) for `pose`. Channels the pose does not hold come from the template frame.
+    /// Euler angles are on the principal branch; see [`PoseLayout::frame_from_pose_near`].
+    pub fn frame_from_pose(&self, pose: &[f64], out_channels: &mut [f64]) -> Result<(), PoseError> {
+        self.frame_from_pose_impl(pose, None, out_channels)
+    }
+
+    /// Like [`PoseLayout::frame_from_pose`], choosing for every joint the Euler solution (and
+    /// 360-degree shift) nearest `reference` (e.g. the previous written frame, or the source frame),
+    /// so that written channels stay continuous.
+    pub fn frame_from_pose_near(
+        &self,
+        pose: &[f64],
+        reference: &[f64],
+        out_channels: &mut [f64],
+    ) -> Result<(), PoseError> {
+        if reference.len() != self.template.len() {
+            return Err(PoseError::Length {
+                what: "reference frame",
+                expected: self.template.len(),
+                found: reference.len(),
+            });
+        }
+        self.frame_from_pose_impl(pose, Some(reference), out_channels)
+    }
+
+    fn frame_from_pose_impl(
+        &self,
+        pose: &[f64],
+        reference: Option<&[f64]>,
+        out: &mut [f64],
+    ) -> Result<(), PoseError> {
+        if pose.len() != self.dof() {
+            return Err(PoseError::Length {
+                what: "pose",
+                expected: self.dof(),
+                found: pose.len(),
+            });
+        }
+        if out.len() != self.template.len() {
+            return Err(PoseError::Length {
+                what: "channel output",
+                expected: self.template.len(),
+                found: out.len(),
+            });
+        }
+        if let Some(i) = pose.iter().position(|v| !v.is_finite()) {
+            return Err(PoseError::NonFinite {
+                what: "pose",
+                index: i,
+            });
+        }
+        out.copy_from_slice(&self.template);
+        let sk = &self.skeleton;
+        let world = Transform {
+            rotation: exp_to_quat(DVec3::from_slice(&pose[3..6])),
+            position: DVec3::from_slice(&pose[0..3]) * self.units_per_metre,
+        };
+        let local = self.root_parent_world.inverse().mul(&world);
+        let r = self.root;
+        let s = self.channel_starts[r];
+        let ch = &sk.joints[r].channels;
+        let seg = &mut out[s..s + ch.len()];
+        for (c, o) in ch.iter().zip(seg.iter_mut()) {
+            if c.is_position() {
+                *o = local.position[c.axis()];
+            }
+        }
+        quat_to_channels(
+            local.rotation,
+            ch,
+            reference.map(|x| &x[s..s + ch.len()]),
+            seg,
+        );
+        for (k, &j) in self.order.iter().enumerate() {
+            let s = self.channel_starts[j];
+            let ch = &sk.joints[j].channels;
+            let q = exp_to_quat(DVec3::from_slice(&pose[ROOT_ROWS + 3 * k..]));
+            quat_to_channels(
+                q,
+                ch,
+                reference.map(|x| &x[s..s + ch.len()]),
+                &mut out[s..s + ch.len()],
+            );
+        }
+        Ok(())
+    }
+
+    /// A motion (this layout's skeleton) from pose vectors `poses` (`frames x dof`), every frame's
+    /// Euler angles chosen nearest the previous frame's so the written channels are continuous.
+    pub fn motion_from_poses(&self, poses: &[f64], frame_time: f64) -> Result<Motion, PoseError> {
+        let p = self.dof();
+        if poses.is_empty() || poses.len() % p != 0 {
+            return Err(PoseError::BadShape {
+                dof: p,
+                len: poses.len(),
+            });
+        }
+        let nch = self.template.len();
+        let nf = poses.len() / p;
+        let mut frames = vec![0.0; nf * nch];
+        for f in 0..nf {
+            let (before, rest) = frames.split_at_mut(f * nch);
+            let out = &mut rest[..nch];
+            if f == 0 {
+                self.frame_from_pose(&poses[..p], out)?;
+            } else {
+                self.frame_from_pose_near(
+                    &poses[f * p..(f + 1) * p],
+                    &before[(f - 1) * nch..],
+                    out,
+                )?;
+            }
+        }
+        Ok(Motion {
+            skeleton: self.skeleton.clone(),
+            frame_time,
+            frames,
+        })
+    }
+
+    /// Forward kinematics of a full-precision pose vector: world position (metres) of every
+    /// skeleton joint into `out` (length = skeleton joint count). Joints that are not below the
+    /// motion root are placed on the ground under the root. Allocation-free.
+    ///
+    /// # Panics
+    /// If `pose.len() != dof()` or `out.len()` differs from the joint count.
+    pub fn joint_positions_f64(&self, pose: &[f64], out: &mut [DVec3]) {
+        assert_eq!(pose.len(), self.dof(), "pose length must equal dof");
+        assert_eq!(
+            out.len(),
+            self.skeleton.joints.len(),
+            "output length must equal the joint count"
+        );
+        self.fk_f64(pose, out, &mut None);
+    }
+
+    /// World transforms (rotation, position in metres) of every joint of a full-precision pose.
+    ///
+    /// # Panics
+    /// As [`PoseLayout::joint_positions_f64`].
+    pub fn joint_transforms_f64(&self, pose: &[f64], out: &mut [Transform]) {
+        assert_eq!(pose.len(), self.dof(), "pose length must equal dof");
+        assert_eq!(
+            out.len(),
+            self.skeleton.joints.len(),
+            "output length must equal the joint count"
+        );
+        let mut pos = vec![DVec3::ZERO; out.len()];
+        let mut rots = Some(vec![DQuat::IDENTITY; out.len()]);
+        self.fk_f64(pose, &mut pos, &mut rots);
+        for ((o, p), r) in out.iter_mut().zip(pos).zip(rots.unwrap_or_default()) {
+            *o = Transform {
+                rotation: r,
+                position: p,
+            };
+        }
+    }
+
+    fn fk_f64(&self, pose: &[f64], out: &mut [DVec3], rots_out: &mut Option<Vec<DQuat>>) {
+        let nj = self.skeleton.joints.len();
+        let root_pos = DVec3::from_slice(&pose[0..3]);
+        let root_rot = exp_to_quat(DVec3::from_slice(&pose[3..6]));
+        let ground = DVec3::new(root_pos.x, 0.0, root_pos.z);
+        // Small fixed scratch; heap only for very large skeletons.
+        let mut stack = [DQuat::IDENTITY; 128];
+        let mut heap = Vec::new();
+        let rot: &mut [DQuat] = if nj <= stack.len() {
+            &mut stack[..nj]
+        } else {
+            heap.resize(nj, DQuat::IDENTITY);
+            &mut heap
+        };
+        for j in 0..nj {
+            match self.role[j] {
+                Role::Outside => {
+                    out[j] = ground;
+                    rot[j] = DQuat::IDENTITY;
+                }
+                Role::Root => {
+                    out[j] = root_pos;
+                    rot[j] = root_rot;
+                }
+                role => {
+                    let p = self.skeleton.joints[j].parent.unwrap_or(0);
+                    let local = match role {
+                        Role::Rotating(k) => {
+                            exp_to_quat(DVec3::from_slice(&pose[ROOT_ROWS + 3 * k..]))
+                        }
+                        _ => self.rest[j],
+                    };
+                    out[j] = out[p] + rot[p] * self.offset_m[j];
+                    rot[j] = rot[p] * local;
+                }
+            }
+        }
+        if let Some(r) = rots_out {
+            r.copy_from_slice(rot);
+        }
+    }
+
+    /// Runtime forward kinematics (paper section 3.2's last step): world positions in metres of
+    /// every skeleton joint for an f32 pose vector, into `out` (length = skeleton joint count).
+    ///
+    /// Only the first `active_joints` joints of the order are read from `pose` (which may be
+    /// truncated to `7 + 3 * active_joints` rows, the level's `P'`); the others use the layout's
+    /// rest rotation (the mean, see [`PoseLayout::from_motions`], [`PoseLayout::set_rest_from_poses`]).
+    /// `world_j = world_parent * (offset_j, exp(v_j))`. Joints not below the motion root are placed
+    /// on the ground under it. No allocation for skeletons up to 128 joints.
+    ///
+    /// # Panics
+    /// If `pose` has fewer than `7 + 3 * min(active_joints, joint_count())` rows or `out` is shorter
+    /// than the skeleton's joint count.
+    pub fn joint_positions(&self, pose: &[f32], active_joints: usize, out: &mut [Vec3]) {
+        let active = active_joints.min(self.order.len());
+        let needed = if active == 0 {
+            6
+        } else {
+            ROOT_ROWS + 3 * active
+        };
+        assert!(pose.len() >= needed, "pose too short for the active joints");
+        let nj = self.skeleton.joints.len();
+        assert!(out.len() >= nj, "output shorter than the joint count");
+        let root_pos = Vec3::from_slice(&pose[0..3]);
+        let root_rot = exp_to_quat_f32(Vec3::from_slice(&pose[3..6]));
+        let ground = Vec3::new(root_pos.x, 0.0, root_pos.z);
+        let mut stack = [Quat::IDENTITY; 128];
+        let mut heap = Vec::new();
+        let rot: &mut [Quat] = if nj <= stack.len() {
+            &mut stack[..nj]
+        } else {
+            heap.resize(nj, Quat::IDENTITY);
+            &mut heap
+        };
+        for j in 0..nj {
+            match self.role[j] {
+                Role::Outside => {
+                    out[j] = ground;
+                    rot[j] = Quat::IDENTITY;
+                }
+                Role::Root => {
+                    out[j] = root_pos;
+                    rot[j] = root_rot;
+                }
+                role => {
+                    let p = self.skeleton.joints[j].parent.unwrap_or(0);
+                    debug_assert!(p < j);
+                    let local = match role {
+                        Role::Rotating(k) if k < active => {
+                            let r = ROOT_ROWS + 3 * k;
+                            exp_to_quat_f32(Vec3::new(pose[r], pose[r + 1], pose[r + 2]))
+                        }
+                        _ => self.rest_f32[j],
+                    };
+                    out[j] = out[p] + rot[p] * self.offset_m_f32[j];
+                    rot[j] = rot[p] * local;
+                }
+            }
+        }
+    }
+}
+
+fn check_shape(len: usize, dof: usize) -> Result<(), PoseError> {
+    if dof < ROOT_ROWS || (dof - ROOT_ROWS) % 3 != 0 || len % dof != 0 {
+        return Err(PoseError::BadShape { dof, len });
+    }
+    Ok(())
+}
+
+/// The exp-map triples of a pose of dimension `dof`: rows `3..6`, then `7 + 3k ..`.
+fn exp_triples(dof: usize) -> impl Iterator<Item = usize> {
+    std::iter::once(3).chain((ROOT_ROWS..dof).step_by(3))
+}
+
+/// Makes every exp-map of a sequence of pose vectors (`frames x dof`, row-major) continuous over
+/// frames: frame `f`'s map is replaced by its branch nearest frame `f - 1`'s (already unwrapped)
+/// map, so there is no jump at `|v| = pi`.
+pub fn unwrap_exp_maps(poses: &mut [f64], dof: usize) -> Result<(), PoseError> {
+    check_shape(poses.len(), dof)?;
+    let n = poses.len() / dof;
+    for f in 1..n {
+        let (prev, cur) = poses.split_at_mut(f * dof);
+        let prev = &prev[(f - 1) * dof..];
+        for r in exp_triples(dof) {
+            let v = nearest_branch(DVec3::from_slice(&cur[r..]), DVec3::from_slice(&prev[r..]));
+            cur[r..r + 3].copy_from_slice(&v.to_array());
+        }
+    }
+    Ok(())
+}
+
+/// Brings every exp-map of one pose onto the branch nearest the same map in `reference` (continuity
+/// across samples, e.g. to the first cycle's first frame or a mean pose).
+pub fn align_exp_maps(pose: &mut [f64], reference: &[f64]) -> Result<(), PoseError> {
+    let dof = reference.len();
+    check_shape(pose.len(), dof)?;
+    if pose.len() != dof {
+        return Err(PoseError::Length {
+            what: "pose",
+            expected: dof,
+            found: pose.len(),
+        });
+    }
+    for r in exp_triples(dof) {
+        let v = nearest_branch(
+            DVec3::from_slice(&pose[r..]),
+            DVec3::from_slice(&reference[r..]),
+        );
+        pose[r..r + 3].copy_from_slice(&v.to_array());
+    }
+    Ok(())
+}
+
+/// Brings a whole sequence (`frames x dof`) onto the branch nearest `reference` as one block:
+/// every exp-map of the first frame is aligned to `reference`, and the same `2 pi k` shift of each
+/// map is then carried through the sequence by [`unwrap_exp_maps`].
+pub fn align_sequence(poses: &mut [f64], reference: &[f64]) -> Result<(), PoseError> {
+    let dof = reference.len();
+    check_shape(poses.len(), dof)?;
+    if poses.is_empty() {
+        return Ok(());
+    }
+    align_exp_maps(&mut poses[..dof], reference)?;
+    unwrap_exp_maps(poses, dof)
+}
