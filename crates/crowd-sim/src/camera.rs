@@ -1,0 +1,381 @@
+//! The camera (a pinhole with an image size), its paths over time, and its view frustum.
+
+use crate::error::CrowdError;
+use glam::{Mat4, Vec3, Vec4};
+
+/// A perspective camera: placement, lens and image size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Eye position (m).
+    pub position: Vec3,
+    /// Point looked at (m).
+    pub target: Vec3,
+    /// Up direction (need not be unit or orthogonal to the view direction, but not parallel).
+    pub up: Vec3,
+    /// Vertical field of view (rad), in `(0, pi)`.
+    pub fov_y: f32,
+    /// Width / height of the image.
+    pub aspect: f32,
+    /// Near clipping distance (m), `> 0`.
+    pub near: f32,
+    /// Far clipping distance (m), `> near`.
+    pub far: f32,
+    /// Image width in pixels (used by rendering and screen-space policies).
+    pub image_width: u32,
+    /// Image height in pixels.
+    pub image_height: u32,
+}
+
+impl Default for Camera {
+    /// A 60-degree camera 1.7 m above the origin looking along +z, 640x360 pixels.
+    fn default() -> Self {
+        Self {
+            position: Vec3::new(0.0, 1.7, 0.0),
+            target: Vec3::new(0.0, 1.2, 10.0),
+            up: Vec3::Y,
+            fov_y: 60f32.to_radians(),
+            aspect: 640.0 / 360.0,
+            near: 0.1,
+            far: 500.0,
+            image_width: 640,
+            image_height: 360,
+        }
+    }
+}
+
+/// Orthonormal camera basis: forward, right and true up.
+#[derive(Debug, Clone, Copy)]
+pub struct CameraBasis {
+    /// Unit view direction.
+    pub forward: Vec3,
+    /// Unit right direction (`forward x up`).
+    pub right: Vec3,
+    /// Unit up direction orthogonal to both.
+    pub up: Vec3,
+}
+
+impl Camera {
+    /// Checks every field: finite, `0 < fov_y < pi`, `aspect > 0`, `0 < near < far`, a non-zero
+    /// view direction not parallel to `up`, and a non-zero image.
+    pub fn validate(&self) -> Result<(), CrowdError> {
+        let bad = |what| Err(CrowdError::BadCamera { what });
+        let vs = [self.position, self.target, self.up];
+        if vs.iter().any(|v| !v.is_finite()) {
+            return bad("position, target or up is NaN or infinite");
+        }
+        if ![self.fov_y, self.aspect, self.near, self.far]
+            .iter()
+            .all(|v| v.is_finite())
+        {
+            return bad("fov_y, aspect, near or far is NaN or infinite");
+        }
+        if !(self.fov_y > 0.0 && self.fov_y < std::f32::consts::PI) {
+            return bad("fov_y outside (0, pi)");
+        }
+        if self.aspect <= 0.0 {
+            return bad("aspect <= 0");
+        }
+        if !(self.near > 0.0 && self.far > self.near) {
+            return bad("need 0 < near < far");
+        }
+        let f = self.target - self.position;
+        if f.length_squared() < 1e-12 {
+            return bad("target equals position");
+        }
+        if f.normalize().cross(self.up).length_squared() < 1e-10 {
+            return bad("up is zero or parallel to the view direction");
+        }
+        if self.image_width == 0 || self.image_height == 0 {
+            return bad("image size is zero");
+        }
+        Ok(())
+    }
+
+    /// The orthonormal basis; call on a validated camera.
+    pub fn basis(&self) -> CameraBasis {
+        let forward = (self.target - self.position).normalize();
+        let right = forward.cross(self.up).normalize();
+        let up = right.cross(forward);
+        CameraBasis { forward, right, up }
+    }
+
+    /// View-projection matrix `P V` (right-handed, depth in `[0, 1]`).
+    pub fn view_projection(&self) -> Mat4 {
+        Mat4::perspective_rh(self.fov_y, self.aspect, self.near, self.far)
+            * Mat4::look_at_rh(self.position, self.target, self.up)
+    }
+
+    /// Corners of the view frustum: near plane (4) then far plane (4), each in the order
+    /// bottom-left, bottom-right, top-right, top-left.
+    pub fn frustum_corners(&self) -> [Vec3; 8] {
+        let b = self.basis();
+        let tv = (0.5 * self.fov_y).tan();
+        let th = tv * self.aspect;
+        let mut out = [Vec3::ZERO; 8];
+        for (k, dist) in [self.near, self.far].into_iter().enumerate() {
+            let c = self.position + b.forward * dist;
+            let (h, v) = (b.right * th * dist, b.up * tv * dist);
+            out[4 * k] = c - h - v;
+            out[4 * k + 1] = c + h - v;
+            out[4 * k + 2] = c + h + v;
+            out[4 * k + 3] = c - h + v;
+        }
+        out
+    }
+}
+
+/// A camera that moves over time.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CameraPath {
+    /// Always the same camera.
+    Fixed,
+    /// Circles `centre` at `radius` and `height` above it, looking at `centre`, one turn per
+    /// `period_s` seconds.
+    Orbit {
+        /// Point looked at (m).
+        centre: Vec3,
+        /// Horizontal distance to the centre (m).
+        radius: f32,
+        /// Height above the centre (m).
+        height: f32,
+        /// Seconds per revolution.
+        period_s: f32,
+    },
+    /// Flies along a closed polyline of `waypoints` at `speed_mps`, looking `look_ahead_m`
+    /// further along the path and slightly down.
+    FlyThrough {
+        /// Closed loop of positions (at least two).
+        waypoints: Vec<Vec3>,
+        /// Speed along the loop (m/s).
+        speed_mps: f32,
+        /// Distance along the loop to the point looked at (m).
+        look_ahead_m: f32,
+    },
+}
+
+impl CameraPath {
+    /// A walk at eye height (1.7 m) around a square loop of half-size `0.3 * field_size_m`, inside
+    /// a crowd spread over a field of that size centred at the origin.
+    pub fn inside_crowd(field_size_m: f32) -> Self {
+        let h = 0.3 * field_size_m;
+        let y = 1.7;
+        CameraPath::FlyThrough {
+            waypoints: vec![
+                Vec3::new(-h, y, -h),
+                Vec3::new(-h, y, h),
+                Vec3::new(h, y, h),
+                Vec3::new(h, y, -h),
+            ],
+            speed_mps: 1.5,
+            look_ahead_m: 10.0,
+        }
+    }
+
+    /// The camera at time `t` seconds: `lens` supplies everything but position and target.
+    pub fn camera_at(&self, t: f32, lens: &Camera) -> Camera {
+        let mut cam = *lens;
+        match self {
+            CameraPath::Fixed => {}
+            CameraPath::Orbit {
+                centre,
+                radius,
+                height,
+                period_s,
+            } => {
+                let a = std::f32::consts::TAU * t / *period_s;
+                cam.position = *centre + Vec3::new(radius * a.cos(), *height, radius * a.sin());
+                cam.target = *centre;
+            }
+            CameraPath::FlyThrough {
+                waypoints,
+                speed_mps,
+                look_ahead_m,
+            } => {
+                let s = t * speed_mps;
+                cam.position = point_on_loop(waypoints, s);
+                let ahead = point_on_loop(waypoints, s + look_ahead_m);
+                cam.target = ahead - Vec3::new(0.0, 0.15 * look_ahead_m, 0.0);
+            }
+        }
+        cam
+    }
+}
+
+/// Point at arc length `s` along the closed polyline `pts` (wrapping around).
+fn point_on_loop(pts: &[Vec3], s: f32) -> Vec3 {
+    match pts.len() {
+        0 => return Vec3::ZERO,
+        1 => return pts[0],
+        _ => {}
+    }
+    let seg = |i: usize| (pts[i], pts[(i + 1) % pts.len()]);
+    let total: f32 = (0..pts.len()).map(|i| seg(i).0.distance(seg(i).1)).sum();
+    if total.is_nan() || total <= 0.0 || !s.is_finite() {
+        return pts[0];
+    }
+    let mut rem = s.rem_euclid(total);
+    for i in 0..pts.len() {
+        let (a, b) = seg(i);
+        let l = a.distance(b);
+        if rem <= l && l > 0.0 {
+            return a + (b - a) * (rem / l);
+        }
+        rem -= l;
+    }
+    pts[0]
+}
+
+/// An axis-aligned box, `min <= max` componentwise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    /// Smallest corner.
+    pub min: Vec3,
+    /// Largest corner.
+    pub max: Vec3,
+}
+
+/// The six planes of a view frustum, normals pointing inwards: a point `p` is inside plane
+/// `(n, d)` when `n . p + d >= 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frustum {
+    /// Near, far, left, right, bottom, top, as `(n.x, n.y, n.z, d)` with unit `n`.
+    pub planes: [Vec4; 6],
+}
+
+impl Frustum {
+    /// The frustum of a camera (validated first).
+    ///
+    /// With forward `f`, right `r`, up `u`, `tv = tan(fov_y / 2)` and `th = aspect * tv`, the
+    /// inward normals are `f` (near), `-f` (far), `r + th f` (left), `-r + th f` (right),
+    /// `u + tv f` (bottom) and `-u + tv f` (top), normalised; side planes pass through the eye.
+    pub fn from_camera(camera: &Camera) -> Result<Self, CrowdError> {
+        camera.validate()?;
+        let b = camera.basis();
+        let tv = (0.5 * camera.fov_y).tan();
+        let th = tv * camera.aspect;
+        let eye = camera.position;
+        let plane = |n: Vec3, through: Vec3| {
+            let n = n.normalize();
+            n.extend(-n.dot(through))
+        };
+        Ok(Self {
+            planes: [
+                plane(b.forward, eye + b.forward * camera.near),
+                plane(-b.forward, eye + b.forward * camera.far),
+                plane(b.right + b.forward * th, eye),
+                plane(-b.right + b.forward * th, eye),
+                plane(b.up + b.forward * tv, eye),
+                plane(-b.up + b.forward * tv, eye),
+            ],
+        })
+    }
+
+    /// True when `p` is inside or on every plane.
+    pub fn contains_point(&self, p: Vec3) -> bool {
+        self.planes
+            .iter()
+            .all(|pl| pl.truncate().dot(p) + pl.w >= 0.0)
+    }
+
+    /// Conservative box test: false only when the box lies entirely outside one plane (tested
+    /// with the box corner furthest along the plane normal). Monotone: a box containing a box
+    /// that passes also passes, which makes BVH traversal exact with respect to this test.
+    pub fn intersects_box(&self, min: Vec3, max: Vec3) -> bool {
+        self.planes.iter().all(|pl| {
+            let n = pl.truncate();
+            let p = Vec3::select(n.cmpge(Vec3::ZERO), max, min);
+            n.dot(p) + pl.w >= 0.0
+        })
+    }
+
+    /// [`Frustum::intersects_box`] for a [`Bounds`].
+    pub fn intersects(&self, b: &Bounds) -> bool {
+        self.intersects_box(b.min, b.max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_camera_is_valid_and_sees_ahead_not_behind() {
+        let cam = Camera::default();
+        let f = Frustum::from_camera(&cam).unwrap();
+        assert!(f.contains_point(Vec3::new(0.0, 1.0, 20.0)));
+        assert!(!f.contains_point(Vec3::new(0.0, 1.0, -5.0)));
+        assert!(!f.contains_point(Vec3::new(0.0, 1.0, 600.0)));
+        assert!(!f.contains_point(Vec3::new(100.0, 1.0, 20.0)));
+        // A box straddling the left plane intersects; one behind does not.
+        assert!(f.intersects_box(Vec3::new(10.0, 0.0, 10.0), Vec3::new(30.0, 2.0, 12.0)));
+        assert!(!f.intersects_box(Vec3::new(-1.0, 0.0, -3.0), Vec3::new(1.0, 2.0, -1.0)));
+    }
+
+    #[test]
+    fn frustum_corners_lie_on_the_frustum_boundary() {
+        let cam = Camera {
+            target: Vec3::new(3.0, 0.5, 9.0),
+            ..Camera::default()
+        };
+        let f = Frustum::from_camera(&cam).unwrap();
+        for c in cam.frustum_corners() {
+            let min_dist = f
+                .planes
+                .iter()
+                .map(|p| p.truncate().dot(c) + p.w)
+                .fold(f32::MAX, f32::min);
+            assert!(
+                min_dist.abs() < 1e-2 * c.distance(cam.position).max(1.0),
+                "{min_dist}"
+            );
+        }
+    }
+
+    #[test]
+    fn nan_or_degenerate_camera_is_an_error() {
+        let mut cam = Camera::default();
+        cam.position.x = f32::NAN;
+        assert!(matches!(
+            Frustum::from_camera(&cam),
+            Err(CrowdError::BadCamera { .. })
+        ));
+        let cam = Camera {
+            target: Camera::default().position,
+            ..Camera::default()
+        };
+        assert!(cam.validate().is_err());
+        let cam = Camera {
+            up: Vec3::new(0.0, 0.0, 1.0),
+            target: Vec3::new(0.0, 1.7, 5.0),
+            ..Camera::default()
+        };
+        assert!(cam.validate().is_err());
+        let cam = Camera {
+            near: 0.0,
+            ..Camera::default()
+        };
+        assert!(cam.validate().is_err());
+    }
+
+    #[test]
+    fn camera_paths_are_continuous() {
+        let lens = Camera::default();
+        for path in [
+            CameraPath::inside_crowd(100.0),
+            CameraPath::Orbit {
+                centre: Vec3::ZERO,
+                radius: 30.0,
+                height: 10.0,
+                period_s: 20.0,
+            },
+        ] {
+            let mut prev = path.camera_at(0.0, &lens);
+            for i in 1..2000 {
+                let c = path.camera_at(i as f32 / 30.0, &lens);
+                assert!(c.validate().is_ok());
+                assert!(c.position.distance(prev.position) < 0.5);
+                prev = c;
+            }
+        }
+    }
+}

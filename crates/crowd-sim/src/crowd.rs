@@ -1,0 +1,506 @@
+//! The crowd: configuration, construction and the per-frame step (cull, kernels, poses, FK).
+
+use crate::camera::{Bounds, Camera, CameraPath, Frustum};
+use crate::controls::{Controls, Detail, LevelTable};
+use crate::culling::WalkerBvh;
+use crate::error::CrowdError;
+use crate::path::{EllipsePath, heading_of, path_controls};
+use crate::policy::DetailPolicy;
+use crate::rng::SplitMix64;
+use crate::source::ClipSource;
+use crate::stats::{CrowdReport, FrameStats, StageTimings};
+use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Walkers per rayon task: large enough to amortise scheduling, small enough to balance.
+const CHUNK: usize = 64;
+/// Largest accepted time step (s).
+const MAX_DT: f32 = 10.0;
+
+/// How to populate and run a crowd.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CrowdConfig {
+    /// Number of walkers (at least 1).
+    pub walkers: usize,
+    /// Side of the square field `[-size/2, size/2]^2` (m).
+    pub field_size_m: f32,
+    /// Seed of every walker's generator (walker `i` uses `seed` and `i`).
+    pub seed: u64,
+    /// Frames per second of `Crowd::run` (`dt = 1 / fps`).
+    pub fps: f32,
+    /// Accuracy levels `0..blend_levels` blend clip transitions with ease-in/out; coarser levels
+    /// and root-only walkers switch clips directly (paper section 5.2).
+    pub blend_levels: usize,
+    /// Length of a blend window as a fraction of the new cycle (the paper blends half a cycle).
+    pub blend_fraction: f32,
+    /// Distance kept between paths and the field border (m).
+    pub border_m: f32,
+    /// Growth of each walker's culling box beyond its body, covering one frame of motion (m).
+    pub cull_margin_m: f32,
+    /// Rebuild the BVH every this many frames; refit it in between (1 = rebuild every frame).
+    /// Default 240: a rebuild costs ~20 refits at 10k walkers, and walkers move little per frame.
+    pub bvh_rebuild_interval: u32,
+}
+
+impl Default for CrowdConfig {
+    fn default() -> Self {
+        Self {
+            walkers: 100,
+            field_size_m: 100.0,
+            seed: 1,
+            fps: 30.0,
+            blend_levels: 3,
+            blend_fraction: 0.5,
+            border_m: 2.0,
+            cull_margin_m: 0.25,
+            bvh_rebuild_interval: 240,
+        }
+    }
+}
+
+impl CrowdConfig {
+    /// A config with `walkers` walkers at `density` walkers per square metre (field side
+    /// `sqrt(walkers / density)`), other fields default.
+    pub fn with_density(walkers: usize, density: f32) -> Self {
+        Self {
+            walkers,
+            field_size_m: (walkers as f32 / density).sqrt(),
+            ..Self::default()
+        }
+    }
+
+    fn validate(&self) -> Result<(), CrowdError> {
+        let bad = |field, value: f32| {
+            Err(CrowdError::BadConfig {
+                field,
+                value: f64::from(value),
+            })
+        };
+        if self.walkers == 0 {
+            return Err(CrowdError::NoWalkers);
+        }
+        if !(self.field_size_m.is_finite() && self.field_size_m > 0.0) {
+            return bad("field_size_m", self.field_size_m);
+        }
+        if !(self.fps.is_finite() && self.fps > 0.0) {
+            return bad("fps", self.fps);
+        }
+        if !(self.blend_fraction > 0.0 && self.blend_fraction <= 1.0) {
+            return bad("blend_fraction", self.blend_fraction);
+        }
+        if !(self.border_m.is_finite() && self.border_m >= 0.0) {
+            return bad("border_m", self.border_m);
+        }
+        if !(self.cull_margin_m.is_finite() && self.cull_margin_m >= 0.0) {
+            return bad("cull_margin_m", self.cull_margin_m);
+        }
+        if self.bvh_rebuild_interval == 0 {
+            return bad("bvh_rebuild_interval", 0.0);
+        }
+        Ok(())
+    }
+}
+
+/// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
+///
+/// All per-frame buffers are allocated by `new`; `step_into` allocates nothing except when the
+/// BVH is rebuilt (every `bvh_rebuild_interval` frames).
+pub struct Crowd<C> {
+    config: CrowdConfig,
+    params: StageParams,
+    walkers: Vec<Walker<C>>,
+    poses: Vec<f32>,
+    scratch: Vec<f32>,
+    joints: Vec<Vec3>,
+    bounds: Vec<Bounds>,
+    visible: Vec<bool>,
+    bvh: WalkerBvh,
+    bones: Vec<(usize, usize)>,
+    frame: u64,
+    time_s: f64,
+}
+
+impl<C: Send> Crowd<C> {
+    /// Places `config.walkers` walkers on seeded paths with root-only clips at random phases.
+    ///
+    /// Errors: zero walkers, a source without levels or with unusable control bounds, a bad
+    /// config value, a field too small for the source's turning range, or an invalid clip.
+    pub fn new<S: ClipSource<Clip = C>>(
+        source: &S,
+        config: CrowdConfig,
+    ) -> Result<Self, CrowdError> {
+        config.validate()?;
+        let levels = source.levels();
+        if levels.accuracy_levels == 0 || levels.pose_len == 0 {
+            return Err(CrowdError::NoLevels {
+                accuracy_levels: levels.accuracy_levels,
+                pose_len: levels.pose_len,
+            });
+        }
+        let bounds = source.control_bounds();
+        bounds.validate()?;
+        let params = StageParams {
+            levels,
+            bounds,
+            blend_levels: config.blend_levels,
+            blend_fraction: config.blend_fraction,
+        };
+        // Preferred strides and the tightest curvature they can follow with half the turn range.
+        let dz_lo = bounds.min.dz.max(0.2 * bounds.max.dz);
+        let (stride_lo, stride_hi) = (
+            dz_lo + 0.3 * (bounds.max.dz - dz_lo),
+            dz_lo + 0.8 * (bounds.max.dz - dz_lo),
+        );
+        let turn_max = bounds.max.turn.min(-bounds.min.turn);
+        let min_radius = 2.0 * stride_hi / turn_max;
+        let root_only = Detail::root_only(&levels);
+        let make = |i: usize| -> Result<Walker<C>, CrowdError> {
+            let mut g = SplitMix64::for_walker(config.seed, i);
+            let path =
+                EllipsePath::random(&mut g, config.field_size_m, config.border_m, min_radius)
+                    .ok_or(CrowdError::FieldTooSmall {
+                        field_m: config.field_size_m,
+                        needed_m: 2.0 * ((1.5 * min_radius).max(3.0) + config.border_m),
+                    })?;
+            let s = g.range(0.0, std::f32::consts::TAU);
+            let stride = g.range(stride_lo, stride_hi);
+            let height = g.range(bounds.min.height, bounds.max.height);
+            let phase = g.next_f32();
+            let base = path.point(s);
+            let heading = heading_of(path.velocity(s));
+            let controls = path_controls(&path, s, base, heading, stride, height, &bounds);
+            let mut cur = source.new_clip();
+            source.build_clip(&controls, root_only, &mut cur);
+            let dur = source.clip_duration(&cur);
+            if !valid_duration(dur) {
+                return Err(CrowdError::BadClipDuration {
+                    walker: i,
+                    duration: dur,
+                });
+            }
+            let cur_motion = source.clip_root_motion(&cur);
+            Ok(Walker {
+                path,
+                s,
+                stride,
+                height,
+                base,
+                heading,
+                t: phase * dur,
+                controls,
+                cur,
+                cur_detail: root_only,
+                cur_dur: dur,
+                cur_motion,
+                prev: source.new_clip(),
+                prev_detail: root_only,
+                prev_dur: dur,
+                blend: None,
+                rows: 0,
+                n_joints: 0,
+                root: Vec3::new(base.x, 0.0, base.y),
+            })
+        };
+        let walkers = (0..config.walkers)
+            .into_par_iter()
+            .with_min_len(CHUNK)
+            .map(make)
+            .collect::<Result<Vec<_>, _>>()?;
+        let n = walkers.len();
+        let npos = levels.joints + 1;
+        let mut crowd = Self {
+            config,
+            params,
+            walkers,
+            poses: vec![0.0; n * levels.pose_len],
+            scratch: vec![0.0; n * levels.pose_len],
+            joints: vec![Vec3::ZERO; n * npos],
+            bounds: vec![
+                Bounds {
+                    min: Vec3::ZERO,
+                    max: Vec3::ZERO
+                };
+                n
+            ],
+            visible: vec![false; n],
+            bvh: WalkerBvh::new(&[]),
+            bones: source.bones().to_vec(),
+            frame: 0,
+            time_s: 0.0,
+        };
+        crowd.update_bounds();
+        crowd.bvh.rebuild(&crowd.bounds);
+        Ok(crowd)
+    }
+
+    /// Culling box of every walker: root ground position +-(0.4 height + margin) horizontally,
+    /// `[-margin, 1.1 height + margin]` vertically.
+    fn update_bounds(&mut self) {
+        let m = self.config.cull_margin_m;
+        // Sequential: clips need only be `Send`, so walkers cannot be shared across threads.
+        for (b, w) in self.bounds.iter_mut().zip(&self.walkers) {
+            let r = 0.4 * w.height + m;
+            b.min = Vec3::new(w.root.x - r, -m, w.root.z - r);
+            b.max = Vec3::new(w.root.x + r, 1.1 * w.height + m, w.root.z + r);
+        }
+    }
+
+    /// Advances the crowd by `dt` seconds seen from `camera` and returns the frame's statistics.
+    pub fn step<S, P>(
+        &mut self,
+        source: &S,
+        policy: &P,
+        camera: &Camera,
+        dt: f32,
+    ) -> Result<FrameStats, CrowdError>
+    where
+        S: ClipSource<Clip = C>,
+        P: DetailPolicy + ?Sized,
+    {
+        let mut stats = FrameStats::default();
+        self.step_into(source, policy, camera, dt, &mut stats)?;
+        Ok(stats)
+    }
+
+    /// [`Crowd::step`] writing into a caller-owned `stats` (no allocation once its histogram has
+    /// the right length).
+    ///
+    /// Stages: (1) cull: boxes from last frame's roots, BVH refit (or rebuild), frustum query;
+    /// (2) kernels: per walker, detail from `policy` (distance from the camera to the root,
+    /// visibility), cycle scheduling and clip builds; (3) poses with transition blending;
+    /// (4) forward kinematics into world positions. Stages 2-4 run in parallel over walkers and
+    /// give the same bytes for any thread count.
+    pub fn step_into<S, P>(
+        &mut self,
+        source: &S,
+        policy: &P,
+        camera: &Camera,
+        dt: f32,
+        stats: &mut FrameStats,
+    ) -> Result<(), CrowdError>
+    where
+        S: ClipSource<Clip = C>,
+        P: DetailPolicy + ?Sized,
+    {
+        if !(dt.is_finite() && (0.0..=MAX_DT).contains(&dt)) {
+            return Err(CrowdError::BadTimeStep { dt });
+        }
+        let frustum = Frustum::from_camera(camera)?;
+
+        // (1) Culling.
+        let t0 = Instant::now();
+        self.update_bounds();
+        if self.frame % u64::from(self.config.bvh_rebuild_interval) == 0 {
+            self.bvh.rebuild(&self.bounds);
+        } else {
+            self.bvh.refit(&self.bounds);
+        }
+        let visible = self.bvh.query(&frustum, &mut self.visible);
+
+        // (2) Kernels.
+        let t1 = Instant::now();
+        let params = self.params;
+        let eye = camera.position;
+        let fault = self
+            .walkers
+            .par_iter_mut()
+            .zip(self.visible.par_iter())
+            .enumerate()
+            .with_min_len(CHUNK)
+            .map(|(i, (w, &vis))| {
+                let d = policy.detail(w.root.distance(eye), vis, camera);
+                match w.advance(source, &params, d, dt) {
+                    Ok(n) => (n, None),
+                    Err(e) => (0, Some((i, e))),
+                }
+            })
+            .reduce(
+                || (0, None),
+                |a, b| {
+                    let f = match (a.1, b.1) {
+                        (Some(x), Some(y)) => Some(if x.0 <= y.0 { x } else { y }),
+                        (x, y) => x.or(y),
+                    };
+                    (a.0 + b.0, f)
+                },
+            );
+        if let Some((walker, e)) = fault.1 {
+            return Err(match e {
+                WalkerFault::Duration(duration) => CrowdError::BadClipDuration { walker, duration },
+                WalkerFault::Level(level) => CrowdError::BadLevel {
+                    walker,
+                    level,
+                    levels: params.levels.accuracy_levels,
+                },
+            });
+        }
+
+        // (3) Poses.
+        let t2 = Instant::now();
+        let pl = params.levels.pose_len;
+        self.walkers
+            .par_iter_mut()
+            .zip(self.poses.par_chunks_mut(pl))
+            .zip(self.scratch.par_chunks_mut(pl))
+            .with_min_len(CHUNK)
+            .for_each(|((w, pose), scratch)| w.pose(source, pose, scratch));
+
+        // (4) Forward kinematics.
+        let t3 = Instant::now();
+        let npos = params.levels.joints + 1;
+        self.walkers
+            .par_iter_mut()
+            .zip(self.poses.par_chunks(pl))
+            .zip(self.joints.par_chunks_mut(npos))
+            .with_min_len(CHUNK)
+            .for_each(|((w, pose), out)| w.place(source, pose, out));
+        let t4 = Instant::now();
+
+        stats.timings = StageTimings {
+            cull: t1 - t0,
+            kernels: t2 - t1,
+            poses: t3 - t2,
+            fk: t4 - t3,
+        };
+        stats.level_histogram.clear();
+        stats
+            .level_histogram
+            .resize(params.levels.histogram_bins(), 0);
+        stats.blending = 0;
+        for w in &self.walkers {
+            stats.level_histogram[params.levels.bin(&w.cur_detail)] += 1;
+            stats.blending += usize::from(w.blend.is_some());
+        }
+        stats.visible = visible;
+        stats.kernels_built = fault.0;
+        self.frame += 1;
+        self.time_s += f64::from(dt);
+        Ok(())
+    }
+
+    /// Runs `frames` frames at `dt = 1 / config.fps` with the camera of `path` (lens and image
+    /// from `lens`) and aggregates their statistics.
+    pub fn run<S, P>(
+        &mut self,
+        source: &S,
+        policy: &P,
+        path: &CameraPath,
+        lens: &Camera,
+        frames: usize,
+    ) -> Result<CrowdReport, CrowdError>
+    where
+        S: ClipSource<Clip = C>,
+        P: DetailPolicy + ?Sized,
+    {
+        let dt = 1.0 / self.config.fps;
+        let mut report = CrowdReport::new();
+        let mut stats = FrameStats::default();
+        for _ in 0..frames {
+            let cam = path.camera_at(self.time_s as f32, lens);
+            self.step_into(source, policy, &cam, dt, &mut stats)?;
+            report.add(&stats);
+        }
+        Ok(report)
+    }
+}
+
+impl<C> Crowd<C> {
+    /// Number of walkers.
+    pub fn len(&self) -> usize {
+        self.walkers.len()
+    }
+
+    /// Always false: a crowd has at least one walker.
+    pub fn is_empty(&self) -> bool {
+        self.walkers.is_empty()
+    }
+
+    /// The configuration the crowd was built with.
+    pub fn config(&self) -> &CrowdConfig {
+        &self.config
+    }
+
+    /// The source's level table.
+    pub fn levels(&self) -> LevelTable {
+        self.params.levels
+    }
+
+    /// Bones for drawing (copied from the source).
+    pub fn bones(&self) -> &[(usize, usize)] {
+        &self.bones
+    }
+
+    /// Frames stepped so far.
+    pub fn frame(&self) -> u64 {
+        self.frame
+    }
+
+    /// Simulated seconds so far.
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// World joint positions of walker `i` after the last step (root first; empty before the
+    /// first step). Panics if `i >= len()`.
+    pub fn joint_positions(&self, i: usize) -> &[Vec3] {
+        let npos = self.params.levels.joints + 1;
+        &self.joints[i * npos..i * npos + self.walkers[i].n_joints]
+    }
+
+    /// World root position of walker `i` after the last step (its path start before).
+    pub fn root_position(&self, i: usize) -> Vec3 {
+        self.walkers[i].root
+    }
+
+    /// Whether walker `i`'s box intersected the frustum in the last step.
+    pub fn is_visible(&self, i: usize) -> bool {
+        self.visible[i]
+    }
+
+    /// Visibility flags of all walkers from the last step.
+    pub fn visible_flags(&self) -> &[bool] {
+        &self.visible
+    }
+
+    /// Culling boxes used in the last step.
+    pub fn bounds(&self) -> &[Bounds] {
+        &self.bounds
+    }
+
+    /// Detail of walker `i`'s current clip.
+    pub fn detail(&self, i: usize) -> Detail {
+        self.walkers[i].cur_detail
+    }
+
+    /// Level histogram bin of walker `i` (see `FrameStats::level_histogram`).
+    pub fn level_bin(&self, i: usize) -> usize {
+        self.params.levels.bin(&self.walkers[i].cur_detail)
+    }
+
+    /// The path of walker `i`.
+    pub fn path(&self, i: usize) -> &EllipsePath {
+        &self.walkers[i].path
+    }
+
+    /// Standing height of walker `i` (m).
+    pub fn height(&self, i: usize) -> f32 {
+        self.walkers[i].height
+    }
+
+    /// Controls of walker `i`'s current cycle (after clamping).
+    pub fn controls(&self, i: usize) -> Controls {
+        self.walkers[i].controls
+    }
+
+    /// Origin `(x, z)` and heading of walker `i`'s current cycle frame.
+    pub fn cycle_frame(&self, i: usize) -> (Vec2, f32) {
+        (self.walkers[i].base, self.walkers[i].heading)
+    }
+
+    /// Whether walker `i` is inside a transition blend.
+    pub fn is_blending(&self, i: usize) -> bool {
+        self.walkers[i].blend.is_some()
+    }
+}

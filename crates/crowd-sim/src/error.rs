@@ -1,0 +1,125 @@
+//! Error types of the crate: one enum for the simulation, one for rendering and file output.
+
+use std::path::PathBuf;
+
+/// What went wrong while building or stepping a crowd.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum CrowdError {
+    /// `CrowdConfig::walkers` was zero.
+    #[error("a crowd needs at least one walker (config.walkers = 0)")]
+    NoWalkers,
+    /// The clip source reports no accuracy level or an empty pose vector.
+    #[error(
+        "clip source has no levels: accuracy_levels = {accuracy_levels}, pose_len = {pose_len}"
+    )]
+    NoLevels {
+        /// Number of accuracy levels reported by the source.
+        accuracy_levels: usize,
+        /// Pose vector length reported by the source.
+        pose_len: usize,
+    },
+    /// The control bounds of the source are not finite, inverted, or allow no forward motion/turn.
+    #[error("clip source control bounds are unusable: {what}")]
+    BadControlBounds {
+        /// Which bound is wrong.
+        what: &'static str,
+    },
+    /// A configuration value is out of range (not finite, zero, negative...).
+    #[error("crowd config field `{field}` is invalid: {value}")]
+    BadConfig {
+        /// Name of the field in `CrowdConfig`.
+        field: &'static str,
+        /// Offending value.
+        value: f64,
+    },
+    /// The field is too small for paths whose curvature the source's turn range can follow.
+    #[error(
+        "field of {field_m} m is too small: paths need at least {needed_m} m (turn range too narrow?)"
+    )]
+    FieldTooSmall {
+        /// Configured field side length in metres.
+        field_m: f32,
+        /// Smallest side length that fits one path.
+        needed_m: f32,
+    },
+    /// A camera parameter is NaN/infinite or degenerate.
+    #[error("camera is invalid: {what}")]
+    BadCamera {
+        /// Which parameter is wrong.
+        what: &'static str,
+    },
+    /// The time step is not finite or negative.
+    #[error("time step dt = {dt} s is not a finite non-negative number")]
+    BadTimeStep {
+        /// Offending time step in seconds.
+        dt: f32,
+    },
+    /// The source built a clip whose duration is not finite or too short to play.
+    #[error("walker {walker}: clip duration {duration} s is not a finite value >= 1 ms")]
+    BadClipDuration {
+        /// Index of the walker whose clip is wrong.
+        walker: usize,
+        /// Reported duration in seconds.
+        duration: f32,
+    },
+    /// The policy asked for an accuracy level the source does not have.
+    #[error("walker {walker}: policy asked for accuracy level {level}, source has {levels}")]
+    BadLevel {
+        /// Index of the walker.
+        walker: usize,
+        /// Requested accuracy level.
+        level: usize,
+        /// Number of accuracy levels of the source.
+        levels: usize,
+    },
+}
+
+/// What went wrong while rendering or writing images.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The output directory cannot be created or written.
+    #[error("cannot write to directory {path}: {source}")]
+    Dir {
+        /// The directory.
+        path: PathBuf,
+        /// Underlying I/O error.
+        source: std::io::Error,
+    },
+    /// Writing or renaming a file failed.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The file being written.
+        path: PathBuf,
+        /// Underlying I/O error.
+        source: std::io::Error,
+    },
+    /// The PNG encoder failed.
+    #[error("PNG encoding of {path} failed: {message}")]
+    Png {
+        /// The file being written.
+        path: PathBuf,
+        /// Encoder message.
+        message: String,
+    },
+    /// The GIF encoder failed.
+    #[error("GIF encoding of {path} failed: {message}")]
+    Gif {
+        /// The file being written.
+        path: PathBuf,
+        /// Encoder message.
+        message: String,
+    },
+    /// Image size is zero or too large for the format.
+    #[error("image size {width}x{height} is not supported ({what})")]
+    BadSize {
+        /// Requested width in pixels.
+        width: u32,
+        /// Requested height in pixels.
+        height: u32,
+        /// Why it is refused.
+        what: &'static str,
+    },
+    /// The camera used for rendering is invalid.
+    #[error(transparent)]
+    Camera(#[from] CrowdError),
+}

@@ -1,0 +1,210 @@
+//! Walker paths: seeded closed ellipses over the field, and the controller that turns "the path
+//! ahead" into the controls of the next gait cycle.
+//!
+//! Ground coordinates are `(x, z)` as a `Vec2`; a heading `h` faces `(sin h, cos h)` and its left
+//! is `(cos h, -sin h)` (positive heading change = turn left, as in `docs/architecture.md`).
+
+use crate::controls::{ControlBounds, Controls};
+use crate::rng::SplitMix64;
+use glam::Vec2;
+use std::f32::consts::{PI, TAU};
+
+/// Unit forward direction `(sin h, cos h)` of heading `h`.
+pub fn forward(h: f32) -> Vec2 {
+    Vec2::new(h.sin(), h.cos())
+}
+
+/// Unit left direction `(cos h, -sin h)` of heading `h`.
+pub fn left(h: f32) -> Vec2 {
+    Vec2::new(h.cos(), -h.sin())
+}
+
+/// Heading of a non-zero ground direction `d`: `atan2(d.x, d.z)`.
+pub fn heading_of(d: Vec2) -> f32 {
+    d.x.atan2(d.y)
+}
+
+/// Wraps an angle into `(-pi, pi]`.
+pub fn wrap_angle(a: f32) -> f32 {
+    let w = (a + PI).rem_euclid(TAU) - PI;
+    if w <= -PI { w + TAU } else { w }
+}
+
+/// A closed elliptic path `p(s) = c + R(rot) (a cos s, b sin s)`, travelled with increasing `s`
+/// when `dir = 1` and decreasing `s` when `dir = -1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EllipsePath {
+    /// Centre on the ground (m).
+    pub centre: Vec2,
+    /// Semi-axes `(a, b)` (m), `a >= b > 0`.
+    pub axes: Vec2,
+    /// Rotation of the major axis (rad).
+    pub rot: f32,
+    /// Direction of travel, +1 or -1.
+    pub dir: f32,
+}
+
+impl EllipsePath {
+    fn rotate(&self, v: Vec2) -> Vec2 {
+        let (s, c) = self.rot.sin_cos();
+        Vec2::new(c * v.x - s * v.y, s * v.x + c * v.y)
+    }
+
+    /// Point at parameter `s`.
+    pub fn point(&self, s: f32) -> Vec2 {
+        self.centre + self.rotate(Vec2::new(self.axes.x * s.cos(), self.axes.y * s.sin()))
+    }
+
+    /// Derivative `dp/ds` times `dir` (the direction of travel, not normalised).
+    pub fn velocity(&self, s: f32) -> Vec2 {
+        self.dir * self.rotate(Vec2::new(-self.axes.x * s.sin(), self.axes.y * s.cos()))
+    }
+
+    /// Smallest radius of curvature, `b^2 / a`.
+    pub fn min_radius_of_curvature(&self) -> f32 {
+        self.axes.y * self.axes.y / self.axes.x
+    }
+
+    /// Parameter of the point closest to `p`, searched within `+-0.8` rad of `s_guess`
+    /// (17 samples, then golden-section refinement). Walkers stay close to their path, so the
+    /// local search suffices.
+    pub fn closest_param_near(&self, p: Vec2, s_guess: f32) -> f32 {
+        let d2 = |s: f32| self.point(s).distance_squared(p);
+        let step = 0.1;
+        let mut best = s_guess;
+        let mut best_d = d2(s_guess);
+        for k in -8..=8 {
+            let s = s_guess + k as f32 * step;
+            let d = d2(s);
+            if d < best_d {
+                best_d = d;
+                best = s;
+            }
+        }
+        let (mut lo, mut hi) = (best - step, best + step);
+        let g = 0.618_034_f32;
+        for _ in 0..16 {
+            let m1 = hi - g * (hi - lo);
+            let m2 = lo + g * (hi - lo);
+            if d2(m1) < d2(m2) { hi = m2 } else { lo = m1 }
+        }
+        0.5 * (lo + hi)
+    }
+
+    /// Distance from `p` to the path (global search: 720 samples then local refinement).
+    pub fn distance_to(&self, p: Vec2) -> f32 {
+        let mut best = 0.0;
+        let mut best_d = f32::MAX;
+        for k in 0..720 {
+            let s = k as f32 * TAU / 720.0;
+            let d = self.point(s).distance_squared(p);
+            if d < best_d {
+                best_d = d;
+                best = s;
+            }
+        }
+        let s = self.closest_param_near(p, best);
+        self.point(s).distance(p)
+    }
+
+    /// Draws a path that fits in the square field `[-field/2, field/2]^2` with `margin` to spare
+    /// and whose radius of curvature is at least `min_radius`. Returns `None` when even the
+    /// smallest such ellipse does not fit.
+    pub fn random(g: &mut SplitMix64, field: f32, margin: f32, min_radius: f32) -> Option<Self> {
+        let half = 0.5 * field - margin;
+        let a_min = (1.5 * min_radius).max(3.0);
+        if half < a_min {
+            return None;
+        }
+        let a_max = half.min(40.0).max(a_min);
+        let a = g.range(a_min, a_max);
+        // b^2 / a >= min_radius  <=>  b >= sqrt(min_radius a).
+        let b_min = (min_radius * a).sqrt().max(0.5 * a).min(a);
+        let b = g.range(b_min, a);
+        let lim = half - a;
+        let centre = Vec2::new(g.range(-lim, lim), g.range(-lim, lim));
+        let rot = g.range(0.0, PI);
+        let dir = if g.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
+        Some(Self {
+            centre,
+            axes: Vec2::new(a, b),
+            rot,
+            dir,
+        })
+    }
+}
+
+/// Controls for the next cycle of a walker at `pos` with heading `heading`, following `path` from
+/// parameter `s` with a preferred stride `stride` (m per cycle), then clamped into `bounds`.
+///
+/// Pure pursuit one stride ahead: the target `T = p(s + dir L / |p'(s)|)` is expressed in the
+/// walker's heading frame, `dx = (T - pos) . left(h)`, `dz = (T - pos) . forward(h)`, and
+/// `turn = wrap(heading(p'(s_T)) - h)`. Lateral and heading errors are corrected within a few
+/// cycles; the clamp keeps every request inside what the model covers.
+pub fn path_controls(
+    path: &EllipsePath,
+    s: f32,
+    pos: Vec2,
+    heading: f32,
+    stride: f32,
+    height: f32,
+    bounds: &ControlBounds,
+) -> Controls {
+    let speed = path.velocity(s).length().max(1e-3);
+    let s_t = s + path.dir * stride / speed;
+    let target = path.point(s_t);
+    let d = target - pos;
+    let turn = wrap_angle(heading_of(path.velocity(s_t)) - heading);
+    bounds.clamp(&Controls {
+        dx: d.dot(left(heading)),
+        dz: d.dot(forward(heading)),
+        turn,
+        height,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heading_helpers_agree_with_conventions() {
+        // Heading 0 faces +z, its left is +x; a positive turn moves forward towards +x.
+        assert!(forward(0.0).distance(Vec2::new(0.0, 1.0)) < 1e-6);
+        assert!(left(0.0).distance(Vec2::new(1.0, 0.0)) < 1e-6);
+        assert!(forward(0.1).x > 0.0);
+        assert!((heading_of(forward(1.2)) - 1.2).abs() < 1e-5);
+        assert!((wrap_angle(3.0 * PI) - PI).abs() < 1e-5);
+        assert!((wrap_angle(-0.5) + 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn random_paths_fit_the_field_and_curvature() {
+        let mut g = SplitMix64::new(3);
+        for _ in 0..200 {
+            let p = EllipsePath::random(&mut g, 60.0, 2.0, 4.0).unwrap();
+            assert!(p.min_radius_of_curvature() >= 4.0 - 1e-3);
+            for k in 0..64 {
+                let q = p.point(k as f32 * TAU / 64.0);
+                assert!(q.x.abs() <= 28.0 + 1e-3 && q.y.abs() <= 28.0 + 1e-3);
+            }
+        }
+        assert!(EllipsePath::random(&mut g, 10.0, 2.0, 4.0).is_none());
+    }
+
+    #[test]
+    fn closest_param_recovers_the_parameter() {
+        let p = EllipsePath {
+            centre: Vec2::new(1.0, 2.0),
+            axes: Vec2::new(10.0, 6.0),
+            rot: 0.4,
+            dir: 1.0,
+        };
+        for k in 0..20 {
+            let s = k as f32 * 0.3;
+            let got = p.closest_param_near(p.point(s), s + 0.3);
+            assert!(p.point(got).distance(p.point(s)) < 1e-3);
+            assert!(p.distance_to(p.point(s)) < 1e-3);
+        }
+    }
+}

@@ -1,0 +1,57 @@
+//! The contract between the crowd and whatever synthesises motion.
+
+use crate::controls::{ControlBounds, Controls, Detail, LevelTable, RootMotion};
+use glam::Vec3;
+
+/// A provider of gait clips at (controls, detail), implemented by the facade for the multilinear
+/// model and for a naive baseline, and by [`testing::ProceduralSource`](crate::testing::ProceduralSource).
+///
+/// The crowd calls the methods in three separate stages so that each is timed on its own:
+/// `build_clip` once per cycle (the *kernel*, e.g. `G(c) = U_P K(c)`), then per frame `pose`
+/// (e.g. `G(c) w_T`, eq. 5) and `joints` (forward kinematics of the active joints).
+///
+/// Frames: a clip is one gait cycle starting at the origin of its *cycle frame* (root on the
+/// ground origin at `t = 0`, facing +z, +x left, y up). `pose` and `joints` describe the whole
+/// body in that frame, root translation and orientation included. The root motion returned by
+/// `clip_root_motion` must match where `joints` puts the root at `t = clip_duration` (else
+/// walkers jump at cycle boundaries); the next cycle starts there.
+///
+/// Pose vectors are blended linearly (ease-in/out transitions), so every row must be a quantity
+/// that can be interpolated (positions, exponential maps on one branch, ...).
+pub trait ClipSource: Sync {
+    /// A per-walker clip buffer, allocated once by `new_clip` and refilled by `build_clip`.
+    type Clip: Send;
+
+    /// Accuracy levels, joints and pose vector length.
+    fn levels(&self) -> LevelTable;
+
+    /// The range of controls the source covers; the crowd clamps every request into it.
+    fn control_bounds(&self) -> ControlBounds;
+
+    /// A fresh clip buffer (its content is unspecified until `build_clip`).
+    fn new_clip(&self) -> Self::Clip;
+
+    /// Synthesises the clip for `controls` at `detail` into `clip` (the per-cycle kernel).
+    /// `detail.accuracy < levels().accuracy_levels` and `detail.active_joints <= levels().joints`.
+    fn build_clip(&self, controls: &Controls, detail: Detail, clip: &mut Self::Clip);
+
+    /// Duration of the clip in seconds (must be finite and at least 1 ms).
+    fn clip_duration(&self, clip: &Self::Clip) -> f32;
+
+    /// Root displacement and heading change over the whole clip, in its start heading frame.
+    fn clip_root_motion(&self, clip: &Self::Clip) -> RootMotion;
+
+    /// Writes the pose vector at `t_seconds` (in `[0, clip_duration]`) into `out`
+    /// (`out.len() >= levels().pose_len`) and returns the number of rows written (rows beyond the
+    /// clip's detail are not written).
+    fn pose(&self, clip: &Self::Clip, t_seconds: f32, out: &mut [f32]) -> usize;
+
+    /// Forward kinematics of `pose` (as written by `pose` for this clip) into cycle-frame joint
+    /// positions in metres, root first; `out.len() >= 1 + levels().joints`. Returns how many
+    /// positions were written (1 for a root-only clip).
+    fn joints(&self, clip: &Self::Clip, pose: &[f32], out: &mut [Vec3]) -> usize;
+
+    /// Bones as pairs of indices into the joint positions, for drawing; a bone is drawn only when
+    /// both ends were written by `joints`.
+    fn bones(&self) -> &[(usize, usize)];
+}

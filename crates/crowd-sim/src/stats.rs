@@ -1,0 +1,170 @@
+//! Per-frame timings and level histograms, and their aggregate over a run.
+
+use std::time::Duration;
+
+/// Wall-clock time of each stage of one crowd frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimings {
+    /// Bounds update, BVH refit or rebuild, frustum query.
+    pub cull: Duration,
+    /// Detail choice, cycle scheduling and clip kernels (`ClipSource::build_clip`).
+    pub kernels: Duration,
+    /// Pose vectors (`ClipSource::pose`) and transition blending.
+    pub poses: Duration,
+    /// Forward kinematics (`ClipSource::joints`) and placement in the world.
+    pub fk: Duration,
+}
+
+impl StageTimings {
+    /// Sum of all stages: the simulation and synthesis cost of the frame (no rendering).
+    pub fn total(&self) -> Duration {
+        self.cull + self.kernels + self.poses + self.fk
+    }
+
+    fn add(&mut self, o: &StageTimings) {
+        self.cull += o.cull;
+        self.kernels += o.kernels;
+        self.poses += o.poses;
+        self.fk += o.fk;
+    }
+}
+
+/// What one `Crowd::step` did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FrameStats {
+    /// Time per stage.
+    pub timings: StageTimings,
+    /// Walkers per histogram bin: bin `l < accuracy_levels` counts walkers whose clip is at
+    /// accuracy `l` with joints; the last bin counts root-only walkers. Sums to the walker count.
+    pub level_histogram: Vec<u32>,
+    /// Walkers whose bounds intersect the view frustum.
+    pub visible: usize,
+    /// Clip kernels built during the frame (cycle changes and detail upgrades).
+    pub kernels_built: usize,
+    /// Walkers currently blending two clips.
+    pub blending: usize,
+}
+
+/// Aggregate of many frames: frames per second worst/mean/best and summed histograms.
+///
+/// The frame rate counts simulation, synthesis and forward kinematics (the stage timings), not
+/// rendering; the mean is `frames / total time` (the harmonic mean of per-frame rates).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CrowdReport {
+    /// Frames added.
+    pub frames: usize,
+    /// Lowest per-frame rate (1 / slowest frame).
+    pub fps_worst: f64,
+    /// `frames / total time`.
+    pub fps_mean: f64,
+    /// Highest per-frame rate (1 / fastest frame).
+    pub fps_best: f64,
+    /// Summed stage timings.
+    pub total: StageTimings,
+    /// Level histogram summed over frames (walker-frames per bin).
+    pub level_histogram: Vec<u64>,
+    /// Summed visible walker counts.
+    pub visible_sum: u64,
+    /// Summed kernel builds.
+    pub kernels_built: u64,
+}
+
+impl CrowdReport {
+    /// An empty report.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds one frame.
+    pub fn add(&mut self, f: &FrameStats) {
+        let secs = f.timings.total().as_secs_f64().max(1e-9);
+        let fps = 1.0 / secs;
+        if self.frames == 0 {
+            self.fps_worst = fps;
+            self.fps_best = fps;
+        } else {
+            self.fps_worst = self.fps_worst.min(fps);
+            self.fps_best = self.fps_best.max(fps);
+        }
+        self.frames += 1;
+        self.total.add(&f.timings);
+        self.fps_mean = self.frames as f64 / self.total.total().as_secs_f64().max(1e-9);
+        if self.level_histogram.len() < f.level_histogram.len() {
+            self.level_histogram.resize(f.level_histogram.len(), 0);
+        }
+        for (a, b) in self.level_histogram.iter_mut().zip(&f.level_histogram) {
+            *a += u64::from(*b);
+        }
+        self.visible_sum += f.visible as u64;
+        self.kernels_built += f.kernels_built as u64;
+    }
+
+    /// Mean stage timings per frame.
+    pub fn mean_timings(&self) -> StageTimings {
+        let n = self.frames.max(1) as u32;
+        StageTimings {
+            cull: self.total.cull / n,
+            kernels: self.total.kernels / n,
+            poses: self.total.poses / n,
+            fk: self.total.fk / n,
+        }
+    }
+
+    /// Mean number of visible walkers per frame.
+    pub fn mean_visible(&self) -> f64 {
+        self.visible_sum as f64 / self.frames.max(1) as f64
+    }
+}
+
+impl std::fmt::Display for CrowdReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let m = self.mean_timings();
+        writeln!(
+            f,
+            "{} frames: fps worst {:.1} / mean {:.1} / best {:.1}",
+            self.frames, self.fps_worst, self.fps_mean, self.fps_best
+        )?;
+        writeln!(
+            f,
+            "mean per frame: cull {:?}, kernels {:?}, poses {:?}, fk {:?}; visible {:.0}",
+            m.cull,
+            m.kernels,
+            m.poses,
+            m.fk,
+            self.mean_visible()
+        )?;
+        write!(
+            f,
+            "level histogram (walker-frames, last = root only): {:?}",
+            self.level_histogram
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_aggregates_fps_and_histograms() {
+        let mut r = CrowdReport::new();
+        let frame = |ms: u64, h: Vec<u32>| FrameStats {
+            timings: StageTimings {
+                kernels: Duration::from_millis(ms),
+                ..Default::default()
+            },
+            level_histogram: h,
+            visible: 3,
+            ..Default::default()
+        };
+        r.add(&frame(10, vec![1, 2]));
+        r.add(&frame(40, vec![3, 0]));
+        assert_eq!(r.frames, 2);
+        assert!((r.fps_best - 100.0).abs() < 1e-6);
+        assert!((r.fps_worst - 25.0).abs() < 1e-6);
+        assert!((r.fps_mean - 40.0).abs() < 1e-6);
+        assert_eq!(r.level_histogram, vec![4, 2]);
+        assert_eq!(r.mean_visible(), 3.0);
+        assert!(r.to_string().contains("fps worst 25.0"));
+    }
+}

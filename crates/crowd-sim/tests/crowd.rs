@@ -1,0 +1,412 @@
+//! End-to-end tests of the crowd with the procedural source.
+
+use crowd_sim::testing::{ProceduralClip, ProceduralSource, paper_distance_policy};
+use crowd_sim::{
+    Camera, CameraPath, ClipSource, ControlBounds, Controls, Crowd, CrowdConfig, CrowdError,
+    Detail, Frustum, LevelTable, RootMotion,
+};
+use glam::{Vec2, Vec3};
+
+const DT: f32 = 1.0 / 30.0;
+
+fn config(walkers: usize, field: f32) -> CrowdConfig {
+    CrowdConfig {
+        walkers,
+        field_size_m: field,
+        seed: 42,
+        ..CrowdConfig::default()
+    }
+}
+
+fn orbit() -> CameraPath {
+    CameraPath::Orbit {
+        centre: Vec3::ZERO,
+        radius: 25.0,
+        height: 6.0,
+        period_s: 12.0,
+    }
+}
+
+/// A source whose clips move 8 % less than asked and veer slightly right: the path controller
+/// must still keep walkers on their paths.
+struct BiasedSource(ProceduralSource);
+
+impl ClipSource for BiasedSource {
+    type Clip = ProceduralClip;
+    fn levels(&self) -> LevelTable {
+        self.0.levels()
+    }
+    fn control_bounds(&self) -> ControlBounds {
+        self.0.control_bounds()
+    }
+    fn new_clip(&self) -> ProceduralClip {
+        self.0.new_clip()
+    }
+    fn build_clip(&self, c: &Controls, d: Detail, clip: &mut ProceduralClip) {
+        let biased = Controls {
+            dz: 0.92 * c.dz,
+            turn: c.turn - 0.03,
+            dx: c.dx - 0.02,
+            ..*c
+        };
+        self.0.build_clip(&biased, d, clip)
+    }
+    fn clip_duration(&self, clip: &ProceduralClip) -> f32 {
+        self.0.clip_duration(clip)
+    }
+    fn clip_root_motion(&self, clip: &ProceduralClip) -> RootMotion {
+        self.0.clip_root_motion(clip)
+    }
+    fn pose(&self, clip: &ProceduralClip, t: f32, out: &mut [f32]) -> usize {
+        self.0.pose(clip, t, out)
+    }
+    fn joints(&self, clip: &ProceduralClip, pose: &[f32], out: &mut [Vec3]) -> usize {
+        self.0.joints(clip, pose, out)
+    }
+    fn bones(&self) -> &[(usize, usize)] {
+        self.0.bones()
+    }
+}
+
+fn check_on_paths<S: ClipSource<Clip = ProceduralClip>>(source: &S) {
+    let policy = paper_distance_policy(source.levels());
+    let cfg = config(150, 60.0);
+    let mut crowd = Crowd::new(source, cfg).unwrap();
+    let lens = Camera::default();
+    let half = 0.5 * cfg.field_size_m;
+    let mut worst = 0.0f32;
+    for f in 0..600 {
+        let cam = orbit().camera_at(f as f32 * DT, &lens);
+        crowd.step(source, &policy, &cam, DT).unwrap();
+        if f % 10 == 0 {
+            for i in 0..crowd.len() {
+                let r = crowd.root_position(i);
+                assert!(
+                    r.x.abs() < half && r.z.abs() < half,
+                    "walker {i} left the field at {r}"
+                );
+                worst = worst.max(crowd.path(i).distance_to(Vec2::new(r.x, r.z)));
+            }
+        }
+    }
+    assert!(worst < 0.6, "a walker strayed {worst} m from its path");
+}
+
+#[test]
+fn walkers_stay_on_their_paths_and_inside_the_field() {
+    check_on_paths(&ProceduralSource::new());
+}
+
+#[test]
+fn path_controller_absorbs_a_biased_source() {
+    check_on_paths(&BiasedSource(ProceduralSource::new()));
+}
+
+#[test]
+fn root_motion_is_continuous_across_cycle_boundaries() {
+    let source = ProceduralSource::new();
+    let policy = paper_distance_policy(source.levels());
+    let mut crowd = Crowd::new(&source, config(120, 50.0)).unwrap();
+    let lens = Camera::default();
+    let cam = orbit().camera_at(0.0, &lens);
+    crowd.step(&source, &policy, &cam, DT).unwrap();
+    let mut prev: Vec<Vec3> = (0..crowd.len()).map(|i| crowd.root_position(i)).collect();
+    let mut prev_step = vec![f32::NAN; crowd.len()];
+    let mut bases: Vec<Vec2> = (0..crowd.len()).map(|i| crowd.cycle_frame(i).0).collect();
+    let mut boundaries = 0;
+    for f in 1..240 {
+        let cam = orbit().camera_at(f as f32 * DT, &lens);
+        crowd.step(&source, &policy, &cam, DT).unwrap();
+        for i in 0..crowd.len() {
+            let r = crowd.root_position(i);
+            let step = r.distance(prev[i]);
+            // At most ~1.7 m/s plus sway and bob: 7 cm per frame at 30 fps.
+            assert!(step < 0.08, "walker {i} jumped {step} m at frame {f}");
+            let base = crowd.cycle_frame(i).0;
+            if base != bases[i] {
+                boundaries += 1;
+                // The step over a boundary is like its neighbours' (no jump beyond speed changes).
+                if prev_step[i].is_finite() {
+                    assert!(
+                        (step - prev_step[i]).abs() < 0.02,
+                        "walker {i}: {step} vs {}",
+                        prev_step[i]
+                    );
+                }
+                bases[i] = base;
+            }
+            prev_step[i] = step;
+            prev[i] = r;
+        }
+    }
+    assert!(
+        boundaries > 500,
+        "only {boundaries} cycle boundaries were crossed"
+    );
+}
+
+#[test]
+fn blending_happens_only_at_the_first_levels_and_is_smooth() {
+    let source = ProceduralSource::new();
+    let lv = source.levels();
+    // Near walkers at level 0, the rest at level 6, all with every joint, all visible or not.
+    let policy = |d: f32, _vis: bool, _c: &Camera| Detail {
+        accuracy: if d < 38.0 { 0 } else { 6 },
+        active_joints: lv.joints,
+    };
+    let cfg = CrowdConfig {
+        blend_levels: 2,
+        ..config(150, 60.0)
+    };
+    let mut crowd = Crowd::new(&source, cfg).unwrap();
+    let cam = Camera {
+        position: Vec3::new(0.0, 30.0, -1.0),
+        target: Vec3::ZERO,
+        ..Camera::default()
+    };
+    crowd.step(&source, &policy, &cam, DT).unwrap();
+    let mut prev: Vec<Vec<Vec3>> = (0..crowd.len())
+        .map(|i| crowd.joint_positions(i).to_vec())
+        .collect();
+    let (mut blended_frames, mut coarse_frames) = (0, 0);
+    let (mut worst_blend, mut worst_steady) = (0.0f32, 0.0f32);
+    // 60 fps: limbs move ~5 cm per frame, so a pop between clips would stand out.
+    for f in 1..400 {
+        let stats = crowd.step(&source, &policy, &cam, 0.5 * DT).unwrap();
+        assert_eq!(
+            stats.blending,
+            (0..crowd.len()).filter(|&i| crowd.is_blending(i)).count()
+        );
+        for (i, prev_i) in prev.iter_mut().enumerate() {
+            let d = crowd.detail(i);
+            let cur = crowd.joint_positions(i);
+            let root_step = cur[0] - prev_i[0];
+            // Largest joint motion relative to the root motion.
+            let rel = cur
+                .iter()
+                .zip(prev_i.iter())
+                .map(|(a, b)| ((*a - *b) - root_step).length())
+                .fold(0.0, f32::max);
+            if crowd.is_blending(i) {
+                assert!(
+                    d.accuracy < 2,
+                    "walker {i} blends at level {} in frame {f}",
+                    d.accuracy
+                );
+                blended_frames += 1;
+                worst_blend = worst_blend.max(rel);
+            } else if d.accuracy >= 2 {
+                coarse_frames += 1;
+            } else {
+                worst_steady = worst_steady.max(rel);
+            }
+            *prev_i = cur.to_vec();
+        }
+    }
+    assert!(
+        blended_frames > 100 && coarse_frames > 100,
+        "{blended_frames} {coarse_frames}"
+    );
+    // Limbs move no faster relative to the root while blending than in steady walking.
+    assert!(worst_steady > 0.0);
+    assert!(
+        worst_blend < 1.2 * worst_steady,
+        "blending limb step {worst_blend} vs steady {worst_steady}"
+    );
+}
+
+#[test]
+fn culled_walkers_are_exactly_those_whose_bounds_miss_the_frustum() {
+    let source = ProceduralSource::new();
+    let policy = paper_distance_policy(source.levels());
+    let cfg = CrowdConfig {
+        bvh_rebuild_interval: 7,
+        ..config(800, 80.0)
+    };
+    let mut crowd = Crowd::new(&source, cfg).unwrap();
+    let lens = Camera::default();
+    let path = CameraPath::inside_crowd(cfg.field_size_m);
+    for f in 0..60 {
+        let cam = path.camera_at(f as f32 * 0.5, &lens);
+        let stats = crowd.step(&source, &policy, &cam, DT).unwrap();
+        let fr = Frustum::from_camera(&cam).unwrap();
+        let brute: Vec<bool> = crowd.bounds().iter().map(|b| fr.intersects(b)).collect();
+        assert_eq!(crowd.visible_flags(), &brute[..], "frame {f}");
+        let n = brute.iter().filter(|v| **v).count();
+        assert_eq!(stats.visible, n);
+        assert!(n > 0 && n < crowd.len(), "frame {f}: {n} visible");
+        // Culled walkers are root only under the paper policy.
+        for i in (0..crowd.len()).filter(|&i| !brute[i]) {
+            if crowd.detail(i).active_joints == 0 {
+                assert_eq!(crowd.joint_positions(i).len(), 1);
+            }
+        }
+    }
+}
+
+#[test]
+fn level_histogram_sums_to_walkers_and_matches_details() {
+    let source = ProceduralSource::new();
+    let policy = paper_distance_policy(source.levels());
+    let mut crowd = Crowd::new(&source, config(500, 300.0)).unwrap();
+    let lens = Camera {
+        far: 1000.0,
+        ..Camera::default()
+    };
+    let mut report = crowd_sim::CrowdReport::new();
+    for f in 0..40 {
+        let cam = orbit().camera_at(f as f32, &lens);
+        let s = crowd.step(&source, &policy, &cam, DT).unwrap();
+        assert_eq!(s.level_histogram.len(), source.levels().accuracy_levels + 1);
+        assert_eq!(s.level_histogram.iter().sum::<u32>() as usize, crowd.len());
+        for (bin, &count) in s.level_histogram.iter().enumerate() {
+            assert_eq!(
+                count as usize,
+                (0..crowd.len())
+                    .filter(|&i| crowd.level_bin(i) == bin)
+                    .count()
+            );
+        }
+        report.add(&s);
+    }
+    let used = report.level_histogram.iter().filter(|&&c| c > 0).count();
+    assert!(used >= 4, "levels used: {:?}", report.level_histogram);
+    assert!(report.fps_worst <= report.fps_mean && report.fps_mean <= report.fps_best);
+}
+
+/// A source that reports no accuracy level.
+struct NoLevels(ProceduralSource);
+
+impl ClipSource for NoLevels {
+    type Clip = ProceduralClip;
+    fn levels(&self) -> LevelTable {
+        LevelTable {
+            accuracy_levels: 0,
+            ..self.0.levels()
+        }
+    }
+    fn control_bounds(&self) -> ControlBounds {
+        self.0.control_bounds()
+    }
+    fn new_clip(&self) -> ProceduralClip {
+        self.0.new_clip()
+    }
+    fn build_clip(&self, c: &Controls, d: Detail, clip: &mut ProceduralClip) {
+        self.0.build_clip(c, d, clip)
+    }
+    fn clip_duration(&self, clip: &ProceduralClip) -> f32 {
+        self.0.clip_duration(clip)
+    }
+    fn clip_root_motion(&self, clip: &ProceduralClip) -> RootMotion {
+        self.0.clip_root_motion(clip)
+    }
+    fn pose(&self, clip: &ProceduralClip, t: f32, out: &mut [f32]) -> usize {
+        self.0.pose(clip, t, out)
+    }
+    fn joints(&self, clip: &ProceduralClip, pose: &[f32], out: &mut [Vec3]) -> usize {
+        self.0.joints(clip, pose, out)
+    }
+    fn bones(&self) -> &[(usize, usize)] {
+        self.0.bones()
+    }
+}
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    let source = ProceduralSource::new();
+    let policy = paper_distance_policy(source.levels());
+    assert!(matches!(
+        Crowd::new(&source, config(0, 50.0)),
+        Err(CrowdError::NoWalkers)
+    ));
+    assert!(matches!(
+        Crowd::new(&NoLevels(source.clone()), config(5, 50.0)),
+        Err(CrowdError::NoLevels { .. })
+    ));
+    assert!(matches!(
+        Crowd::new(&source, config(5, 4.0)),
+        Err(CrowdError::FieldTooSmall { .. })
+    ));
+    assert!(matches!(
+        Crowd::new(&source, config(5, f32::NAN)),
+        Err(CrowdError::BadConfig { .. })
+    ));
+    let mut crowd = Crowd::new(&source, config(10, 50.0)).unwrap();
+    let nan_cam = Camera {
+        position: Vec3::new(f32::NAN, 1.0, 0.0),
+        ..Camera::default()
+    };
+    let e = crowd.step(&source, &policy, &nan_cam, DT).unwrap_err();
+    assert!(matches!(e, CrowdError::BadCamera { .. }));
+    assert!(e.to_string().contains("NaN"));
+    assert!(matches!(
+        crowd.step(&source, &policy, &Camera::default(), f32::NAN),
+        Err(CrowdError::BadTimeStep { .. })
+    ));
+    let greedy = |_: f32, _: bool, _: &Camera| Detail {
+        accuracy: 99,
+        active_joints: 3,
+    };
+    let e = crowd
+        .step(&source, &greedy, &Camera::default(), DT)
+        .unwrap_err();
+    assert_eq!(
+        e,
+        CrowdError::BadLevel {
+            walker: 0,
+            level: 99,
+            levels: 10
+        }
+    );
+    // After errors the crowd still steps normally.
+    crowd
+        .step(&source, &policy, &Camera::default(), DT)
+        .unwrap();
+}
+
+fn run_in_pool(threads: usize) -> (Vec<Vec3>, Vec<bool>, Vec<u32>) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let source = ProceduralSource::new();
+        let policy = paper_distance_policy(source.levels());
+        let cfg = CrowdConfig {
+            bvh_rebuild_interval: 5,
+            ..config(700, 70.0)
+        };
+        let mut crowd = Crowd::new(&source, cfg).unwrap();
+        let lens = Camera::default();
+        let path = CameraPath::inside_crowd(cfg.field_size_m);
+        let mut hist = Vec::new();
+        let mut all = Vec::new();
+        for f in 0..90 {
+            let cam = path.camera_at(f as f32 * DT * 4.0, &lens);
+            let s = crowd.step(&source, &policy, &cam, DT).unwrap();
+            hist.extend(s.level_histogram);
+            for i in 0..crowd.len() {
+                all.extend_from_slice(crowd.joint_positions(i));
+            }
+        }
+        (all, crowd.visible_flags().to_vec(), hist)
+    })
+}
+
+#[test]
+fn results_are_identical_for_one_and_four_threads() {
+    let (a, va, ha) = run_in_pool(1);
+    let (b, vb, hb) = run_in_pool(4);
+    assert_eq!(a.len(), b.len());
+    let bits = |v: &[Vec3]| {
+        v.iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<u32>>()
+    };
+    assert!(
+        bits(&a) == bits(&b),
+        "joint positions differ between thread counts"
+    );
+    assert_eq!(va, vb);
+    assert_eq!(ha, hb);
+}
