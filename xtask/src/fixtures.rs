@@ -233,7 +233,9 @@ fn readme(planned: &[PlannedTake]) -> String {
          - Each take starts from a standstill-like first cycle (speed ramping from 30 % of the steady\n  \
            speed, short slow steps) that ends with a left heel strike, then walks {} steady two-step cycles\n  \
            (left heel strike to left heel strike) on a circular arc with the take's turn rate\n  \
-           (positive = turning left) or a straight line.\n\
+           (positive = turning left) or a straight line, and goes on walking for about half a cycle\n  \
+           after the last one (so that a window of one cycle centred on its closing heel strike, over\n  \
+           which `motion_io` measures the heading, lies inside the take).\n\
          - Steady speeds are stratified over 0.8..1.6 m/s per performer; turn rates -30, -15, 0, +15,\n  \
            +30 deg/s, one of each per performer (jittered by up to 3 deg/s, straight takes exactly\n  \
            straight). Start heading and position vary per take.\n\

@@ -148,8 +148,11 @@ impl TakeSpec {
 pub const START_SPEED_FRACTION: f64 = 0.3;
 /// Length of the speed ramp in cycles of the steady gait.
 pub const RAMP_CYCLES: f64 = 1.25;
-/// Cycles walked after the last steady cycle (so that its closing heel strike is in the take).
-const END_MARGIN: f64 = 0.1;
+/// Cycles walked after the last steady cycle's closing heel strike: half a cycle of the same steady
+/// walk, so that a window of one cycle centred on that heel strike (over which `motion_io`
+/// measures the heading of travel) lies inside the take, plus a tenth of a cycle for the contact
+/// detection.
+pub const END_MARGIN: f64 = 0.6;
 /// Resolution of the tabulated gait phase, seconds.
 const PHASE_DT: f64 = 1.0 / 2400.0;
 /// How far before time 0 the phase table reaches (footholds of the first steps lie in the past).
@@ -404,6 +407,7 @@ mod tests {
         }
         let p0 = tr.phase_at(tr.steady_start);
         assert!((p0 - p0.round()).abs() < 1e-9 && tr.steady_start >= tr.ramp - 1e-9);
-        assert!(tr.phase_at(tr.end) - p0 >= 4.0);
+        // Four steady cycles and the half cycle (plus margin) walked after the last one.
+        assert!((tr.phase_at(tr.end) - p0 - 4.0 - END_MARGIN).abs() < 1e-6);
     }
 }

@@ -36,7 +36,7 @@ pub enum CycleError {
     Pose(#[from] crate::pose::PoseError),
 }
 
-/// The joints used for contacts and headings, and the leg length.
+/// The joints used for contacts and the standing height, and the leg length.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Feet {
     /// Left ankle (foot) joint.

@@ -2,10 +2,40 @@
 //! canonicalisation and control parameters.
 //!
 //! A cycle runs from the frame a left contact starts to the frame the next one starts (both
-//! included). Its poses are canonicalised: the root starts over the ground origin heading +Z
-//! (y up, +x = the character's left). Controls (docs/architecture.md): `dx`, `dz` root
-//! displacement over the cycle in the start heading frame (metres), `turn` heading change
+//! included). Its poses are canonicalised: the root starts over the ground origin with its
+//! heading along +Z (y up, +x = the character's left). Controls (docs/architecture.md): `dx`, `dz`
+//! root displacement over the cycle in the start heading frame (metres), `turn` heading change
 //! (radians, positive = left), `height` standing height (metres).
+//!
+//! # Heading = direction of travel
+//! The heading at frame `f` is the direction the root travels over one gait cycle centred on `f`:
+//! with `g(t)` the root's ground track (interpolated between frames) and `L` the cycle's duration,
+//!
+//! `h(f) = atan2(d.x, d.z)`, `d = g(f + L/2) - g(f - L/2)`.
+//!
+//! The root's lateral sway and fore-aft surge repeat once per cycle, so on a straight path they
+//! cancel in `d`; on a path of constant curvature the chord is parallel to the tangent at its
+//! midpoint, so `h` is the path direction for constant turn rates. On a turn a sway (which turns
+//! with the walker) only changes the chord's length; a surge of amplitude `a` tilts it by at most
+//! `a kappa` (`kappa` the curvature: 0.2 degrees for 1 cm at 30 degrees per 1.3 m). While the
+//! walker accelerates the chord's midpoint by arc length moves away from `f`, which biases `h`
+//! on turns (about 1 degree on the fixtures' first steady cycle, whose window reaches back into
+//! the speed ramp).
+//!
+//! `turn = h(last) - h(first)` (wrapped to `(-pi, pi]`) and `(dx, dz)` is `g(last) - g(first)`
+//! rotated by `-h(first)`: a straight walk has `dx ~ 0`, and on an arc `dx = |d| sin(turn / 2)`.
+//!
+//! The pelvis (hip line) is not used for the heading: performers hold their pelvis yawed against
+//! the walking direction by a few degrees (the Bandai-Namco straight walks: 2.4 degrees on average,
+//! up to 5 degrees for some styles, with mirror-symmetric hip offsets), which showed up as a
+//! sideways drift `dx` of up to 0.1 m per straight cycle. The canonical poses keep that posture:
+//! the root's yaw at frame 0 is the pelvis's yaw against the direction of travel.
+//!
+//! Near the ends of a take the centred window does not fit. There the heading is extrapolated: a
+//! least-squares line through the centred-window headings `h(c)` over the half cycle of centres
+//! nearest that end, evaluated at `f` (exact for constant turn rates, and free of the gait
+//! oscillation, which the chords have already removed). In a take shorter than 1.5 cycle lengths
+//! the fit has no support, and the cycle is dropped with [`DropReason::HeadingWindowTruncated`].
 
 use std::f64::consts::PI;
 use std::fmt;
@@ -15,7 +45,7 @@ use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::contacts::{
-    ContactThresholds, CycleError, Feet, FootNames, contact_starts, find_feet, foot_contacts,
+    ContactThresholds, CycleError, FootNames, contact_starts, find_feet, foot_contacts,
     standing_height,
 };
 use crate::expmap::{exp_to_quat, quat_to_exp, wrap_angle};
@@ -238,6 +268,15 @@ pub enum DropReason {
         /// Heading change, radians.
         turn: f64,
     },
+    /// The heading at the first or last frame cannot be measured: the take is shorter than 1.5
+    /// cycle lengths, so neither a window of one cycle centred on the frame nor the extrapolating
+    /// fit of the module docs stays inside the take.
+    HeadingWindowTruncated {
+        /// The frame whose heading is missing (the cycle's first or last frame).
+        frame: usize,
+        /// `true` when the window runs past the end of the take, `false` past its start.
+        at_end: bool,
+    },
 }
 
 impl fmt::Display for DropReason {
@@ -268,6 +307,11 @@ impl fmt::Display for DropReason {
             DropReason::SharpTurn { turn } => {
                 write!(f, "sharp turn ({:.0} deg)", turn.to_degrees())
             }
+            DropReason::HeadingWindowTruncated { frame, at_end } => write!(
+                f,
+                "heading window truncated at take {} (frame {frame})",
+                if *at_end { "end" } else { "start" }
+            ),
         }
     }
 }
@@ -292,26 +336,73 @@ pub struct CycleReport {
     pub dropped: Vec<DroppedCycle>,
 }
 
-/// Forward direction of the character at one frame: `left x up` with
-/// `left = p(left hip) - p(right hip)` projected on the ground (unit length); its heading is
-/// `atan2(f.x, f.z)` (0 = +Z, positive towards +X = turning left).
-fn forward(p: &[DVec3], feet: &Feet) -> DVec3 {
-    let mut left = p[feet.left_hip] - p[feet.right_hip];
-    left.y = 0.0;
-    left.cross(DVec3::Y).normalize_or_zero()
+/// Point of the ground track `g` at the fractional frame `t` (linear interpolation, clamped to
+/// the take).
+fn track_point(g: &[DVec3], t: f64) -> DVec3 {
+    debug_assert!(!g.is_empty());
+    let last = g.len() - 1;
+    let t = t.clamp(0.0, last as f64);
+    let i = (t.floor() as usize).min(last.saturating_sub(1));
+    let u = t - i as f64;
+    if i == last {
+        return g[i];
+    }
+    g[i].lerp(g[i + 1], u)
 }
 
-/// Heading at frame `f` averaged over a window of `len` frames centred on it (clipped to the
-/// take): the pelvis yaws back and forth within a gait cycle, and averaging over one cycle removes
-/// that oscillation so a straight walk has `dx ~ 0`.
-fn heading(positions: &[Vec<DVec3>], feet: &Feet, f: usize, len: usize) -> f64 {
-    let half = len / 2;
-    let (a, b) = (f.saturating_sub(half), (f + half).min(positions.len() - 1));
-    let mut sum = DVec3::ZERO;
-    for p in &positions[a..=b] {
-        sum += forward(p, feet);
+/// Direction of travel over the window `[c - half, c + half]` (fractional frames, inside the
+/// take): `atan2(d.x, d.z)` with `d = g(c + half) - g(c - half)`; 0 = +Z, positive towards +X.
+fn chord_heading(g: &[DVec3], c: f64, half: f64) -> f64 {
+    let d = track_point(g, c + half) - track_point(g, c - half);
+    d.x.atan2(d.z)
+}
+
+/// Heading at frame `f` of the ground track `g` (one point per frame, y = 0) for a gait cycle of
+/// `period` frames (see the module docs): the chord heading over one period centred on `f` when
+/// that window lies inside the take, otherwise the least-squares line `h(c) = alpha + beta (c - f)`
+/// through the (unwrapped) chord headings of the centres `c` within half a period of the nearest
+/// valid centre, evaluated at `c = f` (`alpha`).
+///
+/// Returns `Err(at_end)` when the take is shorter than 1.5 periods, so the fit has no support
+/// (`at_end`: `f` lies in the second half of the take).
+fn travel_heading(g: &[DVec3], f: usize, period: f64) -> Result<f64, bool> {
+    debug_assert!(period > 0.0);
+    let half = 0.5 * period;
+    let last = g.len().saturating_sub(1) as f64;
+    let (lo, hi) = (half, last - half);
+    let x = f as f64;
+    let at_end = x > 0.5 * last;
+    if hi - lo < half {
+        return Err(at_end);
     }
-    sum.x.atan2(sum.z)
+    if (lo..=hi).contains(&x) {
+        return Ok(chord_heading(g, x, half));
+    }
+    // Centres from the edge of the valid range inwards, one frame apart, over half a period.
+    let (edge, step) = if x > hi { (hi, -1.0) } else { (lo, 1.0) };
+    let count = half.floor() as usize + 1;
+    let (mut sx, mut sy, mut sxx, mut sxy) = (0.0, 0.0, 0.0, 0.0);
+    let mut prev = chord_heading(g, edge, half);
+    let mut unwrapped = prev;
+    for k in 0..count {
+        let c = edge + step * k as f64;
+        let h = chord_heading(g, c, half);
+        unwrapped += wrap_angle(h - prev);
+        prev = h;
+        let dx = c - x;
+        sx += dx;
+        sy += unwrapped;
+        sxx += dx * dx;
+        sxy += dx * unwrapped;
+    }
+    let n = count as f64;
+    let var = sxx - sx * sx / n;
+    let beta = if var > 0.0 {
+        (sxy - sx * sy / n) / var
+    } else {
+        0.0
+    };
+    Ok(sy / n - beta * sx / n)
 }
 
 /// Splits a take into steady two-step cycles.
@@ -321,8 +412,8 @@ fn heading(positions: &[Vec<DVec3>], feet: &Feet, f: usize, len: usize) -> f64 {
 /// contact starts after `skip_start_seconds`. A candidate is kept when its duration is in range,
 /// it holds exactly one right contact start within the phase window, the root ground speed of
 /// each third is above `min_speed` and the first and last thirds differ by at most
-/// `max_speed_change`, it moves forward and turns less than `max_turn`; otherwise it is dropped
-/// with the reason.
+/// `max_speed_change`, the headings at both ends can be measured inside the take (module docs), it
+/// moves forward and turns less than `max_turn`; otherwise it is dropped with the reason.
 pub fn segment_cycles(
     motion: &Motion,
     layout: &PoseLayout,
@@ -383,10 +474,12 @@ pub fn segment_cycles(
         .collect();
     let rstarts = contact_starts(&right);
     let root = layout.root();
-    let ground = |f: usize| {
-        let p = positions[f][root];
-        DVec3::new(p.x, 0.0, p.z) / upm
-    };
+    // Ground track of the root, metres.
+    let track: Vec<DVec3> = positions
+        .iter()
+        .map(|p| DVec3::new(p[root].x, 0.0, p[root].z) / upm)
+        .collect();
+    let ground = |f: usize| track[f];
     let leg_m = feet.leg_length / upm;
     let p = layout.dof();
     let reference = layout.rest_pose();
@@ -443,8 +536,32 @@ pub fn segment_cycles(
             report.dropped.push(drop(reason));
             continue;
         }
-        let h0 = heading(&positions, &feet, a, b - a);
-        let h1 = heading(&positions, &feet, b, b - a);
+        let period = (b - a) as f64;
+        let headings = (
+            travel_heading(&track, a, period),
+            travel_heading(&track, b, period),
+        );
+        let (h0, h1) = match headings {
+            (Ok(h0), Ok(h1)) => (h0, h1),
+            (Err(at_end), _) => {
+                report
+                    .dropped
+                    .push(drop(DropReason::HeadingWindowTruncated {
+                        frame: a,
+                        at_end,
+                    }));
+                continue;
+            }
+            (_, Err(at_end)) => {
+                report
+                    .dropped
+                    .push(drop(DropReason::HeadingWindowTruncated {
+                        frame: b,
+                        at_end,
+                    }));
+                continue;
+            }
+        };
         let turn = wrap_angle(h1 - h0);
         let c = DQuat::from_rotation_y(-h0);
         let d = c * (ground(b) - ground(a));
@@ -491,4 +608,119 @@ pub fn segment_cycles(
         });
     }
     Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ground track of a walk at `v` m/s turning at `omega` rad/s from heading `h0`, sampled every
+    /// `dt` s for `n` frames, with a lateral sway and a fore-aft surge of amplitude `surge` (m)
+    /// that repeat every `period` seconds in the walker's frame (as the root of a walker does),
+    /// and its true heading per frame.
+    fn arc(
+        v: f64,
+        omega: f64,
+        surge: f64,
+        period: f64,
+        dt: f64,
+        n: usize,
+    ) -> (Vec<DVec3>, Vec<f64>) {
+        let w = std::f64::consts::TAU / period;
+        let h0 = 2.9;
+        (0..n)
+            .map(|i| {
+                let t = i as f64 * dt;
+                let h = h0 + omega * t;
+                let p = if omega.abs() < 1e-12 {
+                    DVec3::new(h0.sin(), 0.0, h0.cos()) * v * t
+                } else {
+                    let r = v / omega;
+                    DVec3::new(r * (h0.cos() - h.cos()), 0.0, r * (h.sin() - h0.sin()))
+                };
+                let fwd = DVec3::new(h.sin(), 0.0, h.cos());
+                let left = DVec3::new(h.cos(), 0.0, -h.sin());
+                let sway = 0.03 * (w * t + 0.4).cos() + 0.004 * (2.0 * w * t).sin();
+                let surge = surge * (2.0 * w * t + 1.0).sin();
+                (p + left * sway + fwd * surge, h)
+            })
+            .unzip()
+    }
+
+    #[test]
+    fn travel_heading_is_exact_on_arcs_with_sway_at_every_frame() {
+        // 1.1 s cycles at 120 Hz (132 frames), 3.3 cycles of track, both turn directions. A sway
+        // that turns with the walker leaves the chords' directions alone (its residual
+        // `s (left(h + d) - left(h - d)) = -2 s sin(d) fwd(h)` is along the chord).
+        for omega in [-0.5, 0.0, 0.3] {
+            let (g, truth) = arc(1.3, omega, 0.0, 1.1, 1.0 / 120.0, 436);
+            for f in [0, 20, 65, 66, 200, 370, 400, 435] {
+                let h = travel_heading(&g, f, 132.0).unwrap();
+                let err = wrap_angle(h - truth[f]).abs();
+                assert!(err < 1e-9, "omega {omega} frame {f}: error {err} rad");
+            }
+        }
+    }
+
+    #[test]
+    fn a_surge_on_a_turn_tilts_the_heading_by_at_most_surge_times_curvature() {
+        // The surge's residual `2 a sin(d) left(h)` is sideways: `a kappa` radians on a chord of
+        // `2 R sin(d)`; the extrapolation near the take ends may amplify it by half again.
+        let (v, omega, a) = (1.3, -0.5, 0.01);
+        let (g, truth) = arc(v, omega, a, 1.1, 1.0 / 120.0, 436);
+        let bound = 1.5 * a * (omega / v).abs();
+        for (f, t) in truth.iter().enumerate() {
+            let h = travel_heading(&g, f, 132.0).unwrap();
+            let err = wrap_angle(h - t).abs();
+            assert!(err < bound, "frame {f}: error {err} rad, bound {bound}");
+        }
+    }
+
+    #[test]
+    fn travel_heading_of_a_straight_track_is_its_direction() {
+        // A straight walk along +X: heading pi/2 wherever the frame lies.
+        let g: Vec<DVec3> = (0..100)
+            .map(|i| DVec3::new(0.01 * i as f64, 0.0, 0.0))
+            .collect();
+        for f in [0, 50, 99] {
+            let h = travel_heading(&g, f, 40.0).unwrap();
+            assert!((h - std::f64::consts::FRAC_PI_2).abs() < 1e-12, "{h}");
+        }
+    }
+
+    #[test]
+    fn travel_heading_needs_one_and_a_half_cycles_of_track() {
+        let (g, _) = arc(1.0, 0.2, 0.01, 1.0, 0.01, 151);
+        assert!(travel_heading(&g, 0, 100.0).is_ok());
+        assert_eq!(travel_heading(&g, 0, 101.0), Err(false));
+        assert_eq!(travel_heading(&g, 150, 101.0), Err(true));
+        // Inside the centred range the window always fits.
+        assert!(travel_heading(&g, 75, 100.0).is_ok());
+    }
+
+    #[test]
+    fn track_points_interpolate_and_clamp() {
+        let g = [
+            DVec3::ZERO,
+            DVec3::new(1.0, 0.0, 2.0),
+            DVec3::new(3.0, 0.0, 2.0),
+        ];
+        assert_eq!(track_point(&g, 0.5), DVec3::new(0.5, 0.0, 1.0));
+        assert_eq!(track_point(&g, 2.0), g[2]);
+        assert_eq!(track_point(&g, 7.0), g[2]);
+        assert_eq!(track_point(&g, -1.0), g[0]);
+        assert_eq!(track_point(&g[..1], 0.3), g[0]);
+    }
+
+    #[test]
+    fn drop_reason_names_the_truncated_end() {
+        let r = DropReason::HeadingWindowTruncated {
+            frame: 12,
+            at_end: true,
+        };
+        assert_eq!(
+            r.to_string(),
+            "heading window truncated at take end (frame 12)"
+        );
+    }
 }

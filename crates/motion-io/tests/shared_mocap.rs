@@ -112,6 +112,20 @@ fn bandai_loads_segments_and_round_trips() {
         deg.iter().filter(|t| t.abs() < 5.0).count() >= 200,
         "straight walks"
     );
+    // Straight walks are straight: the heading is the direction of travel, not the hip line
+    // (which is yawed 2.4 degrees off it on average, a sideways drift of 5.5 cm per cycle).
+    let straight: Vec<f64> = cycles
+        .iter()
+        .filter(|c| !c.source.to_string_lossy().contains("turn"))
+        .map(|c| c.controls.dx)
+        .collect();
+    let ns = straight.len() as f64;
+    let mean_abs = straight.iter().map(|d| d.abs()).sum::<f64>() / ns;
+    let mean = straight.iter().sum::<f64>() / ns;
+    assert!(
+        ns >= 300.0 && mean_abs < 0.025 && mean.abs() < 0.005,
+        "{ns} straight-walk cycles: mean |dx| {mean_abs} m, mean dx {mean} m"
+    );
     let p = layout.dof();
     for c in &cycles {
         // Canonical start: root over the origin; forward walking in metres.
