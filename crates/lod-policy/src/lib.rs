@@ -4,3 +4,53 @@
 //! kernels and per-frame poses into caller-owned buffers) and for choosing a level per character from
 //! its distance or projected size. It is not for: building models (see `motion-lod`) or simulating
 //! crowds (see `crowd-sim`).
+//!
+//! The pieces (Mukai and Kuriyama, sections 3.2-4.3):
+//! - [`model`]: [`LodModel`], validated from plain-data [`ModelParts`]: key tensors (ordered Tucker
+//!   models with their universal-kriging projections), accuracy levels (leading sub-block
+//!   truncations of a key), the control space, the mean pose, measured error tables, storage.
+//! - [`projection`]: offline helpers that compute a key's kriging projection `Q` and trend
+//!   projection `V` from `U_S`, the kriging matrix inverse and the sample controls.
+//! - [`kernel`]: per clip, [`LodModel::build_kernel`] computes the kriging weights, the blended
+//!   core `K(c) = Z x_3 w` (eq. 8), `G(c) = U_P K(c)` for the active rows and the clip's time
+//!   table; per frame, [`LodModel::pose`] evaluates `G w_T` (eq. 4-5). Neither allocates.
+//! - [`policy`]: the paper's [`DistancePolicy`] and a [`ScreenSpacePolicy`] with a pixel budget,
+//!   both behind the [`LevelPolicy`] trait.
+//!
+//! ```
+//! use lod_policy::{Detail, DistancePolicy, LevelPolicy, LodModel, ViewParams};
+//!
+//! fn animate(model: &LodModel, controls: &[f32], distance_m: f32) -> Result<Vec<f32>, Box<dyn std::error::Error>> {
+//!     // Once per model: preallocated buffers.
+//!     let mut scratch = lod_policy::KernelScratch::new(model);
+//!     let mut kernel = lod_policy::ClipKernel::new(model);
+//!     let mut pose = vec![0.0f32; model.p()];
+//!     // Once per clip: the level from the policy, then the kernel.
+//!     let policy = DistancePolicy::for_model(model);
+//!     let detail: Detail = policy.detail(distance_m, true, &ViewParams::default());
+//!     model.build_kernel(controls, detail, &mut scratch, &mut kernel)?;
+//!     // Per frame: playback time -> aligned phase -> pose vector.
+//!     let phase = kernel.phase_at(0.5 * kernel.duration());
+//!     model.pose(&kernel, phase, &mut pose)?;
+//!     Ok(pose)
+//! }
+//! # let _ = animate;
+//! ```
+
+pub mod error;
+pub mod kernel;
+pub mod model;
+pub mod policy;
+pub mod projection;
+
+pub use error::{KernelError, ModelError};
+pub use kernel::{ClipKernel, Detail, KernelScratch};
+pub use model::{
+    ALWAYS_ROWS, AccuracyLevel, ControlSpace, KeyTensor, LevelError, LodModel, ModelParts,
+    Precision, ROWS_PER_JOINT, Ranks, TIME_ROW, Variogram, VariogramModel,
+};
+pub use policy::{
+    DistanceConfig, DistancePolicy, ErrorMetric, LevelPolicy, PolicyError, ScreenConfig,
+    ScreenSpacePolicy, ViewParams,
+};
+pub use projection::KeyFactors;

@@ -1,0 +1,125 @@
+//! Error types of the runtime model: shape and value validation, kernel evaluation.
+
+use thiserror::Error;
+
+/// Why a [`crate::model::LodModel`] (or one of its parts) was rejected.
+///
+/// Every variant names the part (`what`), and where relevant the key or level index and the
+/// offending dimension or element, so a malformed model file can be traced to its producer.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ModelError {
+    /// A size that must be positive is zero (`P`, `T`, `S`, a rank, the number of keys or levels).
+    #[error("{what} must be positive")]
+    ZeroSize {
+        /// Which size.
+        what: String,
+    },
+    /// An array has the wrong number of elements.
+    #[error("{what}: expected {expected} values, found {found}")]
+    Length {
+        /// Which array (for example `key 2 core`).
+        what: String,
+        /// Number of elements its dimensions imply.
+        expected: usize,
+        /// Number of elements present.
+        found: usize,
+    },
+    /// A value is NaN or infinite.
+    #[error("{what}: non-finite value at element {index}")]
+    NonFinite {
+        /// Which array.
+        what: String,
+        /// Flat index of the first bad element.
+        index: usize,
+    },
+    /// A rank exceeds the mode size, or an accuracy level's rank exceeds its key's rank.
+    #[error("{what}: rank {rank} exceeds the limit {limit}")]
+    Rank {
+        /// Which rank (for example `level 3 r_T`).
+        what: String,
+        /// The rank given.
+        rank: usize,
+        /// Largest allowed value.
+        limit: usize,
+    },
+    /// An accuracy level refers to a key tensor that does not exist.
+    #[error("accuracy level {level} refers to key {key}, but the model has {keys} keys")]
+    KeyIndex {
+        /// Accuracy level index.
+        level: usize,
+        /// Key index it names.
+        key: usize,
+        /// Number of key tensors.
+        keys: usize,
+    },
+    /// The DOF row layout is inconsistent (`always_rows`, `rows_per_joint` and `P`).
+    #[error("row layout: {0}")]
+    RowLayout(String),
+    /// The control space is inconsistent (bounds, scales).
+    #[error("control space: {0}")]
+    Controls(String),
+    /// The per-level error table does not have one entry per accuracy level, or holds a bad value.
+    #[error("error table: {0}")]
+    ErrorTable(String),
+    /// A small dense linear system met while building a projection was singular.
+    #[error("{what}: singular matrix (pivot {pivot} at column {column})")]
+    Singular {
+        /// Which system.
+        what: String,
+        /// Column where elimination failed.
+        column: usize,
+        /// Magnitude of the best pivot found.
+        pivot: f64,
+    },
+}
+
+/// Why a clip kernel could not be built.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum KernelError {
+    /// The control vector has the wrong length.
+    #[error("controls: expected {expected} values, found {found}")]
+    ControlLength {
+        /// Model's control dimension `d`.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// A control value is NaN or infinite.
+    #[error("control {index} is not finite ({value})")]
+    NonFiniteControl {
+        /// Control dimension.
+        index: usize,
+        /// The value given.
+        value: f32,
+    },
+    /// The requested accuracy level does not exist.
+    #[error("accuracy level {level} out of range (model has {levels})")]
+    Level {
+        /// Level requested.
+        level: usize,
+        /// Number of levels.
+        levels: usize,
+    },
+    /// The pose output slice has the wrong length.
+    #[error("pose output: expected {expected} values, found {found}")]
+    OutputLength {
+        /// Model's `P`.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// The phase is NaN or infinite.
+    #[error("phase is not finite ({phase})")]
+    NonFinitePhase {
+        /// The phase given.
+        phase: f32,
+    },
+    /// The kernel or scratch was preallocated for a different (smaller) model.
+    #[error("{what} was allocated for a different model ({detail})")]
+    Capacity {
+        /// `kernel` or `scratch`.
+        what: &'static str,
+        /// Which size does not fit.
+        detail: String,
+    },
+}

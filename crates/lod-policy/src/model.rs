@@ -1,0 +1,513 @@
+//! The runtime multilinear model: key tensors, accuracy levels, control space, validation and
+//! storage accounting.
+//!
+//! A [`LodModel`] holds, for every KEY level `k`, an ordered Tucker model of the motion tensor
+//! (core `Z_k`, factors `U_P`, `U_T`) together with the precomputed universal-kriging projection of
+//! its sample factor `U_S` (section 3.3, eq. 8), and a table of ACCURACY levels, each a leading
+//! sub-block truncation of one key (section 4.2). All arrays are plain `Vec<f32>`, column-major,
+//! with their dimensions stored beside them; [`LodModel::new`] validates every shape and value.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::ModelError;
+
+pub use kriging::{Variogram, VariogramModel};
+
+/// Rows 0..7 of the pose vector are always evaluated: root position (0..3), root exp-map (3..6)
+/// and the time increment (6).
+pub const ALWAYS_ROWS: usize = 7;
+/// DOF rows per joint (one exponential map).
+pub const ROWS_PER_JOINT: usize = 3;
+/// Row of the pose vector holding the time increment to the next aligned frame (seconds).
+pub const TIME_ROW: usize = 6;
+
+/// A rank triple `(R_P, R_T, R_S)` of a Tucker model (modes joint DOF, time, samples).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Ranks {
+    /// Rank of the joint-DOF mode `R_P`.
+    pub p: usize,
+    /// Rank of the time mode `R_T`.
+    pub t: usize,
+    /// Rank of the sample mode `R_S`.
+    pub s: usize,
+}
+
+impl Ranks {
+    /// Builds a rank triple.
+    pub fn new(p: usize, t: usize, s: usize) -> Self {
+        Self { p, t, s }
+    }
+
+    /// Number of core elements `R_P R_T R_S`.
+    pub fn core_len(&self) -> usize {
+        self.p * self.t * self.s
+    }
+
+    /// True when every rank is at most the corresponding rank of `other`.
+    pub fn fits_in(&self, other: &Ranks) -> bool {
+        self.p <= other.p && self.t <= other.t && self.s <= other.s
+    }
+}
+
+/// One key tensor: an ordered Tucker model with its kriging projection (section 3.3).
+///
+/// Layouts (all column-major, first index fastest):
+/// - `core`: `Z` of size `R_P x R_T x R_S`, element `(i, j, l)` at `i + R_P (j + R_T l)`;
+/// - `u_p`: `U_P` of size `P x R_P`; `u_t`: `U_T` of size `T x R_T`;
+/// - `projection`: `Q = [U_S^T ; C] A^{-1}[:S, :]` of size `(R_S + d + 1) x (S + 1)`, where
+///   `A = [Gamma 1; 1^T 0]` is the kriging matrix (appendix A) and `C` the `(d + 1) x S` matrix of
+///   columns `[c_i; 1]` (scaled controls);
+/// - `trend`: `V = U_S^T C^+` of size `R_S x (d + 1)`, so that the trend of eq. 8 is
+///   `F = Z_(12) V` (`F = K C^+` with `K = Z_(12) U_S^T`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KeyTensor {
+    /// Ranks `(R_P, R_T, R_S)` of this key.
+    pub ranks: Ranks,
+    /// Core tensor `Z`, `R_P R_T R_S` values.
+    pub core: Vec<f32>,
+    /// Joint-DOF factor `U_P`, `P x R_P`.
+    pub u_p: Vec<f32>,
+    /// Time factor `U_T`, `T x R_T`.
+    pub u_t: Vec<f32>,
+    /// Kriging projection `Q`, `(R_S + d + 1) x (S + 1)`.
+    pub projection: Vec<f32>,
+    /// Trend projection `V = U_S^T C^+`, `R_S x (d + 1)`.
+    pub trend: Vec<f32>,
+}
+
+/// One accuracy level: a leading sub-block truncation of key `key` to `ranks` (section 4.2).
+///
+/// A key level itself is the accuracy level whose ranks equal its key's ranks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct AccuracyLevel {
+    /// Index of the key tensor this level truncates.
+    pub key: usize,
+    /// Ranks kept, each at most the key's rank.
+    pub ranks: Ranks,
+}
+
+/// The control space of the kriging interpolation.
+///
+/// A raw control `c` (length `d`) is clamped to `[min, max]` per dimension and scaled as
+/// `c'_k = (c_k - offset_k) * scale_k`; distances, the kriging system and the trend all use scaled
+/// controls. A dimension that is constant over the data has `scale_k = 0` (it is then ignored).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ControlSpace {
+    /// Variogram `gamma(h)` of the residuals (fitted offline by the `kriging` crate).
+    pub variogram: Variogram,
+    /// Per-dimension offset (length `d`).
+    pub offset: Vec<f32>,
+    /// Per-dimension scale, finite and non-negative (length `d`).
+    pub scale: Vec<f32>,
+    /// Scaled sample controls, `S x d` column-major (sample `i`, dimension `k` at `i + S k`).
+    pub samples: Vec<f32>,
+    /// Per-dimension minimum of the raw sample controls (length `d`).
+    pub min: Vec<f32>,
+    /// Per-dimension maximum of the raw sample controls (length `d`).
+    pub max: Vec<f32>,
+}
+
+/// Measured error of one accuracy level (or of one joint count), filled by the model builder.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct LevelError {
+    /// Mean joint position error after forward kinematics, in centimetres.
+    pub mean_joint_cm: f32,
+    /// Shell error: largest displacement of virtual vertices 3 cm from each joint, in centimetres.
+    pub shell_cm: f32,
+}
+
+/// Storage precision for [`LodModel::bytes`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Precision {
+    /// 4 bytes per value (the runtime model and the model file).
+    F32,
+    /// 8 bytes per value (the analysis).
+    F64,
+}
+
+impl Precision {
+    /// Bytes per stored value.
+    pub fn value_bytes(self) -> usize {
+        match self {
+            Precision::F32 => 4,
+            Precision::F64 => 8,
+        }
+    }
+}
+
+/// Plain-data parts of a [`LodModel`], as produced by the model builder or read from a file.
+///
+/// Nothing here is validated; [`LodModel::new`] does that.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelParts {
+    /// Joint DOF `P` (rows of the pose vector).
+    pub p: usize,
+    /// Aligned frames per cycle `T`.
+    pub t: usize,
+    /// Motion samples `S`.
+    pub s: usize,
+    /// Control dimension `d`.
+    pub d: usize,
+    /// Rows always evaluated ([`ALWAYS_ROWS`] = 7: root and time increment).
+    pub always_rows: usize,
+    /// Rows per joint ([`ROWS_PER_JOINT`] = 3).
+    pub rows_per_joint: usize,
+    /// Key tensors, largest first.
+    pub keys: Vec<KeyTensor>,
+    /// Accuracy levels, most accurate (most expensive) first.
+    pub levels: Vec<AccuracyLevel>,
+    /// Control space (variogram, scaling, samples, bounds).
+    pub controls: ControlSpace,
+    /// Row [`TIME_ROW`] holds `time_scale` times the time increment in seconds (the builder scales
+    /// the row so that it weighs like the other rows in the decomposition; 1 = seconds).
+    pub time_scale: f64,
+    /// Mean pose (length `P`), written for rows that are not evaluated.
+    pub mean_pose: Vec<f32>,
+    /// Measured error per accuracy level (empty, or one per level).
+    pub level_errors: Vec<LevelError>,
+    /// Measured error when only `j` joints are evaluated at level 0, indexed by `j`
+    /// (empty, or `joints + 1` entries; the last is normally zero).
+    pub joint_errors: Vec<LevelError>,
+}
+
+/// The validated runtime model (see the module documentation).
+///
+/// Serialises as [`ModelParts`]; deserialisation runs the same validation as [`LodModel::new`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ModelParts", into = "ModelParts")]
+pub struct LodModel {
+    parts: ModelParts,
+    /// Largest ranks over all keys, per mode (for preallocation).
+    max_ranks: Ranks,
+}
+
+impl TryFrom<ModelParts> for LodModel {
+    type Error = ModelError;
+    fn try_from(parts: ModelParts) -> Result<Self, ModelError> {
+        LodModel::new(parts)
+    }
+}
+
+impl From<LodModel> for ModelParts {
+    fn from(model: LodModel) -> Self {
+        model.parts
+    }
+}
+
+fn check_len(what: impl FnOnce() -> String, v: &[f32], expected: usize) -> Result<(), ModelError> {
+    if v.len() != expected {
+        return Err(ModelError::Length {
+            what: what(),
+            expected,
+            found: v.len(),
+        });
+    }
+    Ok(())
+}
+
+fn check_finite(what: impl FnOnce() -> String, v: &[f32]) -> Result<(), ModelError> {
+    if let Some(index) = v.iter().position(|x| !x.is_finite()) {
+        return Err(ModelError::NonFinite {
+            what: what(),
+            index,
+        });
+    }
+    Ok(())
+}
+
+fn check_array(what: &str, v: &[f32], expected: usize) -> Result<(), ModelError> {
+    check_len(|| what.to_string(), v, expected)?;
+    check_finite(|| what.to_string(), v)
+}
+
+fn positive(what: &str, v: usize) -> Result<(), ModelError> {
+    if v == 0 {
+        return Err(ModelError::ZeroSize {
+            what: what.to_string(),
+        });
+    }
+    Ok(())
+}
+
+fn rank_limit(what: String, rank: usize, limit: usize) -> Result<(), ModelError> {
+    if rank == 0 {
+        return Err(ModelError::ZeroSize { what });
+    }
+    if rank > limit {
+        return Err(ModelError::Rank { what, rank, limit });
+    }
+    Ok(())
+}
+
+impl LodModel {
+    /// Validates `parts` and builds the model.
+    ///
+    /// Checks: positive sizes; `6 < always_rows <= P` and `(P - always_rows)` divisible by
+    /// `rows_per_joint`; every key's ranks within `(P, T, S)` and every array's length against
+    /// its dimensions; accuracy levels naming an existing key with ranks within it; control
+    /// bounds `min <= max`, scales `>= 0`; error tables of the right length and non-negative; and
+    /// every value finite (the variogram is checked at `h = 0` and at the sample spread).
+    pub fn new(parts: ModelParts) -> Result<LodModel, ModelError> {
+        let ModelParts {
+            p,
+            t,
+            s,
+            d,
+            always_rows,
+            rows_per_joint,
+            ..
+        } = parts;
+        positive("P", p)?;
+        positive("T", t)?;
+        positive("S", s)?;
+        positive("d", d)?;
+        positive("rows_per_joint", rows_per_joint)?;
+        if always_rows <= TIME_ROW || always_rows > p {
+            return Err(ModelError::RowLayout(format!(
+                "always_rows = {always_rows} must hold the time row {TIME_ROW} and be at most P = {p}"
+            )));
+        }
+        if (p - always_rows) % rows_per_joint != 0 {
+            return Err(ModelError::RowLayout(format!(
+                "P - always_rows = {} is not a multiple of rows_per_joint = {rows_per_joint}",
+                p - always_rows
+            )));
+        }
+        if parts.keys.is_empty() {
+            return Err(ModelError::ZeroSize {
+                what: "number of key tensors".into(),
+            });
+        }
+        if parts.levels.is_empty() {
+            return Err(ModelError::ZeroSize {
+                what: "number of accuracy levels".into(),
+            });
+        }
+        let mut max_ranks = Ranks::new(0, 0, 0);
+        for (k, key) in parts.keys.iter().enumerate() {
+            let r = key.ranks;
+            rank_limit(format!("key {k} R_P"), r.p, p)?;
+            rank_limit(format!("key {k} R_T"), r.t, t)?;
+            rank_limit(format!("key {k} R_S"), r.s, s)?;
+            check_array(&format!("key {k} core"), &key.core, r.core_len())?;
+            check_array(&format!("key {k} u_p"), &key.u_p, p * r.p)?;
+            check_array(&format!("key {k} u_t"), &key.u_t, t * r.t)?;
+            check_array(
+                &format!("key {k} projection"),
+                &key.projection,
+                (r.s + d + 1) * (s + 1),
+            )?;
+            check_array(&format!("key {k} trend"), &key.trend, r.s * (d + 1))?;
+            max_ranks.p = max_ranks.p.max(r.p);
+            max_ranks.t = max_ranks.t.max(r.t);
+            max_ranks.s = max_ranks.s.max(r.s);
+        }
+        for (l, level) in parts.levels.iter().enumerate() {
+            let key = parts.keys.get(level.key).ok_or(ModelError::KeyIndex {
+                level: l,
+                key: level.key,
+                keys: parts.keys.len(),
+            })?;
+            rank_limit(format!("level {l} r_P"), level.ranks.p, key.ranks.p)?;
+            rank_limit(format!("level {l} r_T"), level.ranks.t, key.ranks.t)?;
+            rank_limit(format!("level {l} r_S"), level.ranks.s, key.ranks.s)?;
+        }
+        if !(parts.time_scale.is_finite() && parts.time_scale > 0.0) {
+            return Err(ModelError::NonFinite {
+                what: "time_scale (must be positive)".into(),
+                index: 0,
+            });
+        }
+        check_array("mean_pose", &parts.mean_pose, p)?;
+        Self::check_controls(&parts.controls, s, d)?;
+        let joints = (p - always_rows) / rows_per_joint;
+        Self::check_errors("level_errors", &parts.level_errors, parts.levels.len())?;
+        Self::check_errors("joint_errors", &parts.joint_errors, joints + 1)?;
+        Ok(LodModel { parts, max_ranks })
+    }
+
+    fn check_controls(c: &ControlSpace, s: usize, d: usize) -> Result<(), ModelError> {
+        check_array("controls offset", &c.offset, d)?;
+        check_array("controls scale", &c.scale, d)?;
+        check_array("controls min", &c.min, d)?;
+        check_array("controls max", &c.max, d)?;
+        check_array("controls samples", &c.samples, s * d)?;
+        for k in 0..d {
+            if c.scale[k] < 0.0 {
+                return Err(ModelError::Controls(format!(
+                    "scale of dimension {k} is negative ({})",
+                    c.scale[k]
+                )));
+            }
+            if c.min[k] > c.max[k] {
+                return Err(ModelError::Controls(format!(
+                    "dimension {k}: min {} exceeds max {}",
+                    c.min[k], c.max[k]
+                )));
+            }
+        }
+        // Largest scaled distance between samples is at most the bounding-box diagonal.
+        let mut diag2 = 0.0f64;
+        for k in 0..d {
+            let col = &c.samples[k * s..(k + 1) * s];
+            let lo = col.iter().copied().fold(f32::INFINITY, f32::min);
+            let hi = col.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            diag2 += f64::from(hi - lo).powi(2);
+        }
+        for h in [0.0, 0.5 * diag2.sqrt(), diag2.sqrt()] {
+            let g = c.variogram.eval(h);
+            if !g.is_finite() {
+                return Err(ModelError::Controls(format!(
+                    "variogram is not finite at h = {h}"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn check_errors(what: &str, table: &[LevelError], expected: usize) -> Result<(), ModelError> {
+        if table.is_empty() {
+            return Ok(());
+        }
+        if table.len() != expected {
+            return Err(ModelError::ErrorTable(format!(
+                "{what}: expected {expected} entries, found {}",
+                table.len()
+            )));
+        }
+        for (i, e) in table.iter().enumerate() {
+            for v in [e.mean_joint_cm, e.shell_cm] {
+                if !v.is_finite() || v < 0.0 {
+                    return Err(ModelError::ErrorTable(format!(
+                        "{what}: entry {i} holds {v} (must be finite and >= 0)"
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The validated parts.
+    pub fn parts(&self) -> &ModelParts {
+        &self.parts
+    }
+    /// Returns the parts (for editing and revalidating with [`LodModel::new`]).
+    pub fn into_parts(self) -> ModelParts {
+        self.parts
+    }
+    /// Joint DOF `P`.
+    pub fn p(&self) -> usize {
+        self.parts.p
+    }
+    /// Aligned frames per cycle `T`.
+    pub fn t(&self) -> usize {
+        self.parts.t
+    }
+    /// Number of samples `S`.
+    pub fn s(&self) -> usize {
+        self.parts.s
+    }
+    /// Control dimension `d`.
+    pub fn d(&self) -> usize {
+        self.parts.d
+    }
+    /// Rows always evaluated (root and time increment).
+    pub fn always_rows(&self) -> usize {
+        self.parts.always_rows
+    }
+    /// Rows per joint.
+    pub fn rows_per_joint(&self) -> usize {
+        self.parts.rows_per_joint
+    }
+    /// Number of joints `(P - always_rows) / rows_per_joint`.
+    pub fn joints(&self) -> usize {
+        (self.parts.p - self.parts.always_rows) / self.parts.rows_per_joint
+    }
+    /// Evaluated rows `P' = always_rows + rows_per_joint * active_joints`.
+    pub fn active_rows(&self, active_joints: usize) -> usize {
+        self.parts.always_rows + self.parts.rows_per_joint * active_joints.min(self.joints())
+    }
+    /// Key tensors, largest first.
+    pub fn keys(&self) -> &[KeyTensor] {
+        &self.parts.keys
+    }
+    /// Accuracy levels, most accurate first.
+    pub fn levels(&self) -> &[AccuracyLevel] {
+        &self.parts.levels
+    }
+    /// The control space.
+    pub fn controls(&self) -> &ControlSpace {
+        &self.parts.controls
+    }
+    /// Mean pose (length `P`).
+    pub fn mean_pose(&self) -> &[f32] {
+        &self.parts.mean_pose
+    }
+    /// Measured error per accuracy level (empty if not measured).
+    pub fn level_errors(&self) -> &[LevelError] {
+        &self.parts.level_errors
+    }
+    /// Measured error per active joint count (empty if not measured).
+    pub fn joint_errors(&self) -> &[LevelError] {
+        &self.parts.joint_errors
+    }
+    /// Replaces the per-level and per-joint-count error tables (validated as in [`LodModel::new`]).
+    pub fn set_errors(
+        &mut self,
+        level_errors: Vec<LevelError>,
+        joint_errors: Vec<LevelError>,
+    ) -> Result<(), ModelError> {
+        Self::check_errors("level_errors", &level_errors, self.parts.levels.len())?;
+        Self::check_errors("joint_errors", &joint_errors, self.joints() + 1)?;
+        self.parts.level_errors = level_errors;
+        self.parts.joint_errors = joint_errors;
+        Ok(())
+    }
+    /// Largest rank per mode over all keys.
+    pub fn max_ranks(&self) -> Ranks {
+        self.max_ranks
+    }
+
+    /// Multiply-adds to build a clip kernel at `level` for `rows` evaluated rows:
+    /// `(r_S + d + 1)(S + 1) + r_S (d + 1)` for the kriging weights, `r_P r_T r_S` for `K(c)`,
+    /// `rows r_P r_T` for `G(c)` and `T r_T` for the time table; `None` for a bad level.
+    pub fn kernel_cost(&self, level: usize, rows: usize) -> Option<usize> {
+        let lv = self.parts.levels.get(level)?;
+        let r = lv.ranks;
+        let (s, d, t) = (self.parts.s, self.parts.d, self.parts.t);
+        Some((r.s + d + 1) * (s + 1) + r.s * (d + 1) + r.core_len() + rows * r.p * r.t + t * r.t)
+    }
+
+    /// Multiply-adds per evaluated pose at `level` for `rows` rows: `rows r_T`.
+    pub fn pose_cost(&self, level: usize, rows: usize) -> Option<usize> {
+        Some(self.parts.levels.get(level)?.ranks.t * rows)
+    }
+
+    /// Bytes needed to store the model at `precision`: every key tensor (core, `U_P`, `U_T`,
+    /// projection, trend), the control space (samples, offset, scale, bounds) and the mean pose.
+    /// Accuracy levels and error tables are a few integers each and are counted too.
+    pub fn bytes(&self, precision: Precision) -> usize {
+        let b = precision.value_bytes();
+        let keys: usize = (0..self.parts.keys.len())
+            .map(|k| self.key_bytes(k, precision))
+            .sum();
+        let c = &self.parts.controls;
+        let controls =
+            (c.samples.len() + c.offset.len() + c.scale.len() + c.min.len() + c.max.len()) * b;
+        let tables = self.parts.levels.len() * 4 * std::mem::size_of::<u32>()
+            + (self.parts.level_errors.len() + self.parts.joint_errors.len()) * 2 * b;
+        keys + controls + self.parts.mean_pose.len() * b + tables
+    }
+
+    /// Bytes of key tensor `k` at `precision` (0 for a bad index).
+    pub fn key_bytes(&self, k: usize, precision: Precision) -> usize {
+        self.parts.keys.get(k).map_or(0, |key| {
+            (key.core.len()
+                + key.u_p.len()
+                + key.u_t.len()
+                + key.projection.len()
+                + key.trend.len())
+                * precision.value_bytes()
+        })
+    }
+}

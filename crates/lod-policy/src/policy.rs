@@ -1,0 +1,352 @@
+//! Level-of-detail policies: which [`Detail`] a character gets from its distance to the camera
+//! (section 5.1's schedule) or from its projected error on screen.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::kernel::Detail;
+use crate::model::LodModel;
+
+/// Camera parameters a policy may use.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ViewParams {
+    /// Vertical field of view in radians.
+    pub fov_y_radians: f32,
+    /// Image height in pixels.
+    pub image_height_px: f32,
+}
+
+impl Default for ViewParams {
+    /// 60 degrees vertical field of view, 1080 pixels.
+    fn default() -> Self {
+        ViewParams {
+            fov_y_radians: std::f32::consts::FRAC_PI_3,
+            image_height_px: 1080.0,
+        }
+    }
+}
+
+impl ViewParams {
+    /// Metres per pixel at `distance_m` on the view axis: `2 d tan(fov_y / 2) / H`, so that an
+    /// error of `e` metres covers `e / metres_per_pixel` pixels.
+    pub fn metres_per_pixel(&self, distance_m: f32) -> f32 {
+        2.0 * distance_m * (0.5 * self.fov_y_radians).tan() / self.image_height_px
+    }
+}
+
+/// A rule that maps a character's distance and visibility to a level of detail.
+pub trait LevelPolicy {
+    /// Detail for a character `distance_m` metres from the camera; `visible` is false outside
+    /// the view frustum (then only the root is evaluated).
+    fn detail(&self, distance_m: f32, visible: bool, view: &ViewParams) -> Detail;
+}
+
+/// Why a policy could not be built.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum PolicyError {
+    /// A configuration value is out of its domain.
+    #[error("policy configuration: {name} = {value} must be {rule}")]
+    Config {
+        /// Parameter name.
+        name: &'static str,
+        /// Value given.
+        value: f32,
+        /// The rule it breaks.
+        rule: &'static str,
+    },
+    /// The model has no measured error table for its accuracy levels.
+    #[error("the model has no per-level error table (the screen-space policy needs one)")]
+    NoErrorTable,
+}
+
+/// Distances of the [`DistancePolicy`] (paper defaults, section 5.1).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DistanceConfig {
+    /// Full detail below this distance (30 m).
+    pub near_m: f32,
+    /// One key level more every this many metres beyond `near_m` (50 m).
+    pub key_step_m: f32,
+    /// `joints_per_step` joints fewer every this many metres beyond `near_m` (10 m).
+    pub joint_step_m: f32,
+    /// Joints dropped per joint step (1 joint = 3 DOF).
+    pub joints_per_step: usize,
+}
+
+impl Default for DistanceConfig {
+    fn default() -> Self {
+        DistanceConfig {
+            near_m: 30.0,
+            key_step_m: 50.0,
+            joint_step_m: 10.0,
+            joints_per_step: 1,
+        }
+    }
+}
+
+/// The paper's distance schedule.
+///
+/// With `x = (distance - near) / key_step`: below `near` the most accurate level and every joint;
+/// key group `g` (the `g`-th run of consecutive accuracy levels sharing one key) occupies
+/// `x in [g, g + 1)`, its `n_g` levels spread evenly over it (level `i` of the group from
+/// `x = g + i / n_g`), so one more key level is reached every `key_step` metres. Past the last
+/// group (`x >= number of groups`) or outside the view: root only. Joints: all below `near`, then
+/// `joints_per_step` fewer every `joint_step` metres (never below zero).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DistancePolicy {
+    config: DistanceConfig,
+    /// Fractional key-group position of each accuracy level (non-decreasing).
+    positions: Vec<f32>,
+    groups: usize,
+    joints: usize,
+}
+
+impl DistancePolicy {
+    /// The paper's defaults for `model`'s level table.
+    pub fn for_model(model: &LodModel) -> DistancePolicy {
+        Self::build(model, DistanceConfig::default())
+    }
+
+    /// A policy with `config` for `model`'s level table; distances must be finite and positive
+    /// (`near_m` may be zero).
+    pub fn new(model: &LodModel, config: DistanceConfig) -> Result<DistancePolicy, PolicyError> {
+        let check = |name, value: f32, zero_ok: bool| {
+            let ok = value.is_finite() && (value > 0.0 || (zero_ok && value == 0.0));
+            if ok {
+                Ok(())
+            } else {
+                Err(PolicyError::Config {
+                    name,
+                    value,
+                    rule: if zero_ok {
+                        "finite and >= 0"
+                    } else {
+                        "finite and > 0"
+                    },
+                })
+            }
+        };
+        check("near_m", config.near_m, true)?;
+        check("key_step_m", config.key_step_m, false)?;
+        check("joint_step_m", config.joint_step_m, false)?;
+        Ok(Self::build(model, config))
+    }
+
+    fn build(model: &LodModel, config: DistanceConfig) -> DistancePolicy {
+        let levels = model.levels();
+        let mut positions = Vec::with_capacity(levels.len());
+        let mut group = 0usize;
+        let mut start = 0usize;
+        while start < levels.len() {
+            let key = levels[start].key;
+            let end = start + levels[start..].iter().take_while(|l| l.key == key).count();
+            let n = end - start;
+            for i in 0..n {
+                positions.push(group as f32 + i as f32 / n as f32);
+            }
+            group += 1;
+            start = end;
+        }
+        DistancePolicy {
+            config,
+            positions,
+            groups: group,
+            joints: model.joints(),
+        }
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> DistanceConfig {
+        self.config
+    }
+}
+
+impl LevelPolicy for DistancePolicy {
+    fn detail(&self, distance_m: f32, visible: bool, _view: &ViewParams) -> Detail {
+        if !visible || distance_m.is_nan() {
+            return Detail::root_only();
+        }
+        let c = &self.config;
+        let beyond = distance_m - c.near_m;
+        if beyond < 0.0 {
+            return Detail::new(0, self.joints);
+        }
+        let x = beyond / c.key_step_m;
+        if x >= self.groups as f32 {
+            return Detail::root_only();
+        }
+        // Last level whose position is <= x (position 0 always qualifies).
+        let level = self.positions.partition_point(|&p| p <= x).max(1) - 1;
+        let steps = (beyond / c.joint_step_m).floor();
+        let dropped = if steps >= self.joints as f32 {
+            self.joints
+        } else {
+            (steps as usize)
+                .saturating_mul(c.joints_per_step)
+                .min(self.joints)
+        };
+        Detail::new(level, self.joints - dropped)
+    }
+}
+
+/// Which measured error the [`ScreenSpacePolicy`] projects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ErrorMetric {
+    /// Mean joint position error.
+    MeanJoint,
+    /// Shell error (largest vertex displacement): the conservative choice.
+    Shell,
+}
+
+/// Settings of the [`ScreenSpacePolicy`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ScreenConfig {
+    /// Largest allowed projected error in pixels (default 1).
+    pub budget_px: f32,
+    /// Error measure used (default [`ErrorMetric::Shell`]).
+    pub metric: ErrorMetric,
+}
+
+impl Default for ScreenConfig {
+    fn default() -> Self {
+        ScreenConfig {
+            budget_px: 1.0,
+            metric: ErrorMetric::Shell,
+        }
+    }
+}
+
+/// Picks the cheapest detail whose measured error, projected to the screen, stays under a pixel
+/// budget (beyond the paper).
+///
+/// The error of level `l` with `j` active joints is estimated as `e_l + e_J(j)` metres, where `e_l`
+/// is the level's measured error (all joints) and `e_J(j)` the measured error of evaluating only
+/// `j` joints (made non-increasing in `j` by a running maximum, so it is never underestimated
+/// against a larger joint count); its projection is
+/// `err_px = err_m * image_height / (2 distance tan(fov_y / 2))`. Among all `(l, j)` with
+/// `err_px <= budget_px` it returns the one with the smallest cost
+/// `kernel_cost(l, P') + T pose_cost(l, P')` (a cycle's kernel and poses, [`LodModel::kernel_cost`]);
+/// if none qualifies, full detail. When the model has no joint error table, every joint is kept.
+/// Since the admissible set only grows with distance, the chosen cost never increases with it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScreenSpacePolicy {
+    config: ScreenConfig,
+    /// Per level: error in metres, cost constant part, cost per evaluated row.
+    level_err_m: Vec<f32>,
+    level_base_cost: Vec<u64>,
+    level_row_cost: Vec<u64>,
+    /// Non-increasing error in metres per active joint count `0..=J`.
+    joint_err_m: Vec<f32>,
+    always_rows: usize,
+    rows_per_joint: usize,
+    joints: usize,
+}
+
+impl ScreenSpacePolicy {
+    /// Default budget (1 px, shell error) for `model`; needs its per-level error table.
+    pub fn for_model(model: &LodModel) -> Result<ScreenSpacePolicy, PolicyError> {
+        Self::new(model, ScreenConfig::default())
+    }
+
+    /// A policy with `config` for `model`; `budget_px` must be finite and positive.
+    pub fn new(model: &LodModel, config: ScreenConfig) -> Result<ScreenSpacePolicy, PolicyError> {
+        if !(config.budget_px.is_finite() && config.budget_px > 0.0) {
+            return Err(PolicyError::Config {
+                name: "budget_px",
+                value: config.budget_px,
+                rule: "finite and > 0",
+            });
+        }
+        if model.level_errors().len() != model.levels().len() {
+            return Err(PolicyError::NoErrorTable);
+        }
+        let pick = |e: &crate::model::LevelError| match config.metric {
+            ErrorMetric::MeanJoint => e.mean_joint_cm,
+            ErrorMetric::Shell => e.shell_cm,
+        } * 0.01;
+        let level_err_m = model.level_errors().iter().map(pick).collect();
+        let t = model.t() as u64;
+        let mut level_base_cost = Vec::new();
+        let mut level_row_cost = Vec::new();
+        for l in 0..model.levels().len() {
+            // kernel_cost is affine in the row count.
+            let c0 = model.kernel_cost(l, 0).unwrap_or(0) as u64;
+            let c1 = model.kernel_cost(l, 1).unwrap_or(0) as u64;
+            let p1 = model.pose_cost(l, 1).unwrap_or(0) as u64;
+            level_base_cost.push(c0);
+            level_row_cost.push(c1 - c0 + t * p1);
+        }
+        let joints = model.joints();
+        let joint_err_m = if model.joint_errors().is_empty() {
+            // Unknown: only the full joint count is admissible.
+            let mut v = vec![f32::INFINITY; joints + 1];
+            v[joints] = 0.0;
+            v
+        } else {
+            let mut v: Vec<f32> = model.joint_errors().iter().map(pick).collect();
+            for j in (0..joints).rev() {
+                v[j] = v[j].max(v[j + 1]);
+            }
+            v
+        };
+        Ok(ScreenSpacePolicy {
+            config,
+            level_err_m,
+            level_base_cost,
+            level_row_cost,
+            joint_err_m,
+            always_rows: model.always_rows(),
+            rows_per_joint: model.rows_per_joint(),
+            joints,
+        })
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> ScreenConfig {
+        self.config
+    }
+
+    /// Estimated error in metres of `level` with `active_joints` joints (see the type's docs).
+    pub fn estimated_error_m(&self, level: usize, active_joints: usize) -> Option<f32> {
+        let e = self.level_err_m.get(level)?;
+        Some(e + self.joint_err_m[active_joints.min(self.joints)])
+    }
+
+    /// Estimated cost (multiply-adds of one kernel and `T` poses) of `level` with
+    /// `active_joints` joints.
+    pub fn cost(&self, level: usize, active_joints: usize) -> Option<u64> {
+        let rows = (self.always_rows + self.rows_per_joint * active_joints.min(self.joints)) as u64;
+        Some(self.level_base_cost.get(level)? + rows * self.level_row_cost[level])
+    }
+}
+
+impl LevelPolicy for ScreenSpacePolicy {
+    fn detail(&self, distance_m: f32, visible: bool, view: &ViewParams) -> Detail {
+        if !visible || distance_m.is_nan() {
+            return Detail::root_only();
+        }
+        let full = Detail::new(0, self.joints);
+        let mpp = view.metres_per_pixel(distance_m.max(0.0));
+        if !(mpp.is_finite() && mpp >= 0.0) {
+            return full;
+        }
+        let budget_m = self.config.budget_px * mpp;
+        let mut best: Option<(u64, Detail)> = None;
+        for (l, &e) in self.level_err_m.iter().enumerate() {
+            if e > budget_m {
+                continue;
+            }
+            let rest = budget_m - e;
+            // Fewest joints whose error fits (joint_err_m is non-increasing in j).
+            let j = self.joint_err_m.partition_point(|&ej| ej > rest);
+            if j > self.joints {
+                continue;
+            }
+            let cost = self.level_base_cost[l]
+                + (self.always_rows + self.rows_per_joint * j) as u64 * self.level_row_cost[l];
+            if best.is_none_or(|(c, _)| cost < c) {
+                best = Some((cost, Detail::new(l, j)));
+            }
+        }
+        best.map_or(full, |(_, d)| d)
+    }
+}

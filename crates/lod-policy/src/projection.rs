@@ -1,0 +1,292 @@
+//! Offline helpers that turn a decomposition and a kriging system into runtime parts:
+//! the kriging projection `Q`, the trend projection `V` (section 3.3) and a scaled control space.
+//!
+//! These run once per model in f64 and allocate freely; the only linear algebra needed is the
+//! pseudo-inverse of the small `(d + 1) x (d + 1)` matrix `C C^T`, done here by a Jacobi
+//! eigen-decomposition so that a constant (zero-scaled) control dimension is handled.
+
+use crate::error::ModelError;
+use crate::model::{ControlSpace, KeyTensor, Ranks, Variogram};
+
+/// One key's ordered Tucker model in f64 (column-major, see [`KeyTensor`] for layouts).
+#[derive(Debug, Clone, Copy)]
+pub struct KeyFactors<'a> {
+    /// Ranks `(R_P, R_T, R_S)`.
+    pub ranks: Ranks,
+    /// Core `Z`, `R_P x R_T x R_S`.
+    pub core: &'a [f64],
+    /// `U_P`, `P x R_P`.
+    pub u_p: &'a [f64],
+    /// `U_T`, `T x R_T`.
+    pub u_t: &'a [f64],
+    /// `U_S`, `S x R_S`.
+    pub u_s: &'a [f64],
+}
+
+fn len_check(what: &str, v: &[f64], expected: usize) -> Result<(), ModelError> {
+    if v.len() != expected {
+        return Err(ModelError::Length {
+            what: what.to_string(),
+            expected,
+            found: v.len(),
+        });
+    }
+    if let Some(index) = v.iter().position(|x| !x.is_finite()) {
+        return Err(ModelError::NonFinite {
+            what: what.to_string(),
+            index,
+        });
+    }
+    Ok(())
+}
+
+fn to_f32(v: &[f64]) -> Vec<f32> {
+    v.iter().map(|&x| x as f32).collect()
+}
+
+/// Moore-Penrose pseudo-inverse of a small symmetric positive semi-definite `n x n` matrix
+/// (column-major) by cyclic Jacobi rotations: `M^+ = E diag(1/lambda_i, lambda_i > tol) E^T`,
+/// `tol = 1e-12 max |lambda|`.
+fn pinv_symmetric(m: &[f64], n: usize) -> Vec<f64> {
+    let mut a = m.to_vec();
+    let mut e = vec![0.0; n * n];
+    for i in 0..n {
+        e[i + n * i] = 1.0;
+    }
+    for _sweep in 0..100 {
+        let off: f64 = (0..n)
+            .flat_map(|j| (0..n).filter(move |&i| i != j).map(move |i| (i, j)))
+            .map(|(i, j)| a[i + n * j] * a[i + n * j])
+            .sum();
+        let diag: f64 = (0..n).map(|i| a[i + n * i] * a[i + n * i]).sum();
+        if off <= 1e-30 * diag.max(f64::MIN_POSITIVE) {
+            break;
+        }
+        for q in 1..n {
+            for pp in 0..q {
+                let apq = a[pp + n * q];
+                if apq == 0.0 {
+                    continue;
+                }
+                let theta = (a[q + n * q] - a[pp + n * pp]) / (2.0 * apq);
+                let tt = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let tt = if theta == 0.0 { 1.0 } else { tt };
+                let c = 1.0 / (tt * tt + 1.0).sqrt();
+                let s = tt * c;
+                // A <- J^T A J on rows/columns pp, q.
+                for k in 0..n {
+                    let akp = a[k + n * pp];
+                    let akq = a[k + n * q];
+                    a[k + n * pp] = c * akp - s * akq;
+                    a[k + n * q] = s * akp + c * akq;
+                }
+                for k in 0..n {
+                    let apk = a[pp + n * k];
+                    let aqk = a[q + n * k];
+                    a[pp + n * k] = c * apk - s * aqk;
+                    a[q + n * k] = s * apk + c * aqk;
+                }
+                for k in 0..n {
+                    let ekp = e[k + n * pp];
+                    let ekq = e[k + n * q];
+                    e[k + n * pp] = c * ekp - s * ekq;
+                    e[k + n * q] = s * ekp + c * ekq;
+                }
+            }
+        }
+    }
+    let lmax = (0..n).map(|i| a[i + n * i].abs()).fold(0.0, f64::max);
+    let tol = 1e-12 * lmax;
+    let mut out = vec![0.0; n * n];
+    for l in 0..n {
+        let lam = a[l + n * l];
+        if lam.abs() <= tol || lam == 0.0 {
+            continue;
+        }
+        for j in 0..n {
+            for i in 0..n {
+                out[i + n * j] += e[i + n * l] * e[j + n * l] / lam;
+            }
+        }
+    }
+    out
+}
+
+impl KeyTensor {
+    /// Builds a runtime key tensor from an f64 decomposition and the kriging system.
+    ///
+    /// - `kriging_rows`: the first `S` rows of `A^{-1}`, `A = [Gamma 1; 1^T 0]` (appendix A),
+    ///   as an `S x (S + 1)` column-major matrix, so that `b(c) = kriging_rows [gamma(c); 1]`;
+    /// - `controls`: the scaled sample controls, `S x d` column-major (as in [`ControlSpace`]).
+    ///
+    /// Computes `Q = [U_S^T ; C] A^{-1}[:S, :]` and `V = U_S^T C^+` with
+    /// `C^+ = C^T (C C^T)^+` (eq. 8's `F = K C^+` then equals `Z_(12) V`), and stores
+    /// everything in f32.
+    pub fn from_factors(
+        f: &KeyFactors<'_>,
+        p: usize,
+        t: usize,
+        kriging_rows: &[f64],
+        controls: &[f64],
+    ) -> Result<KeyTensor, ModelError> {
+        let r = f.ranks;
+        if r.s == 0 {
+            return Err(ModelError::ZeroSize { what: "R_S".into() });
+        }
+        let s = f.u_s.len() / r.s;
+        if s == 0 {
+            return Err(ModelError::ZeroSize { what: "S".into() });
+        }
+        len_check("u_s", f.u_s, s * r.s)?;
+        len_check("core", f.core, r.core_len())?;
+        len_check("u_p", f.u_p, p * r.p)?;
+        len_check("u_t", f.u_t, t * r.t)?;
+        len_check("kriging_rows", kriging_rows, s * (s + 1))?;
+        if controls.len() % s != 0 || controls.is_empty() {
+            return Err(ModelError::Length {
+                what: "controls (S x d)".into(),
+                expected: s * (controls.len() / s).max(1),
+                found: controls.len(),
+            });
+        }
+        let d = controls.len() / s;
+        len_check("controls", controls, s * d)?;
+        let dc = d + 1;
+        // C[m, i] = c_i[m] (m < d), 1 (m = d).
+        let cmat = |m: usize, i: usize| if m < d { controls[i + s * m] } else { 1.0 };
+
+        let nq = r.s + dc;
+        let mut q = vec![0.0f64; nq * (s + 1)];
+        for j in 0..=s {
+            let acol = &kriging_rows[s * j..][..s];
+            let qcol = &mut q[nq * j..][..nq];
+            for (ql, ucol) in qcol.iter_mut().zip(f.u_s.chunks_exact(s)) {
+                *ql = ucol.iter().zip(acol).map(|(u, a)| u * a).sum();
+            }
+            for m in 0..dc {
+                qcol[r.s + m] = (0..s).map(|i| cmat(m, i) * acol[i]).sum();
+            }
+        }
+
+        // M = C C^T, B = C U_S ((d+1) x R_S); V = B^T M^+.
+        let mut mm = vec![0.0f64; dc * dc];
+        for a in 0..dc {
+            for b in 0..dc {
+                mm[a + dc * b] = (0..s).map(|i| cmat(a, i) * cmat(b, i)).sum();
+            }
+        }
+        let mp = pinv_symmetric(&mm, dc);
+        let mut bmat = vec![0.0f64; dc * r.s];
+        for l in 0..r.s {
+            for m in 0..dc {
+                bmat[m + dc * l] = (0..s).map(|i| cmat(m, i) * f.u_s[i + s * l]).sum();
+            }
+        }
+        let mut v = vec![0.0f64; r.s * dc];
+        for l in 0..r.s {
+            for m in 0..dc {
+                v[l + r.s * m] = (0..dc).map(|n| bmat[n + dc * l] * mp[n + dc * m]).sum();
+            }
+        }
+        Ok(KeyTensor {
+            ranks: r,
+            core: to_f32(f.core),
+            u_p: to_f32(f.u_p),
+            u_t: to_f32(f.u_t),
+            projection: to_f32(&q),
+            trend: to_f32(&v),
+        })
+    }
+}
+
+impl ControlSpace {
+    /// Builds a control space from raw sample controls (`S x d` column-major), a per-dimension
+    /// `offset` and `scale` (scaled `c'_k = (c_k - offset_k) * scale_k`), and the variogram.
+    /// The clamping bounds are the raw per-dimension minimum and maximum.
+    pub fn from_raw(
+        variogram: Variogram,
+        raw: &[f32],
+        s: usize,
+        offset: Vec<f32>,
+        scale: Vec<f32>,
+    ) -> Result<ControlSpace, ModelError> {
+        let d = offset.len();
+        if s == 0 || d == 0 {
+            return Err(ModelError::ZeroSize {
+                what: if s == 0 { "S" } else { "d" }.into(),
+            });
+        }
+        if raw.len() != s * d {
+            return Err(ModelError::Length {
+                what: "raw controls".into(),
+                expected: s * d,
+                found: raw.len(),
+            });
+        }
+        if scale.len() != d {
+            return Err(ModelError::Length {
+                what: "controls scale".into(),
+                expected: d,
+                found: scale.len(),
+            });
+        }
+        if let Some(index) = raw.iter().position(|x| !x.is_finite()) {
+            return Err(ModelError::NonFinite {
+                what: "raw controls".into(),
+                index,
+            });
+        }
+        let mut min = vec![f32::INFINITY; d];
+        let mut max = vec![f32::NEG_INFINITY; d];
+        let mut samples = vec![0.0f32; s * d];
+        for k in 0..d {
+            for i in 0..s {
+                let v = raw[i + s * k];
+                min[k] = min[k].min(v);
+                max[k] = max[k].max(v);
+                samples[i + s * k] = (v - offset[k]) * scale[k];
+            }
+        }
+        Ok(ControlSpace {
+            variogram,
+            offset,
+            scale,
+            samples,
+            min,
+            max,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pinv_symmetric;
+
+    #[test]
+    fn pinv_of_singular_symmetric_matrix_satisfies_penrose() {
+        // Rank-2 3x3 PSD matrix: M = B B^T with B = [[1,2],[0,1],[1,3]].
+        let b = [[1.0, 2.0], [0.0, 1.0], [1.0, 3.0]];
+        let mut m = vec![0.0; 9];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i + 3 * j] = b[i][0] * b[j][0] + b[i][1] * b[j][1];
+            }
+        }
+        let mp = pinv_symmetric(&m, 3);
+        let mul = |x: &[f64], y: &[f64]| {
+            let mut z = vec![0.0; 9];
+            for i in 0..3 {
+                for j in 0..3 {
+                    z[i + 3 * j] = (0..3).map(|k| x[i + 3 * k] * y[k + 3 * j]).sum();
+                }
+            }
+            z
+        };
+        let mmpm = mul(&mul(&m, &mp), &m);
+        let mpmmp = mul(&mul(&mp, &m), &mp);
+        for i in 0..9 {
+            assert!((mmpm[i] - m[i]).abs() < 1e-9, "M M+ M != M at {i}");
+            assert!((mpmmp[i] - mp[i]).abs() < 1e-9, "M+ M M+ != M+ at {i}");
+        }
+    }
+}

@@ -1,0 +1,320 @@
+//! Clip kernels and poses against a direct f64 evaluation of eq. 4/7/8 (full reconstruction of the
+//! truncated tensor, trend F = K C^+, residual kriging weights from a dense solve).
+// Index loops mirror the formulas' subscripts.
+#![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use common::*;
+use lod_policy::{ClipKernel, Detail, KernelError, KernelScratch, LodModel};
+use timewarp::TimeTable;
+
+fn kernel_pose(model: &LodModel, c: &[f32], detail: Detail, phase: f32) -> (ClipKernel, Vec<f32>) {
+    let mut scratch = KernelScratch::new(model);
+    let mut kernel = ClipKernel::new(model);
+    model
+        .build_kernel(c, detail, &mut scratch, &mut kernel)
+        .unwrap();
+    let mut out = vec![f32::NAN; model.p()];
+    model.pose(&kernel, phase, &mut out).unwrap();
+    (kernel, out)
+}
+
+fn queries(truth: &Truth, rng: &mut Rng, n: usize) -> Vec<Vec<f64>> {
+    (0..n)
+        .map(|_| {
+            (0..truth.d)
+                .map(|k| rng.uniform(truth.min[k], truth.max[k]))
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn pose_matches_direct_universal_kriging_at_every_level() {
+    for (seed, nugget) in [(1u64, 0.0), (2, 0.05)] {
+        let truth = random_truth(seed, nugget);
+        let model = build_model(&truth);
+        let mut rng = Rng::new(seed + 100);
+        for c in queries(&truth, &mut rng, 4) {
+            let c32: Vec<f32> = c.iter().map(|&v| v as f32).collect();
+            for level in 0..truth.levels.len() {
+                for phase in [0.0f32, 3.3, 7.5, (T - 1) as f32] {
+                    let want = direct_pose(&truth, level, &c, phase as f64);
+                    let (kernel, got) =
+                        kernel_pose(&model, &c32, Detail::new(level, usize::MAX), phase);
+                    assert!(!kernel.clamped());
+                    assert_eq!(kernel.rows(), P);
+                    let e = rel_err(&got, &want);
+                    assert!(
+                        e < 1e-4,
+                        "seed {seed} level {level} phase {phase}: relative error {e}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn truncated_level_differs_from_its_key() {
+    // Guards against a truncation that silently evaluates the whole key.
+    let truth = random_truth(3, 0.0);
+    let model = build_model(&truth);
+    let c = [0.1f32, 1.2];
+    let (_, full) = kernel_pose(&model, &c, Detail::new(0, usize::MAX), 4.0);
+    let (_, trunc) = kernel_pose(&model, &c, Detail::new(1, usize::MAX), 4.0);
+    let diff = full
+        .iter()
+        .zip(&trunc)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(diff > 1e-3, "levels 0 and 1 give the same pose");
+}
+
+#[test]
+fn interpolates_samples_exactly_without_nugget() {
+    // With gamma(0) = 0 and no nugget, kriging at a sample's control returns that sample:
+    // K(c_i) = K_i, so the pose is the Tucker reconstruction of sample i.
+    let truth = random_truth(4, 0.0);
+    let model = build_model(&truth);
+    let s = truth.s;
+    for i in [0usize, 5, s - 1] {
+        // Raw control whose scaled value is the sample's.
+        let c: Vec<f32> = (0..truth.d)
+            .map(|k| (truth.controls[i + s * k] / truth.scale[k] + truth.offset[k]) as f32)
+            .collect();
+        let key = &truth.keys[0];
+        let r = key.ranks;
+        let j = 6usize;
+        let want: Vec<f64> = (0..truth.p)
+            .map(|row| {
+                let mut v = 0.0;
+                for l in 0..r.s {
+                    for b in 0..r.t {
+                        for a in 0..r.p {
+                            v += key.core[a + r.p * (b + r.t * l)]
+                                * key.u_p[row + truth.p * a]
+                                * key.u_t[j + truth.t * b]
+                                * key.u_s[i + s * l];
+                        }
+                    }
+                }
+                v
+            })
+            .collect();
+        let (_, got) = kernel_pose(&model, &c, Detail::full(), j as f32);
+        let e = rel_err(&got, &want);
+        assert!(e < 1e-4, "sample {i}: relative error {e}");
+    }
+}
+
+#[test]
+fn reduced_joints_evaluate_leading_rows_and_mean_pose_elsewhere() {
+    let truth = random_truth(5, 0.02);
+    let model = build_model(&truth);
+    let c = [0.05f64, 1.1];
+    let c32 = [0.05f32, 1.1];
+    for joints in 0..=JOINTS {
+        let (kernel, got) = kernel_pose(&model, &c32, Detail::new(2, joints), 2.25);
+        let rows = 7 + 3 * joints;
+        assert_eq!(kernel.rows(), rows);
+        let want = direct_pose(&truth, 2, &c, 2.25);
+        assert!(rel_err(&got[..rows], &want[..rows]) < 1e-4);
+        for row in rows..P {
+            assert_eq!(
+                got[row], truth.mean_pose[row] as f32,
+                "row {row} with {joints} joints"
+            );
+        }
+    }
+}
+
+#[test]
+fn root_only_uses_smallest_level_and_seven_rows() {
+    let truth = random_truth(6, 0.02);
+    let model = build_model(&truth);
+    let c = [-0.2f64, 0.9];
+    let (kernel, got) = kernel_pose(&model, &[-0.2, 0.9], Detail::root_only(), 5.0);
+    assert_eq!(kernel.level(), truth.levels.len() - 1);
+    assert_eq!(kernel.rows(), 7);
+    let want = direct_pose(&truth, truth.levels.len() - 1, &c, 5.0);
+    assert!(rel_err(&got[..7], &want[..7]) < 1e-4);
+    assert_eq!(&got[7..], &model.mean_pose()[7..]);
+}
+
+#[test]
+fn time_table_comes_from_the_increment_row() {
+    let truth = random_truth(7, 0.0);
+    let model = build_model(&truth);
+    let c = [0.3f64, 1.6];
+    let (kernel, _) = kernel_pose(&model, &[0.3, 1.6], Detail::new(0, 0), 0.0);
+    // Increments straight from the direct evaluation, one per aligned frame.
+    let inc: Vec<f64> = (0..T)
+        .map(|j| direct_pose(&truth, 0, &c, j as f64)[6])
+        .collect();
+    let want = TimeTable::from_increments(&inc);
+    let got = kernel.time_table().times();
+    assert_eq!(got.len(), T);
+    for (j, (&g, &w)) in got.iter().zip(want.times()).enumerate() {
+        assert!(
+            (g - w).abs() < 1e-4 * (1.0 + w.abs()),
+            "frame {j}: {g} vs {w}"
+        );
+    }
+    assert!((kernel.duration() - want.duration()).abs() < 1e-4 * (1.0 + want.duration()));
+    // phase_at inverts the table.
+    for j in 0..T {
+        let ph = kernel.phase_at(got[j]);
+        assert!((ph - j as f32).abs() < 1e-3, "frame {j}: phase {ph}");
+    }
+    assert_eq!(kernel.phase_at(-1.0), 0.0);
+    assert_eq!(kernel.phase_at(1e9), (T - 1) as f32);
+    assert_eq!(kernel.phase_at(f64::NAN), 0.0);
+}
+
+#[test]
+fn playback_time_increases_strictly() {
+    // A random model has increments of either sign; negative ones are raised to MIN_INCREMENT.
+    let truth = random_truth(8, 0.0);
+    let model = build_model(&truth);
+    let (kernel, _) = kernel_pose(&model, &[0.0, 1.0], Detail::full(), 0.0);
+    let times = kernel.time_table().times();
+    assert!(
+        times.windows(2).all(|w| w[1] > w[0]),
+        "playback time must increase strictly"
+    );
+    assert_eq!(times[0], 0.0);
+    assert_eq!(kernel.duration(), times[T - 1]);
+}
+
+#[test]
+fn out_of_range_controls_are_clamped_and_flagged() {
+    let truth = random_truth(9, 0.02);
+    let model = build_model(&truth);
+    let outside = [10.0f32, -3.0];
+    let clamped = [truth.max[0] as f32, truth.min[1] as f32];
+    let (k1, p1) = kernel_pose(&model, &outside, Detail::full(), 3.0);
+    let (k2, p2) = kernel_pose(&model, &clamped, Detail::full(), 3.0);
+    assert!(k1.clamped());
+    assert!(!k2.clamped());
+    assert_eq!(p1, p2);
+}
+
+#[test]
+fn bad_inputs_are_errors() {
+    let truth = random_truth(10, 0.0);
+    let model = build_model(&truth);
+    let mut scratch = KernelScratch::new(&model);
+    let mut kernel = ClipKernel::new(&model);
+    assert!(matches!(
+        model.build_kernel(&[f32::NAN, 1.0], Detail::full(), &mut scratch, &mut kernel),
+        Err(KernelError::NonFiniteControl { index: 0, .. })
+    ));
+    assert!(matches!(
+        model.build_kernel(
+            &[0.0, f32::INFINITY],
+            Detail::full(),
+            &mut scratch,
+            &mut kernel
+        ),
+        Err(KernelError::NonFiniteControl { index: 1, .. })
+    ));
+    assert!(matches!(
+        model.build_kernel(&[0.0], Detail::full(), &mut scratch, &mut kernel),
+        Err(KernelError::ControlLength {
+            expected: 2,
+            found: 1
+        })
+    ));
+    assert!(matches!(
+        model.build_kernel(&[0.0, 1.0], Detail::new(4, 1), &mut scratch, &mut kernel),
+        Err(KernelError::Level {
+            level: 4,
+            levels: 4
+        })
+    ));
+    model
+        .build_kernel(&[0.0, 1.0], Detail::full(), &mut scratch, &mut kernel)
+        .unwrap();
+    let mut short = vec![0.0; P - 1];
+    assert!(matches!(
+        model.pose(&kernel, 1.0, &mut short),
+        Err(KernelError::OutputLength { .. })
+    ));
+    let mut out = vec![0.0; P];
+    assert!(matches!(
+        model.pose(&kernel, f32::NAN, &mut out),
+        Err(KernelError::NonFinitePhase { .. })
+    ));
+    // Phases outside [0, T-1] are clamped.
+    let mut lo = vec![0.0; P];
+    let mut hi = vec![0.0; P];
+    model.pose(&kernel, -5.0, &mut lo).unwrap();
+    model.pose(&kernel, 0.0, &mut out).unwrap();
+    assert_eq!(lo, out);
+    model.pose(&kernel, 1e6, &mut hi).unwrap();
+    model.pose(&kernel, (T - 1) as f32, &mut out).unwrap();
+    assert_eq!(hi, out);
+}
+
+#[test]
+fn kernel_from_another_model_is_rejected() {
+    let model = build_model(&random_truth(11, 0.0));
+    let mut parts = model.parts().clone();
+    // A model with fewer frames: same shapes otherwise.
+    parts.t = T - 1;
+    for key in &mut parts.keys {
+        let rt = key.ranks.t;
+        key.u_t = (0..(T - 1) * rt)
+            .map(|i| key.u_t[(i / (T - 1)) * T + i % (T - 1)])
+            .collect();
+    }
+    let other = LodModel::new(parts).unwrap();
+    let mut scratch = KernelScratch::new(&model);
+    let mut kernel = ClipKernel::new(&other);
+    assert!(matches!(
+        model.build_kernel(&[0.0, 1.0], Detail::full(), &mut scratch, &mut kernel),
+        Err(KernelError::Capacity { what: "kernel", .. })
+    ));
+}
+
+#[test]
+fn rebuilding_a_kernel_is_deterministic_and_independent_of_history() {
+    let model = build_model(&random_truth(12, 0.02));
+    let mut scratch = KernelScratch::new(&model);
+    let mut k1 = ClipKernel::new(&model);
+    model
+        .build_kernel(
+            &[0.1, 1.3],
+            Detail::new(0, usize::MAX),
+            &mut scratch,
+            &mut k1,
+        )
+        .unwrap();
+    let g1 = k1.g().to_vec();
+    // Build at a different level and controls in between, then rebuild.
+    model
+        .build_kernel(&[-0.4, 0.7], Detail::root_only(), &mut scratch, &mut k1)
+        .unwrap();
+    model
+        .build_kernel(
+            &[0.1, 1.3],
+            Detail::new(0, usize::MAX),
+            &mut scratch,
+            &mut k1,
+        )
+        .unwrap();
+    let mut fresh_scratch = KernelScratch::new(&model);
+    let mut k2 = ClipKernel::new(&model);
+    model
+        .build_kernel(
+            &[0.1, 1.3],
+            Detail::new(0, usize::MAX),
+            &mut fresh_scratch,
+            &mut k2,
+        )
+        .unwrap();
+    assert_eq!(k1.g(), g1.as_slice());
+    assert_eq!(k1, k2);
+}

@@ -1,0 +1,212 @@
+//! Level-of-detail policies: the paper's distance schedule and the screen-space pixel budget.
+// Index loops mirror the formulas' subscripts.
+#![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use common::*;
+use lod_policy::{
+    Detail, DistanceConfig, DistancePolicy, ErrorMetric, LevelError, LevelPolicy, LodModel,
+    PolicyError, ScreenConfig, ScreenSpacePolicy, ViewParams,
+};
+use proptest::prelude::*;
+
+fn model() -> LodModel {
+    build_model(&random_truth(31, 0.0))
+}
+
+#[test]
+fn distance_policy_follows_the_paper_schedule() {
+    let m = model();
+    let pol = DistancePolicy::for_model(&m);
+    let v = ViewParams::default();
+    let at = |d: f32| pol.detail(d, true, &v);
+    assert_eq!(at(0.0), Detail::new(0, JOINTS));
+    assert_eq!(at(29.9), Detail::new(0, JOINTS));
+    // Key group 0 (levels 0, 1) over [30, 80), group 1 (levels 2, 3) over [80, 130).
+    assert_eq!(at(30.0).accuracy, 0);
+    assert_eq!(at(54.9).accuracy, 0);
+    assert_eq!(at(55.0).accuracy, 1);
+    assert_eq!(at(80.0).accuracy, 2);
+    assert_eq!(at(105.0).accuracy, 3);
+    assert_eq!(at(129.9).accuracy, 3);
+    assert_eq!(at(130.0), Detail::root_only());
+    // One joint fewer every 10 m past 30 m.
+    assert_eq!(at(39.9).active_joints, JOINTS);
+    assert_eq!(at(40.0).active_joints, JOINTS - 1);
+    assert_eq!(at(60.0).active_joints, JOINTS - 3);
+    assert_eq!(at(75.0).active_joints, 0);
+    // Invisible or NaN: root only.
+    assert_eq!(pol.detail(1.0, false, &v), Detail::root_only());
+    assert_eq!(pol.detail(f32::NAN, true, &v), Detail::root_only());
+}
+
+#[test]
+fn distance_policy_is_configurable_and_validated() {
+    let m = model();
+    let cfg = DistanceConfig {
+        near_m: 10.0,
+        key_step_m: 20.0,
+        joint_step_m: 5.0,
+        joints_per_step: 2,
+    };
+    let pol = DistancePolicy::new(&m, cfg).unwrap();
+    let v = ViewParams::default();
+    assert_eq!(pol.detail(9.0, true, &v), Detail::new(0, JOINTS));
+    assert_eq!(pol.detail(30.0, true, &v).accuracy, 2);
+    assert_eq!(pol.detail(15.0, true, &v).active_joints, JOINTS - 2);
+    assert_eq!(pol.detail(50.0, true, &v), Detail::root_only());
+    let bad = DistanceConfig {
+        key_step_m: 0.0,
+        ..cfg
+    };
+    assert!(matches!(
+        DistancePolicy::new(&m, bad),
+        Err(PolicyError::Config {
+            name: "key_step_m",
+            ..
+        })
+    ));
+    let bad = DistanceConfig {
+        near_m: f32::NAN,
+        ..cfg
+    };
+    assert!(DistancePolicy::new(&m, bad).is_err());
+}
+
+fn detail_rank(m: &LodModel, d: Detail) -> (usize, usize) {
+    (d.level_in(m).unwrap(), d.active_joints.min(m.joints()))
+}
+
+#[test]
+fn distance_policy_detail_never_increases_with_distance() {
+    let m = model();
+    let pol = DistancePolicy::for_model(&m);
+    let v = ViewParams::default();
+    let mut prev = detail_rank(&m, pol.detail(0.0, true, &v));
+    for i in 1..4000 {
+        let cur = detail_rank(&m, pol.detail(i as f32 * 0.1, true, &v));
+        assert!(
+            cur.0 >= prev.0 && cur.1 <= prev.1,
+            "at {} m: {cur:?} after {prev:?}",
+            i as f32 * 0.1
+        );
+        prev = cur;
+    }
+}
+
+#[test]
+fn screen_policy_meets_the_budget_and_is_cheapest() {
+    let m = model();
+    let pol = ScreenSpacePolicy::for_model(&m).unwrap();
+    let v = ViewParams {
+        fov_y_radians: 0.8,
+        image_height_px: 720.0,
+    };
+    let mut prev_cost = u64::MAX;
+    for i in 0..3000 {
+        let dist = i as f32 * 0.25;
+        let d = pol.detail(dist, true, &v);
+        let (level, joints) = detail_rank(&m, d);
+        let cost = pol.cost(level, joints).unwrap();
+        assert!(cost <= prev_cost, "cost rose at {dist} m");
+        prev_cost = cost;
+        let budget_m = v.metres_per_pixel(dist) * 1.0;
+        let err = pol.estimated_error_m(level, joints).unwrap();
+        let any_fits =
+            (0..4).any(|l| (0..=JOINTS).any(|j| pol.estimated_error_m(l, j).unwrap() <= budget_m));
+        if any_fits {
+            // Projected error within 1 px (err_px = err_m H / (2 d tan(fov/2))).
+            let err_px = err * v.image_height_px / (2.0 * dist * (0.5 * v.fov_y_radians).tan());
+            assert!(err_px <= 1.0 + 1e-4, "{err_px} px at {dist} m");
+            for l in 0..4 {
+                for j in 0..=JOINTS {
+                    if pol.estimated_error_m(l, j).unwrap() <= budget_m {
+                        assert!(
+                            pol.cost(l, j).unwrap() >= cost,
+                            "({l}, {j}) is cheaper at {dist} m"
+                        );
+                    }
+                }
+            }
+        } else {
+            assert_eq!(
+                d,
+                Detail::new(0, JOINTS),
+                "fallback must be full detail at {dist} m"
+            );
+        }
+    }
+    // Far enough, the cheapest pair is the smallest level with no joints: root only.
+    assert_eq!(detail_rank(&m, pol.detail(1e4, true, &v)), (3, 0));
+    assert_eq!(pol.detail(5.0, false, &v), Detail::root_only());
+}
+
+#[test]
+fn screen_policy_needs_an_error_table_and_a_positive_budget() {
+    let mut parts = model().into_parts();
+    parts.level_errors.clear();
+    let m = LodModel::new(parts).unwrap();
+    assert_eq!(
+        ScreenSpacePolicy::for_model(&m),
+        Err(PolicyError::NoErrorTable)
+    );
+    let m = model();
+    let cfg = ScreenConfig {
+        budget_px: 0.0,
+        metric: ErrorMetric::Shell,
+    };
+    assert!(matches!(
+        ScreenSpacePolicy::new(&m, cfg),
+        Err(PolicyError::Config { .. })
+    ));
+}
+
+#[test]
+fn screen_policy_without_joint_table_keeps_every_joint() {
+    let mut parts = model().into_parts();
+    parts.joint_errors.clear();
+    let m = LodModel::new(parts).unwrap();
+    let pol = ScreenSpacePolicy::new(
+        &m,
+        ScreenConfig {
+            budget_px: 1.0,
+            metric: ErrorMetric::MeanJoint,
+        },
+    )
+    .unwrap();
+    let v = ViewParams::default();
+    for dist in [1.0f32, 50.0, 500.0, 5000.0] {
+        assert_eq!(pol.detail(dist, true, &v).active_joints, JOINTS);
+    }
+    // The mean-joint metric uses the smaller errors: level 3 (4 cm) fits at 1 px when
+    // 0.04 m <= 2 d tan(30 deg) / 1080, i.e. d >= 37.4 m.
+    assert_eq!(pol.detail(38.0, true, &v).accuracy, 3);
+    assert_eq!(pol.detail(36.0, true, &v).accuracy, 2);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    #[test]
+    fn screen_policy_cost_is_monotone_for_any_error_table(
+        level_cm in proptest::collection::vec(0.0f32..20.0, 4),
+        joint_cm in proptest::collection::vec(0.0f32..20.0, JOINTS + 1),
+        budget in 0.2f32..4.0,
+    ) {
+        let mut parts = model().into_parts();
+        parts.level_errors = level_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e }).collect();
+        parts.joint_errors = joint_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e }).collect();
+        let m = LodModel::new(parts).unwrap();
+        let pol = ScreenSpacePolicy::new(&m, ScreenConfig { budget_px: budget, metric: ErrorMetric::Shell }).unwrap();
+        let v = ViewParams::default();
+        let mut prev = u64::MAX;
+        for i in 0..400 {
+            let d = pol.detail(i as f32 * 2.0, true, &v);
+            let (l, j) = detail_rank(&m, d);
+            let c = pol.cost(l, j).unwrap();
+            prop_assert!(c <= prev);
+            prev = c;
+        }
+    }
+}
