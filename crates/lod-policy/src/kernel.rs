@@ -369,9 +369,27 @@ impl LodModel {
         phase: f32,
         out: &mut [f32],
     ) -> Result<(), KernelError> {
+        if out.len() != self.p() {
+            return Err(KernelError::OutputLength {
+                expected: self.p(),
+                found: out.len(),
+            });
+        }
+        self.pose_rows(kernel, phase, out)
+    }
+
+    /// Writes the first `out.len()` rows (at most `P`) of the pose at `phase`, as [`LodModel::pose`]
+    /// does for all of them: rows the kernel evaluated from `G w_T`, later rows from the mean pose.
+    /// With `out.len() = 7` it evaluates only the root and the time increment, `O(7 r_T)`.
+    pub fn pose_rows(
+        &self,
+        kernel: &ClipKernel,
+        phase: f32,
+        out: &mut [f32],
+    ) -> Result<(), KernelError> {
         let (p, t) = (self.p(), self.t());
         self.check_kernel(kernel)?;
-        if out.len() != p {
+        if out.len() > p {
             return Err(KernelError::OutputLength {
                 expected: p,
                 found: out.len(),
@@ -382,21 +400,23 @@ impl LodModel {
         }
         let key = &self.keys()[self.levels()[kernel.level].key];
         let rows = kernel.rows;
+        let used = rows.min(out.len());
         let rt = kernel.ranks.t;
         let ph = phase.clamp(0.0, (t - 1) as f32);
         let i = (ph.floor() as usize).min(t.saturating_sub(2));
         let i1 = (i + 1).min(t - 1);
         let a = ph - i as f32;
-        let (head, tail) = out.split_at_mut(rows);
+        let (head, tail) = out.split_at_mut(used);
         head.fill(0.0);
         for b in 0..rt {
             let wb = (1.0 - a) * key.u_t[i + t * b] + a * key.u_t[i1 + t * b];
-            let gcol = &kernel.g[rows * b..][..rows];
+            let gcol = &kernel.g[rows * b..][..used];
             for (o, &gv) in head.iter_mut().zip(gcol) {
                 *o += wb * gv;
             }
         }
-        tail.copy_from_slice(&self.mean_pose()[rows..]);
+        let n = tail.len();
+        tail.copy_from_slice(&self.mean_pose()[used..used + n]);
         Ok(())
     }
 }

@@ -318,3 +318,26 @@ fn rebuilding_a_kernel_is_deterministic_and_independent_of_history() {
     assert_eq!(k1.g(), g1.as_slice());
     assert_eq!(k1, k2);
 }
+
+#[test]
+fn pose_rows_equal_the_leading_rows_of_pose() {
+    let truth = random_truth(5, 0.0);
+    let model = build_model(&truth);
+    let mut scratch = KernelScratch::new(&model);
+    let mut kernel = ClipKernel::new(&model);
+    let c: Vec<f32> = (0..D).map(|k| 0.3 + 0.1 * k as f32).collect();
+    for detail in [Detail::full(), Detail::new(1, 2), Detail::root_only()] {
+        model
+            .build_kernel(&c, detail, &mut scratch, &mut kernel)
+            .unwrap();
+        let mut full = vec![0.0f32; P];
+        model.pose(&kernel, 2.5, &mut full).unwrap();
+        for n in [0, 3, 7, 9, P] {
+            let mut head = vec![f32::NAN; n];
+            model.pose_rows(&kernel, 2.5, &mut head).unwrap();
+            assert_eq!(head, full[..n], "{detail:?}, {n} rows");
+        }
+        let mut too_long = vec![0.0f32; P + 1];
+        assert!(model.pose_rows(&kernel, 2.5, &mut too_long).is_err());
+    }
+}
