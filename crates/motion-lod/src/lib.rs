@@ -3,3 +3,20 @@
 //! This facade crate is for: the whole build pipeline from BVH folders to a `MotionModel`, the model
 //! file, and the `motion-lod` command line. It re-exports the runtime crates so that an engine can
 //! depend on this one crate. It is not for: the mathematics itself, which lives in the crates below.
+//!
+//! The dataset stage ([`dataset`]): BVH folders to gait cycles on one skeleton, then to the
+//! aligned `P x T x S` motion tensor with the time increment at row 6.
+//!
+//! ```no_run
+//! use motion_lod::dataset::{DatasetConfig, align_cycles, load_cycles};
+//! use timewarp::{AlignMethod, DtwConfig};
+//!
+//! let dirs = vec![std::path::PathBuf::from("fixtures")];
+//! let set = load_cycles(&dirs, &DatasetConfig::default(), &|_, _| {})?;
+//! let aligned = align_cycles(&set, None, AlignMethod::Dtw(DtwConfig::default()))?;
+//! let [p, t, s] = aligned.tensor.dims();
+//! println!("{} cycles kept: P = {p}, T = {t}, S = {s}", set.cycles.len());
+//! # Ok::<(), motion_lod::dataset::DatasetError>(())
+//! ```
+
+pub mod dataset;

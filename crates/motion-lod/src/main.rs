@@ -1,6 +1,28 @@
-//! The `motion-lod` command line.
+//! The `motion-lod` command line. Each subcommand lives in its own module under `src/cli/`
+//! (arguments as a clap `Args` struct and a `run` function); this file only dispatches.
 
-fn main() {
-    eprintln!("motion-lod: no commands yet");
-    std::process::exit(2);
+mod cli;
+
+use clap::{Parser, Subcommand};
+
+/// Multilinear motion synthesis with level-of-detail controls.
+#[derive(Debug, Parser)]
+#[command(name = "motion-lod", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// One variant per subcommand.
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Read BVH folders, segment gait cycles, align them and write the motion tensor.
+    Cycles(cli::cycles::CyclesArgs),
+}
+
+fn main() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Cycles(args) => cli::cycles::run(args),
+    }
 }

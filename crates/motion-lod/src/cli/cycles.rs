@@ -1,0 +1,245 @@
+//! `motion-lod cycles DIR...`: read BVH folders, segment gait cycles, align them, report counts and
+//! optionally write the motion tensor (NPY, shape `(P, T, S)`) and the controls (CSV).
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use motion_io::CycleConfig;
+use motion_lod::dataset::{AlignedSet, CycleSet, DatasetConfig, align_cycles, load_cycles};
+use serde::Serialize;
+use tensor_ops::npy::{NpyDtype, write_tensor};
+use timewarp::{AlignMethod, DtwConfig};
+
+/// Time alignment of the cycles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AlignArg {
+    /// Dynamic time warping against the medoid cycle.
+    Dtw,
+    /// Uniform time scaling between the cycle's first and last frame.
+    Uniform,
+}
+
+/// Contact detection and cycle selection settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Preset {
+    /// Defaults tuned on the Bandai data set.
+    Default,
+    /// CMU (cgspeed) conversions: ignore the first 0.1 s, looser floor height.
+    Cmu,
+}
+
+/// Arguments of `motion-lod cycles`.
+#[derive(Debug, Args)]
+pub struct CyclesArgs {
+    /// Folders of BVH takes (all of one skeleton); every `*.bvh` file in them is read.
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Aligned frames per cycle, T (default: the median cycle length in frames).
+    #[arg(long, value_name = "T")]
+    pub frames: Option<usize>,
+    /// Time alignment method.
+    #[arg(long, value_enum, default_value_t = AlignArg::Dtw)]
+    pub align: AlignArg,
+    /// DTW band, as a fraction of the cycle length.
+    #[arg(long, default_value_t = DtwConfig::default().band)]
+    pub band: f64,
+    /// DTW slope limit: at most this many consecutive steps along one cycle.
+    #[arg(long, default_value_t = DtwConfig::default().max_slope)]
+    pub max_slope: usize,
+    /// Contact detection preset.
+    #[arg(long, value_enum, default_value_t = Preset::Default)]
+    pub preset: Preset,
+    /// Write the motion tensor here as NPY (f64, shape (P, T, S), Fortran order).
+    #[arg(long, value_name = "FILE")]
+    pub tensor: Option<PathBuf>,
+    /// Write the controls here as CSV (one row per cycle).
+    #[arg(long, value_name = "FILE")]
+    pub controls: Option<PathBuf>,
+    /// Print one JSON line of counts instead of the report (no progress bar).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The `--json` line.
+#[derive(Debug, Serialize)]
+struct Summary {
+    /// `.bvh` files found.
+    files: usize,
+    /// Files skipped (unreadable or not segmentable).
+    failed_files: usize,
+    /// Cycles kept.
+    cycles: usize,
+    /// Candidate cycles dropped.
+    dropped: usize,
+    #[serde(rename = "P")]
+    p: usize,
+    #[serde(rename = "T")]
+    t: usize,
+    #[serde(rename = "S")]
+    s: usize,
+}
+
+/// Runs the subcommand.
+pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
+    let method = match args.align {
+        AlignArg::Dtw => AlignMethod::Dtw(DtwConfig {
+            band: args.band,
+            max_slope: args.max_slope,
+        }),
+        AlignArg::Uniform => AlignMethod::Uniform,
+    };
+    let config = DatasetConfig {
+        cycle: match args.preset {
+            Preset::Default => CycleConfig::default(),
+            Preset::Cmu => CycleConfig::cmu(),
+        },
+        units_per_metre: None,
+    };
+    let bar = if args.json {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr())
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{msg:12} [{bar:40}] {pos}/{len}")
+            .context("progress bar template")?,
+    );
+    bar.set_message("takes");
+    let set = load_cycles(&args.dirs, &config, &|_, total| {
+        bar.set_length(total as u64);
+        bar.inc(1);
+    })
+    .context("loading cycles")?;
+    bar.set_message("aligning");
+    let aligned = align_cycles(&set, args.frames, method).context("aligning cycles")?;
+    bar.finish_and_clear();
+    for f in &set.failed {
+        eprintln!("warning: skipped {}: {}", f.path.display(), f.error);
+    }
+    if let Some(path) = &args.tensor {
+        write_tensor(path, &aligned.tensor, NpyDtype::F64)
+            .with_context(|| format!("writing the tensor to {}", path.display()))?;
+    }
+    if let Some(path) = &args.controls {
+        write_controls_csv(path, &aligned)
+            .with_context(|| format!("writing the controls to {}", path.display()))?;
+    }
+    let [p, t, s] = aligned.tensor.dims();
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    if args.json {
+        let summary = Summary {
+            files: set.files,
+            failed_files: set.failed.len(),
+            cycles: set.cycles.len(),
+            dropped: set.dropped.len(),
+            p,
+            t,
+            s,
+        };
+        writeln!(out, "{}", serde_json::to_string(&summary)?)?;
+    } else {
+        print_report(&mut out, &set, &aligned, &args)?;
+    }
+    Ok(())
+}
+
+fn print_report(
+    out: &mut impl std::io::Write,
+    set: &CycleSet,
+    aligned: &AlignedSet,
+    args: &CyclesArgs,
+) -> anyhow::Result<()> {
+    let [p, t, s] = aligned.tensor.dims();
+    writeln!(
+        out,
+        "files: {} found, {} read, {} skipped",
+        set.files,
+        set.files - set.failed.len(),
+        set.failed.len()
+    )?;
+    writeln!(
+        out,
+        "cycles: {} kept, {} dropped",
+        set.cycles.len(),
+        set.dropped.len()
+    )?;
+    for (reason, count) in set.dropped_by_reason() {
+        writeln!(out, "  dropped ({reason}): {count}")?;
+    }
+    let r = &aligned.sources[aligned.reference];
+    writeln!(
+        out,
+        "tensor: P = {p}, T = {t}, S = {s}; alignment {}; reference cycle {} ({} frames {}..={})",
+        match args.align {
+            AlignArg::Dtw => "dtw",
+            AlignArg::Uniform => "uniform",
+        },
+        aligned.reference,
+        r.file.display(),
+        r.first_frame,
+        r.last_frame
+    )?;
+    let lengths: Vec<usize> = set.cycles.iter().map(|c| c.frame_count()).collect();
+    writeln!(
+        out,
+        "cycle length: {}..={} frames, median {}",
+        lengths.iter().min().copied().unwrap_or(0),
+        lengths.iter().max().copied().unwrap_or(0),
+        set.median_length()
+    )?;
+    let range = |f: &dyn Fn(&motion_io::Controls) -> f64| {
+        aligned
+            .controls
+            .iter()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            })
+    };
+    let (dx, dz) = (range(&|c| c.dx), range(&|c| c.dz));
+    let (turn, height) = (range(&|c| c.turn.to_degrees()), range(&|c| c.height));
+    writeln!(
+        out,
+        "controls: dx [{:.3}, {:.3}] m, dz [{:.3}, {:.3}] m, turn [{:.1}, {:.1}] deg, height [{:.3}, {:.3}] m",
+        dx.0, dx.1, dz.0, dz.1, turn.0, turn.1, height.0, height.1
+    )?;
+    if let Some(path) = &args.tensor {
+        writeln!(out, "wrote {} (f64, shape ({p}, {t}, {s}))", path.display())?;
+    }
+    if let Some(path) = &args.controls {
+        writeln!(out, "wrote {} ({s} rows)", path.display())?;
+    }
+    Ok(())
+}
+
+/// One row per sample: source file, first and last frame, dx, dz, turn, height.
+fn write_controls_csv(path: &Path, aligned: &AlignedSet) -> anyhow::Result<()> {
+    let mut text = String::from("source,first_frame,last_frame,dx_m,dz_m,turn_rad,height_m\n");
+    for (src, c) in aligned.sources.iter().zip(&aligned.controls) {
+        text.push_str(&format!(
+            "{},{},{},{},{},{},{}\n",
+            csv_field(&src.file.display().to_string()),
+            src.first_frame,
+            src.last_frame,
+            c.dx,
+            c.dz,
+            c.turn,
+            c.height
+        ));
+    }
+    std::fs::write(path, text)?;
+    Ok(())
+}
+
+/// Quotes a CSV field when it holds a comma, a quote or a line break (RFC 4180).
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}

@@ -1,0 +1,470 @@
+//! The dataset pipeline: BVH folders -> gait cycles on one skeleton -> aligned motion tensor.
+//!
+//! [`load_cycles`] reads every `*.bvh` of the given folders (in parallel, results in folder and
+//! file-name order), builds one [`PoseLayout`] for the whole set, segments each take into steady
+//! left-contact-to-left-contact cycles (`motion_io::segment_cycles`) and brings every cycle's
+//! exponential maps onto the branch nearest the first kept cycle's mean pose, so that the maps are
+//! continuous across samples as well as over time (docs/architecture.md).
+//!
+//! [`align_cycles`] maps every cycle onto `T` frames (DTW against the medoid cycle, or uniform time
+//! scaling; `timewarp`) and stacks the aligned pose vectors into the motion tensor `M` of size
+//! `P x T x S` (paper section 3.2), with row 6 holding the time increment in seconds to the next
+//! aligned frame (the incremental inverse timewarp of section 3.1).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use motion_io::pose::TIME_ROW;
+use motion_io::{
+    Controls, CycleConfig, DropReason, DroppedCycle, GaitCycle, Motion, PoseError, PoseLayout,
+    align_sequence, detect_units_per_metre, read_bvh, segment_cycles,
+};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use tensor_ops::Tensor3;
+use timewarp::{AlignConfig, AlignMethod, FrameSeq, TimewarpError, align};
+
+/// Errors of the dataset pipeline. Failures of single files are not errors: they are reported in
+/// [`CycleSet::failed`] and the file is skipped.
+#[derive(Debug, thiserror::Error)]
+pub enum DatasetError {
+    /// No folder was given.
+    #[error("no input folder given")]
+    NoInput,
+    /// A folder could not be listed.
+    #[error("cannot list folder {}: {source}", path.display())]
+    Folder {
+        /// The folder.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The folders hold no `.bvh` file.
+    #[error("no .bvh file in {folders}")]
+    NoFiles {
+        /// The folders searched, comma-separated.
+        folders: String,
+    },
+    /// Every file failed to read.
+    #[error("none of the {failed} .bvh files could be read (first error: {first})")]
+    NoMotions {
+        /// Number of failed files.
+        failed: usize,
+        /// The first file's error.
+        first: String,
+    },
+    /// Two takes have different skeletons.
+    #[error(
+        "{} has a different skeleton from {}: {detail}; load one skeleton per data set",
+        file.display(),
+        reference.display()
+    )]
+    SkeletonMismatch {
+        /// The take that differs.
+        file: PathBuf,
+        /// The first take, whose skeleton defines the set.
+        reference: PathBuf,
+        /// Which joint differs and how.
+        detail: String,
+    },
+    /// The pose layout could not be built from the takes.
+    #[error("pose layout: {0}")]
+    Layout(#[source] PoseError),
+    /// No steady cycle was found in any take.
+    #[error("no gait cycle kept from {files} takes ({dropped} candidates dropped)")]
+    NoCycles {
+        /// Takes read.
+        files: usize,
+        /// Candidate cycles dropped.
+        dropped: usize,
+    },
+    /// A cycle's poses could not be brought to the common exp-map branch.
+    #[error("cycle {index} ({}): {source}", file.display())]
+    Branch {
+        /// Index of the cycle in the set.
+        index: usize,
+        /// Its take.
+        file: PathBuf,
+        /// The pose error.
+        source: PoseError,
+    },
+    /// A cycle's features do not fit the layout.
+    #[error("cycle {index} ({}): features do not fit the pose layout", file.display())]
+    Features {
+        /// Index of the cycle in the set.
+        index: usize,
+        /// Its take.
+        file: PathBuf,
+    },
+    /// Time alignment failed.
+    #[error("time alignment: {0}")]
+    Align(#[from] TimewarpError),
+    /// The tensor could not be formed.
+    #[error("motion tensor: {0}")]
+    Tensor(#[from] tensor_ops::TensorError),
+}
+
+/// Settings of [`load_cycles`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DatasetConfig {
+    /// Contact detection and cycle selection (`CycleConfig::cmu()` for the CMU conversions).
+    pub cycle: CycleConfig,
+    /// File units per metre; `None` detects them from the first take (hip height).
+    pub units_per_metre: Option<f64>,
+}
+
+/// A file that could not be used, with the reason.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FailedFile {
+    /// The file.
+    pub path: PathBuf,
+    /// Why it was skipped (the error message, which names the line for syntax errors).
+    pub error: String,
+}
+
+/// Where an aligned sample comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CycleSource {
+    /// The take.
+    pub file: PathBuf,
+    /// First frame of the cycle in the take.
+    pub first_frame: usize,
+    /// Last frame of the cycle in the take (included).
+    pub last_frame: usize,
+    /// Seconds between the take's frames.
+    pub frame_time: f64,
+}
+
+/// The cycles of a data set, on one skeleton and one exp-map branch.
+#[derive(Debug, Clone)]
+pub struct CycleSet {
+    /// The pose layout shared by every cycle.
+    pub layout: PoseLayout,
+    /// Kept cycles, in file order then time order.
+    pub cycles: Vec<GaitCycle>,
+    /// Number of `.bvh` files found.
+    pub files: usize,
+    /// Files that could not be read or segmented.
+    pub failed: Vec<FailedFile>,
+    /// Dropped candidate cycles with their take.
+    pub dropped: Vec<(PathBuf, DroppedCycle)>,
+}
+
+impl CycleSet {
+    /// Number of dropped candidates per reason (see [`drop_reason_name`]), sorted by name.
+    pub fn dropped_by_reason(&self) -> BTreeMap<&'static str, usize> {
+        let mut counts = BTreeMap::new();
+        for (_, d) in &self.dropped {
+            *counts.entry(drop_reason_name(&d.reason)).or_insert(0) += 1;
+        }
+        counts
+    }
+
+    /// Median cycle length in frames (the lower median; 0 without cycles).
+    pub fn median_length(&self) -> usize {
+        let mut lens: Vec<usize> = self.cycles.iter().map(GaitCycle::frame_count).collect();
+        lens.sort_unstable();
+        lens.get(lens.len().saturating_sub(1) / 2)
+            .copied()
+            .unwrap_or(0)
+    }
+}
+
+/// A short name for a drop reason, for counting: `too short`, `too long`, `contact pattern`,
+/// `asymmetric`, `start`, `stop`, `not forward`, `sharp turn`.
+pub fn drop_reason_name(reason: &DropReason) -> &'static str {
+    #[allow(unreachable_patterns)]
+    match reason {
+        DropReason::TooShort { .. } => "too short",
+        DropReason::TooLong { .. } => "too long",
+        DropReason::ContactPattern { .. } => "contact pattern",
+        DropReason::Asymmetric { .. } => "asymmetric",
+        DropReason::Start { .. } => "start",
+        DropReason::Stop { .. } => "stop",
+        DropReason::NotForward { .. } => "not forward",
+        DropReason::SharpTurn { .. } => "sharp turn",
+        _ => "other",
+    }
+}
+
+/// The motion tensor of a data set and what each sample is.
+#[derive(Debug, Clone)]
+pub struct AlignedSet {
+    /// `P x T x S`; sample `k` is a contiguous `P x T` block, one pose vector per aligned frame;
+    /// row 6 is the time increment in seconds to the next aligned frame (0 at the last frame), so
+    /// each sample's row 6 sums to its cycle's duration.
+    pub tensor: Tensor3,
+    /// Controls of each sample.
+    pub controls: Vec<Controls>,
+    /// Take and frames of each sample.
+    pub sources: Vec<CycleSource>,
+    /// The pose layout (row meaning).
+    pub layout: PoseLayout,
+    /// Index of the reference (medoid) sample.
+    pub reference: usize,
+    /// Method used for the alignment.
+    pub method: AlignMethod,
+}
+
+/// Lists the `*.bvh` files (case-insensitive, not recursive) of each folder, sorted by name within a
+/// folder, folders in the given order.
+pub fn list_bvh_files(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
+    let mut all = Vec::new();
+    for dir in dirs {
+        let err = |source| DatasetError::Folder {
+            path: dir.clone(),
+            source,
+        };
+        let mut paths = Vec::new();
+        for entry in std::fs::read_dir(dir).map_err(err)? {
+            let p = entry.map_err(err)?.path();
+            if p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("bvh")) {
+                paths.push(p);
+            }
+        }
+        paths.sort();
+        all.extend(paths);
+    }
+    Ok(all)
+}
+
+/// Reads every take of `dirs` and segments it into gait cycles (see the module documentation).
+///
+/// `progress(done, total)` is called once per file after it is read and once per take after it is
+/// segmented (`total` = twice the number of files), from worker threads. Files that fail to read or
+/// to segment are listed in [`CycleSet::failed`]; the result is the same for any thread count.
+///
+/// Errors: no folder, an unreadable folder, no `.bvh` file, no readable file, takes with different
+/// skeletons, or no cycle kept at all.
+pub fn load_cycles(
+    dirs: &[PathBuf],
+    config: &DatasetConfig,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<CycleSet, DatasetError> {
+    if dirs.is_empty() {
+        return Err(DatasetError::NoInput);
+    }
+    let paths = list_bvh_files(dirs)?;
+    if paths.is_empty() {
+        return Err(DatasetError::NoFiles {
+            folders: dirs
+                .iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+        });
+    }
+    let total = 2 * paths.len();
+    let done = AtomicUsize::new(0);
+    let tick = || progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+    let read: Vec<Result<Motion, String>> = paths
+        .par_iter()
+        .map(|p| {
+            let r = read_bvh(p).map_err(|e| e.to_string());
+            tick();
+            r
+        })
+        .collect();
+    let mut failed = Vec::new();
+    let mut motions: Vec<(&Path, Motion)> = Vec::new();
+    for (p, r) in paths.iter().zip(read) {
+        match r {
+            Ok(m) if m.frame_count() == 0 => failed.push(FailedFile {
+                path: p.clone(),
+                error: "no frames".into(),
+            }),
+            Ok(m) => motions.push((p, m)),
+            Err(error) => failed.push(FailedFile {
+                path: p.clone(),
+                error,
+            }),
+        }
+    }
+    if motions.is_empty() {
+        return Err(DatasetError::NoMotions {
+            failed: failed.len(),
+            first: failed.first().map(|f| f.error.clone()).unwrap_or_default(),
+        });
+    }
+    check_skeletons(&motions)?;
+    let units = match config.units_per_metre {
+        Some(u) => u,
+        None => detect_units_per_metre(&motions[0].1),
+    };
+    let refs: Vec<&Motion> = motions.iter().map(|(_, m)| m).collect();
+    let layout = PoseLayout::from_motions(&refs, units).map_err(|e| match e {
+        PoseError::SkeletonMismatch {
+            motion,
+            joint,
+            what,
+        } => DatasetError::SkeletonMismatch {
+            file: motions[motion].0.to_path_buf(),
+            reference: motions[0].0.to_path_buf(),
+            detail: format!("joint {joint}: {what}"),
+        },
+        other => DatasetError::Layout(other),
+    })?;
+    let segmented: Vec<_> = motions
+        .par_iter()
+        .map(|(p, m)| {
+            let r = segment_cycles(m, &layout, &config.cycle, p);
+            tick();
+            r
+        })
+        .collect();
+    let mut cycles = Vec::new();
+    let mut dropped = Vec::new();
+    for ((p, _), r) in motions.iter().zip(segmented) {
+        match r {
+            Ok(report) => {
+                cycles.extend(report.cycles);
+                dropped.extend(report.dropped.into_iter().map(|d| (p.to_path_buf(), d)));
+            }
+            Err(e) => failed.push(FailedFile {
+                path: p.to_path_buf(),
+                error: format!("cycle segmentation: {e}"),
+            }),
+        }
+    }
+    // Keep the failures in file order whatever stage they come from.
+    failed.sort_by(|a, b| a.path.cmp(&b.path));
+    if cycles.is_empty() {
+        return Err(DatasetError::NoCycles {
+            files: motions.len(),
+            dropped: dropped.len(),
+        });
+    }
+    unify_branches(&mut cycles, layout.dof())?;
+    Ok(CycleSet {
+        layout,
+        cycles,
+        files: paths.len(),
+        failed,
+        dropped,
+    })
+}
+
+/// Checks that every take has the first take's joint names (in order), for a clear message.
+fn check_skeletons(motions: &[(&Path, Motion)]) -> Result<(), DatasetError> {
+    let (ref_path, first) = (&motions[0].0, &motions[0].1.skeleton);
+    for (p, m) in &motions[1..] {
+        let sk = &m.skeleton;
+        let detail = if sk.joints.len() != first.joints.len() {
+            Some(format!(
+                "{} joints instead of {}",
+                sk.joints.len(),
+                first.joints.len()
+            ))
+        } else {
+            sk.joints
+                .iter()
+                .zip(&first.joints)
+                .enumerate()
+                .find(|(_, (a, b))| a.name != b.name)
+                .map(|(j, (a, b))| format!("joint {j} is `{}` instead of `{}`", a.name, b.name))
+        };
+        if let Some(detail) = detail {
+            return Err(DatasetError::SkeletonMismatch {
+                file: p.to_path_buf(),
+                reference: ref_path.to_path_buf(),
+                detail,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Brings every cycle onto the exp-map branch nearest the first cycle's mean pose
+/// (`motion_io::align_sequence`: the first frame to the reference, then continuity over time).
+fn unify_branches(cycles: &mut [GaitCycle], dof: usize) -> Result<(), DatasetError> {
+    let first = &cycles[0];
+    let frames = first.frame_count() as f64;
+    let mut mean = vec![0.0; dof];
+    for pose in first.poses.chunks_exact(dof) {
+        for (m, v) in mean.iter_mut().zip(pose) {
+            *m += v / frames;
+        }
+    }
+    cycles
+        .par_iter_mut()
+        .enumerate()
+        .try_for_each(|(index, c)| {
+            align_sequence(&mut c.poses, &mean).map_err(|source| DatasetError::Branch {
+                index,
+                file: c.source.clone(),
+                source,
+            })
+        })
+}
+
+/// Aligns every cycle of `set` onto `frames` aligned frames (`None`: the median cycle length) with
+/// `method`, against the medoid cycle (chosen on the features `GaitCycle::features`: joint
+/// positions in the root frame), and forms the `P x T x S` motion tensor with the time increment
+/// at row 6 (see [`AlignedSet::tensor`]).
+///
+/// Errors: fewer than 2 aligned frames, cycles whose features or poses do not fit the layout,
+/// or an alignment failure (for example a DTW band too narrow for the cycle lengths).
+pub fn align_cycles(
+    set: &CycleSet,
+    frames: Option<usize>,
+    method: AlignMethod,
+) -> Result<AlignedSet, DatasetError> {
+    let p = set.layout.dof();
+    debug_assert!(p > TIME_ROW);
+    let t_frames = frames.unwrap_or_else(|| set.median_length().max(2));
+    let (features, values): (Vec<FrameSeq>, Vec<FrameSeq>) = set
+        .cycles
+        .par_iter()
+        .enumerate()
+        .map(|(index, c)| {
+            let n = c.frame_count();
+            let f = c.features(&set.layout);
+            if f.is_empty() || f.len() % n != 0 || c.poses.len() != n * p {
+                return Err(DatasetError::Features {
+                    index,
+                    file: c.source.clone(),
+                });
+            }
+            let feat = FrameSeq::new(f.len() / n, f)?;
+            // The pose vector without its (empty) time row: align() inserts the increment there.
+            let mut v = Vec::with_capacity(n * (p - 1));
+            for pose in c.poses.chunks_exact(p) {
+                v.extend_from_slice(&pose[..TIME_ROW]);
+                v.extend_from_slice(&pose[TIME_ROW + 1..]);
+            }
+            Ok((feat, FrameSeq::new(p - 1, v)?))
+        })
+        .collect::<Result<Vec<_>, DatasetError>>()?
+        .into_iter()
+        .unzip();
+    let frame_time: Vec<f64> = set.cycles.iter().map(|c| c.frame_time).collect();
+    let mut config = AlignConfig::new(t_frames, method);
+    config.increment_row = Some(TIME_ROW);
+    let alignment = align(&features, &values, &frame_time, &config)?;
+    debug_assert_eq!(alignment.increment_col, TIME_ROW);
+    let s = set.cycles.len();
+    let mut data = Vec::with_capacity(p * t_frames * s);
+    for a in &alignment.aligned {
+        debug_assert_eq!(a.dim, p);
+        data.extend_from_slice(&a.frames);
+    }
+    let tensor = Tensor3::from_vec([p, t_frames, s], data)?;
+    Ok(AlignedSet {
+        tensor,
+        controls: set.cycles.iter().map(|c| c.controls).collect(),
+        sources: set
+            .cycles
+            .iter()
+            .map(|c| CycleSource {
+                file: c.source.clone(),
+                first_frame: c.first_frame,
+                last_frame: c.last_frame,
+                frame_time: c.frame_time,
+            })
+            .collect(),
+        layout: set.layout.clone(),
+        reference: alignment.reference,
+        method,
+    })
+}

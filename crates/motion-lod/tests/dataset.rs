@@ -1,0 +1,320 @@
+//! The dataset pipeline and `motion-lod cycles` on `fixtures/` (when generated) and on the Bandai
+//! folder of `../shared/mocap` (when present).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use motion_lod::dataset::{AlignedSet, CycleSet, DatasetConfig, align_cycles, load_cycles};
+use timewarp::{AlignMethod, DtwConfig};
+
+const FIXTURES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
+const MOCAP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/mocap");
+
+/// Folders under `root` (and `root` itself) that hold at least one `.bvh` file.
+fn bvh_folders(root: &Path) -> Vec<PathBuf> {
+    let has_bvh = |d: &Path| {
+        std::fs::read_dir(d).is_ok_and(|it| {
+            it.flatten().any(|e| {
+                e.path()
+                    .extension()
+                    .is_some_and(|x| x.eq_ignore_ascii_case("bvh"))
+            })
+        })
+    };
+    let mut out = Vec::new();
+    if has_bvh(root) {
+        out.push(root.to_path_buf());
+    }
+    if let Ok(it) = std::fs::read_dir(root) {
+        let mut subs: Vec<PathBuf> = it
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.is_dir())
+            .collect();
+        subs.sort();
+        out.extend(subs.into_iter().filter(|d| has_bvh(d)));
+    }
+    out
+}
+
+/// Checks the invariants of a loaded and aligned set; returns (turn min, turn max).
+fn check_set(set: &CycleSet, aligned: &AlignedSet) -> (f64, f64) {
+    let s = set.cycles.len();
+    let p = set.layout.dof();
+    let [tp, tt, ts] = aligned.tensor.dims();
+    assert_eq!((tp, ts), (p, s));
+    assert_eq!(tt, set.median_length().max(2));
+    assert_eq!(aligned.controls.len(), s);
+    assert_eq!(aligned.sources.len(), s);
+    assert!(aligned.reference < s);
+    assert!(aligned.tensor.as_slice().iter().all(|v| v.is_finite()));
+    for (k, c) in set.cycles.iter().enumerate() {
+        // Row 6 integrates to the cycle's duration.
+        let total: f64 = (0..tt).map(|j| aligned.tensor.get(6, j, k)).sum();
+        assert!(
+            (total - c.duration()).abs() < 1e-9,
+            "cycle {k}: {total} vs {}",
+            c.duration()
+        );
+        // The first aligned pose is the cycle's first pose (row 6 excepted).
+        let first = c.pose(0, p);
+        for (i, &v) in first.iter().enumerate().filter(|&(i, _)| i != 6) {
+            assert!((aligned.tensor.get(i, 0, k) - v).abs() < 1e-9, "row {i}");
+        }
+    }
+    let turns = aligned.controls.iter().map(|c| c.turn);
+    (
+        turns.clone().fold(f64::INFINITY, f64::min),
+        turns.fold(f64::NEG_INFINITY, f64::max),
+    )
+}
+
+/// Runs the binary and returns its stdout; panics with stderr on failure.
+fn run_cli(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_motion-lod"))
+        .args(args)
+        .output()
+        .expect("run motion-lod");
+    assert!(
+        out.status.success(),
+        "motion-lod {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("utf-8 output")
+}
+
+/// Checks the `--json` line, the NPY shape and the CSV of `motion-lod cycles` on `dir`.
+fn check_cli(dir: &Path, set: &CycleSet, aligned: &AlignedSet, extra: &[&str]) {
+    let tmp = std::env::temp_dir().join(format!("motion-lod-dataset-test-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let npy = tmp.join("tensor.npy");
+    let csv = tmp.join("controls.csv");
+    let dir_s = dir.to_str().unwrap();
+    let mut args = vec![
+        "cycles",
+        dir_s,
+        "--json",
+        "--tensor",
+        npy.to_str().unwrap(),
+        "--controls",
+        csv.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let stdout = run_cli(&args);
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("JSON line");
+    let [p, t, s] = aligned.tensor.dims();
+    assert_eq!(v["files"], set.files);
+    assert_eq!(v["failed_files"], set.failed.len());
+    assert_eq!(v["cycles"], set.cycles.len());
+    assert_eq!(v["dropped"], set.dropped.len());
+    assert_eq!(
+        (v["P"].as_u64(), v["T"].as_u64(), v["S"].as_u64()),
+        (Some(p as u64), Some(t as u64), Some(s as u64))
+    );
+    let back = tensor_ops::npy::read_tensor(&npy).expect("NPY reads back");
+    assert_eq!(back.dims(), [p, t, s]);
+    assert_eq!(back.as_slice(), aligned.tensor.as_slice());
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("source,first_frame,last_frame,dx_m,dz_m,turn_rad,height_m")
+    );
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), s);
+    let last: Vec<&str> = rows[s - 1].rsplitn(7, ',').collect();
+    let turn: f64 = last[1].parse().unwrap();
+    assert!((turn - aligned.controls[s - 1].turn).abs() < 1e-12);
+    std::fs::remove_dir_all(&tmp).ok();
+}
+
+#[test]
+fn fixtures_load_align_and_report() {
+    let dirs = bvh_folders(Path::new(FIXTURES));
+    let Some(dir) = dirs.first() else {
+        println!("skipped: fixtures/ has no .bvh yet");
+        return;
+    };
+    let set = match load_cycles(
+        std::slice::from_ref(dir),
+        &DatasetConfig::default(),
+        &|_, _| {},
+    ) {
+        Ok(set) => set,
+        Err(e) => panic!("fixtures in {}: {e}", dir.display()),
+    };
+    assert!(set.files >= 1);
+    assert!(!set.cycles.is_empty());
+    let aligned = align_cycles(&set, None, AlignMethod::Dtw(DtwConfig::default())).unwrap();
+    let (lo, hi) = check_set(&set, &aligned);
+    println!(
+        "fixtures {}: {} files, {} cycles, {} dropped, P x T x S = {:?}, turn [{lo:.3}, {hi:.3}] rad",
+        dir.display(),
+        set.files,
+        set.cycles.len(),
+        set.dropped.len(),
+        aligned.tensor.dims()
+    );
+    // Same result whatever the thread count.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let again = pool.install(|| {
+        let set = load_cycles(
+            std::slice::from_ref(dir),
+            &DatasetConfig::default(),
+            &|_, _| {},
+        )
+        .unwrap();
+        align_cycles(&set, None, AlignMethod::Dtw(DtwConfig::default())).unwrap()
+    });
+    assert_eq!(again.tensor.as_slice(), aligned.tensor.as_slice());
+    check_cli(dir, &set, &aligned, &[]);
+    let (better, dtw_mean, uniform_mean) = dtw_versus_uniform(&set);
+    println!(
+        "fixtures: DTW lowers the distance to the reference for {better} of {} cycles \
+         (mean {dtw_mean:.5} vs uniform {uniform_mean:.5})",
+        set.cycles.len()
+    );
+    assert!(dtw_mean <= uniform_mean);
+}
+
+#[test]
+fn bandai_counts_ranges_and_cli() {
+    let dir = Path::new(MOCAP).join("bandai-namco-2-walk");
+    if !dir.is_dir() {
+        println!("skipped: ../shared/mocap not found");
+        return;
+    }
+    let set = load_cycles(
+        std::slice::from_ref(&dir),
+        &DatasetConfig::default(),
+        &|_, _| {},
+    )
+    .unwrap();
+    let aligned = align_cycles(&set, None, AlignMethod::Uniform).unwrap();
+    let (lo, hi) = check_set(&set, &aligned);
+    let range = |f: fn(&motion_io::Controls) -> f64| {
+        let v: Vec<f64> = aligned.controls.iter().map(f).collect();
+        (
+            v.iter().copied().fold(f64::INFINITY, f64::min),
+            v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        )
+    };
+    println!(
+        "bandai: {} files, {} failed, {} cycles, {} dropped {:?}, P x T x S = {:?}, lengths median {}",
+        set.files,
+        set.failed.len(),
+        set.cycles.len(),
+        set.dropped.len(),
+        set.dropped_by_reason(),
+        aligned.tensor.dims(),
+        set.median_length()
+    );
+    println!(
+        "bandai controls: dx {:?} m, dz {:?} m, turn [{:.1}, {:.1}] deg, height {:?} m",
+        range(|c| c.dx),
+        range(|c| c.dz),
+        lo.to_degrees(),
+        hi.to_degrees(),
+        range(|c| c.height)
+    );
+    assert_eq!(set.files, 168);
+    assert!(set.failed.is_empty(), "{:?}", set.failed);
+    assert!(set.cycles.len() > 400, "{} cycles", set.cycles.len());
+    // Both turn directions are covered.
+    assert!(lo < -0.2 && hi > 0.2, "turn range [{lo}, {hi}]");
+    check_cli(&dir, &set, &aligned, &["--align", "uniform"]);
+    let (better, dtw_mean, uniform_mean) = dtw_versus_uniform(&set);
+    println!(
+        "bandai: DTW lowers the distance to the reference for {better} of {} cycles \
+         (mean {dtw_mean:.4} vs uniform {uniform_mean:.4} m^2 per frame)",
+        set.cycles.len()
+    );
+    assert!(dtw_mean < uniform_mean);
+}
+
+/// Aligns the cycles' features (joint positions in the root frame) to the same reference by DTW
+/// and by uniform scaling; returns how many cycles DTW brings closer to the reference and the two
+/// mean squared distances per aligned frame.
+fn dtw_versus_uniform(set: &CycleSet) -> (usize, f64, f64) {
+    use timewarp::{AlignConfig, FrameSeq, align};
+    let feats: Vec<FrameSeq> = set
+        .cycles
+        .iter()
+        .map(|c| {
+            let f = c.features(&set.layout);
+            FrameSeq::new(f.len() / c.frame_count(), f).unwrap()
+        })
+        .collect();
+    let ft: Vec<f64> = set.cycles.iter().map(|c| c.frame_time).collect();
+    let mut cfg = AlignConfig::for_data(&feats, AlignMethod::Dtw(DtwConfig::default()));
+    let warped = align(&feats, &feats, &ft, &cfg).unwrap();
+    cfg.reference = Some(warped.reference);
+    cfg.method = AlignMethod::Uniform;
+    let uniform = align(&feats, &feats, &ft, &cfg).unwrap();
+    let dist = |a: &FrameSeq, b: &FrameSeq, skip: usize| -> f64 {
+        let mut sum = 0.0;
+        for k in 0..a.len() {
+            for c in (0..a.dim).filter(|&c| c != skip) {
+                sum += (a.frame(k)[c] - b.frame(k)[c]).powi(2);
+            }
+        }
+        sum / a.len() as f64
+    };
+    let r = warped.reference;
+    let (mut better, mut dw, mut du) = (0, 0.0, 0.0);
+    for s in 0..feats.len() {
+        let w = dist(&warped.aligned[s], &warped.aligned[r], warped.increment_col);
+        let u = dist(
+            &uniform.aligned[s],
+            &uniform.aligned[r],
+            uniform.increment_col,
+        );
+        better += usize::from(w < u);
+        dw += w;
+        du += u;
+    }
+    (better, dw / feats.len() as f64, du / feats.len() as f64)
+}
+
+#[test]
+fn bad_inputs_are_clear_errors() {
+    let missing = PathBuf::from("/nonexistent/motion-lod-folder");
+    let err = load_cycles(&[missing], &DatasetConfig::default(), &|_, _| {}).unwrap_err();
+    assert!(
+        err.to_string().contains("/nonexistent/motion-lod-folder"),
+        "{err}"
+    );
+    assert!(load_cycles(&[], &DatasetConfig::default(), &|_, _| {}).is_err());
+    let tmp = std::env::temp_dir().join(format!("motion-lod-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let err = load_cycles(
+        std::slice::from_ref(&tmp),
+        &DatasetConfig::default(),
+        &|_, _| {},
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("no .bvh file"), "{err}");
+    std::fs::write(
+        tmp.join("broken.bvh"),
+        "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0\n",
+    )
+    .unwrap();
+    let err = load_cycles(
+        std::slice::from_ref(&tmp),
+        &DatasetConfig::default(),
+        &|_, _| {},
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("broken.bvh"), "{err}");
+    std::fs::remove_dir_all(&tmp).ok();
+    let out = Command::new(env!("CARGO_BIN_EXE_motion-lod"))
+        .args(["cycles", "/nonexistent/motion-lod-folder", "--json"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nonexistent"));
+}

@@ -1,0 +1,119 @@
+//! [`TimeTable`]: playback times of an aligned sequence from its time-increment channel (the
+//! incremental inverse timewarp of the paper's section 3.1).
+
+/// Smallest time increment, in seconds, that [`TimeTable`] accepts: a synthesized increment that is
+/// smaller than this, negative, NaN or infinite is replaced by it, so that playback time always
+/// increases strictly (1 microsecond; real increments are tens of milliseconds).
+pub const MIN_INCREMENT: f64 = 1e-6;
+
+/// Cumulative playback times of the `T` aligned frames of one sequence:
+///
+/// `t_0 = 0`, `t_k = t_{k-1} + max(dt_{k-1}, MIN_INCREMENT)` for `k in 1..T`,
+///
+/// where `dt_k` is the increment from aligned frame `k` to `k + 1`. The last increment (from frame
+/// `T - 1` onwards) is not used: it is 0 in aligned data. [`TimeTable::phase_at`] inverts the table.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TimeTable {
+    times: Vec<f64>,
+}
+
+impl TimeTable {
+    /// An empty table.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// An empty table with room for `frames` entries, so that [`TimeTable::fill_from`] with up to
+    /// that many increments does not allocate.
+    pub fn with_capacity(frames: usize) -> Self {
+        Self {
+            times: Vec::with_capacity(frames),
+        }
+    }
+
+    /// A table from the `T` increments of one aligned sequence.
+    pub fn from_increments(increments: &[f64]) -> Self {
+        let mut table = Self::with_capacity(increments.len());
+        table.fill_from(increments);
+        table
+    }
+
+    /// Refills the table from `T` increments, reusing its buffer (no allocation when the capacity
+    /// suffices). Clamps each used increment to at least [`MIN_INCREMENT`].
+    pub fn fill_from(&mut self, increments: &[f64]) {
+        self.fill_from_iter(increments.iter().copied());
+    }
+
+    /// As [`TimeTable::fill_from`] from any sequence of increments (for example a strided column).
+    pub fn fill_from_iter<I: IntoIterator<Item = f64>>(&mut self, increments: I) {
+        self.times.clear();
+        let mut t = 0.0;
+        let mut pending: Option<f64> = None;
+        for dt in increments {
+            if let Some(prev) = pending {
+                t += clamp_increment(prev);
+            }
+            self.times.push(t);
+            pending = Some(dt);
+        }
+    }
+
+    /// Number of entries `T`.
+    pub fn len(&self) -> usize {
+        self.times.len()
+    }
+
+    /// Whether the table is empty.
+    pub fn is_empty(&self) -> bool {
+        self.times.is_empty()
+    }
+
+    /// The cumulative times `t_k` in seconds.
+    pub fn times(&self) -> &[f64] {
+        &self.times
+    }
+
+    /// Duration `t_{T-1}` in seconds (0 for an empty table).
+    pub fn duration(&self) -> f64 {
+        self.times.last().copied().unwrap_or(0.0)
+    }
+
+    /// Fractional aligned frame `phi` in `[0, T - 1]` at playback time `t` seconds (clamped to
+    /// `[0, duration]`; NaN gives 0): with `t_k <= t < t_{k+1}` found by binary search,
+    /// `phi = k + (t - t_k) / (t_{k+1} - t_k)`. Returns 0 for tables of fewer than two entries.
+    pub fn phase_at(&self, t: f64) -> f64 {
+        let n = self.times.len();
+        if n < 2 {
+            return 0.0;
+        }
+        let t = t.max(0.0).min(self.duration());
+        let k = self.times.partition_point(|&x| x <= t).clamp(1, n - 1) - 1;
+        let (t0, t1) = (self.times[k], self.times[k + 1]);
+        let f = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+        k as f64 + f
+    }
+
+    /// Playback time in seconds at fractional aligned frame `phi` (clamped to `[0, T - 1]`), the
+    /// inverse of [`TimeTable::phase_at`]: `t = t_k + f (t_{k+1} - t_k)` with `k + f = phi`.
+    pub fn time_at(&self, phase: f64) -> f64 {
+        let n = self.times.len();
+        if n < 2 {
+            return 0.0;
+        }
+        let (k, f) = crate::frame_seq::split_position(phase, n);
+        if f == 0.0 {
+            self.times[k]
+        } else {
+            self.times[k] + f * (self.times[k + 1] - self.times[k])
+        }
+    }
+}
+
+#[inline]
+fn clamp_increment(dt: f64) -> f64 {
+    if dt.is_finite() && dt >= MIN_INCREMENT {
+        dt
+    } else {
+        MIN_INCREMENT
+    }
+}
