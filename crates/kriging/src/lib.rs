@@ -3,3 +3,94 @@
 //! This crate is for: empirical and theoretical variograms, ordinary and universal kriging (Mukai and
 //! Kuriyama eq. 8 and appendix A), leave-one-out cross validation and an RBF baseline, for any values,
 //! not only motion. It is not for: tensors or motion data themselves.
+//!
+//! Pieces:
+//! - [`EmpiricalVariogram`]: the binned semi-variance of appendix A;
+//! - [`Variogram`] / [`VariogramModel`]: linear, power, spherical, exponential and gaussian models
+//!   with nugget, sill and range, fitted by weighted least squares ([`fit_variogram`]);
+//! - [`Kriging`]: ordinary kriging and the paper's universal kriging (trend `F = K C^+` over
+//!   `[c; 1]`, kriging of the residuals), with automatic model choice by fit or leave-one-out error,
+//!   closed-form leave-one-out ([`Kriging::leave_one_out`]) and allocation-free queries;
+//! - [`ProjectedQuery`]: `L b(c)` for a fixed `L` in `R (S+1)` multiply-adds (runtime hot path);
+//! - [`ParamScaling`]: per-dimension scaling (none, standardise, given); constant dimensions dropped;
+//! - [`Rbf`]: the radial-basis baseline of Rose et al. with the same `fit/weights/predict/loo` shape.
+//!
+//! Degenerate input: NaN/inf, wrong shapes, too few samples (universal kriging needs `d' + 2`
+//! with `d'` the non-constant dimensions), all-equal parameters and values that do not vary are
+//! errors ([`KrigingError`]). Duplicate parameter points are an error naming both samples unless the
+//! variogram has a nugget, which then regularises the system (it acts as independent noise between
+//! distinct samples). Constant dimensions get scale 0 under standardisation and are reported by
+//! [`Kriging::dropped_dims`]; constant or collinear dimensions in the trend go through a
+//! pseudo-inverse. A singular or ill-conditioned system (pivot ratio below 1e-13) is an error,
+//! and automatic model choice skips such candidates.
+//!
+//! All results are deterministic: the linear algebra runs single-threaded and the only parallel
+//! loop (pairwise value distances) reduces in a fixed order.
+//!
+//! ```
+//! use faer::Mat;
+//! use kriging::{Kriging, KrigingConfig, Method, ModelChoice, ScalingChoice, VariogramModel};
+//!
+//! // Five samples over a 2-D parameter space, 2-D values.
+//! let c: [[f64; 2]; 5] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.4, 0.7]];
+//! let params = Mat::from_fn(5, 2, |i, k| c[i][k]);
+//! let values = Mat::from_fn(5, 2, |i, j| if j == 0 { c[i][0] + 2.0 * c[i][1] } else { c[i][0] * c[i][1] });
+//! let config = KrigingConfig {
+//!     method: Method::Ordinary,
+//!     model: ModelChoice::Fixed(VariogramModel::Linear),
+//!     scaling: ScalingChoice::None,
+//!     bins: 4,
+//!     ..KrigingConfig::default()
+//! };
+//! let k = Kriging::fit(params.as_ref(), values.as_ref(), &config)?;
+//! let mut b = vec![0.0; 5];
+//! k.weights(&[0.5, 0.5], &mut b)?;
+//! assert!((b.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+//! let mut x = vec![0.0; 2];
+//! k.predict(&[1.0, 0.0], &mut x)?; // exact at a sample
+//! assert!((x[0] - 1.0).abs() < 1e-9);
+//! let loo = k.leave_one_out()?;
+//! assert_eq!(loo.per_sample.len(), 5);
+//! # Ok::<(), kriging::KrigingError>(())
+//! ```
+
+mod config;
+mod empirical;
+mod error;
+mod fit;
+mod kriging;
+mod linalg;
+mod projected;
+mod rbf;
+mod scaling;
+mod variogram;
+
+pub use config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoice, Selection};
+pub use empirical::EmpiricalVariogram;
+pub use error::KrigingError;
+pub use fit::{FitOptions, FitWeights, FittedVariogram, fit_variogram};
+pub use kriging::{Kriging, augmented_params};
+pub use linalg::PINV_RTOL;
+pub use projected::ProjectedQuery;
+pub use rbf::{Rbf, RbfConfig, RbfKernel};
+pub use scaling::{ParamScaling, ScalingChoice};
+pub use variogram::{Variogram, VariogramModel, shape};
+
+/// Fails with [`KrigingError::NonFinite`] at the first NaN or infinity of `m` (column by column).
+pub(crate) fn check_finite(
+    what: &'static str,
+    m: faer::MatRef<'_, f64>,
+) -> Result<(), KrigingError> {
+    for j in 0..m.ncols() {
+        for i in 0..m.nrows() {
+            if !m[(i, j)].is_finite() {
+                return Err(KrigingError::NonFinite {
+                    what,
+                    row: i,
+                    col: j,
+                });
+            }
+        }
+    }
+    Ok(())
+}

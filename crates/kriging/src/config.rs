@@ -1,0 +1,111 @@
+//! Configuration of [`crate::Kriging::fit`] and the reports it produces.
+
+use serde::{Deserialize, Serialize};
+
+use crate::fit::FitWeights;
+use crate::scaling::ScalingChoice;
+use crate::variogram::{Variogram, VariogramModel};
+
+/// Which kriging estimator to build.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum Method {
+    /// Ordinary kriging of the values (appendix A system with the Lagrange multiplier).
+    Ordinary,
+    /// The paper's universal kriging (eq. 8): least-squares trend hyperplane `F = K C^+` over
+    /// `[c; 1]`, ordinary kriging of the residuals.
+    #[default]
+    Universal,
+}
+
+/// How automatic model choice ranks the candidate variogram models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum Selection {
+    /// Smallest weighted squared error of the fit to the empirical variogram.
+    BestFit,
+    /// Smallest leave-one-out RMSE of the predictions (closed form, no refits).
+    #[default]
+    BestLoo,
+}
+
+/// Which variogram the kriging system uses.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum ModelChoice {
+    /// Fit every [`VariogramModel`] and keep the best by the given criterion.
+    Auto(Selection),
+    /// Fit this model.
+    Fixed(VariogramModel),
+    /// Use this variogram as it is (no fit; the empirical variogram is not computed).
+    Given(Variogram),
+}
+
+impl Default for ModelChoice {
+    fn default() -> Self {
+        ModelChoice::Auto(Selection::BestLoo)
+    }
+}
+
+/// Everything [`crate::Kriging::fit`] needs besides the data.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KrigingConfig {
+    /// Ordinary or universal kriging.
+    pub method: Method,
+    /// Variogram model choice.
+    pub model: ModelChoice,
+    /// Number of distance intervals `S_I` of the empirical variogram.
+    pub bins: usize,
+    /// Per-dimension scaling of the parameters.
+    pub scaling: ScalingChoice,
+    /// Fit a nugget (`>= 0`); when false the nugget is 0.
+    pub nugget: bool,
+    /// Interval weights of the variogram fit.
+    pub fit_weights: FitWeights,
+}
+
+impl Default for KrigingConfig {
+    /// Universal kriging, model chosen by leave-one-out error, 20 intervals, standardised
+    /// parameters, nugget fitted, pair-count weights.
+    fn default() -> Self {
+        KrigingConfig {
+            method: Method::Universal,
+            model: ModelChoice::default(),
+            bins: 20,
+            scaling: ScalingChoice::Standardise,
+            nugget: true,
+            fit_weights: FitWeights::PairCounts,
+        }
+    }
+}
+
+/// Leave-one-out cross validation: the prediction error at each sample when the model is built
+/// from the other `S - 1` samples (same variogram and scaling; the trend is refitted).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LooReport {
+    /// `sqrt(1/S sum_k |e_k|^2)` with `e_k` the error vector at sample `k`.
+    pub rmse: f64,
+    /// `|e_k|` (Euclidean norm over the value dimensions) per sample.
+    pub per_sample: Vec<f64>,
+}
+
+impl LooReport {
+    /// Builds the report from per-sample error norms.
+    pub(crate) fn from_norms(per_sample: Vec<f64>) -> Self {
+        let n = per_sample.len().max(1) as f64;
+        let rmse = (per_sample.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
+        LooReport { rmse, per_sample }
+    }
+}
+
+/// What automatic (or fixed) model choice found for one candidate model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CandidateReport {
+    /// The candidate model.
+    pub model: VariogramModel,
+    /// The fitted variogram, when the fit succeeded.
+    pub variogram: Option<Variogram>,
+    /// Weighted squared error of the fit.
+    pub wsse: Option<f64>,
+    /// Leave-one-out RMSE (computed for [`Selection::BestLoo`]).
+    pub loo_rmse: Option<f64>,
+    /// Why the candidate was rejected, if it was.
+    pub error: Option<String>,
+}

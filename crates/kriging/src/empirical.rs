@@ -1,0 +1,196 @@
+//! The empirical (binned) variogram of appendix A.
+
+use faer::MatRef;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::KrigingError;
+
+/// Below this many `S^2 D` operations the pairwise value distances run on one thread.
+const PARALLEL_MIN_WORK: usize = 1 << 24;
+
+/// Pairwise Euclidean distances between the rows of a parameter matrix, packed (upper triangle).
+#[derive(Debug, Clone)]
+pub(crate) struct PairDistances {
+    n: usize,
+    /// Row i holds the distances to j = i+1 .. n, rows one after the other.
+    packed: Vec<f64>,
+    max: f64,
+}
+
+impl PairDistances {
+    /// Distances between the rows of `params` (S x d).
+    pub(crate) fn new(params: MatRef<'_, f64>) -> Self {
+        let (n, d) = params.shape();
+        let mut packed = Vec::with_capacity(n * n.saturating_sub(1) / 2);
+        let mut max = 0.0f64;
+        for i in 0..n {
+            for j in i + 1..n {
+                let mut s = 0.0;
+                for k in 0..d {
+                    let t = params[(i, k)] - params[(j, k)];
+                    s += t * t;
+                }
+                let h = s.sqrt();
+                max = max.max(h);
+                packed.push(h);
+            }
+        }
+        PairDistances { n, packed, max }
+    }
+
+    /// Start of row `i` in `packed`.
+    #[inline]
+    fn row_start(&self, i: usize) -> usize {
+        // sum_{r < i} (n - 1 - r)
+        i * (2 * self.n - i - 1) / 2
+    }
+
+    /// Distance between samples `i != j`.
+    #[inline]
+    pub(crate) fn get(&self, i: usize, j: usize) -> f64 {
+        debug_assert!(i != j && i < self.n && j < self.n);
+        let (a, b) = if i < j { (i, j) } else { (j, i) };
+        self.packed[self.row_start(a) + (b - a - 1)]
+    }
+
+    /// Largest distance.
+    pub(crate) fn max(&self) -> f64 {
+        self.max
+    }
+
+    /// The first pair (i < j, in row order) whose distance is at most `tol`.
+    pub(crate) fn first_duplicate(&self, tol: f64) -> Option<(usize, usize)> {
+        for i in 0..self.n {
+            let start = self.row_start(i);
+            for j in i + 1..self.n {
+                if self.packed[start + (j - i - 1)] <= tol {
+                    return Some((i, j));
+                }
+            }
+        }
+        None
+    }
+
+    /// Relative tolerance under which two points count as duplicates.
+    pub(crate) fn duplicate_tol(&self) -> f64 {
+        1e-12 * self.max
+    }
+}
+
+/// Binned averages of the semi-variance (appendix A).
+///
+/// The distance range `[0, h_max]` is split into `S_I` intervals of width `dh = h_max / S_I`
+/// with centres `h_u = dh (u - 1/2)`; interval `u` averages `|x_i - x_j|^2 / 2` (squared Euclidean
+/// norm for vector values) over the `n(I_u)` pairs whose parameter distance falls in it (the pair
+/// at `h_max` goes to the last interval).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EmpiricalVariogram {
+    /// Interval width `dh`.
+    pub bin_width: f64,
+    /// Interval centres `h_u`.
+    pub centers: Vec<f64>,
+    /// Mean semi-variance per interval (0 where the interval is empty).
+    pub gamma: Vec<f64>,
+    /// Pair count `n(I_u)` per interval.
+    pub counts: Vec<usize>,
+}
+
+impl EmpiricalVariogram {
+    /// Computes the empirical variogram of `values` (S x D, one sample per row) over the rows of
+    /// `params` (S x d, already scaled) with `bins` intervals.
+    pub fn compute(
+        params: MatRef<'_, f64>,
+        values: MatRef<'_, f64>,
+        bins: usize,
+    ) -> Result<Self, KrigingError> {
+        if params.nrows() != values.nrows() {
+            return Err(KrigingError::ShapeMismatch {
+                what: "values rows vs parameter rows",
+                expected: params.nrows(),
+                got: values.nrows(),
+            });
+        }
+        crate::check_finite("params", params)?;
+        crate::check_finite("values", values)?;
+        let dist = PairDistances::new(params);
+        Self::from_distances(&dist, values, bins)
+    }
+
+    /// Same as [`EmpiricalVariogram::compute`] with precomputed parameter distances.
+    pub(crate) fn from_distances(
+        dist: &PairDistances,
+        values: MatRef<'_, f64>,
+        bins: usize,
+    ) -> Result<Self, KrigingError> {
+        let s = values.nrows();
+        if s < 2 {
+            return Err(KrigingError::TooFewSamples {
+                what: "empirical variogram",
+                needed: 2,
+                got: s,
+            });
+        }
+        if bins == 0 {
+            return Err(KrigingError::InvalidConfig(
+                "the empirical variogram needs at least one bin".into(),
+            ));
+        }
+        let hmax = dist.max();
+        if hmax.is_nan() || hmax <= 0.0 {
+            return Err(KrigingError::NoSpread { samples: s });
+        }
+        let dh = hmax / bins as f64;
+        let dcols = values.ncols();
+        // Row-major copy so that each sample is contiguous.
+        let rows: Vec<f64> = (0..s)
+            .flat_map(|i| (0..dcols).map(move |k| (i, k)))
+            .map(|(i, k)| values[(i, k)])
+            .collect();
+        let row_bins = |i: usize| {
+            let mut sums = vec![0.0; bins];
+            let mut counts = vec![0usize; bins];
+            let xi = &rows[i * dcols..(i + 1) * dcols];
+            for j in i + 1..s {
+                let xj = &rows[j * dcols..(j + 1) * dcols];
+                let sq: f64 = xi.iter().zip(xj).map(|(a, b)| (a - b) * (a - b)).sum();
+                let u = ((dist.get(i, j) / dh) as usize).min(bins - 1);
+                sums[u] += 0.5 * sq;
+                counts[u] += 1;
+            }
+            (sums, counts)
+        };
+        // Rows are independent: the parallel and the sequential loop give the same bits. Small
+        // problems stay sequential (waking the pool costs more than the work).
+        let per_row: Vec<(Vec<f64>, Vec<usize>)> = if s * s * dcols < PARALLEL_MIN_WORK {
+            (0..s).map(row_bins).collect()
+        } else {
+            (0..s).into_par_iter().map(row_bins).collect()
+        };
+        let mut sums = vec![0.0; bins];
+        let mut counts = vec![0usize; bins];
+        for (rs, rc) in &per_row {
+            for u in 0..bins {
+                sums[u] += rs[u];
+                counts[u] += rc[u];
+            }
+        }
+        let gamma = sums
+            .iter()
+            .zip(&counts)
+            .map(|(&sm, &n)| if n > 0 { sm / n as f64 } else { 0.0 })
+            .collect();
+        let centers = (0..bins).map(|u| dh * (u as f64 + 0.5)).collect();
+        Ok(EmpiricalVariogram {
+            bin_width: dh,
+            centers,
+            gamma,
+            counts,
+        })
+    }
+
+    /// Number of non-empty intervals.
+    pub fn nonempty(&self) -> usize {
+        self.counts.iter().filter(|&&n| n > 0).count()
+    }
+}

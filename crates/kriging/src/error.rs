@@ -1,0 +1,102 @@
+//! The error type of every fallible operation in this crate.
+
+use crate::variogram::VariogramModel;
+
+/// What went wrong, and where (sample index, dimension, matrix size).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum KrigingError {
+    /// An input has the wrong length or shape.
+    #[error("{what}: expected {expected}, got {got}")]
+    ShapeMismatch {
+        /// Which input (for example `"values rows"` or `"query length"`).
+        what: &'static str,
+        /// The size that was needed.
+        expected: usize,
+        /// The size that was given.
+        got: usize,
+    },
+    /// An input holds NaN or an infinity.
+    #[error("{what} is not finite at row {row}, column {col}")]
+    NonFinite {
+        /// Which input.
+        what: &'static str,
+        /// Row (sample) index.
+        row: usize,
+        /// Column (dimension) index.
+        col: usize,
+    },
+    /// Not enough samples for the requested method.
+    #[error("{what} needs at least {needed} samples, got {got}")]
+    TooFewSamples {
+        /// The method or step that needs them.
+        what: &'static str,
+        /// Minimum sample count.
+        needed: usize,
+        /// Sample count given.
+        got: usize,
+    },
+    /// Two samples have the same parameters after scaling and nothing regularises the system.
+    #[error(
+        "samples {first} and {second} have the same scaled parameters: the {what} system is singular \
+         (remove one, or fit a variogram with a nugget)"
+    )]
+    DuplicateParams {
+        /// Which system (`"kriging"` or `"rbf"`).
+        what: &'static str,
+        /// The smaller sample index.
+        first: usize,
+        /// The larger sample index.
+        second: usize,
+    },
+    /// All samples sit at the same point of the (scaled) parameter space.
+    #[error("all {samples} samples have the same scaled parameters: no distances to work with")]
+    NoSpread {
+        /// Sample count.
+        samples: usize,
+    },
+    /// A variogram model could not be fitted to the empirical variogram.
+    #[error("cannot fit a {model:?} variogram: {reason}")]
+    VariogramFit {
+        /// The model that failed (`None` when the empirical variogram itself is unusable).
+        model: Option<VariogramModel>,
+        /// Why.
+        reason: String,
+    },
+    /// Variogram parameters outside their domain.
+    #[error("invalid {model:?} variogram: {reason}")]
+    InvalidVariogram {
+        /// The model.
+        model: VariogramModel,
+        /// Which parameter is wrong and why.
+        reason: String,
+    },
+    /// A configuration value is out of range.
+    #[error("invalid configuration: {0}")]
+    InvalidConfig(String),
+    /// A scaling is malformed (wrong length, negative or non-finite entries).
+    #[error("invalid parameter scaling at dimension {dim}: {reason}")]
+    InvalidScaling {
+        /// The dimension.
+        dim: usize,
+        /// Why.
+        reason: String,
+    },
+    /// The linear system is singular or too ill-conditioned to trust.
+    #[error(
+        "the {what} system ({size} x {size}) is singular or ill-conditioned \
+         (smallest/largest pivot {pivot_ratio:.3e}, relative residual {residual:.3e})"
+    )]
+    Singular {
+        /// Which system.
+        what: &'static str,
+        /// Its size.
+        size: usize,
+        /// Smallest over largest absolute LU pivot.
+        pivot_ratio: f64,
+        /// Relative residual of a probe solve.
+        residual: f64,
+    },
+    /// Automatic model selection found no usable model.
+    #[error("no variogram model could be used: {0}")]
+    NoModel(String),
+}

@@ -1,0 +1,639 @@
+//! The fitted kriging model: ordinary kriging (appendix A) and the paper's universal kriging (eq. 8).
+
+use faer::{Mat, MatRef};
+
+use crate::config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoice, Selection};
+use crate::empirical::{EmpiricalVariogram, PairDistances};
+use crate::error::KrigingError;
+use crate::fit::{FitOptions, fit_variogram};
+use crate::linalg::{checked_inverse, matmul, matmul_par_cols, sym_pinv};
+use crate::scaling::ParamScaling;
+use crate::variogram::{Variogram, VariogramModel};
+
+/// A fitted ordinary or universal kriging model over S samples with d parameters and D values.
+///
+/// The kriging matrix `A = [Gamma 1; 1^t 0]` ((S+1) x (S+1), `Gamma_ij = gamma(|c_i - c_j|)` for
+/// `i != j`, 0 on the diagonal) is factorised once at fit time and kept as its inverse `A^-1`, so
+/// that the weights of appendix A, `[b(c); lambda] = A^-1 [gamma(c); 1]`, cost `S (S+1)`
+/// multiply-adds plus S variogram evaluations. For universal kriging the values are first reduced
+/// by the trend hyperplane `F [c; 1]` (eq. 8) and `b(c)` are the ordinary-kriging weights of the
+/// residuals.
+#[derive(Debug, Clone)]
+pub struct Kriging {
+    method: Method,
+    variogram: Variogram,
+    scaling: ParamScaling,
+    dropped: Vec<usize>,
+    /// S x d scaled parameters.
+    scaled: Mat<f64>,
+    /// Row-major copy of `scaled` (S * d).
+    scaled_rows: Vec<f64>,
+    /// S x D residuals (values for ordinary kriging).
+    residuals: Mat<f64>,
+    /// D x (d+1) trend F (universal only).
+    trend: Option<Mat<f64>>,
+    /// (d+1) x (d+1) Gram matrix C C^t and (d+1) x D product C X (universal only, for the LOO).
+    gram: Option<Mat<f64>>,
+    cx: Option<Mat<f64>>,
+    /// (S+1) x (S+1) symmetric inverse of the kriging matrix.
+    ainv: Mat<f64>,
+    /// Row-major (S+1) x D dual coefficients `A^-1[:, :S] R`.
+    dual: Vec<f64>,
+    empirical: Option<EmpiricalVariogram>,
+    candidates: Vec<CandidateReport>,
+}
+
+/// Checks shapes and finiteness of `params` (S x d) and `values` (S x D).
+fn check_inputs(params: MatRef<'_, f64>, values: MatRef<'_, f64>) -> Result<(), KrigingError> {
+    if params.nrows() != values.nrows() {
+        return Err(KrigingError::ShapeMismatch {
+            what: "values rows vs parameter rows",
+            expected: params.nrows(),
+            got: values.nrows(),
+        });
+    }
+    if params.ncols() == 0 {
+        return Err(KrigingError::ShapeMismatch {
+            what: "parameter dimensions (need at least one)",
+            expected: 1,
+            got: 0,
+        });
+    }
+    if values.ncols() == 0 {
+        return Err(KrigingError::ShapeMismatch {
+            what: "value dimensions (need at least one)",
+            expected: 1,
+            got: 0,
+        });
+    }
+    crate::check_finite("params", params)?;
+    crate::check_finite("values", values)
+}
+
+/// The augmented parameter matrix `C` ((d+1) x S): column i is `[c_i; 1]` (scaled).
+pub fn augmented_params(scaled: MatRef<'_, f64>) -> Mat<f64> {
+    let (s, d) = scaled.shape();
+    Mat::from_fn(d + 1, s, |k, i| if k < d { scaled[(i, k)] } else { 1.0 })
+}
+
+/// Least-squares trend of eq. 8: returns `(F, R, G, C X)` with `F = X^t C^+` (D x (d+1)) computed
+/// as `(C X)^t (C C^t)^+`, residuals `R = X - C^t F^t` (S x D), `G = C C^t`.
+fn fit_trend(
+    scaled: MatRef<'_, f64>,
+    values: MatRef<'_, f64>,
+) -> (Mat<f64>, Mat<f64>, Mat<f64>, Mat<f64>) {
+    let c = augmented_params(scaled);
+    let g = matmul(c.as_ref(), c.transpose());
+    let cx = matmul(c.as_ref(), values);
+    let (gp, _) = sym_pinv(g.as_ref());
+    let t = matmul(gp.as_ref(), cx.as_ref()); // (d+1) x D = F^t
+    let fitted = matmul(c.transpose(), t.as_ref()); // S x D
+    let residuals = Mat::from_fn(values.nrows(), values.ncols(), |i, j| {
+        values[(i, j)] - fitted[(i, j)]
+    });
+    (t.transpose().to_owned(), residuals, g, cx)
+}
+
+/// Fails when the residuals (values for ordinary kriging) vanish relative to the spread of the
+/// values around their mean (`|R|_F <= 1e-10 |X - mean X|_F`, or both zero): there is nothing to fit
+/// a variogram to (constant values, or values exactly linear in the parameters under universal
+/// kriging). [`ModelChoice::Given`] skips this check.
+fn check_residuals_vary(
+    values: MatRef<'_, f64>,
+    residuals: MatRef<'_, f64>,
+) -> Result<(), KrigingError> {
+    let (s, dv) = values.shape();
+    let mut spread = 0.0;
+    for j in 0..dv {
+        let mean = (0..s).map(|i| values[(i, j)]).sum::<f64>() / s as f64;
+        spread += (0..s).map(|i| (values[(i, j)] - mean).powi(2)).sum::<f64>();
+    }
+    let rnorm: f64 = (0..dv)
+        .flat_map(|j| (0..s).map(move |i| (i, j)))
+        .map(|(i, j)| residuals[(i, j)].powi(2))
+        .sum();
+    if rnorm.sqrt() <= 1e-10 * spread.sqrt() {
+        return Err(KrigingError::VariogramFit {
+            model: None,
+            reason:
+                "the kriged quantities do not vary over the samples (constant values, or values \
+                     exactly linear in the parameters under universal kriging); give a variogram \
+                     with ModelChoice::Given to get blending weights anyway"
+                    .into(),
+        });
+    }
+    Ok(())
+}
+
+/// Builds and inverts the kriging matrix `A = [Gamma 1; 1^t 0]`.
+fn kriging_inverse(
+    dist: &PairDistances,
+    s: usize,
+    v: &Variogram,
+) -> Result<Mat<f64>, KrigingError> {
+    if v.nugget == 0.0 {
+        if let Some((first, second)) = dist.first_duplicate(dist.duplicate_tol()) {
+            return Err(KrigingError::DuplicateParams {
+                what: "kriging",
+                first,
+                second,
+            });
+        }
+    }
+    let a = Mat::from_fn(s + 1, s + 1, |i, j| {
+        if i == s || j == s {
+            if i == j { 0.0 } else { 1.0 }
+        } else if i == j {
+            0.0
+        } else {
+            v.between_samples(dist.get(i, j))
+        }
+    });
+    checked_inverse(a.as_ref(), true, "kriging")
+}
+
+/// Row-major `A^-1[:, :S] R` ((S+1) x D).
+fn dual_coefficients(ainv: &Mat<f64>, residuals: &Mat<f64>) -> Vec<f64> {
+    let s = residuals.nrows();
+    let dm = matmul_par_cols(ainv.as_ref().subcols(0, s), residuals.as_ref());
+    let (r, c) = dm.shape();
+    let mut out = Vec::with_capacity(r * c);
+    for i in 0..r {
+        for j in 0..c {
+            out.push(dm[(i, j)]);
+        }
+    }
+    out
+}
+
+impl Kriging {
+    /// Fits a kriging model to `params` (S x d, one sample per row) and `values` (S x D).
+    ///
+    /// Steps: scale the parameters; for [`Method::Universal`] fit the trend `F = K C^+` (pseudo-
+    /// inverse with a relative eigenvalue tolerance of 1e-12 on `C C^t`, so constant or collinear
+    /// dimensions are handled) and take residuals; bin the empirical variogram of the residuals;
+    /// fit or take the variogram; factorise the kriging system.
+    ///
+    /// Errors: shape mismatch, NaN/inf, too few samples (ordinary: 2; universal: d' + 2 with d'
+    /// the non-dropped dimensions), coinciding parameters without nugget
+    /// ([`KrigingError::DuplicateParams`], both indices), no usable variogram, singular system.
+    /// With a positive nugget duplicates are allowed: the nugget then acts as independent noise
+    /// between distinct samples ([`Variogram::between_samples`]), which keeps the system regular.
+    pub fn fit(
+        params: MatRef<'_, f64>,
+        values: MatRef<'_, f64>,
+        config: &KrigingConfig,
+    ) -> Result<Kriging, KrigingError> {
+        check_inputs(params, values)?;
+        let s = params.nrows();
+        let scaling = ParamScaling::from_choice(&config.scaling, params)?;
+        let dropped = scaling.dropped();
+        let d_eff = params.ncols() - dropped.len();
+        let needed = match config.method {
+            Method::Ordinary => 2,
+            Method::Universal => d_eff + 2,
+        };
+        if s < needed {
+            return Err(KrigingError::TooFewSamples {
+                what: match config.method {
+                    Method::Ordinary => "ordinary kriging",
+                    Method::Universal => "universal kriging (trend over [c; 1] plus residuals)",
+                },
+                needed,
+                got: s,
+            });
+        }
+        let scaled = scaling.apply_rows(params);
+        let (trend, residuals, gram, cx) = match config.method {
+            Method::Ordinary => (None, values.to_owned(), None, None),
+            Method::Universal => {
+                let (f, r, g, cx) = fit_trend(scaled.as_ref(), values);
+                (Some(f), r, Some(g), Some(cx))
+            }
+        };
+        let dist = PairDistances::new(scaled.as_ref());
+        if dist.max().is_nan() || dist.max() <= 0.0 {
+            return Err(KrigingError::NoSpread { samples: s });
+        }
+        let mut scaled_rows = Vec::with_capacity(s * scaled.ncols());
+        for i in 0..s {
+            for k in 0..scaled.ncols() {
+                scaled_rows.push(scaled[(i, k)]);
+            }
+        }
+        let mut model = Kriging {
+            method: config.method,
+            variogram: Variogram {
+                model: VariogramModel::Linear,
+                nugget: 0.0,
+                sill: 1.0,
+                range: 0.0,
+                exponent: 1.0,
+            },
+            scaling,
+            dropped,
+            scaled,
+            scaled_rows,
+            residuals,
+            trend,
+            gram,
+            cx,
+            ainv: Mat::zeros(0, 0),
+            dual: Vec::new(),
+            empirical: None,
+            candidates: Vec::new(),
+        };
+        if !matches!(config.model, ModelChoice::Given(_)) {
+            check_residuals_vary(values, model.residuals.as_ref())?;
+        }
+        let opts = FitOptions {
+            nugget: config.nugget,
+            weights: config.fit_weights,
+        };
+        match config.model {
+            ModelChoice::Given(v) => {
+                v.validate()?;
+                model.install(&dist, v)?;
+            }
+            ModelChoice::Fixed(m) => {
+                let emp = EmpiricalVariogram::from_distances(
+                    &dist,
+                    model.residuals.as_ref(),
+                    config.bins,
+                )?;
+                let fitted = fit_variogram(&emp, m, &opts)?;
+                model.candidates.push(CandidateReport {
+                    model: m,
+                    variogram: Some(fitted.variogram),
+                    wsse: Some(fitted.wsse),
+                    loo_rmse: None,
+                    error: None,
+                });
+                model.empirical = Some(emp);
+                model.install(&dist, fitted.variogram)?;
+            }
+            ModelChoice::Auto(sel) => {
+                let emp = EmpiricalVariogram::from_distances(
+                    &dist,
+                    model.residuals.as_ref(),
+                    config.bins,
+                )?;
+                model.auto_select(&dist, &emp, sel, &opts)?;
+                model.empirical = Some(emp);
+            }
+        }
+        Ok(model)
+    }
+
+    /// Factorises the system for `v` and stores everything that depends on it.
+    fn install(&mut self, dist: &PairDistances, v: Variogram) -> Result<(), KrigingError> {
+        let ainv = kriging_inverse(dist, self.n_samples(), &v)?;
+        self.dual = dual_coefficients(&ainv, &self.residuals);
+        self.ainv = ainv;
+        self.variogram = v;
+        Ok(())
+    }
+
+    /// Tries every model and installs the best by `sel`; fills `self.candidates`.
+    fn auto_select(
+        &mut self,
+        dist: &PairDistances,
+        emp: &EmpiricalVariogram,
+        sel: Selection,
+        opts: &FitOptions,
+    ) -> Result<(), KrigingError> {
+        let mut reports = Vec::new();
+        for m in VariogramModel::ALL {
+            let mut rep = CandidateReport {
+                model: m,
+                variogram: None,
+                wsse: None,
+                loo_rmse: None,
+                error: None,
+            };
+            match fit_variogram(emp, m, opts) {
+                Err(e) => rep.error = Some(e.to_string()),
+                Ok(f) => {
+                    rep.variogram = Some(f.variogram);
+                    rep.wsse = Some(f.wsse);
+                    let score = match sel {
+                        Selection::BestFit => Ok(f.wsse),
+                        Selection::BestLoo => self
+                            .install(dist, f.variogram)
+                            .and_then(|_| self.leave_one_out())
+                            .map(|l| {
+                                rep.loo_rmse = Some(l.rmse);
+                                l.rmse
+                            }),
+                    };
+                    match score {
+                        Err(e) => rep.error = Some(e.to_string()),
+                        Ok(sc) if sc.is_finite() => {}
+                        Ok(sc) => rep.error = Some(format!("non-finite score {sc}")),
+                    }
+                }
+            }
+            reports.push(rep);
+        }
+        // For BestFit a model with the best fit may still give a singular system: fall back
+        // through the candidates in order of fit error.
+        let mut order: Vec<usize> = (0..reports.len())
+            .filter(|&i| reports[i].error.is_none())
+            .collect();
+        let score = |r: &CandidateReport| match sel {
+            Selection::BestFit => r.wsse.unwrap_or(f64::INFINITY),
+            Selection::BestLoo => r.loo_rmse.unwrap_or(f64::INFINITY),
+        };
+        order.sort_by(|&a, &b| {
+            score(&reports[a])
+                .total_cmp(&score(&reports[b]))
+                .then(a.cmp(&b))
+        });
+        let mut installed = false;
+        for i in order {
+            let v = reports[i]
+                .variogram
+                .expect("candidate without error has a variogram");
+            match self.install(dist, v) {
+                Ok(()) => {
+                    installed = true;
+                    break;
+                }
+                Err(e) => reports[i].error = Some(e.to_string()),
+            }
+        }
+        self.candidates = reports;
+        if !installed {
+            let details = self
+                .candidates
+                .iter()
+                .map(|r| format!("{}: {}", r.model.name(), r.error.as_deref().unwrap_or("?")))
+                .collect::<Vec<_>>()
+                .join("; ");
+            return Err(KrigingError::NoModel(details));
+        }
+        Ok(())
+    }
+
+    /// Number of samples S.
+    pub fn n_samples(&self) -> usize {
+        self.scaled.nrows()
+    }
+
+    /// Number of parameter dimensions d.
+    pub fn n_params(&self) -> usize {
+        self.scaled.ncols()
+    }
+
+    /// Number of value dimensions D.
+    pub fn n_values(&self) -> usize {
+        self.residuals.ncols()
+    }
+
+    /// The estimator.
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// The variogram of the kriging system (of the residuals for universal kriging).
+    pub fn variogram(&self) -> &Variogram {
+        &self.variogram
+    }
+
+    /// The parameter scaling applied before any distance.
+    pub fn scaling(&self) -> &ParamScaling {
+        &self.scaling
+    }
+
+    /// Parameter dimensions dropped because they are constant over the samples (scale 0).
+    pub fn dropped_dims(&self) -> &[usize] {
+        &self.dropped
+    }
+
+    /// The scaled sample parameters (S x d).
+    pub fn scaled_params(&self) -> MatRef<'_, f64> {
+        self.scaled.as_ref()
+    }
+
+    /// `C` of eq. 8 ((d+1) x S): column i is `[scaled c_i; 1]`.
+    pub fn augmented_params(&self) -> Mat<f64> {
+        augmented_params(self.scaled.as_ref())
+    }
+
+    /// The trend `F` (D x (d+1)) of eq. 8, acting on `[scaled c; 1]`; `None` for ordinary kriging.
+    pub fn trend(&self) -> Option<MatRef<'_, f64>> {
+        self.trend.as_ref().map(|t| t.as_ref())
+    }
+
+    /// The kriged quantities (S x D): residuals `x_i - F [c_i; 1]` for universal kriging, the values
+    /// for ordinary kriging.
+    pub fn residuals(&self) -> MatRef<'_, f64> {
+        self.residuals.as_ref()
+    }
+
+    /// The symmetric inverse of the kriging matrix `A^-1` ((S+1) x (S+1)).
+    pub fn system_inverse(&self) -> MatRef<'_, f64> {
+        self.ainv.as_ref()
+    }
+
+    /// The empirical variogram the model was fitted to (`None` for [`ModelChoice::Given`]).
+    pub fn empirical(&self) -> Option<&EmpiricalVariogram> {
+        self.empirical.as_ref()
+    }
+
+    /// What each candidate model gave during the fit (empty for [`ModelChoice::Given`]).
+    pub fn candidates(&self) -> &[CandidateReport] {
+        &self.candidates
+    }
+
+    /// Checks a query point and an output length.
+    fn check_query(
+        &self,
+        c: &[f64],
+        out_len: usize,
+        expected_out: usize,
+    ) -> Result<(), KrigingError> {
+        check_query(c, self.n_params(), out_len, expected_out)
+    }
+
+    /// Distance between the scaled query `c` (unscaled input) and sample `j`.
+    #[inline]
+    fn dist_to(&self, c: &[f64], j: usize) -> f64 {
+        scaled_dist(&self.scaling, &self.scaled_rows, c, j)
+    }
+
+    /// The kriging weights `b(c)` (length S) of appendix A: `b = A^-1[:S, :] [gamma(c); 1]`.
+    /// They sum to one; at a sample `c_i` they are the unit vector `e_i` (exact interpolation).
+    /// No allocation.
+    pub fn weights(&self, c: &[f64], out: &mut [f64]) -> Result<(), KrigingError> {
+        let s = self.n_samples();
+        self.check_query(c, out.len(), s)?;
+        out.copy_from_slice(&self.ainv.col_as_slice(s)[..s]);
+        for j in 0..s {
+            let g = self.variogram.eval(self.dist_to(c, j));
+            let col = &self.ainv.col_as_slice(j)[..s];
+            for (o, a) in out.iter_mut().zip(col) {
+                *o += g * a;
+            }
+        }
+        Ok(())
+    }
+
+    /// The prediction at `c` (length D): `F [c; 1] + sum_i b_i(c) r_i` (eq. 8; ordinary kriging:
+    /// `sum_i b_i(c) x_i`), evaluated in the dual form `[gamma(c); 1]^t A^-1[:, :S] R`.
+    /// No allocation.
+    pub fn predict(&self, c: &[f64], out: &mut [f64]) -> Result<(), KrigingError> {
+        let s = self.n_samples();
+        let dv = self.n_values();
+        self.check_query(c, out.len(), dv)?;
+        out.copy_from_slice(&self.dual[s * dv..(s + 1) * dv]);
+        for j in 0..s {
+            let g = self.variogram.eval(self.dist_to(c, j));
+            for (o, a) in out.iter_mut().zip(&self.dual[j * dv..(j + 1) * dv]) {
+                *o += g * a;
+            }
+        }
+        if let Some(f) = &self.trend {
+            let d = self.n_params();
+            for k in 0..=d {
+                let z = c.get(k).map_or(1.0, |&ck| {
+                    (ck - self.scaling.offset[k]) * self.scaling.scale[k]
+                });
+                for (o, fk) in out.iter_mut().zip(f.col_as_slice(k)) {
+                    *o += z * fk;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Leave-one-out errors `e_k = x_k - x_hat_{-k}(c_k)` (S x D) without refactorising.
+    ///
+    /// Ordinary kriging (Dubrule 1983): with `B = A^-1` and `alpha = B[:S, :S] R`,
+    /// `e_k = alpha_k / B_kk`; the weights of the system without sample k at `c_k` are
+    /// `-B_ki / B_kk`. Universal kriging adds the refit of the trend without sample k:
+    /// `e_k = alpha_k / B_kk + (F - F_{-k}) v_k` with `v_k = [c_k; 1] - sum_{i != k} b_i [c_i; 1]`
+    /// and `F_{-k} = (X^t C^t - x_k z_k^t) (C C^t - z_k z_k^t)^+`, a (d+1) x (d+1) pseudo-inverse
+    /// per sample. The variogram and the scaling stay fixed. Agrees with refitting S times except
+    /// at duplicated parameter points (which the refit would treat with `gamma(0) = 0`).
+    pub fn loo_errors(&self) -> Result<Mat<f64>, KrigingError> {
+        let s = self.n_samples();
+        let dv = self.n_values();
+        let d = self.n_params();
+        let b = &self.ainv;
+        let mut err = Mat::zeros(s, dv);
+        for k in 0..s {
+            let bkk = b[(k, k)];
+            if bkk == 0.0 || !bkk.is_finite() {
+                return Err(KrigingError::Singular {
+                    what: "leave-one-out",
+                    size: s,
+                    pivot_ratio: 0.0,
+                    residual: f64::NAN,
+                });
+            }
+            let row = &self.dual[k * dv..(k + 1) * dv];
+            for j in 0..dv {
+                err[(k, j)] = row[j] / bkk;
+            }
+        }
+        if let (Some(f), Some(g), Some(cx)) = (&self.trend, &self.gram, &self.cx) {
+            let cm = self.augmented_params(); // (d+1) x S
+            let bc = matmul(b.as_ref().submatrix(0, 0, s, s), cm.transpose()); // S x (d+1)
+            let mut gk = Mat::zeros(d + 1, d + 1);
+            let mut v = vec![0.0; d + 1];
+            let mut xk = vec![0.0; dv];
+            for k in 0..s {
+                let bkk = b[(k, k)];
+                // w = sum_{i != k} b_i z_i with b_i = -B_ki / B_kk; v = z_k - w.
+                for l in 0..=d {
+                    let zk = cm[(l, k)];
+                    let w = -(bc[(k, l)] - bkk * zk) / bkk;
+                    v[l] = zk - w;
+                }
+                for q in 0..=d {
+                    for p in 0..=d {
+                        gk[(p, q)] = g[(p, q)] - cm[(p, k)] * cm[(q, k)];
+                    }
+                }
+                let (gp, _) = sym_pinv(gk.as_ref());
+                // gv = (G_{-k})^+ v
+                let mut gv = vec![0.0; d + 1];
+                for (p, gvp) in gv.iter_mut().enumerate() {
+                    *gvp = (0..=d).map(|q| gp[(p, q)] * v[q]).sum();
+                }
+                let zg: f64 = (0..=d).map(|l| cm[(l, k)] * gv[l]).sum();
+                // x_k = r_k + F z_k
+                for (j, x) in xk.iter_mut().enumerate() {
+                    *x = self.residuals[(k, j)]
+                        + (0..=d).map(|l| f[(j, l)] * cm[(l, k)]).sum::<f64>();
+                }
+                for j in 0..dv {
+                    let fv: f64 = (0..=d).map(|l| f[(j, l)] * v[l]).sum();
+                    let fkv: f64 = (0..=d).map(|l| cx[(l, j)] * gv[l]).sum::<f64>() - xk[j] * zg;
+                    err[(k, j)] += fv - fkv;
+                }
+            }
+        }
+        Ok(err)
+    }
+
+    /// Leave-one-out cross validation ([`Kriging::loo_errors`] summarised): RMSE over samples of
+    /// the Euclidean norm of the error vector, and that norm per sample.
+    pub fn leave_one_out(&self) -> Result<LooReport, KrigingError> {
+        let e = self.loo_errors()?;
+        let per = (0..e.nrows())
+            .map(|k| {
+                (0..e.ncols())
+                    .map(|j| e[(k, j)] * e[(k, j)])
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect();
+        Ok(LooReport::from_norms(per))
+    }
+}
+
+/// Checks the query length, its finiteness and the output length.
+pub(crate) fn check_query(
+    c: &[f64],
+    d: usize,
+    out_len: usize,
+    expected_out: usize,
+) -> Result<(), KrigingError> {
+    if c.len() != d {
+        return Err(KrigingError::ShapeMismatch {
+            what: "query parameter length",
+            expected: d,
+            got: c.len(),
+        });
+    }
+    if out_len != expected_out {
+        return Err(KrigingError::ShapeMismatch {
+            what: "output buffer length",
+            expected: expected_out,
+            got: out_len,
+        });
+    }
+    if let Some(k) = c.iter().position(|x| !x.is_finite()) {
+        return Err(KrigingError::NonFinite {
+            what: "query parameter",
+            row: 0,
+            col: k,
+        });
+    }
+    Ok(())
+}
+
+/// `|scale(c) - p_j|` with `p` row-major S x d.
+#[inline]
+pub(crate) fn scaled_dist(scaling: &ParamScaling, rows: &[f64], c: &[f64], j: usize) -> f64 {
+    let d = c.len();
+    let p = &rows[j * d..(j + 1) * d];
+    let mut s = 0.0;
+    for k in 0..d {
+        let t = (c[k] - scaling.offset[k]) * scaling.scale[k] - p[k];
+        s += t * t;
+    }
+    s.sqrt()
+}

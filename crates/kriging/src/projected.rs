@@ -1,0 +1,145 @@
+//! A precomputed projection of the kriging weights for hot paths: `L b(c)` in `R (S+1)`
+//! multiply-adds plus S variogram evaluations.
+
+use faer::MatRef;
+use serde::{Deserialize, Serialize};
+
+use crate::error::KrigingError;
+use crate::kriging::{Kriging, check_query, scaled_dist};
+use crate::scaling::ParamScaling;
+use crate::variogram::Variogram;
+
+/// `Q = L A^-1[:S, :]` (R x (S+1)) for a caller's fixed linear map `L` (R x S), so that
+/// `L b(c) = Q [gamma(c); 1]` (appendix A weights projected; DESIGN: `Q = U_S^t A^-1[:S, :]`).
+///
+/// Everything is stored in plain vectors so that a runtime can copy it into its own (f32) arrays:
+/// [`ProjectedQuery::matrix`] is **row-major** (row r holds `Q[r, 0..=S]`, the last entry of each row
+/// multiplies the constant 1), [`ProjectedQuery::scaled_params`] is row-major S x d.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProjectedQuery {
+    rows: usize,
+    samples: usize,
+    matrix: Vec<f64>,
+    scaled_params: Vec<f64>,
+    variogram: Variogram,
+    scaling: ParamScaling,
+}
+
+impl ProjectedQuery {
+    /// Precomputes `L A^-1[:S, :]` for `l` (R x S) and copies the scaled sample parameters, the
+    /// variogram and the scaling of `kriging`.
+    pub fn new(kriging: &Kriging, l: MatRef<'_, f64>) -> Result<Self, KrigingError> {
+        let s = kriging.n_samples();
+        if l.ncols() != s {
+            return Err(KrigingError::ShapeMismatch {
+                what: "projection columns vs samples",
+                expected: s,
+                got: l.ncols(),
+            });
+        }
+        crate::check_finite("projection", l)?;
+        let ainv = kriging.system_inverse();
+        let q = crate::linalg::matmul(l, ainv.subrows(0, s));
+        let rows = l.nrows();
+        let mut matrix = Vec::with_capacity(rows * (s + 1));
+        for r in 0..rows {
+            for j in 0..=s {
+                matrix.push(q[(r, j)]);
+            }
+        }
+        let p = kriging.scaled_params();
+        let mut scaled_params = Vec::with_capacity(s * p.ncols());
+        for i in 0..s {
+            for k in 0..p.ncols() {
+                scaled_params.push(p[(i, k)]);
+            }
+        }
+        Ok(ProjectedQuery {
+            rows,
+            samples: s,
+            matrix,
+            scaled_params,
+            variogram: *kriging.variogram(),
+            scaling: kriging.scaling().clone(),
+        })
+    }
+
+    /// `out = L b(c) = Q [gamma(c); 1]`. `gamma_scratch` must hold S+1 entries (it receives
+    /// `[gamma(c); 1]`), `out` R entries. No allocation.
+    pub fn query(
+        &self,
+        c: &[f64],
+        gamma_scratch: &mut [f64],
+        out: &mut [f64],
+    ) -> Result<(), KrigingError> {
+        let s = self.samples;
+        check_query(c, self.scaling.dims(), out.len(), self.rows)?;
+        if gamma_scratch.len() != s + 1 {
+            return Err(KrigingError::ShapeMismatch {
+                what: "gamma scratch length (S + 1)",
+                expected: s + 1,
+                got: gamma_scratch.len(),
+            });
+        }
+        for (j, g) in gamma_scratch[..s].iter_mut().enumerate() {
+            *g = self
+                .variogram
+                .eval(scaled_dist(&self.scaling, &self.scaled_params, c, j));
+        }
+        gamma_scratch[s] = 1.0;
+        for (o, row) in out.iter_mut().zip(self.matrix.chunks_exact(s + 1)) {
+            *o = dot(row, gamma_scratch);
+        }
+        Ok(())
+    }
+
+    /// Number of rows R of `L`.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Number of samples S.
+    pub fn n_samples(&self) -> usize {
+        self.samples
+    }
+
+    /// `Q = L A^-1[:S, :]`, row-major R x (S+1).
+    pub fn matrix(&self) -> &[f64] {
+        &self.matrix
+    }
+
+    /// The scaled sample parameters, row-major S x d.
+    pub fn scaled_params(&self) -> &[f64] {
+        &self.scaled_params
+    }
+
+    /// The variogram `gamma`.
+    pub fn variogram(&self) -> &Variogram {
+        &self.variogram
+    }
+
+    /// The parameter scaling applied to a query before distances are taken.
+    pub fn scaling(&self) -> &ParamScaling {
+        &self.scaling
+    }
+}
+
+/// Dot product with four interleaved partial sums (vectorisable; fixed order, so deterministic).
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    debug_assert_eq!(a.len(), b.len());
+    let mut acc = [0.0f64; 4];
+    let split = a.len() / 4 * 4;
+    let (a4, ar) = a.split_at(split);
+    let (b4, br) = b.split_at(split);
+    for (x, y) in a4.chunks_exact(4).zip(b4.chunks_exact(4)) {
+        for k in 0..4 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    for (x, y) in ar.iter().zip(br) {
+        s += x * y;
+    }
+    s
+}

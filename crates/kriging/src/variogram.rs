@@ -1,0 +1,183 @@
+//! Theoretical variogram models (paper appendix A: the function gamma fitted to the binned averages).
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::KrigingError;
+
+/// The shape of a theoretical variogram.
+///
+/// With nugget `n`, (partial) sill `s`, range `a` and exponent `e`, for `h > 0`:
+/// - `Linear`: `n + s h` (`s` is the slope; no range),
+/// - `Power`: `n + s h^e`, `0 < e < 2` (no range),
+/// - `Spherical`: `n + s (3h/(2a) - h^3/(2a^3))` for `h < a`, `n + s` beyond,
+/// - `Exponential`: `n + s (1 - exp(-3h/a))` (`a` is the practical range, 95 % of the sill),
+/// - `Gaussian`: `n + s (1 - exp(-3h^2/a^2))` (practical range).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum VariogramModel {
+    /// Unbounded, proportional to the distance.
+    Linear,
+    /// Unbounded, a power of the distance.
+    Power,
+    /// Bounded, reaches the sill at the range.
+    Spherical,
+    /// Bounded asymptotically.
+    Exponential,
+    /// Bounded asymptotically, smooth (parabolic) at the origin.
+    Gaussian,
+}
+
+impl VariogramModel {
+    /// Every model, in the order automatic selection tries them (ties go to the earlier one).
+    pub const ALL: [VariogramModel; 5] = [
+        VariogramModel::Linear,
+        VariogramModel::Power,
+        VariogramModel::Spherical,
+        VariogramModel::Exponential,
+        VariogramModel::Gaussian,
+    ];
+
+    /// Lower-case name (`"linear"`, `"power"`, `"spherical"`, `"exponential"`, `"gaussian"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            VariogramModel::Linear => "linear",
+            VariogramModel::Power => "power",
+            VariogramModel::Spherical => "spherical",
+            VariogramModel::Exponential => "exponential",
+            VariogramModel::Gaussian => "gaussian",
+        }
+    }
+
+    /// Parses a name as printed by [`VariogramModel::name`] (case-insensitive).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(name))
+    }
+
+    /// Whether the model has a range parameter (`Spherical`, `Exponential`, `Gaussian`).
+    pub fn has_range(self) -> bool {
+        matches!(
+            self,
+            VariogramModel::Spherical | VariogramModel::Exponential | VariogramModel::Gaussian
+        )
+    }
+}
+
+/// A theoretical variogram `gamma(h)` (see [`VariogramModel`] for the formulas).
+///
+/// `gamma(0) = 0`; the nugget applies for `h > 0`. `sill` is the partial sill (the total sill of a
+/// bounded model is `nugget + sill`); for `Linear` and `Power` it is the coefficient of `h` or `h^e`.
+/// `range` is unused (0) for `Linear` and `Power`; `exponent` is used by `Power` only (1 otherwise).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Variogram {
+    /// The model shape.
+    pub model: VariogramModel,
+    /// Discontinuity at the origin, `>= 0`.
+    pub nugget: f64,
+    /// Partial sill (or slope), `> 0`.
+    pub sill: f64,
+    /// Practical range of bounded models, `> 0` for them.
+    pub range: f64,
+    /// Exponent of the power model, in `(0, 2)`.
+    pub exponent: f64,
+}
+
+impl Variogram {
+    /// A validated variogram; `range` is ignored (stored as 0) for unbounded models and `exponent`
+    /// is ignored (stored as 1) for every model but `Power`.
+    pub fn new(
+        model: VariogramModel,
+        nugget: f64,
+        sill: f64,
+        range: f64,
+        exponent: f64,
+    ) -> Result<Self, KrigingError> {
+        let v = Variogram {
+            model,
+            nugget,
+            sill,
+            range: if model.has_range() { range } else { 0.0 },
+            exponent: if model == VariogramModel::Power {
+                exponent
+            } else {
+                1.0
+            },
+        };
+        v.validate()?;
+        Ok(v)
+    }
+
+    /// Checks that every parameter is finite and inside its domain.
+    pub fn validate(&self) -> Result<(), KrigingError> {
+        let bad = |reason: String| KrigingError::InvalidVariogram {
+            model: self.model,
+            reason,
+        };
+        if !(self.nugget.is_finite() && self.nugget >= 0.0) {
+            return Err(bad(format!(
+                "nugget {} must be finite and >= 0",
+                self.nugget
+            )));
+        }
+        if !(self.sill.is_finite() && self.sill > 0.0) {
+            return Err(bad(format!("sill {} must be finite and > 0", self.sill)));
+        }
+        if self.model.has_range() && !(self.range.is_finite() && self.range > 0.0) {
+            return Err(bad(format!("range {} must be finite and > 0", self.range)));
+        }
+        if self.model == VariogramModel::Power && !(self.exponent > 0.0 && self.exponent < 2.0) {
+            return Err(bad(format!("exponent {} must be in (0, 2)", self.exponent)));
+        }
+        Ok(())
+    }
+
+    /// `gamma(h)`: 0 at `h <= 0`, `nugget + sill * shape(h)` for `h > 0`.
+    #[inline]
+    pub fn eval(&self, h: f64) -> f64 {
+        if h > 0.0 {
+            self.nugget + self.structured(h)
+        } else {
+            0.0
+        }
+    }
+
+    /// The structured part `sill * shape(h)` without the nugget (continuous, 0 at `h = 0`).
+    #[inline]
+    pub fn structured(&self, h: f64) -> f64 {
+        self.sill * shape(self.model, h, self.range, self.exponent)
+    }
+
+    /// The variogram between two *distinct* samples at distance `h`: `nugget + structured(h)`,
+    /// also at `h = 0` (duplicate parameter points). This is the entry of the matrix Gamma; it
+    /// keeps the kriging system regular for duplicates when the nugget is positive (the nugget is
+    /// read as independent noise on each sample).
+    #[inline]
+    pub fn between_samples(&self, h: f64) -> f64 {
+        self.nugget + self.structured(h)
+    }
+}
+
+/// The unit shape `f(h)` of a model (0 at `h = 0`), so that `gamma(h) = nugget + sill f(h)`.
+#[inline]
+pub fn shape(model: VariogramModel, h: f64, range: f64, exponent: f64) -> f64 {
+    if h <= 0.0 {
+        return 0.0;
+    }
+    match model {
+        VariogramModel::Linear => h,
+        VariogramModel::Power => h.powf(exponent),
+        VariogramModel::Spherical => {
+            if h >= range {
+                1.0
+            } else {
+                let t = h / range;
+                1.5 * t - 0.5 * t * t * t
+            }
+        }
+        VariogramModel::Exponential => 1.0 - (-3.0 * h / range).exp(),
+        VariogramModel::Gaussian => {
+            let t = h / range;
+            1.0 - (-3.0 * t * t).exp()
+        }
+    }
+}
