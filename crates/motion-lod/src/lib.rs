@@ -19,4 +19,20 @@
 //! # Ok::<(), motion_lod::dataset::DatasetError>(())
 //! ```
 
+pub mod build;
 pub mod dataset;
+pub mod eval;
+pub mod importance;
+pub mod metrics;
+pub mod model;
+pub mod model_file;
+pub mod progress;
+pub mod source;
+pub mod storage;
+
+pub use build::{Analysis, BuildConfig, BuildError, TrainingSet};
+pub use model::{BuildReport, CONTROL_NAMES, Evaluator, MotionModel, TIME_ROW};
+pub use source::LodSource;
+
+/// The runtime crates, re-exported so that an engine can depend on this crate alone.
+pub use {crowd_sim, hosvd_als, kriging, lod_policy, motion_io, tensor_ops, timewarp};

@@ -18,11 +18,17 @@ struct Cli {
 enum Command {
     /// Read BVH folders, segment gait cycles, align them and write the motion tensor.
     Cycles(cli::cycles::CyclesArgs),
+    /// Build the multilinear model from BVH folders (or the embedded data) and write the model file.
+    Build(cli::build::BuildArgs),
+    /// Show a model's dimensions, levels, errors and storage.
+    Info(cli::info::InfoArgs),
 }
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Cycles(args) => cli::cycles::run(args),
+        Command::Build(args) => cli::build::run(args),
+        Command::Info(args) => cli::info::run(args),
     }
 }

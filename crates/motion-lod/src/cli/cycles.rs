@@ -5,53 +5,19 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use motion_io::CycleConfig;
-use motion_lod::dataset::{AlignedSet, CycleSet, DatasetConfig, align_cycles, load_cycles};
+use clap::Args;
+use motion_lod::dataset::{AlignedSet, CycleSet};
 use serde::Serialize;
 use tensor_ops::npy::{NpyDtype, write_tensor};
-use timewarp::{AlignMethod, DtwConfig};
 
-/// Time alignment of the cycles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum AlignArg {
-    /// Dynamic time warping against the medoid cycle.
-    Dtw,
-    /// Uniform time scaling between the cycle's first and last frame.
-    Uniform,
-}
-
-/// Contact detection and cycle selection settings.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Preset {
-    /// Defaults tuned on the Bandai data set.
-    Default,
-    /// CMU (cgspeed) conversions: ignore the first 0.1 s, looser floor height.
-    Cmu,
-}
+use super::data::{AlignArg, DataArgs, load};
 
 /// Arguments of `motion-lod cycles`.
 #[derive(Debug, Args)]
 pub struct CyclesArgs {
-    /// Folders of BVH takes (all of one skeleton); every `*.bvh` file in them is read.
-    #[arg(required = true, value_name = "DIR")]
-    pub dirs: Vec<PathBuf>,
-    /// Aligned frames per cycle, T (default: the median cycle length in frames).
-    #[arg(long, value_name = "T")]
-    pub frames: Option<usize>,
-    /// Time alignment method.
-    #[arg(long, value_enum, default_value_t = AlignArg::Dtw)]
-    pub align: AlignArg,
-    /// DTW band, as a fraction of the cycle length.
-    #[arg(long, default_value_t = DtwConfig::default().band)]
-    pub band: f64,
-    /// DTW slope limit: at most this many consecutive steps along one cycle.
-    #[arg(long, default_value_t = DtwConfig::default().max_slope)]
-    pub max_slope: usize,
-    /// Contact detection preset.
-    #[arg(long, value_enum, default_value_t = Preset::Default)]
-    pub preset: Preset,
+    /// Training data.
+    #[command(flatten)]
+    pub data: DataArgs,
     /// Write the motion tensor here as NPY (f64, shape (P, T, S), Fortran order).
     #[arg(long, value_name = "FILE")]
     pub tensor: Option<PathBuf>,
@@ -84,47 +50,17 @@ struct Summary {
 
 /// Runs the subcommand.
 pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
-    let method = match args.align {
-        AlignArg::Dtw => AlignMethod::Dtw(DtwConfig {
-            band: args.band,
-            max_slope: args.max_slope,
-        }),
-        AlignArg::Uniform => AlignMethod::Uniform,
-    };
-    let config = DatasetConfig {
-        cycle: match args.preset {
-            Preset::Default => CycleConfig::default(),
-            Preset::Cmu => CycleConfig::cmu(),
-        },
-        units_per_metre: None,
-    };
-    let bar = if args.json {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr())
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{msg:12} [{bar:40}] {pos}/{len}")
-            .context("progress bar template")?,
-    );
-    bar.set_message("takes");
-    let set = load_cycles(&args.dirs, &config, &|_, total| {
-        bar.set_length(total as u64);
-        bar.inc(1);
-    })
-    .context("loading cycles")?;
-    bar.set_message("aligning");
-    let aligned = align_cycles(&set, args.frames, method).context("aligning cycles")?;
-    bar.finish_and_clear();
-    for f in &set.failed {
-        eprintln!("warning: skipped {}: {}", f.path.display(), f.error);
+    if args.data.dirs.is_empty() {
+        anyhow::bail!("name at least one folder of BVH takes");
     }
+    let loaded = load(&args.data.spec(), args.json)?;
+    let (set, aligned) = (&loaded.cycles, &loaded.aligned);
     if let Some(path) = &args.tensor {
         write_tensor(path, &aligned.tensor, NpyDtype::F64)
             .with_context(|| format!("writing the tensor to {}", path.display()))?;
     }
     if let Some(path) = &args.controls {
-        write_controls_csv(path, &aligned)
+        write_controls_csv(path, aligned)
             .with_context(|| format!("writing the controls to {}", path.display()))?;
     }
     let [p, t, s] = aligned.tensor.dims();
@@ -142,7 +78,7 @@ pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
         };
         writeln!(out, "{}", serde_json::to_string(&summary)?)?;
     } else {
-        print_report(&mut out, &set, &aligned, &args)?;
+        print_report(&mut out, set, aligned, &args)?;
     }
     Ok(())
 }
@@ -174,7 +110,7 @@ fn print_report(
     writeln!(
         out,
         "tensor: P = {p}, T = {t}, S = {s}; alignment {}; reference cycle {} ({} frames {}..={})",
-        match args.align {
+        match args.data.align {
             AlignArg::Dtw => "dtw",
             AlignArg::Uniform => "uniform",
         },

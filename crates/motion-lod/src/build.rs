@@ -1,0 +1,500 @@
+//! `MotionModel::build`: from aligned gait cycles to the runtime multilinear model (sections 3-4).
+//!
+//! Steps, in order:
+//! 1. measure the visual importance of every joint ([`crate::importance`]) and reorder the DOF rows
+//!    (root and time increment first, then joints by decreasing importance);
+//! 2. scale the time-increment row into frame units (so that it weighs like the other rows in the
+//!    decomposition) and set the layout's rest rotations to the data's mean;
+//! 3. the greedy key-level search with ALS (section 4.2) and the hybrid accuracy levels between keys;
+//! 4. universal kriging of the samples over the controls (eq. 8, appendix A), variogram chosen by
+//!    leave-one-out error; one kriging system serves every level;
+//! 5. per key level the runtime parts: `Q = [U_S^T; C] A^{-1}[:S, :]` and `V = U_S^T C^+`;
+//! 6. the measured error of every accuracy level and every joint count ([`crate::metrics`]).
+
+use std::time::Instant;
+
+use faer::Mat;
+use hosvd_als::{AlsOptions, KeyLevels, KeySearchConfig, hybrid_levels};
+use kriging::{Kriging, KrigingConfig};
+use lod_policy::{
+    AccuracyLevel, ControlSpace, Detail, KeyFactors, KeyTensor, LevelError, LodModel, ModelParts,
+    Ranks,
+};
+use motion_io::PoseLayout;
+use serde::{Deserialize, Serialize};
+use tensor_ops::Tensor3;
+
+use crate::importance::{JointImportance, joint_importance};
+use crate::metrics::ErrorMeter;
+use crate::model::{BuildReport, CONTROL_NAMES, KeyReport, MotionModel, TIME_ROW};
+use crate::progress::Progress;
+
+/// Aligned training data: the motion tensor and what each sample is.
+#[derive(Debug, Clone)]
+pub struct TrainingSet {
+    /// Pose layout of every sample (rows of the tensor).
+    pub layout: PoseLayout,
+    /// Motion tensor `P x T x S`; row 6 holds the time increment in seconds.
+    pub tensor: Tensor3,
+    /// Controls `(dx, dz, turn, height)` per sample (metres, metres, radians, metres).
+    pub controls: Vec<[f64; 4]>,
+    /// Where each sample came from (file and frame range), for reports.
+    pub sources: Vec<String>,
+}
+
+/// Settings of [`MotionModel::build`]; the defaults are the paper's section 5.1.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BuildConfig {
+    /// Key levels `N`.
+    pub key_levels: usize,
+    /// Accuracy levels `N_A` (at least `N`); the levels between keys are truncations.
+    pub accuracy_levels: usize,
+    /// Ranks `(R_P, R_T, R_S)` of the first key level (clamped to the data).
+    pub max_ranks: [usize; 3],
+    /// Ranks of the last key level (clamped to the data).
+    pub min_ranks: [usize; 3],
+    /// ALS stopping rule.
+    pub als: AlsOptions,
+    /// Kriging settings (universal kriging, variogram chosen by leave-one-out error by default).
+    pub kriging: KrigingConfig,
+    /// Poses used to measure joint importance (evenly strided over the data).
+    pub importance_poses: usize,
+    /// Samples at whose controls the level errors are measured (evenly strided).
+    pub error_samples: usize,
+}
+
+impl Default for BuildConfig {
+    fn default() -> Self {
+        BuildConfig {
+            key_levels: 10,
+            accuracy_levels: 28,
+            max_ranks: [40, 40, 60],
+            min_ranks: [7, 7, 9],
+            als: AlsOptions::default(),
+            kriging: KrigingConfig::default(),
+            importance_poses: 4000,
+            error_samples: 48,
+        }
+    }
+}
+
+/// Why a model could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    /// The training set is inconsistent or too small.
+    #[error("training data: {0}")]
+    Data(String),
+    /// The decomposition failed.
+    #[error("tensor decomposition: {0}")]
+    Decomposition(#[from] hosvd_als::HosvdError),
+    /// The kriging system could not be set up.
+    #[error("kriging over the controls: {0}")]
+    Kriging(#[from] kriging::KrigingError),
+    /// The runtime model rejected the parts.
+    #[error("runtime model: {0}")]
+    Model(#[from] lod_policy::ModelError),
+    /// Evaluating the model while measuring its errors failed.
+    #[error("measuring level errors: {0}")]
+    Kernel(#[from] lod_policy::KernelError),
+    /// The layout could not be reordered.
+    #[error("pose layout: {0}")]
+    Layout(#[from] motion_io::PoseError),
+}
+
+impl TrainingSet {
+    /// Checks shapes and values: `P` matches the layout, one control row per sample, finite data.
+    pub fn validate(&self) -> Result<(), BuildError> {
+        let [p, t, s] = self.tensor.dims();
+        if p != self.layout.dof() {
+            return Err(BuildError::Data(format!(
+                "tensor has {p} DOF rows, the pose layout {}",
+                self.layout.dof()
+            )));
+        }
+        if t < 2 {
+            return Err(BuildError::Data(format!(
+                "{t} aligned frames: at least 2 are needed"
+            )));
+        }
+        if self.controls.len() != s {
+            return Err(BuildError::Data(format!(
+                "{} control rows for {s} samples",
+                self.controls.len()
+            )));
+        }
+        if let Some(i) = self
+            .controls
+            .iter()
+            .position(|c| c.iter().any(|v| !v.is_finite()))
+        {
+            return Err(BuildError::Data(format!(
+                "controls of sample {i} are not finite: {:?}",
+                self.controls[i]
+            )));
+        }
+        let min_samples = 6;
+        if s < min_samples {
+            return Err(BuildError::Data(format!(
+                "{s} samples: universal kriging over {} controls needs at least {min_samples}",
+                CONTROL_NAMES.len()
+            )));
+        }
+        Ok(())
+    }
+
+    /// A deterministic random subset of `n` samples (all when `n >= S`), in their original order.
+    pub fn subset(&self, n: usize, seed: u64) -> TrainingSet {
+        let [p, t, s] = self.tensor.dims();
+        if n >= s {
+            return self.clone();
+        }
+        // Partial Fisher-Yates with splitmix64: the same (n, seed) always picks the same samples.
+        let mut idx: Vec<usize> = (0..s).collect();
+        let mut state = seed;
+        for i in 0..n {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            let j = i + (z % (s - i) as u64) as usize;
+            idx.swap(i, j);
+        }
+        let mut pick = idx[..n].to_vec();
+        pick.sort_unstable();
+        let mut data = Vec::with_capacity(p * t * n);
+        for &k in &pick {
+            data.extend_from_slice(self.tensor.sample(k));
+        }
+        TrainingSet {
+            layout: self.layout.clone(),
+            tensor: Tensor3::from_vec([p, t, n], data).expect("subset of a valid tensor"),
+            controls: pick.iter().map(|&k| self.controls[k]).collect(),
+            sources: pick.iter().map(|&k| self.sources[k].clone()).collect(),
+        }
+    }
+}
+
+/// Column-major copy of a faer matrix.
+fn col_major(m: faer::MatRef<'_, f64>) -> Vec<f64> {
+    let mut v = Vec::with_capacity(m.nrows() * m.ncols());
+    for j in 0..m.ncols() {
+        for i in 0..m.nrows() {
+            v.push(m[(i, j)]);
+        }
+    }
+    v
+}
+
+/// Reorders the DOF rows of every pose: the first `7` rows stay, joint blocks follow `order`
+/// (skeleton joint indices) as `new_layout` lists them.
+fn permute_rows(old: &PoseLayout, new: &PoseLayout, tensor: &Tensor3) -> Tensor3 {
+    let [p, t, s] = tensor.dims();
+    let mut map = (0..TIME_ROW + 1).collect::<Vec<usize>>();
+    for &j in new.joint_order() {
+        map.extend(old.joint_rows(j).expect("rotating joint"));
+    }
+    debug_assert_eq!(map.len(), p);
+    let src = tensor.as_slice();
+    let mut data = vec![0.0; p * t * s];
+    for (dst_pose, src_pose) in data.chunks_exact_mut(p).zip(src.chunks_exact(p)) {
+        for (d, &m) in dst_pose.iter_mut().zip(&map) {
+            *d = src_pose[m];
+        }
+    }
+    Tensor3::from_vec([p, t, s], data).expect("same shape")
+}
+
+/// The offline analysis behind a model: the prepared tensor, the key-level decompositions (with their
+/// sample factors `U_S`, which the runtime model does not keep) and the kriging fit. `eval` and the tables
+/// use it to compare methods on exactly the data the model was built from.
+#[derive(Debug, Clone)]
+pub struct Analysis {
+    /// Pose layout with joints in importance order and the data's mean as rest rotations.
+    pub layout: PoseLayout,
+    /// The motion tensor in that row order, time row multiplied by `time_scale`.
+    pub tensor: Tensor3,
+    /// Row [`TIME_ROW`] of `tensor` holds `time_scale` x seconds.
+    pub time_scale: f64,
+    /// Joints by decreasing measured importance.
+    pub importance: Vec<JointImportance>,
+    /// The key levels (ALS).
+    pub keys: KeyLevels,
+    /// The accuracy levels (distinct rank triples, each a truncation of a key).
+    pub levels: Vec<hosvd_als::AccuracyLevel>,
+    /// Universal kriging of the samples over the controls.
+    pub kriging: Kriging,
+    /// Raw controls per sample.
+    pub controls: Vec<[f64; 4]>,
+    /// Source of every sample.
+    pub sources: Vec<String>,
+}
+
+impl Analysis {
+    /// Steps 1-4 of the module documentation.
+    pub fn run(
+        set: &TrainingSet,
+        config: &BuildConfig,
+        progress: &dyn Progress,
+    ) -> Result<Analysis, BuildError> {
+        set.validate()?;
+        let [p, t, s] = set.tensor.dims();
+
+        // 1. Joint order by measured importance.
+        progress.stage("joint importance", 1);
+        let importance: Vec<JointImportance> =
+            joint_importance(&set.layout, set.tensor.as_slice(), config.importance_poses);
+        let order: Vec<usize> = importance.iter().map(|j| j.joint).collect();
+        let mut layout = set.layout.clone().with_joint_order(order)?;
+        let mut tensor = permute_rows(&set.layout, &layout, &set.tensor);
+        layout.set_rest_from_poses(tensor.as_slice())?;
+        progress.inc(1);
+
+        // 2. Time increments in units of the mean increment.
+        let mean_dt = tensor
+            .as_slice()
+            .chunks_exact(p)
+            .map(|pose| pose[TIME_ROW])
+            .sum::<f64>()
+            / (t * s) as f64;
+        if !mean_dt.is_finite() || mean_dt <= 0.0 {
+            return Err(BuildError::Data(format!(
+                "mean time increment {mean_dt} s: the time row ({TIME_ROW}) is not filled"
+            )));
+        }
+        let time_scale = 1.0 / mean_dt;
+        for pose in tensor.as_mut_slice().chunks_exact_mut(p) {
+            pose[TIME_ROW] *= time_scale;
+        }
+
+        // 3. Key levels and hybrid accuracy levels.
+        progress.stage("key levels (ALS)", 1);
+        let key_cfg = KeySearchConfig {
+            levels: config.key_levels,
+            max_ranks: config.max_ranks,
+            min_ranks: config.min_ranks,
+            als: config.als,
+        };
+        let keys: KeyLevels = hosvd_als::key_levels(&tensor, &key_cfg)?;
+        let levels = distinct_levels(&hybrid_levels(&keys, config.accuracy_levels));
+        progress.inc(1);
+
+        // 4. Universal kriging of the samples over the controls.
+        progress.stage("kriging", 1);
+        let params = Mat::from_fn(s, CONTROL_NAMES.len(), |i, k| set.controls[i][k]);
+        let values = Mat::from_fn(s, p * t, |i, j| tensor.sample(i)[j]);
+        let kriging = Kriging::fit(params.as_ref(), values.as_ref(), &config.kriging)?;
+        progress.inc(1);
+        Ok(Analysis {
+            layout,
+            tensor,
+            time_scale,
+            importance,
+            keys,
+            levels,
+            kriging,
+            controls: set.controls.clone(),
+            sources: set.sources.clone(),
+        })
+    }
+
+    /// Step 5: the runtime model (level errors not yet measured).
+    pub fn runtime_model(&self, progress: &dyn Progress) -> Result<MotionModel, BuildError> {
+        let [p, t, s] = self.tensor.dims();
+        let krig = &self.kriging;
+        let kriging_rows = col_major(krig.system_inverse().subrows(0, s));
+        let scaled = col_major(krig.scaled_params());
+        progress.stage("runtime model", self.keys.levels.len() as u64);
+        let mut key_tensors = Vec::with_capacity(self.keys.levels.len());
+        let mut key_reports = Vec::with_capacity(self.keys.levels.len());
+        for key in &self.keys.levels {
+            let tk = &key.tucker;
+            let [rp, rt, rs] = key.ranks;
+            let u_p = col_major(tk.factors[0].as_ref());
+            let u_t = col_major(tk.factors[1].as_ref());
+            let u_s = col_major(tk.factors[2].as_ref());
+            let factors = KeyFactors {
+                ranks: Ranks::new(rp, rt, rs),
+                core: tk.core.as_slice(),
+                u_p: &u_p,
+                u_t: &u_t,
+                u_s: &u_s,
+            };
+            key_tensors.push(KeyTensor::from_factors(
+                &factors,
+                p,
+                t,
+                &kriging_rows,
+                &scaled,
+            )?);
+            key_reports.push(KeyReport {
+                ranks: key.ranks,
+                mse: key.mse,
+                rel_error: key.rel_error,
+                iterations: key.iterations,
+            });
+            progress.inc(1);
+        }
+        let scaling = krig.scaling();
+        let raw: Vec<f32> = (0..CONTROL_NAMES.len())
+            .flat_map(|k| self.controls.iter().map(move |c| c[k] as f32))
+            .collect();
+        let controls = ControlSpace::from_raw(
+            *krig.variogram(),
+            &raw,
+            s,
+            scaling.offset.iter().map(|&v| v as f32).collect(),
+            scaling.scale.iter().map(|&v| v as f32).collect(),
+        )?;
+        let mean_pose = mean_rows(&self.tensor, &self.layout);
+        let parts = ModelParts {
+            p,
+            t,
+            s,
+            d: CONTROL_NAMES.len(),
+            always_rows: lod_policy::ALWAYS_ROWS,
+            rows_per_joint: lod_policy::ROWS_PER_JOINT,
+            keys: key_tensors,
+            levels: self
+                .levels
+                .iter()
+                .map(|l| AccuracyLevel {
+                    key: l.key,
+                    ranks: Ranks::new(l.ranks[0], l.ranks[1], l.ranks[2]),
+                })
+                .collect(),
+            controls,
+            time_scale: self.time_scale,
+            mean_pose: mean_pose.iter().map(|&v| v as f32).collect(),
+            level_errors: Vec::new(),
+            joint_errors: Vec::new(),
+        };
+        Ok(MotionModel {
+            layout: self.layout.clone(),
+            lod: LodModel::new(parts)?,
+            report: BuildReport {
+                samples: s,
+                dims: [p, t, s],
+                sources: self.sources.clone(),
+                importance: self.importance.clone(),
+                keys: key_reports,
+                c_e: self.keys.c_e,
+                ranks_clamped: self.keys.clamped,
+                variogram: *krig.variogram(),
+                dropped_controls: krig.dropped_dims().to_vec(),
+                kriging_loo_rmse: None,
+                seconds: 0.0,
+                data: None,
+            },
+        })
+    }
+}
+
+impl MotionModel {
+    /// Builds the hybrid multilinear model from aligned training data (offline; see the module docs).
+    pub fn build(
+        set: &TrainingSet,
+        config: &BuildConfig,
+        progress: &dyn Progress,
+    ) -> Result<MotionModel, BuildError> {
+        Ok(MotionModel::build_with_analysis(set, config, progress)?.0)
+    }
+
+    /// As [`MotionModel::build`], also returning the analysis it was built from.
+    pub fn build_with_analysis(
+        set: &TrainingSet,
+        config: &BuildConfig,
+        progress: &dyn Progress,
+    ) -> Result<(MotionModel, Analysis), BuildError> {
+        let started = Instant::now();
+        let analysis = Analysis::run(set, config, progress)?;
+        let mut model = analysis.runtime_model(progress)?;
+        // 6. Measured errors of every accuracy level and joint count.
+        progress.stage("level errors", 1);
+        let (level_errors, joint_errors) =
+            model.measure_lod_errors(&set.controls, config.error_samples)?;
+        model.lod.set_errors(level_errors, joint_errors)?;
+        progress.inc(1);
+        model.report.seconds = started.elapsed().as_secs_f64();
+        Ok((model, analysis))
+    }
+
+    /// Error of every accuracy level (all joints) and of every joint count (level 0) relative to the
+    /// full-detail synthesis at the same controls, over up to `max_samples` training controls.
+    fn measure_lod_errors(
+        &self,
+        controls: &[[f64; 4]],
+        max_samples: usize,
+    ) -> Result<(Vec<LevelError>, Vec<LevelError>), BuildError> {
+        let lod = &self.lod;
+        let (p, t) = (lod.p(), lod.t());
+        let stride = controls.len().div_ceil(max_samples.max(1)).max(1);
+        let picked: Vec<[f32; 4]> = controls
+            .iter()
+            .step_by(stride)
+            .map(|c| c.map(|v| v as f32))
+            .collect();
+        let full = Detail::full();
+        let reference: Vec<Vec<f64>> = picked
+            .iter()
+            .map(|c| self.synthesize_aligned(c, full))
+            .collect::<Result<_, _>>()?;
+        let measure = |detail: Detail| -> Result<LevelError, BuildError> {
+            let mut meter = ErrorMeter::new(&self.layout);
+            for (c, r) in picked.iter().zip(&reference) {
+                let poses = self.synthesize_aligned(c, detail)?;
+                meter.compare_sequences(r, &poses);
+            }
+            let e = meter.total();
+            Ok(LevelError {
+                mean_joint_cm: e.mean_joint_cm as f32,
+                shell_cm: e.shell_cm as f32,
+            })
+        };
+        debug_assert!(p > 0 && t > 0);
+        let levels = (0..lod.levels().len())
+            .map(|l| measure(Detail::new(l, usize::MAX)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let joints = (0..=lod.joints())
+            .map(|j| measure(Detail::new(0, j)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((levels, joints))
+    }
+}
+
+/// Removes repeated rank triples from the hybrid schedule: when the rank range between two keys is too
+/// narrow for the number of accuracy levels asked for, several levels get the same ranks. A truncation
+/// whose ranks equal a later key's is dropped in favour of that key (ALS beats truncation at equal
+/// size), and of consecutive equal levels the first is kept.
+fn distinct_levels(levels: &[hosvd_als::AccuracyLevel]) -> Vec<hosvd_als::AccuracyLevel> {
+    let mut out: Vec<hosvd_als::AccuracyLevel> = Vec::with_capacity(levels.len());
+    for (i, level) in levels.iter().enumerate() {
+        let later_same = levels[i + 1..]
+            .iter()
+            .any(|m| m.ranks == level.ranks && m.key != level.key);
+        let repeats = out.last().is_some_and(|prev| prev.ranks == level.ranks);
+        if !later_same && !repeats {
+            out.push(*level);
+        }
+    }
+    out
+}
+
+/// Mean of every row over all poses: root and (scaled) time rows arithmetic means, joint rows the
+/// exp-map of the layout's rest (mean) rotation, so that rows which are not evaluated hold what the
+/// runtime forward kinematics uses for inactive joints.
+fn mean_rows(tensor: &Tensor3, layout: &PoseLayout) -> Vec<f64> {
+    let [p, t, s] = tensor.dims();
+    let mut mean = vec![0.0; p];
+    for pose in tensor.as_slice().chunks_exact(p) {
+        for (m, v) in mean.iter_mut().zip(pose) {
+            *m += v;
+        }
+    }
+    for m in &mut mean {
+        *m /= (t * s) as f64;
+    }
+    let rest = layout.rest_pose();
+    mean[TIME_ROW + 1..].copy_from_slice(&rest[TIME_ROW + 1..]);
+    mean
+}

@@ -1,0 +1,99 @@
+//! `motion-lod build DIR... -o model.mlod`: build the multilinear model and write the model file.
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+use clap::Args;
+use motion_lod::progress::{BarProgress, NoProgress, Progress};
+use motion_lod::{BuildConfig, MotionModel};
+
+use super::data::{DataArgs, load};
+
+/// Model settings shared by `build` and `eval`.
+#[derive(Debug, Clone, Args)]
+pub struct ModelArgs {
+    /// Key levels N (paper: 10).
+    #[arg(long, default_value_t = BuildConfig::default().key_levels)]
+    pub levels: usize,
+    /// Accuracy levels N_A (at least N); levels between keys are truncations of the larger key.
+    #[arg(long, default_value_t = BuildConfig::default().accuracy_levels)]
+    pub accuracy_levels: usize,
+    /// Ranks (R_P, R_T, R_S) of the first key level, clamped to the data (paper: 40,40,60).
+    #[arg(long, value_parser = parse_ranks, default_value = "40,40,60")]
+    pub max_ranks: [usize; 3],
+    /// Ranks of the last key level (paper: 7,7,9).
+    #[arg(long, value_parser = parse_ranks, default_value = "7,7,9")]
+    pub min_ranks: [usize; 3],
+}
+
+impl ModelArgs {
+    /// The build configuration these options describe.
+    pub fn config(&self) -> BuildConfig {
+        BuildConfig {
+            key_levels: self.levels,
+            accuracy_levels: self.accuracy_levels,
+            max_ranks: self.max_ranks,
+            min_ranks: self.min_ranks,
+            ..BuildConfig::default()
+        }
+    }
+}
+
+/// Parses `a,b,c` into a rank triple.
+pub fn parse_ranks(s: &str) -> Result<[usize; 3], String> {
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|x| x.trim().parse::<usize>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("`{s}`: {e} (expected three numbers like 40,40,60)"))?;
+    match v.as_slice() {
+        &[a, b, c] if a > 0 && b > 0 && c > 0 => Ok([a, b, c]),
+        _ => Err(format!(
+            "`{s}`: expected three positive numbers like 40,40,60"
+        )),
+    }
+}
+
+/// Arguments of `motion-lod build`.
+#[derive(Debug, Args)]
+pub struct BuildArgs {
+    /// Training data.
+    #[command(flatten)]
+    pub data: DataArgs,
+    /// Model settings.
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// The model file to write (written atomically).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// Print one JSON line (dimensions, levels, bytes) instead of the report.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Loads the data of `data` and builds a model with `model`'s settings (progress on stderr unless quiet).
+pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::Result<MotionModel> {
+    let spec = data.spec();
+    let loaded = load(&spec, quiet)?;
+    let bar = BarProgress::new(!quiet);
+    let progress: &dyn Progress = if quiet { &NoProgress } else { &bar };
+    let mut built = MotionModel::build(&loaded.training, &model.config(), progress)
+        .context("building the model")?;
+    built.report.data = Some(spec);
+    Ok(built)
+}
+
+/// Runs the subcommand.
+pub fn run(args: BuildArgs) -> anyhow::Result<()> {
+    let model = build_model(&args.data, &args.model, args.json)?;
+    model
+        .save(&args.output)
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    if args.json {
+        println!("{}", serde_json::to_string(&super::info::summary(&model))?);
+    } else {
+        super::info::print(&mut std::io::stdout().lock(), &model)?;
+        println!("wrote {}", args.output.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,110 @@
+//! Options shared by every subcommand that reads training data (`cycles`, `build`, `eval`, `crowd`).
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use motion_lod::dataset::{AlignSpec, DataSpec, LoadedData, Preset};
+use timewarp::DtwConfig;
+
+/// Time alignment of the cycles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AlignArg {
+    /// Dynamic time warping against the medoid cycle.
+    Dtw,
+    /// Uniform time scaling between the cycle's first and last frame.
+    Uniform,
+}
+
+/// Contact detection and cycle selection settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PresetArg {
+    /// Defaults tuned on the Bandai data set.
+    Default,
+    /// CMU (cgspeed) conversions: ignore the first 0.1 s, looser floor height.
+    Cmu,
+}
+
+/// Where the training data comes from and how it is aligned.
+#[derive(Debug, Clone, Args)]
+pub struct DataArgs {
+    /// Folders of BVH takes (all of one skeleton); without any, the embedded default data set.
+    #[arg(value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Aligned frames per cycle, T (default: the median cycle length in frames).
+    #[arg(long, value_name = "T")]
+    pub frames: Option<usize>,
+    /// Time alignment method.
+    #[arg(long, value_enum, default_value_t = AlignArg::Dtw)]
+    pub align: AlignArg,
+    /// DTW band, as a fraction of the cycle length.
+    #[arg(long, default_value_t = DtwConfig::default().band)]
+    pub band: f64,
+    /// DTW slope limit: at most this many consecutive steps along one cycle.
+    #[arg(long, default_value_t = DtwConfig::default().max_slope)]
+    pub max_slope: usize,
+    /// Contact detection preset.
+    #[arg(long, value_enum, default_value_t = PresetArg::Default)]
+    pub preset: PresetArg,
+    /// Use a random subset of N cycles (the paper used 186).
+    #[arg(long, value_name = "N")]
+    pub samples: Option<usize>,
+    /// Seed of the random subset.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+impl DataArgs {
+    /// The data specification these options describe.
+    pub fn spec(&self) -> DataSpec {
+        DataSpec {
+            dirs: self.dirs.clone(),
+            frames: self.frames,
+            align: match self.align {
+                AlignArg::Dtw => AlignSpec::Dtw {
+                    band: self.band,
+                    max_slope: self.max_slope,
+                },
+                AlignArg::Uniform => AlignSpec::Uniform,
+            },
+            preset: match self.preset {
+                PresetArg::Default => Preset::Default,
+                PresetArg::Cmu => Preset::Cmu,
+            },
+            samples: self.samples,
+            seed: self.seed,
+        }
+    }
+}
+
+/// A progress bar on standard error (hidden when `quiet`).
+pub fn bar(quiet: bool) -> anyhow::Result<ProgressBar> {
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr())
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{msg:12} [{bar:40}] {pos}/{len}")
+            .context("progress bar template")?,
+    );
+    Ok(bar)
+}
+
+/// Loads and aligns the data of `spec` with a progress bar; warns about skipped files on stderr.
+pub fn load(spec: &DataSpec, quiet: bool) -> anyhow::Result<LoadedData> {
+    let bar = bar(quiet)?;
+    bar.set_message("takes");
+    let loaded = spec
+        .load(&|_, total| {
+            bar.set_length(total as u64);
+            bar.inc(1);
+        })
+        .with_context(|| format!("loading {}", spec.describe()))?;
+    bar.finish_and_clear();
+    for f in &loaded.cycles.failed {
+        eprintln!("warning: skipped {}: {}", f.path.display(), f.error);
+    }
+    Ok(loaded)
+}

@@ -1,0 +1,277 @@
+//! Leave-one-out evaluation of the multilinear model against the alternatives (paper section 5.1).
+//!
+//! Every method predicts a held-out sample as a linear blend of the other samples' representations, so
+//! each is a leave-one-out weight matrix `W` (S x S, zero diagonal, row `i` = the weights that predict
+//! sample `i` from the others) applied to a representation of the samples:
+//!
+//! | method | `W` | samples blended |
+//! |---|---|---|
+//! | `multilinear` (per key level) | universal kriging (eq. 8), trend refitted without `i` | the level's Tucker reconstruction, `Z x1 U_P x2 U_T x3 (W U_S)` |
+//! | `naive-kriging` | the same | the raw aligned samples |
+//! | `pca` | the same | the samples projected on the first `R_P` principal DOF directions |
+//! | `rbf` | RBF with a linear polynomial (Rose et al.), refitted without `i` | the raw aligned samples |
+//! | `nearest` | 1 at the nearest other sample in scaled control space | the raw aligned samples |
+//!
+//! The kriging variogram and the control scaling stay those fitted on all samples (closed-form
+//! leave-one-out, see `kriging::Kriging::loo_errors`). The error of a prediction is the project's metric
+//! ([`crate::metrics`]): mean joint position error in cm over the `T` aligned frames, against the held-out
+//! sample.
+
+use faer::{Mat, MatRef};
+use hosvd_als::Tucker;
+use kriging::{Kriging, KrigingConfig, ModelChoice, Rbf, RbfConfig, ScalingChoice};
+use serde::{Deserialize, Serialize};
+use tensor_ops::Tensor3;
+
+use crate::build::{Analysis, BuildError};
+use crate::metrics::ErrorMeter;
+use crate::progress::Progress;
+
+/// Settings of [`leave_one_out`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct EvalConfig {
+    /// Principal DOF directions kept by the PCA baseline (the paper: 40), clamped to `P`.
+    pub pca_rank: usize,
+    /// Evaluate at most this many held-out samples (evenly strided); all when `None`.
+    pub max_samples: Option<usize>,
+}
+
+impl Default for EvalConfig {
+    fn default() -> Self {
+        EvalConfig {
+            pca_rank: 40,
+            max_samples: None,
+        }
+    }
+}
+
+/// The error of one method.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MethodError {
+    /// `multilinear`, `naive-kriging`, `rbf`, `pca` or `nearest`.
+    pub name: String,
+    /// Accuracy level (multilinear only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub level: Option<usize>,
+    /// Ranks `(R_P, R_T, R_S)` of that level (multilinear only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ranks: Option<[usize; 3]>,
+    /// Mean joint position error over the held-out samples (cm).
+    pub error_cm: f64,
+    /// Largest shell error over the held-out samples (cm).
+    pub shell_cm: f64,
+    /// Bytes the method keeps to synthesize, in f64.
+    pub bytes: usize,
+}
+
+/// The result of [`leave_one_out`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EvalReport {
+    /// Samples `S`.
+    pub samples: usize,
+    /// Held-out samples evaluated.
+    pub evaluated: usize,
+    /// The aligned samples in f64, `P T S x 8`.
+    pub raw_bytes: usize,
+    /// Everything the hybrid model keeps, in f64.
+    pub model_bytes: usize,
+    /// One entry per method (multilinear once per key level).
+    pub methods: Vec<MethodError>,
+}
+
+/// `W = I - E(I)`: leave-one-out weights from the leave-one-out errors of the identity values.
+fn loo_weights_from_errors(errors: MatRef<'_, f64>) -> Mat<f64> {
+    let s = errors.nrows();
+    Mat::from_fn(s, s, |i, j| if i == j { 0.0 } else { -errors[(i, j)] })
+}
+
+/// Leave-one-out weights of universal kriging with the analysis's variogram and scaling.
+fn kriging_loo_weights(analysis: &Analysis) -> Result<Mat<f64>, BuildError> {
+    let k = &analysis.kriging;
+    let s = k.n_samples();
+    let params = Mat::from_fn(s, analysis.controls[0].len(), |i, d| {
+        analysis.controls[i][d]
+    });
+    let config = KrigingConfig {
+        model: ModelChoice::Given(*k.variogram()),
+        scaling: ScalingChoice::Given(k.scaling().clone()),
+        ..KrigingConfig::default()
+    };
+    let identity = Mat::<f64>::identity(s, s);
+    let fit = Kriging::fit(params.as_ref(), identity.as_ref(), &config)?;
+    Ok(loo_weights_from_errors(fit.loo_errors()?.as_ref()))
+}
+
+/// Leave-one-out weights of the RBF baseline.
+fn rbf_loo_weights(analysis: &Analysis) -> Result<Mat<f64>, BuildError> {
+    let k = &analysis.kriging;
+    let s = k.n_samples();
+    let params = Mat::from_fn(s, analysis.controls[0].len(), |i, d| {
+        analysis.controls[i][d]
+    });
+    let config = RbfConfig {
+        scaling: ScalingChoice::Given(k.scaling().clone()),
+        ..RbfConfig::default()
+    };
+    let identity = Mat::<f64>::identity(s, s);
+    let fit = Rbf::fit(params.as_ref(), identity.as_ref(), &config)?;
+    Ok(loo_weights_from_errors(fit.loo_errors()?.as_ref()))
+}
+
+/// Nearest other sample in scaled control space (ties: the lower index).
+fn nearest_weights(analysis: &Analysis) -> Mat<f64> {
+    let c = analysis.kriging.scaled_params();
+    let s = c.nrows();
+    let mut w = Mat::zeros(s, s);
+    for i in 0..s {
+        let mut best = (f64::INFINITY, i);
+        for j in (0..s).filter(|&j| j != i) {
+            let d: f64 = (0..c.ncols())
+                .map(|k| (c[(i, k)] - c[(j, k)]).powi(2))
+                .sum();
+            if d < best.0 {
+                best = (d, j);
+            }
+        }
+        if best.1 != i {
+            w[(i, best.1)] = 1.0;
+        }
+    }
+    w
+}
+
+/// `X x3 W` for a `P x T x S` tensor seen as the `(P T) x S` matrix of its samples: sample `i` of the
+/// result is `sum_j W[i, j] X_j`.
+fn blend_samples(x: &Tensor3, w: MatRef<'_, f64>) -> Tensor3 {
+    x.mode_product(2, w)
+}
+
+/// The samples projected on the first `rank` principal directions of the DOF mode (PCA of the mode-0
+/// unfolding, without centring, as the paper's matrix SVD).
+fn pca_projection(x: &Tensor3, rank: usize) -> Result<Tensor3, BuildError> {
+    let [p, _, _] = x.dims();
+    let r = rank.clamp(1, p);
+    let full = hosvd_als::hosvd(x, [r, x.dims()[1], x.dims()[2]])?;
+    let u = full.factors[0].as_ref();
+    let proj = u * u.transpose();
+    Ok(x.mode_product(0, proj.as_ref()))
+}
+
+/// Mean joint and largest shell error of the first `evaluated` predicted samples (by stride) against
+/// the analysis's samples.
+fn score(analysis: &Analysis, predicted: &Tensor3, stride: usize) -> (f64, f64) {
+    let mut meter = ErrorMeter::new(&analysis.layout);
+    let s = analysis.tensor.dims()[2];
+    for i in (0..s).step_by(stride) {
+        meter.compare_sequences(analysis.tensor.sample(i), predicted.sample(i));
+    }
+    let e = meter.total();
+    (e.mean_joint_cm, e.shell_cm)
+}
+
+/// Reconstruction of every sample at a multilinear level from the leave-one-out sample weights:
+/// `Z x1 U_P x2 U_T x3 (W U_S)`.
+fn multilinear_prediction(tucker: &Tucker, w: MatRef<'_, f64>) -> Tensor3 {
+    let u_s = w * tucker.factors[2].as_ref();
+    tensor_ops::reconstruct(
+        &tucker.core,
+        [
+            tucker.factors[0].as_ref(),
+            tucker.factors[1].as_ref(),
+            u_s.as_ref(),
+        ],
+    )
+}
+
+/// Leave-one-out errors of every method on the analysis's samples (see the module documentation).
+pub fn leave_one_out(
+    analysis: &Analysis,
+    model_bytes: usize,
+    key_bytes: &[usize],
+    config: &EvalConfig,
+    progress: &dyn Progress,
+) -> Result<EvalReport, BuildError> {
+    let x = &analysis.tensor;
+    let [p, t, s] = x.dims();
+    let raw_bytes = p * t * s * 8;
+    let stride = config
+        .max_samples
+        .map_or(1, |m| s.div_ceil(m.max(1)).max(1));
+    let evaluated = (0..s).step_by(stride).count();
+    let keys = &analysis.keys.levels;
+    progress.stage("leave-one-out", (keys.len() + 4) as u64);
+    let w_krig = kriging_loo_weights(analysis)?;
+    let mut methods = Vec::new();
+    for (k, key) in keys.iter().enumerate() {
+        let level = analysis
+            .levels
+            .iter()
+            .position(|l| l.key == k && l.ranks == key.ranks);
+        let (error_cm, shell_cm) = score(
+            analysis,
+            &multilinear_prediction(&key.tucker, w_krig.as_ref()),
+            stride,
+        );
+        methods.push(MethodError {
+            name: "multilinear".into(),
+            level,
+            ranks: Some(key.ranks),
+            error_cm,
+            shell_cm,
+            bytes: key_bytes.get(k).copied().unwrap_or(0),
+        });
+        progress.inc(1);
+    }
+    let naive = blend_samples(x, w_krig.as_ref());
+    let (error_cm, shell_cm) = score(analysis, &naive, stride);
+    methods.push(MethodError {
+        name: "naive-kriging".into(),
+        level: None,
+        ranks: None,
+        error_cm,
+        shell_cm,
+        bytes: raw_bytes,
+    });
+    progress.inc(1);
+    let w_rbf = rbf_loo_weights(analysis)?;
+    let (error_cm, shell_cm) = score(analysis, &blend_samples(x, w_rbf.as_ref()), stride);
+    methods.push(MethodError {
+        name: "rbf".into(),
+        level: None,
+        ranks: None,
+        error_cm,
+        shell_cm,
+        bytes: raw_bytes,
+    });
+    progress.inc(1);
+    let r_pca = config.pca_rank.clamp(1, p);
+    let pca = pca_projection(x, r_pca)?;
+    let (error_cm, shell_cm) = score(analysis, &blend_samples(&pca, w_krig.as_ref()), stride);
+    methods.push(MethodError {
+        name: "pca".into(),
+        level: None,
+        ranks: Some([r_pca, t, s]),
+        error_cm,
+        shell_cm,
+        bytes: (r_pca * t * s + p * r_pca) * 8,
+    });
+    progress.inc(1);
+    let w_nn = nearest_weights(analysis);
+    let (error_cm, shell_cm) = score(analysis, &blend_samples(x, w_nn.as_ref()), stride);
+    methods.push(MethodError {
+        name: "nearest".into(),
+        level: None,
+        ranks: None,
+        error_cm,
+        shell_cm,
+        bytes: raw_bytes,
+    });
+    progress.inc(1);
+    Ok(EvalReport {
+        samples: s,
+        evaluated,
+        raw_bytes,
+        model_bytes,
+        methods,
+    })
+}

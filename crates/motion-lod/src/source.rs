@@ -1,0 +1,236 @@
+//! [`crowd_sim::ClipSource`] for the multilinear model ([`LodSource`]).
+//!
+//! Joint positions handed to the crowd are the root followed by the rotating joints in the model's
+//! importance order, so that a walker with `k` active joints draws the root and its `k` most important
+//! joints (the paper's joint-DOF reduction, section 4.3). Bones connect each of those joints to its
+//! nearest ancestor in that list.
+
+use crowd_sim::{
+    ClipSource, ControlBounds, Controls, Detail as CrowdDetail, LevelTable, RootMotion,
+};
+use glam::{Quat, Vec3};
+use lod_policy::{ClipKernel, Detail, KernelScratch};
+use motion_io::PoseLayout;
+use std::sync::Mutex;
+
+use crate::model::MotionModel;
+
+/// Largest skeleton handled without allocation in [`ClipSource::joints`].
+const MAX_JOINTS: usize = 128;
+
+/// Heading (yaw about +y, radians) of a root orientation given as an exponential map; 0 = facing +z,
+/// positive = turned left (towards +x).
+pub fn heading_of_exp_map(v: [f32; 3]) -> f32 {
+    let axis = Vec3::from_array(v);
+    let angle = axis.length();
+    let q = if angle > 1e-12 {
+        Quat::from_axis_angle(axis / angle, angle)
+    } else {
+        Quat::IDENTITY
+    };
+    let f = q * Vec3::Z;
+    f.x.atan2(f.z)
+}
+
+/// Bones between the root and the rotating joints of `layout`, as indices into the crowd's joint list
+/// (0 = root, `1 + k` = k-th rotating joint in row order).
+pub fn bones_of(layout: &PoseLayout) -> Vec<(usize, usize)> {
+    let sk = layout.skeleton();
+    let mut slot = vec![usize::MAX; sk.joints.len()];
+    slot[layout.root()] = 0;
+    for (k, &j) in layout.joint_order().iter().enumerate() {
+        slot[j] = 1 + k;
+    }
+    let mut bones = Vec::new();
+    for &j in layout.joint_order() {
+        let mut a = sk.joints[j].parent;
+        while let Some(p) = a {
+            if slot[p] != usize::MAX {
+                bones.push((slot[p].min(slot[j]), slot[p].max(slot[j])));
+                break;
+            }
+            a = sk.joints[p].parent;
+        }
+    }
+    bones.sort_unstable();
+    bones
+}
+
+/// One walker's clip: the kernel and what the crowd asks of it without recomputing.
+#[derive(Debug, Clone)]
+pub struct LodClip {
+    kernel: ClipKernel,
+    duration: f32,
+    root_motion: RootMotion,
+}
+
+/// The multilinear model as a crowd clip source.
+#[derive(Debug)]
+pub struct LodSource<'m> {
+    model: &'m MotionModel,
+    bones: Vec<(usize, usize)>,
+    /// Scratch for kernel builds, one per rayon worker would be ideal; kernels are built inside the
+    /// crowd's parallel loop, so each call takes a scratch from this pool.
+    scratch: Mutex<Vec<KernelScratch>>,
+}
+
+impl<'m> LodSource<'m> {
+    /// A source over `model`.
+    pub fn new(model: &'m MotionModel) -> LodSource<'m> {
+        LodSource {
+            model,
+            bones: bones_of(&model.layout),
+            scratch: Mutex::new(Vec::new()),
+        }
+    }
+
+    fn with_scratch<R>(&self, f: impl FnOnce(&mut KernelScratch) -> R) -> R {
+        let taken = self.scratch.lock().unwrap_or_else(|e| e.into_inner()).pop();
+        let mut s = taken.unwrap_or_else(|| KernelScratch::new(&self.model.lod));
+        let r = f(&mut s);
+        self.scratch
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(s);
+        r
+    }
+}
+
+/// Converts a crowd detail into the model's (`active_joints` 0 is root only at the smallest level).
+pub fn model_detail(d: CrowdDetail) -> Detail {
+    if d.active_joints == 0 {
+        Detail::root_only()
+    } else {
+        Detail::new(d.accuracy, d.active_joints)
+    }
+}
+
+impl ClipSource for LodSource<'_> {
+    type Clip = LodClip;
+
+    fn levels(&self) -> LevelTable {
+        LevelTable {
+            accuracy_levels: self.model.lod.levels().len(),
+            joints: self.model.lod.joints(),
+            pose_len: self.model.lod.p(),
+        }
+    }
+
+    fn control_bounds(&self) -> ControlBounds {
+        let r = self.model.control_range();
+        let c = |i: usize| (r[i].0, r[i].1);
+        ControlBounds {
+            min: Controls {
+                dx: c(0).0,
+                dz: c(1).0,
+                turn: c(2).0,
+                height: c(3).0,
+            },
+            max: Controls {
+                dx: c(0).1,
+                dz: c(1).1,
+                turn: c(2).1,
+                height: c(3).1,
+            },
+        }
+    }
+
+    fn new_clip(&self) -> LodClip {
+        LodClip {
+            kernel: ClipKernel::new(&self.model.lod),
+            duration: 1.0,
+            root_motion: RootMotion::default(),
+        }
+    }
+
+    fn build_clip(&self, controls: &Controls, detail: CrowdDetail, clip: &mut LodClip) {
+        let c = [controls.dx, controls.dz, controls.turn, controls.height];
+        let lod = &self.model.lod;
+        let built =
+            self.with_scratch(|s| lod.build_kernel(&c, model_detail(detail), s, &mut clip.kernel));
+        if built.is_err() {
+            // The crowd clamps controls and levels into the ranges this source reports, so this is
+            // unreachable for well-formed crowds; fall back to the root-only clip at the same
+            // controls, clamped, rather than leaving a stale kernel.
+            let mid = self.control_bounds().clamp(controls);
+            let c = [mid.dx, mid.dz, mid.turn, mid.height];
+            let _ = self
+                .with_scratch(|s| lod.build_kernel(&c, Detail::root_only(), s, &mut clip.kernel));
+        }
+        clip.duration = (clip.kernel.duration() as f32).max(1e-3);
+        // Root motion over the whole clip: the root at the last aligned frame, in the cycle frame.
+        let mut end = [0.0f32; 7];
+        let mut start = [0.0f32; 7];
+        let t = lod.t() as f32;
+        let ok = lod.pose_rows(&clip.kernel, t - 1.0, &mut end).is_ok()
+            && lod.pose_rows(&clip.kernel, 0.0, &mut start).is_ok();
+        clip.root_motion = if ok {
+            let turn = heading_of_exp_map([end[3], end[4], end[5]])
+                - heading_of_exp_map([start[3], start[4], start[5]]);
+            RootMotion {
+                dx: end[0],
+                dz: end[2],
+                turn: wrap_pi(turn),
+            }
+        } else {
+            RootMotion::default()
+        };
+    }
+
+    fn clip_duration(&self, clip: &LodClip) -> f32 {
+        clip.duration
+    }
+
+    fn clip_root_motion(&self, clip: &LodClip) -> RootMotion {
+        clip.root_motion
+    }
+
+    fn pose(&self, clip: &LodClip, t_seconds: f32, out: &mut [f32]) -> usize {
+        let lod = &self.model.lod;
+        let phase = clip.kernel.phase_at(f64::from(t_seconds));
+        let p = lod.p();
+        match lod.pose(&clip.kernel, phase, &mut out[..p]) {
+            Ok(()) => clip.kernel.rows(),
+            Err(_) => 0,
+        }
+    }
+
+    fn joints(&self, clip: &LodClip, pose: &[f32], out: &mut [Vec3]) -> usize {
+        let layout = &self.model.layout;
+        let active = clip.kernel.detail().active_joints.min(layout.joint_count());
+        if active == 0 {
+            out[0] = Vec3::new(pose[0], pose[1], pose[2]);
+            return 1;
+        }
+        let nj = layout.skeleton().joints.len();
+        let mut world = [Vec3::ZERO; MAX_JOINTS];
+        let mut heap = Vec::new();
+        let world: &mut [Vec3] = if nj <= MAX_JOINTS {
+            &mut world[..nj]
+        } else {
+            heap.resize(nj, Vec3::ZERO);
+            &mut heap
+        };
+        layout.joint_positions(pose, active, world);
+        out[0] = world[layout.root()];
+        for (k, &j) in layout.joint_order().iter().take(active).enumerate() {
+            out[1 + k] = world[j];
+        }
+        1 + active
+    }
+
+    fn bones(&self) -> &[(usize, usize)] {
+        &self.bones
+    }
+}
+
+/// Wraps an angle into `(-pi, pi]`.
+fn wrap_pi(a: f32) -> f32 {
+    let tau = std::f32::consts::TAU;
+    let w = a - tau * (a / tau).round();
+    if w <= -std::f32::consts::PI {
+        w + tau
+    } else {
+        w
+    }
+}
