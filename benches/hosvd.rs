@@ -14,15 +14,31 @@ fn bench(c: &mut Criterion) {
     let x = decaying_tucker(DIMS, [60, 60, 90], 6.0, 0.01, 1).expect("synthetic tensor");
     let mut g = c.benchmark_group("hosvd_94x100x186");
     g.sample_size(10);
-    g.bench_function("hosvd_truncated_40_40_60", |b| b.iter(|| hosvd(black_box(&x), [40, 40, 60]).unwrap()));
-    g.bench_function("hosvd_full", |b| b.iter(|| hosvd_full(black_box(&x)).unwrap()));
-    let opts = AlsOptions { tol: 1e-8, max_iter: 100 };
-    g.bench_function("hooi_40_40_60_tol1e-8", |b| b.iter(|| hooi(black_box(&x), [40, 40, 60], &opts).unwrap()));
+    g.bench_function("hosvd_truncated_40_40_60", |b| {
+        b.iter(|| hosvd(black_box(&x), [40, 40, 60]).unwrap())
+    });
+    g.bench_function("hosvd_full", |b| {
+        b.iter(|| hosvd_full(black_box(&x)).unwrap())
+    });
+    let opts = AlsOptions {
+        tol: 1e-8,
+        max_iter: 100,
+    };
+    g.bench_function("hooi_40_40_60_tol1e-8", |b| {
+        b.iter(|| hooi(black_box(&x), [40, 40, 60], &opts).unwrap())
+    });
     // A fixed amount of work per run: 10 sweeps regardless of convergence.
-    let ten = AlsOptions { tol: 0.0, max_iter: 10 };
-    g.bench_function("hooi_40_40_60_10_sweeps", |b| b.iter(|| hooi(black_box(&x), [40, 40, 60], &ten).unwrap()));
+    let ten = AlsOptions {
+        tol: 0.0,
+        max_iter: 10,
+    };
+    g.bench_function("hooi_40_40_60_10_sweeps", |b| {
+        b.iter(|| hooi(black_box(&x), [40, 40, 60], &ten).unwrap())
+    });
     let cfg = KeySearchConfig::default();
-    g.bench_function("key_levels_10_from_40_40_60_to_7_7_9", |b| b.iter(|| key_levels(black_box(&x), &cfg).unwrap()));
+    g.bench_function("key_levels_10_from_40_40_60_to_7_7_9", |b| {
+        b.iter(|| key_levels(black_box(&x), &cfg).unwrap())
+    });
     g.finish();
 }
 

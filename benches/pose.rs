@@ -15,7 +15,10 @@ const D: usize = 3;
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
     }
     fn vec(&mut self, n: usize, scale: f32) -> Vec<f32> {
@@ -35,7 +38,13 @@ fn paper_model() -> LodModel {
     };
     let (big, small) = (Ranks::new(40, 40, 60), Ranks::new(7, 7, 9));
     let keys = vec![key(&mut rng, big), key(&mut rng, small)];
-    let levels = vec![AccuracyLevel { key: 0, ranks: big }, AccuracyLevel { key: 1, ranks: small }];
+    let levels = vec![
+        AccuracyLevel { key: 0, ranks: big },
+        AccuracyLevel {
+            key: 1,
+            ranks: small,
+        },
+    ];
     let raw = rng.vec(S * D, 1.0);
     let variogram = Variogram::new(VariogramModel::Exponential, 0.05, 1.0, 1.5, 1.0).unwrap();
     let controls = ControlSpace::from_raw(variogram, &raw, S, vec![0.0; D], vec![1.0; D]).unwrap();
@@ -77,7 +86,9 @@ fn bench_pose(c: &mut Criterion) {
                     .unwrap();
             })
         });
-        model.build_kernel(&controls, detail, &mut scratch, &mut kernel).unwrap();
+        model
+            .build_kernel(&controls, detail, &mut scratch, &mut kernel)
+            .unwrap();
         let mut phase = 0.0f32;
         group.bench_function(format!("pose/{name}"), |b| {
             b.iter(|| {

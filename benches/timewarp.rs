@@ -64,7 +64,9 @@ fn bench_timewarp(c: &mut Criterion) {
     .unwrap();
     let aligned = &al.aligned[0];
     let mut table = TimeTable::with_capacity(33);
-    let incs: Vec<f64> = (0..33).map(|k| aligned.frame(k)[al.increment_col]).collect();
+    let incs: Vec<f64> = (0..33)
+        .map(|k| aligned.frame(k)[al.increment_col])
+        .collect();
     c.bench_function("timewarp/time_table_fill_and_60_phases", |bench| {
         bench.iter(|| {
             table.fill_from(black_box(&incs));
@@ -78,7 +80,14 @@ fn bench_timewarp(c: &mut Criterion) {
     let mut out = FrameSeq::zeros(60, 0);
     c.bench_function("timewarp/playback_cycle_at_60fps", |bench| {
         bench.iter(|| {
-            playback_into(black_box(aligned), al.increment_col, 60.0, &mut table, &mut out).unwrap()
+            playback_into(
+                black_box(aligned),
+                al.increment_col,
+                60.0,
+                &mut table,
+                &mut out,
+            )
+            .unwrap()
         })
     });
 }

@@ -299,7 +299,11 @@ impl Analysis {
     }
 
     /// Step 5: the runtime model (level errors not yet measured).
-    pub fn runtime_model(&self, progress: &dyn Progress) -> Result<MotionModel, BuildError> {
+    pub fn runtime_model(
+        &self,
+        config: &BuildConfig,
+        progress: &dyn Progress,
+    ) -> Result<MotionModel, BuildError> {
         let [p, t, s] = self.tensor.dims();
         let krig = &self.kriging;
         let kriging_rows = col_major(krig.system_inverse().subrows(0, s));
@@ -385,6 +389,7 @@ impl Analysis {
                 kriging_loo_rmse: None,
                 seconds: 0.0,
                 data: None,
+                config: config.clone(),
             },
         })
     }
@@ -408,7 +413,7 @@ impl MotionModel {
     ) -> Result<(MotionModel, Analysis), BuildError> {
         let started = Instant::now();
         let analysis = Analysis::run(set, config, progress)?;
-        let mut model = analysis.runtime_model(progress)?;
+        let mut model = analysis.runtime_model(config, progress)?;
         // 6. Measured errors of every accuracy level and joint count.
         progress.stage("level errors", 1);
         let (level_errors, joint_errors) =

@@ -20,18 +20,22 @@
 //! ```
 
 pub mod build;
+pub mod crowd;
 pub mod dataset;
 pub mod eval;
 pub mod importance;
 pub mod metrics;
 pub mod model;
 pub mod model_file;
+pub mod naive;
 pub mod progress;
 pub mod source;
 pub mod storage;
+pub mod synth;
 
 pub use build::{Analysis, BuildConfig, BuildError, TrainingSet};
 pub use model::{BuildReport, CONTROL_NAMES, Evaluator, MotionModel, TIME_ROW};
+pub use naive::NaiveSource;
 pub use source::LodSource;
 
 /// The runtime crates, re-exported so that an engine can depend on this crate alone.

@@ -22,6 +22,14 @@ enum Command {
     Build(cli::build::BuildArgs),
     /// Show a model's dimensions, levels, errors and storage.
     Info(cli::info::InfoArgs),
+    /// Leave-one-out error of the model at each key level against naive kriging, RBF, PCA and nearest.
+    Eval(cli::eval::EvalArgs),
+    /// Synthesize a walk for given controls and write it as a BVH file.
+    Synth(cli::synth::SynthArgs),
+    /// Animate a crowd with the model's level of detail; time it, render it, compare with naive.
+    Crowd(cli::crowd::CrowdArgs),
+    /// The main job on the embedded data: build, run 1,000 walkers for 10 s, render, report.
+    Demo(cli::demo::DemoArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -30,5 +38,9 @@ fn main() -> anyhow::Result<()> {
         Command::Cycles(args) => cli::cycles::run(args),
         Command::Build(args) => cli::build::run(args),
         Command::Info(args) => cli::info::run(args),
+        Command::Eval(args) => cli::eval::run(args),
+        Command::Synth(args) => cli::synth::run(args),
+        Command::Crowd(args) => cli::crowd::run(args),
+        Command::Demo(args) => cli::demo::run(args),
     }
 }

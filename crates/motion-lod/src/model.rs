@@ -57,6 +57,8 @@ pub struct BuildReport {
     pub seconds: f64,
     /// Where the training data came from (set by the command line; `None` for in-memory data).
     pub data: Option<crate::dataset::DataSpec>,
+    /// The settings the model was built with.
+    pub config: crate::build::BuildConfig,
 }
 
 /// The multilinear motion model with level-of-detail controls.

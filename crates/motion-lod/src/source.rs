@@ -96,6 +96,37 @@ impl<'m> LodSource<'m> {
     }
 }
 
+/// Forward kinematics of `pose` into the crowd's joint list: the root, then the first `active` rotating
+/// joints in row order (cycle-frame positions in metres); returns how many were written. Allocation-free
+/// for skeletons up to 128 joints.
+pub(crate) fn write_joints(
+    layout: &PoseLayout,
+    pose: &[f32],
+    active: usize,
+    out: &mut [Vec3],
+) -> usize {
+    let active = active.min(layout.joint_count());
+    if active == 0 {
+        out[0] = Vec3::new(pose[0], pose[1], pose[2]);
+        return 1;
+    }
+    let nj = layout.skeleton().joints.len();
+    let mut stack = [Vec3::ZERO; MAX_JOINTS];
+    let mut heap = Vec::new();
+    let world: &mut [Vec3] = if nj <= MAX_JOINTS {
+        &mut stack[..nj]
+    } else {
+        heap.resize(nj, Vec3::ZERO);
+        &mut heap
+    };
+    layout.joint_positions(pose, active, world);
+    out[0] = world[layout.root()];
+    for (k, &j) in layout.joint_order().iter().take(active).enumerate() {
+        out[1 + k] = world[j];
+    }
+    1 + active
+}
+
 /// Converts a crowd detail into the model's (`active_joints` 0 is root only at the smallest level).
 pub fn model_detail(d: CrowdDetail) -> Detail {
     if d.active_joints == 0 {
@@ -196,27 +227,12 @@ impl ClipSource for LodSource<'_> {
     }
 
     fn joints(&self, clip: &LodClip, pose: &[f32], out: &mut [Vec3]) -> usize {
-        let layout = &self.model.layout;
-        let active = clip.kernel.detail().active_joints.min(layout.joint_count());
-        if active == 0 {
-            out[0] = Vec3::new(pose[0], pose[1], pose[2]);
-            return 1;
-        }
-        let nj = layout.skeleton().joints.len();
-        let mut world = [Vec3::ZERO; MAX_JOINTS];
-        let mut heap = Vec::new();
-        let world: &mut [Vec3] = if nj <= MAX_JOINTS {
-            &mut world[..nj]
-        } else {
-            heap.resize(nj, Vec3::ZERO);
-            &mut heap
-        };
-        layout.joint_positions(pose, active, world);
-        out[0] = world[layout.root()];
-        for (k, &j) in layout.joint_order().iter().take(active).enumerate() {
-            out[1 + k] = world[j];
-        }
-        1 + active
+        write_joints(
+            &self.model.layout,
+            pose,
+            clip.kernel.detail().active_joints,
+            out,
+        )
     }
 
     fn bones(&self) -> &[(usize, usize)] {

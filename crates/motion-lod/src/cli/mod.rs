@@ -2,6 +2,10 @@
 //! line and dispatches to the `run` function of the chosen module.
 
 pub mod build;
+pub mod crowd;
 pub mod cycles;
 pub mod data;
+pub mod demo;
+pub mod eval;
 pub mod info;
+pub mod synth;

@@ -1,0 +1,242 @@
+//! `motion-lod crowd [MODEL] --walkers N --seconds S`: a crowd animated by the model, timed, optionally
+//! rendered and compared with naive interpolation.
+
+use std::path::PathBuf;
+
+use anyhow::{Context as _, bail};
+use clap::{Args, ValueEnum};
+use crowd_sim::{Camera, CrowdConfig, CrowdReport};
+use lod_policy::{DistancePolicy, ScreenSpacePolicy};
+use motion_lod::build::Analysis;
+use motion_lod::crowd::{CrowdRun, FullDetail, ModelPolicy, check_render_dir, run_crowd};
+use motion_lod::progress::NoProgress;
+use motion_lod::{LodSource, MotionModel, NaiveSource};
+use serde::Serialize;
+
+use super::data::load;
+
+/// Level-of-detail policy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PolicyArg {
+    /// The paper's distance schedule (30 m, 50 m per key level, one joint fewer per 10 m).
+    Distance,
+    /// The cheapest level whose measured error projects under the pixel budget.
+    Screen,
+}
+
+/// Arguments of `motion-lod crowd`.
+#[derive(Debug, Args)]
+pub struct CrowdArgs {
+    /// The model file (default: a model built from the embedded data set).
+    #[arg(value_name = "MODEL")]
+    pub model: Option<PathBuf>,
+    /// Number of walkers.
+    #[arg(long, default_value_t = 1000)]
+    pub walkers: usize,
+    /// Simulated seconds.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f32,
+    /// Walkers per square metre (sets the field size).
+    #[arg(long, default_value_t = 0.05)]
+    pub density: f32,
+    /// Frames per second of the simulation.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f32,
+    /// Seed of the walkers' paths.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Level-of-detail policy.
+    #[arg(long, value_enum, default_value_t = PolicyArg::Distance)]
+    pub policy: PolicyArg,
+    /// Animate with naive interpolation instead of the model (no level of detail).
+    #[arg(long, conflicts_with = "compare_naive")]
+    pub naive: bool,
+    /// Also run the naive source on the same crowd and print the speed ratio.
+    #[arg(long)]
+    pub compare_naive: bool,
+    /// Write PNG frames, top-down maps and a GIF here.
+    #[arg(long, value_name = "DIR")]
+    pub render: Option<PathBuf>,
+    /// Render every n-th frame.
+    #[arg(long, default_value_t = 30)]
+    pub render_every: usize,
+    /// Print one JSON line instead of the report.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct Fps {
+    worst: f64,
+    mean: f64,
+    best: f64,
+}
+
+impl From<&CrowdReport> for Fps {
+    fn from(r: &CrowdReport) -> Fps {
+        Fps {
+            worst: r.fps_worst,
+            mean: r.fps_mean,
+            best: r.fps_best,
+        }
+    }
+}
+
+#[derive(Debug, Serialize)]
+struct Summary {
+    walkers: usize,
+    frames: usize,
+    fps: Fps,
+    naive_fps: Option<Fps>,
+    ratio: Option<f64>,
+    levels: Vec<u32>,
+}
+
+/// The model to animate and, when the naive source is needed, the analysis it was built from.
+fn model_and_analysis(
+    path: Option<&PathBuf>,
+    need_analysis: bool,
+    quiet: bool,
+) -> anyhow::Result<(MotionModel, Option<Analysis>)> {
+    let model = match path {
+        Some(p) => MotionModel::load(p).with_context(|| format!("reading {}", p.display()))?,
+        None => {
+            let spec = motion_lod::dataset::DataSpec::default();
+            let loaded = load(&spec, quiet)?;
+            let config = motion_lod::BuildConfig::default();
+            let (mut model, analysis) =
+                MotionModel::build_with_analysis(&loaded.training, &config, &NoProgress)
+                    .context("building the model from the embedded data")?;
+            model.report.data = Some(spec);
+            return Ok((model, need_analysis.then_some(analysis)));
+        }
+    };
+    if !need_analysis {
+        return Ok((model, None));
+    }
+    let spec = model
+        .report
+        .data
+        .clone()
+        .context("the model does not record its training data, which the naive source needs")?;
+    let loaded = load(&spec, quiet)?;
+    let analysis = Analysis::run(&loaded.training, &model.report.config, &NoProgress)
+        .context("rebuilding the samples for the naive source")?;
+    Ok((model, Some(analysis)))
+}
+
+/// Runs the subcommand.
+pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
+    if args.walkers == 0 {
+        bail!("--walkers must be at least 1");
+    }
+    if !(args.density.is_finite() && args.density > 0.0) {
+        bail!("--density must be a positive number of walkers per square metre");
+    }
+    if let Some(dir) = &args.render {
+        check_render_dir(dir).with_context(|| format!("render folder {}", dir.display()))?;
+    }
+    let need_naive = args.naive || args.compare_naive;
+    let (model, analysis) = model_and_analysis(args.model.as_ref(), need_naive, args.json)?;
+    let run = CrowdRun {
+        config: CrowdConfig {
+            seed: args.seed,
+            fps: args.fps,
+            ..CrowdConfig::with_density(args.walkers, args.density)
+        },
+        seconds: args.seconds,
+        lens: Camera {
+            image_width: 960,
+            image_height: 540,
+            aspect: 960.0 / 540.0,
+            ..Camera::default()
+        },
+        render: args.render.clone().map(|d| (d, args.render_every)),
+    };
+    let lod = &model.lod;
+    let naive_run = CrowdRun {
+        render: None,
+        ..run.clone()
+    };
+    let (main, naive) = if args.naive {
+        let analysis = analysis.as_ref().context("naive source")?;
+        let source = NaiveSource::new(&model, analysis);
+        let outcome = run_crowd(
+            &source,
+            &FullDetail {
+                joints: lod.joints(),
+            },
+            &run,
+        )?;
+        (outcome, None)
+    } else {
+        let source = LodSource::new(&model);
+        let outcome = match args.policy {
+            PolicyArg::Distance => run_crowd(
+                &source,
+                &ModelPolicy::new(DistancePolicy::for_model(lod), lod),
+                &run,
+            )?,
+            PolicyArg::Screen => run_crowd(
+                &source,
+                &ModelPolicy::new(
+                    ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
+                    lod,
+                ),
+                &run,
+            )?,
+        };
+        let naive = match &analysis {
+            Some(a) if args.compare_naive => {
+                let source = NaiveSource::new(&model, a);
+                Some(run_crowd(
+                    &source,
+                    &FullDetail {
+                        joints: lod.joints(),
+                    },
+                    &naive_run,
+                )?)
+            }
+            _ => None,
+        };
+        (outcome, naive)
+    };
+    let ratio = naive
+        .as_ref()
+        .map(|n| main.report.fps_mean / n.report.fps_mean.max(1e-12));
+    if args.json {
+        let summary = Summary {
+            walkers: args.walkers,
+            frames: main.report.frames,
+            fps: Fps::from(&main.report),
+            naive_fps: naive.as_ref().map(|n| Fps::from(&n.report)),
+            ratio,
+            levels: main.last.level_histogram.clone(),
+        };
+        println!("{}", serde_json::to_string(&summary)?);
+        return Ok(());
+    }
+    let source_name = if args.naive {
+        "naive interpolation"
+    } else {
+        "multilinear LOD"
+    };
+    println!(
+        "{} walkers, {:.1} s at {} fps ({} frames), {source_name}, field {:.0} m",
+        args.walkers, args.seconds, args.fps, main.report.frames, run.config.field_size_m
+    );
+    println!("{}", main.report);
+    println!(
+        "levels in the last frame (accuracy 0.., then root only): {:?}",
+        main.last.level_histogram
+    );
+    if let (Some(n), Some(r)) = (&naive, ratio) {
+        println!("naive interpolation on the same crowd:");
+        println!("{}", n.report);
+        println!("LOD / naive mean frame rate: {r:.2}x");
+    }
+    if let Some(dir) = &args.render {
+        println!("rendered {} files into {}", main.rendered, dir.display());
+    }
+    Ok(())
+}

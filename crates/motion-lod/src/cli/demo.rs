@@ -1,0 +1,44 @@
+//! `motion-lod demo`: the main job on the embedded data: build a model from the procedural walker's takes,
+//! run 1,000 walkers for 10 s with the distance policy, render a few frames and compare with naive
+//! interpolation on the same crowd.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::crowd::{CrowdArgs, PolicyArg};
+
+/// Arguments of `motion-lod demo`.
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// Number of walkers.
+    #[arg(long, default_value_t = 1000)]
+    pub walkers: usize,
+    /// Simulated seconds.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f32,
+    /// Where to write the rendered frames, maps and GIF.
+    #[arg(long, default_value = "out/demo")]
+    pub render: PathBuf,
+}
+
+/// Runs the subcommand.
+pub fn run(args: DemoArgs) -> anyhow::Result<()> {
+    println!(
+        "building a model from the embedded data set (procedural walker, 3 performers, 120 Hz)"
+    );
+    super::crowd::run(CrowdArgs {
+        model: None,
+        walkers: args.walkers,
+        seconds: args.seconds,
+        density: 0.05,
+        fps: 30.0,
+        seed: 1,
+        policy: PolicyArg::Distance,
+        naive: false,
+        compare_naive: true,
+        render: Some(args.render),
+        render_every: 30,
+        json: false,
+    })
+}

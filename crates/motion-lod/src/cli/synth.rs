@@ -1,0 +1,111 @@
+//! `motion-lod synth model.mlod --dx --dz --turn [--height] -o walk.bvh`: a walk as a BVH file.
+
+use std::path::PathBuf;
+
+use anyhow::{Context as _, bail};
+use clap::Args;
+use lod_policy::Detail;
+use motion_lod::MotionModel;
+use motion_lod::synth::WalkRequest;
+
+/// Arguments of `motion-lod synth`.
+#[derive(Debug, Args)]
+pub struct SynthArgs {
+    /// The model file.
+    #[arg(value_name = "MODEL")]
+    pub model: PathBuf,
+    /// Sideways root displacement per cycle, metres (+ = to the character's left).
+    #[arg(long, allow_hyphen_values = true)]
+    pub dx: f32,
+    /// Forward root displacement per cycle, metres.
+    #[arg(long, allow_hyphen_values = true)]
+    pub dz: f32,
+    /// Heading change per cycle, degrees (+ = left).
+    #[arg(long, allow_hyphen_values = true)]
+    pub turn: f32,
+    /// Standing height of the character, metres (default: the middle of the data's range).
+    #[arg(long)]
+    pub height: Option<f32>,
+    /// Accuracy level (0 = full detail).
+    #[arg(long, default_value_t = 0)]
+    pub level: usize,
+    /// Evaluated joints (default: all).
+    #[arg(long)]
+    pub joints: Option<usize>,
+    /// Number of cycles.
+    #[arg(long, default_value_t = 4)]
+    pub cycles: usize,
+    /// Output frames per second.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    /// Switch cycles without the ease-in/out blend.
+    #[arg(long)]
+    pub no_blend: bool,
+    /// Refuse controls outside the data's range instead of clamping them.
+    #[arg(long)]
+    pub strict: bool,
+    /// The BVH file to write (atomically).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+}
+
+/// Runs the subcommand.
+pub fn run(args: SynthArgs) -> anyhow::Result<()> {
+    let model = MotionModel::load(&args.model)
+        .with_context(|| format!("reading {}", args.model.display()))?;
+    let range = model.control_range();
+    let height = args.height.unwrap_or(0.5 * (range[3].0 + range[3].1));
+    let controls = [args.dx, args.dz, args.turn.to_radians(), height];
+    let names = ["dx", "dz", "turn", "height"];
+    for (k, (&c, &(lo, hi))) in controls.iter().zip(&range).enumerate() {
+        if !c.is_finite() {
+            bail!("--{} is not a finite number", names[k]);
+        }
+        let constant = hi - lo <= f32::EPSILON * hi.abs().max(1.0);
+        if constant && k == 3 {
+            if args.height.is_some() && (c - lo).abs() > 1e-3 {
+                eprintln!(
+                    "warning: the training data has one height ({lo:.3} m); --height {c:.3} has no effect"
+                );
+            }
+            continue;
+        }
+        if c < lo || c > hi {
+            let (show, lo_s, hi_s) = if k == 2 {
+                (c.to_degrees(), lo.to_degrees(), hi.to_degrees())
+            } else {
+                (c, lo, hi)
+            };
+            let msg = format!(
+                "--{} {show:.3} is outside the data's range [{lo_s:.3}, {hi_s:.3}]",
+                names[k]
+            );
+            if args.strict {
+                bail!("{msg} (--strict)");
+            }
+            eprintln!("warning: {msg}; clamped");
+        }
+    }
+    let req = WalkRequest {
+        controls,
+        detail: Detail::new(args.level, args.joints.unwrap_or(usize::MAX)),
+        cycles: args.cycles,
+        fps: args.fps,
+        blend: !args.no_blend,
+    };
+    let walk = model
+        .synthesize_walk(&req)
+        .context("synthesizing the walk")?;
+    let motion = model.walk_motion(&walk).context("converting to BVH")?;
+    motion_io::write_bvh(&motion, &args.output)
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    println!(
+        "wrote {}: {} cycles of {:.3} s, {} frames at {} fps",
+        args.output.display(),
+        args.cycles,
+        walk.cycle_seconds,
+        motion.frame_count(),
+        args.fps
+    );
+    Ok(())
+}

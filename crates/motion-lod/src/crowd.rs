@@ -1,0 +1,165 @@
+//! Crowds of walkers driven by the model: the level-of-detail policies of `lod-policy` adapted to the
+//! crowd's [`DetailPolicy`], and [`run_crowd`], which steps a crowd, times it and optionally renders it.
+
+use std::path::Path;
+
+use crowd_sim::render::{Recorder, RenderStyle};
+use crowd_sim::{
+    Camera, CameraPath, ClipSource, Crowd, CrowdConfig, CrowdError, CrowdReport,
+    Detail as CrowdDetail, DetailPolicy, FrameStats, RenderError,
+};
+use lod_policy::{Detail, LevelPolicy, LodModel, ViewParams};
+
+/// A `lod-policy` policy seen by the crowd: camera field of view and image height become the policy's
+/// view parameters, the model's root-only detail becomes the crowd's (0 active joints).
+#[derive(Debug, Clone)]
+pub struct ModelPolicy<P> {
+    policy: P,
+    levels: usize,
+    joints: usize,
+}
+
+impl<P: LevelPolicy + Sync> ModelPolicy<P> {
+    /// Wraps `policy` for a crowd over `model`.
+    pub fn new(policy: P, model: &LodModel) -> ModelPolicy<P> {
+        ModelPolicy {
+            policy,
+            levels: model.levels().len(),
+            joints: model.joints(),
+        }
+    }
+}
+
+impl<P: LevelPolicy + Sync> DetailPolicy for ModelPolicy<P> {
+    fn detail(&self, distance_m: f32, visible: bool, camera: &Camera) -> CrowdDetail {
+        let view = ViewParams {
+            fov_y_radians: camera.fov_y,
+            image_height_px: camera.image_height as f32,
+        };
+        let d = self.policy.detail(distance_m, visible, &view);
+        let accuracy = if d.accuracy == Detail::SMALLEST {
+            self.levels - 1
+        } else {
+            d.accuracy.min(self.levels - 1)
+        };
+        CrowdDetail {
+            accuracy,
+            active_joints: d.active_joints.min(self.joints),
+        }
+    }
+}
+
+/// Full detail for every walker, visible or not: the baseline without level of detail.
+#[derive(Debug, Clone, Copy)]
+pub struct FullDetail {
+    /// Joints of the source.
+    pub joints: usize,
+}
+
+impl DetailPolicy for FullDetail {
+    fn detail(&self, _distance_m: f32, _visible: bool, _camera: &Camera) -> CrowdDetail {
+        CrowdDetail {
+            accuracy: 0,
+            active_joints: self.joints,
+        }
+    }
+}
+
+/// How to run a crowd.
+#[derive(Debug, Clone)]
+pub struct CrowdRun {
+    /// Walkers, field, seed, frame rate.
+    pub config: CrowdConfig,
+    /// Simulated seconds.
+    pub seconds: f32,
+    /// The camera's lens (its position follows [`CameraPath::inside_crowd`]).
+    pub lens: Camera,
+    /// Render every n-th frame into this folder (PNG frames, maps, GIF), if set.
+    pub render: Option<(std::path::PathBuf, usize)>,
+}
+
+/// Why a crowd run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CrowdRunError {
+    /// The crowd rejected its settings or a frame.
+    #[error("crowd: {0}")]
+    Crowd(#[from] CrowdError),
+    /// A frame could not be rendered or written.
+    #[error("rendering: {0}")]
+    Render(#[from] RenderError),
+    /// The duration is not a positive number.
+    #[error("simulated time {0} s is not a positive number")]
+    Seconds(f32),
+}
+
+/// What a run measured.
+#[derive(Debug, Clone)]
+pub struct CrowdOutcome {
+    /// Frame rates and summed stage timings over the run (rendering excluded).
+    pub report: CrowdReport,
+    /// The last frame's statistics (its level histogram sums to the walker count).
+    pub last: FrameStats,
+    /// Files written by the renderer.
+    pub rendered: usize,
+}
+
+/// Steps a crowd of `source` under `policy` for `run.seconds`, timing every frame; renders every n-th
+/// frame when asked (rendering time is not counted).
+pub fn run_crowd<S, P>(
+    source: &S,
+    policy: &P,
+    run: &CrowdRun,
+) -> Result<CrowdOutcome, CrowdRunError>
+where
+    S: ClipSource,
+    P: DetailPolicy,
+{
+    if !(run.seconds.is_finite() && run.seconds > 0.0) {
+        return Err(CrowdRunError::Seconds(run.seconds));
+    }
+    let mut crowd = Crowd::new(source, run.config)?;
+    let path = CameraPath::inside_crowd(run.config.field_size_m);
+    let frames = ((run.seconds * run.config.fps).round() as usize).max(1);
+    let dt = 1.0 / run.config.fps;
+    let mut recorder = match &run.render {
+        Some((dir, _)) => Some(Recorder::new(dir, render_style(source))?),
+        None => None,
+    };
+    let mut report = CrowdReport::new();
+    let mut last = FrameStats::default();
+    let mut rendered = 0;
+    for f in 0..frames {
+        let camera = path.camera_at(f as f32 * dt, &run.lens);
+        crowd.step_into(source, policy, &camera, dt, &mut last)?;
+        report.add(&last);
+        if let (Some(rec), Some((_, every))) = (recorder.as_mut(), &run.render)
+            && f % (*every).max(1) == 0
+        {
+            rec.record(&crowd, &camera)?;
+            rendered += 1;
+        }
+    }
+    if let Some(rec) = recorder
+        && rec.finish()?.is_some()
+    {
+        rendered += 1;
+    }
+    Ok(CrowdOutcome {
+        report,
+        last,
+        rendered,
+    })
+}
+
+fn render_style<S: ClipSource>(_source: &S) -> RenderStyle {
+    RenderStyle {
+        map: true,
+        gif_every: 1,
+        ..RenderStyle::default()
+    }
+}
+
+/// Whether `dir` can be written (created when missing): checked before a long run starts.
+pub fn check_render_dir(dir: &Path) -> Result<(), RenderError> {
+    Recorder::new(dir, RenderStyle::default()).map(|_| ())
+}

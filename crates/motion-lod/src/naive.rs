@@ -1,0 +1,218 @@
+//! The naive baseline as a crowd clip source: the aligned samples blended directly with the kriging
+//! weights (paper eq. 1 with the universal kriging kernel of eq. 8), no tensor and no level of detail.
+//!
+//! Per clip it computes the kriging weights `b(c)` from the full `(S+1) x (S+1)` system (`O(S^2)`), the
+//! equivalent sample weights of eq. 8, `l(c) = C^+ [c; 1] + (I - C^+ C) b(c)`, and the blended cycle
+//! `sum_i l_i M_i` (`O(P T S)`); per frame it interpolates two aligned frames (`O(P)`). This is what the
+//! paper compares its LOD against ("naive interpolation", 3.9 fps for 100 walkers).
+
+use crowd_sim::{
+    ClipSource, ControlBounds, Controls, Detail as CrowdDetail, LevelTable, RootMotion,
+};
+use faer::Mat;
+use glam::Vec3;
+use kriging::Kriging;
+use timewarp::TimeTable;
+
+use crate::build::Analysis;
+use crate::model::{MotionModel, TIME_ROW};
+use crate::source::{bones_of, heading_of_exp_map, write_joints};
+
+/// One walker's naive clip: the blended aligned cycle and its time table.
+#[derive(Debug, Clone)]
+pub struct NaiveClip {
+    /// `T x P` blended poses (row-major, time row in seconds).
+    poses: Vec<f32>,
+    times: TimeTable,
+    /// Sample weights `b(c)` (scratch, length S).
+    b: Vec<f64>,
+    /// Equivalent sample weights `l(c)` (scratch, length S).
+    l: Vec<f64>,
+    root_motion: RootMotion,
+}
+
+/// Naive kriging interpolation of the raw samples, as a crowd clip source.
+#[derive(Debug)]
+pub struct NaiveSource<'m> {
+    model: &'m MotionModel,
+    kriging: &'m Kriging,
+    /// Samples, `S` blocks of `T x P` f32 (time row in seconds).
+    samples: Vec<f32>,
+    /// `C^+`, `S x (d + 1)` row-major.
+    c_pinv: Vec<f64>,
+    /// `C`, `(d + 1) x S` row-major.
+    c: Vec<f64>,
+    bones: Vec<(usize, usize)>,
+}
+
+/// Moore-Penrose pseudo-inverse of a small-rank matrix by a thin SVD (singular values below
+/// `1e-12 * max` are treated as zero).
+fn pinv(m: faer::MatRef<'_, f64>) -> Mat<f64> {
+    let svd = m.thin_svd().expect("thin SVD of a finite matrix");
+    let (u, s, v) = (svd.U(), svd.S(), svd.V());
+    let smax = (0..s.dim()).map(|i| s[i]).fold(0.0, f64::max);
+    let mut out = Mat::zeros(m.ncols(), m.nrows());
+    for k in 0..s.dim() {
+        if s[k] > 1e-12 * smax {
+            let inv = 1.0 / s[k];
+            for i in 0..m.ncols() {
+                for j in 0..m.nrows() {
+                    out[(i, j)] += v[(i, k)] * inv * u[(j, k)];
+                }
+            }
+        }
+    }
+    out
+}
+
+impl<'m> NaiveSource<'m> {
+    /// A naive source over the samples of `analysis` (the data `model` was built from).
+    pub fn new(model: &'m MotionModel, analysis: &'m Analysis) -> NaiveSource<'m> {
+        let [p, t, s] = analysis.tensor.dims();
+        let inv_scale = 1.0 / analysis.time_scale;
+        let mut samples = Vec::with_capacity(p * t * s);
+        for pose in analysis.tensor.as_slice().chunks_exact(p) {
+            samples.extend(pose.iter().enumerate().map(|(r, &v)| {
+                if r == TIME_ROW {
+                    (v * inv_scale) as f32
+                } else {
+                    v as f32
+                }
+            }));
+        }
+        let c = analysis.kriging.augmented_params();
+        let cp = pinv(c.as_ref());
+        let row_major = |m: &Mat<f64>| {
+            (0..m.nrows())
+                .flat_map(|i| (0..m.ncols()).map(move |j| (i, j)))
+                .map(|(i, j)| m[(i, j)])
+                .collect::<Vec<f64>>()
+        };
+        NaiveSource {
+            model,
+            kriging: &analysis.kriging,
+            samples,
+            c_pinv: row_major(&cp),
+            c: row_major(&c),
+            bones: bones_of(&model.layout),
+        }
+    }
+
+    fn dims(&self) -> (usize, usize, usize, usize) {
+        let lod = &self.model.lod;
+        (lod.p(), lod.t(), lod.s(), lod.d())
+    }
+}
+
+impl ClipSource for NaiveSource<'_> {
+    type Clip = NaiveClip;
+
+    fn levels(&self) -> LevelTable {
+        LevelTable {
+            accuracy_levels: 1,
+            joints: self.model.lod.joints(),
+            pose_len: self.model.lod.p(),
+        }
+    }
+
+    fn control_bounds(&self) -> ControlBounds {
+        crate::source::LodSource::new(self.model).control_bounds()
+    }
+
+    fn new_clip(&self) -> NaiveClip {
+        let (p, t, s, _) = self.dims();
+        NaiveClip {
+            poses: vec![0.0; p * t],
+            times: TimeTable::with_capacity(t),
+            b: vec![0.0; s],
+            l: vec![0.0; s],
+            root_motion: RootMotion::default(),
+        }
+    }
+
+    fn build_clip(&self, controls: &Controls, _detail: CrowdDetail, clip: &mut NaiveClip) {
+        let (p, t, s, d) = self.dims();
+        let c = [
+            f64::from(controls.dx),
+            f64::from(controls.dz),
+            f64::from(controls.turn),
+            f64::from(controls.height),
+        ];
+        if self.kriging.weights(&c, &mut clip.b).is_err() {
+            clip.b.fill(1.0 / s as f64);
+        }
+        // z = [c'; 1] - C b with c' the scaled controls; l = b + C^+ z.
+        let scaling = self.kriging.scaling();
+        let mut z = [0.0f64; 8];
+        for (k, zk) in z.iter_mut().enumerate().take(d + 1) {
+            let ck = if k < d {
+                (c[k] - scaling.offset[k]) * scaling.scale[k]
+            } else {
+                1.0
+            };
+            let cb: f64 = (0..s).map(|i| self.c[k * s + i] * clip.b[i]).sum();
+            *zk = ck - cb;
+        }
+        for i in 0..s {
+            let corr: f64 = (0..=d).map(|k| self.c_pinv[i * (d + 1) + k] * z[k]).sum();
+            clip.l[i] = clip.b[i] + corr;
+        }
+        clip.poses.fill(0.0);
+        let block = p * t;
+        for (i, &w) in clip.l.iter().enumerate() {
+            let w = w as f32;
+            for (o, &v) in clip
+                .poses
+                .iter_mut()
+                .zip(&self.samples[i * block..(i + 1) * block])
+            {
+                *o += w * v;
+            }
+        }
+        clip.times
+            .fill_from_iter((0..t).map(|k| f64::from(clip.poses[k * p + TIME_ROW])));
+        let (start, end) = (&clip.poses[..p], &clip.poses[(t - 1) * p..]);
+        let turn = heading_of_exp_map([end[3], end[4], end[5]])
+            - heading_of_exp_map([start[3], start[4], start[5]]);
+        clip.root_motion = RootMotion {
+            dx: end[0],
+            dz: end[2],
+            turn: (turn + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
+                - std::f32::consts::PI,
+        };
+    }
+
+    fn clip_duration(&self, clip: &NaiveClip) -> f32 {
+        (clip.times.duration() as f32).max(1e-3)
+    }
+
+    fn clip_root_motion(&self, clip: &NaiveClip) -> RootMotion {
+        clip.root_motion
+    }
+
+    fn pose(&self, clip: &NaiveClip, t_seconds: f32, out: &mut [f32]) -> usize {
+        let (p, t, _, _) = self.dims();
+        let phase = clip
+            .times
+            .phase_at(f64::from(t_seconds))
+            .clamp(0.0, (t - 1) as f64);
+        let i = (phase.floor() as usize).min(t.saturating_sub(2));
+        let a = (phase - i as f64) as f32;
+        let (f0, f1) = (
+            &clip.poses[i * p..(i + 1) * p],
+            &clip.poses[(i + 1).min(t - 1) * p..][..p],
+        );
+        for ((o, &x), &y) in out[..p].iter_mut().zip(f0).zip(f1) {
+            *o = (1.0 - a) * x + a * y;
+        }
+        p
+    }
+
+    fn joints(&self, _clip: &NaiveClip, pose: &[f32], out: &mut [Vec3]) -> usize {
+        write_joints(&self.model.layout, pose, usize::MAX, out)
+    }
+
+    fn bones(&self) -> &[(usize, usize)] {
+        &self.bones
+    }
+}

@@ -1,0 +1,294 @@
+//! The model end to end on the embedded data set: build, file round trip, determinism, synthesized walks
+//! that travel what was asked, the crowd source, and the leave-one-out acceptance on the real Bandai data
+//! (skipped when `../shared/mocap` is absent).
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use crowd_sim::{Camera, ClipSource, CrowdConfig};
+use glam::DVec3;
+use lod_policy::{Detail, DistancePolicy};
+use motion_io::expmap::exp_to_quat;
+use motion_lod::build::Analysis;
+use motion_lod::crowd::{CrowdRun, FullDetail, ModelPolicy, run_crowd};
+use motion_lod::dataset::DataSpec;
+use motion_lod::eval::{EvalConfig, leave_one_out};
+use motion_lod::model_file;
+use motion_lod::progress::NoProgress;
+use motion_lod::synth::WalkRequest;
+use motion_lod::{BuildConfig, LodSource, MotionModel, NaiveSource};
+
+fn built() -> &'static (MotionModel, Analysis) {
+    static MODEL: OnceLock<(MotionModel, Analysis)> = OnceLock::new();
+    MODEL.get_or_init(|| {
+        let loaded = DataSpec::default()
+            .load(&|_, _| {})
+            .expect("embedded data loads");
+        MotionModel::build_with_analysis(&loaded.training, &BuildConfig::default(), &NoProgress)
+            .expect("model builds")
+    })
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("motion-lod-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn model_has_levels_with_growing_error_and_a_compact_size() {
+    let (model, analysis) = built();
+    let lod = &model.lod;
+    assert_eq!(lod.s(), analysis.tensor.dims()[2]);
+    assert!(lod.levels().len() >= lod.keys().len());
+    let errors = lod.level_errors();
+    assert_eq!(errors.len(), lod.levels().len());
+    assert_eq!(errors[0].mean_joint_cm, 0.0, "level 0 is the reference");
+    let last = errors.last().unwrap().mean_joint_cm;
+    assert!(last > 1.0, "the smallest level loses detail: {last} cm");
+    // Distinct rank triples, each within its key and never growing.
+    for w in lod.levels().windows(2) {
+        assert_ne!(w[0].ranks, w[1].ranks);
+        assert!(
+            w[1].ranks.fits_in(&w[0].ranks),
+            "{:?} then {:?}",
+            w[0],
+            w[1]
+        );
+    }
+    let storage = motion_lod::storage::Storage::of(model);
+    // f32 halves every stored value; a few counts and sizes are stored at a fixed width.
+    assert!(
+        (storage.model_f32 as f64) < 0.51 * storage.model_f64 as f64,
+        "{storage:?}"
+    );
+    assert!(storage.model_f64 < storage.raw_f64, "{storage:?}");
+}
+
+#[test]
+fn model_file_round_trips_and_rejects_damage() {
+    let (model, _) = built();
+    let path = temp("round.mlod");
+    model.save(&path).unwrap();
+    let back = MotionModel::load(&path).unwrap();
+    assert_eq!(&back, model);
+    let bytes = std::fs::read(&path).unwrap();
+    let mut bad = bytes.clone();
+    let mid = bad.len() / 2;
+    bad[mid] ^= 0x40;
+    std::fs::write(&path, &bad).unwrap();
+    let err = MotionModel::load(&path).unwrap_err();
+    assert!(err.to_string().contains("corrupted"), "{err}");
+    std::fs::write(&path, &bytes[..bytes.len() - 7]).unwrap();
+    let err = MotionModel::load(&path).unwrap_err();
+    assert!(err.to_string().contains("truncated"), "{err}");
+}
+
+#[test]
+fn build_is_deterministic_whatever_the_thread_count() {
+    let (model, _) = built();
+    let reference = model_file::encode(model, Path::new("m")).unwrap();
+    let loaded = DataSpec::default().load(&|_, _| {}).unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let single = pool.install(|| {
+        MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress).unwrap()
+    });
+    let mut single = single;
+    single.report.seconds = model.report.seconds;
+    let bytes = model_file::encode(&single, Path::new("m")).unwrap();
+    assert!(
+        bytes == reference,
+        "model bytes differ between thread counts"
+    );
+}
+
+/// Root travel of a walk's first cycle measured back from its BVH: (dx, dz) of the root in the start
+/// frame and the heading change, from the poses of the re-read file.
+fn measured_cycle(model: &MotionModel, bvh: &Path, cycle_frames: usize) -> (f64, f64, f64) {
+    let motion = motion_io::read_bvh(bvh).unwrap();
+    let layout = &model.layout;
+    let p = layout.dof();
+    let mut a = vec![0.0; p];
+    let mut b = vec![0.0; p];
+    layout.pose_from_frame(&motion, 0, &mut a).unwrap();
+    layout
+        .pose_from_frame(&motion, cycle_frames, &mut b)
+        .unwrap();
+    let yaw = |v: &[f64]| {
+        let f: DVec3 = exp_to_quat(DVec3::from_slice(&v[3..6])) * DVec3::Z;
+        f.x.atan2(f.z)
+    };
+    // The first cycle's frame is the walk's world frame: it starts over the origin heading +z.
+    let turn = motion_io::expmap::wrap_angle(yaw(&b) - yaw(&a));
+    (b[0] - a[0], b[2] - a[2], turn)
+}
+
+#[test]
+fn synthesized_walks_travel_the_requested_controls() {
+    let (model, analysis) = built();
+    let fps = 120.0;
+    // Controls inside the data: the training controls of a few samples and midpoints between them.
+    let c = &analysis.controls;
+    let picks = [c[3], c[17], c[31], c[44]];
+    let mids = [
+        std::array::from_fn(|k| 0.5 * (c[5][k] + c[25][k])),
+        std::array::from_fn(|k| 0.5 * (c[12][k] + c[50][k])),
+    ];
+    for (n, ctl) in picks.iter().chain(mids.iter()).enumerate() {
+        let controls = ctl.map(|v| v as f32);
+        let req = WalkRequest {
+            controls,
+            detail: Detail::full(),
+            cycles: 2,
+            fps,
+            blend: true,
+        };
+        let walk = model.synthesize_walk(&req).unwrap();
+        let path = temp(&format!("walk{n}.bvh"));
+        motion_io::write_bvh(&model.walk_motion(&walk).unwrap(), &path).unwrap();
+        let frames = (walk.cycle_seconds * fps).round() as usize;
+        let (dx, dz, turn) = measured_cycle(model, &path, frames);
+        let step = (ctl[0].powi(2) + ctl[1].powi(2)).sqrt();
+        let err = ((dx - ctl[0]).powi(2) + (dz - ctl[1]).powi(2)).sqrt();
+        assert!(
+            err <= 0.1 * step,
+            "walk {n}: travelled ({dx:.3}, {dz:.3}) for ({:.3}, {:.3}): {err:.3} m > 10% of {step:.3} m",
+            ctl[0],
+            ctl[1]
+        );
+        let turn_err = (turn - ctl[2]).to_degrees().abs();
+        assert!(
+            turn_err <= 5.0,
+            "walk {n}: turned {:.1} deg for {:.1} deg",
+            turn.to_degrees(),
+            ctl[2].to_degrees()
+        );
+    }
+}
+
+#[test]
+fn out_of_range_controls_are_clamped_and_reported() {
+    let (model, _) = built();
+    let range = model.control_range();
+    let req = WalkRequest {
+        controls: [0.0, range[1].1 * 3.0, 0.0, range[3].0],
+        detail: Detail::full(),
+        cycles: 1,
+        fps: 30.0,
+        blend: false,
+    };
+    assert!(model.synthesize_walk(&req).unwrap().clamped);
+    let bad = WalkRequest {
+        controls: [f32::NAN, 1.0, 0.0, 1.7],
+        ..req
+    };
+    assert!(model.synthesize_walk(&bad).is_err());
+    let zero = WalkRequest { cycles: 0, ..req };
+    assert!(model.synthesize_walk(&zero).is_err());
+}
+
+#[test]
+fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_count() {
+    let (model, analysis) = built();
+    let run = CrowdRun {
+        config: CrowdConfig {
+            seed: 3,
+            ..CrowdConfig::with_density(300, 0.05)
+        },
+        seconds: 2.0,
+        lens: Camera::default(),
+        render: None,
+    };
+    let lod = &model.lod;
+    let source = LodSource::new(model);
+    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    let a = run_crowd(&source, &policy, &run).unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let b = pool.install(|| run_crowd(&source, &policy, &run).unwrap());
+    assert_eq!(a.last.level_histogram, b.last.level_histogram);
+    assert_eq!(a.last.level_histogram.iter().sum::<u32>(), 300);
+    // Root motion of a clip equals where its poses put the root at the end of the clip.
+    let mut clip = source.new_clip();
+    let c = analysis.controls[7].map(|v| v as f32);
+    let controls = crowd_sim::Controls {
+        dx: c[0],
+        dz: c[1],
+        turn: c[2],
+        height: c[3],
+    };
+    source.build_clip(
+        &controls,
+        crowd_sim::Detail {
+            accuracy: 0,
+            active_joints: lod.joints(),
+        },
+        &mut clip,
+    );
+    let mut pose = vec![0.0f32; lod.p()];
+    source.pose(&clip, source.clip_duration(&clip), &mut pose);
+    let rm = source.clip_root_motion(&clip);
+    assert!((rm.dx - pose[0]).abs() < 1e-4 && (rm.dz - pose[2]).abs() < 1e-4);
+    let naive = NaiveSource::new(model, analysis);
+    let n = run_crowd(
+        &naive,
+        &FullDetail {
+            joints: lod.joints(),
+        },
+        &run,
+    )
+    .unwrap();
+    assert_eq!(n.last.level_histogram[0], 300);
+}
+
+#[test]
+fn leave_one_out_on_bandai_meets_the_paper_comparison() {
+    let root = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/mocap/bandai-namco-2-walk"
+    );
+    if !Path::new(root).is_dir() {
+        eprintln!("skipped: ../shared/mocap not found");
+        return;
+    }
+    // A random 240-cycle subset keeps the test fast; the README quotes the full 800.
+    let spec = DataSpec {
+        dirs: vec![PathBuf::from(root)],
+        samples: Some(240),
+        ..DataSpec::default()
+    };
+    let loaded = spec.load(&|_, _| {}).unwrap();
+    let config = BuildConfig::default();
+    let analysis = Analysis::run(&loaded.training, &config, &NoProgress).unwrap();
+    let report = leave_one_out(&analysis, 0, &[], &EvalConfig::default(), &NoProgress).unwrap();
+    let get = |name: &str| {
+        report
+            .methods
+            .iter()
+            .find(|m| m.name == name)
+            .unwrap()
+            .error_cm
+    };
+    let ml: Vec<f64> = report
+        .methods
+        .iter()
+        .filter(|m| m.name == "multilinear")
+        .map(|m| m.error_cm)
+        .collect();
+    let (naive, rbf, nearest) = (get("naive-kriging"), get("rbf"), get("nearest"));
+    assert!(
+        ml[0] <= 1.1 * naive,
+        "full level {:.3} cm vs naive kriging {naive:.3} cm",
+        ml[0]
+    );
+    assert!(
+        ml[0] < rbf && ml[0] < nearest,
+        "{ml:?} vs rbf {rbf}, nearest {nearest}"
+    );
+    assert!(*ml.last().unwrap() > ml[0], "{ml:?}");
+}
