@@ -420,6 +420,17 @@ impl Kriging {
         augmented_params(self.scaled.as_ref())
     }
 
+    /// `C^+ = C^t (C C^t)^+` (S x (d+1)), the pseudo-inverse of [`Kriging::augmented_params`] with
+    /// the same tolerance as the trend ([`PINV_RTOL`](crate::PINV_RTOL)): the trend of eq. 8 is
+    /// `F = X^t C^+`, and the sample weights equivalent to a universal kriging prediction at `c` are
+    /// `C^+ [c; 1] + (I - C^+ C) b(c)`.
+    pub fn augmented_pinv(&self) -> Mat<f64> {
+        let c = self.augmented_params();
+        let g = matmul(c.as_ref(), c.transpose());
+        let (gp, _) = sym_pinv(g.as_ref());
+        matmul(c.transpose(), gp.as_ref())
+    }
+
     /// The trend `F` (D x (d+1)) of eq. 8, acting on `[scaled c; 1]`; `None` for ordinary kriging.
     pub fn trend(&self) -> Option<MatRef<'_, f64>> {
         self.trend.as_ref().map(|t| t.as_ref())

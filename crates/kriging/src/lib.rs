@@ -70,7 +70,7 @@ pub use empirical::EmpiricalVariogram;
 pub use error::KrigingError;
 pub use fit::{FitOptions, FitWeights, FittedVariogram, fit_variogram};
 pub use kriging::{Kriging, augmented_params};
-pub use linalg::PINV_RTOL;
+pub use linalg::{PINV_RTOL, sym_pinv};
 pub use projected::ProjectedQuery;
 pub use rbf::{Rbf, RbfConfig, RbfKernel};
 pub use scaling::{ParamScaling, ScalingChoice};

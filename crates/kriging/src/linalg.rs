@@ -160,7 +160,7 @@ pub const PINV_RTOL: f64 = 1e-12;
 /// Moore-Penrose pseudo-inverse of a symmetric positive semi-definite matrix through its
 /// eigen-decomposition, eigenvalues `<= PINV_RTOL * max(eig)` treated as zero. Returns the
 /// pseudo-inverse and the numerical rank.
-pub(crate) fn sym_pinv(g: MatRef<'_, f64>) -> (Mat<f64>, usize) {
+pub fn sym_pinv(g: MatRef<'_, f64>) -> (Mat<f64>, usize) {
     let n = g.nrows();
     let (vals, vecs) = sym_eigen(g);
     let vmax = vals.iter().fold(0.0f64, |m, v| m.max(*v));

@@ -2,8 +2,8 @@
 //! the kriging projection `Q`, the trend projection `V` (section 3.3) and a scaled control space.
 //!
 //! These run once per model in f64 and allocate freely; the only linear algebra needed is the
-//! pseudo-inverse of the small `(d + 1) x (d + 1)` matrix `C C^T`, done here by a Jacobi
-//! eigen-decomposition so that a constant (zero-scaled) control dimension is handled.
+//! pseudo-inverse of the small `(d + 1) x (d + 1)` matrix `C C^T`, taken from the `kriging` crate so
+//! that a constant (zero-scaled) control dimension is handled exactly as the kriging trend handles it.
 
 use crate::error::ModelError;
 use crate::model::{ControlSpace, KeyTensor, Ranks, Variogram};
@@ -45,71 +45,14 @@ fn to_f32(v: &[f64]) -> Vec<f32> {
 }
 
 /// Moore-Penrose pseudo-inverse of a small symmetric positive semi-definite `n x n` matrix
-/// (column-major) by cyclic Jacobi rotations: `M^+ = E diag(1/lambda_i, lambda_i > tol) E^T`,
-/// `tol = 1e-12 max |lambda|`.
+/// (column-major), by [`kriging::sym_pinv`] so that the trend here is the kriging crate's trend
+/// (same eigenvalue tolerance, [`kriging::PINV_RTOL`]).
 fn pinv_symmetric(m: &[f64], n: usize) -> Vec<f64> {
-    let mut a = m.to_vec();
-    let mut e = vec![0.0; n * n];
-    for i in 0..n {
-        e[i + n * i] = 1.0;
-    }
-    for _sweep in 0..100 {
-        let off: f64 = (0..n)
-            .flat_map(|j| (0..n).filter(move |&i| i != j).map(move |i| (i, j)))
-            .map(|(i, j)| a[i + n * j] * a[i + n * j])
-            .sum();
-        let diag: f64 = (0..n).map(|i| a[i + n * i] * a[i + n * i]).sum();
-        if off <= 1e-30 * diag.max(f64::MIN_POSITIVE) {
-            break;
-        }
-        for q in 1..n {
-            for pp in 0..q {
-                let apq = a[pp + n * q];
-                if apq == 0.0 {
-                    continue;
-                }
-                let theta = (a[q + n * q] - a[pp + n * pp]) / (2.0 * apq);
-                let tt = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let tt = if theta == 0.0 { 1.0 } else { tt };
-                let c = 1.0 / (tt * tt + 1.0).sqrt();
-                let s = tt * c;
-                // A <- J^T A J on rows/columns pp, q.
-                for k in 0..n {
-                    let akp = a[k + n * pp];
-                    let akq = a[k + n * q];
-                    a[k + n * pp] = c * akp - s * akq;
-                    a[k + n * q] = s * akp + c * akq;
-                }
-                for k in 0..n {
-                    let apk = a[pp + n * k];
-                    let aqk = a[q + n * k];
-                    a[pp + n * k] = c * apk - s * aqk;
-                    a[q + n * k] = s * apk + c * aqk;
-                }
-                for k in 0..n {
-                    let ekp = e[k + n * pp];
-                    let ekq = e[k + n * q];
-                    e[k + n * pp] = c * ekp - s * ekq;
-                    e[k + n * q] = s * ekp + c * ekq;
-                }
-            }
-        }
-    }
-    let lmax = (0..n).map(|i| a[i + n * i].abs()).fold(0.0, f64::max);
-    let tol = 1e-12 * lmax;
-    let mut out = vec![0.0; n * n];
-    for l in 0..n {
-        let lam = a[l + n * l];
-        if lam.abs() <= tol || lam == 0.0 {
-            continue;
-        }
-        for j in 0..n {
-            for i in 0..n {
-                out[i + n * j] += e[i + n * l] * e[j + n * l] / lam;
-            }
-        }
-    }
-    out
+    let (p, _) = kriging::sym_pinv(faer::MatRef::from_column_major_slice(m, n, n));
+    (0..n)
+        .flat_map(|j| (0..n).map(move |i| (i, j)))
+        .map(|(i, j)| p[(i, j)])
+        .collect()
 }
 
 impl KeyTensor {

@@ -45,26 +45,6 @@ pub struct NaiveSource<'m> {
     bones: Vec<(usize, usize)>,
 }
 
-/// Moore-Penrose pseudo-inverse of a small-rank matrix by a thin SVD (singular values below
-/// `1e-12 * max` are treated as zero).
-fn pinv(m: faer::MatRef<'_, f64>) -> Mat<f64> {
-    let svd = m.thin_svd().expect("thin SVD of a finite matrix");
-    let (u, s, v) = (svd.U(), svd.S(), svd.V());
-    let smax = (0..s.dim()).map(|i| s[i]).fold(0.0, f64::max);
-    let mut out = Mat::zeros(m.ncols(), m.nrows());
-    for k in 0..s.dim() {
-        if s[k] > 1e-12 * smax {
-            let inv = 1.0 / s[k];
-            for i in 0..m.ncols() {
-                for j in 0..m.nrows() {
-                    out[(i, j)] += v[(i, k)] * inv * u[(j, k)];
-                }
-            }
-        }
-    }
-    out
-}
-
 impl<'m> NaiveSource<'m> {
     /// A naive source over the samples of `analysis` (the data `model` was built from).
     pub fn new(model: &'m MotionModel, analysis: &'m Analysis) -> NaiveSource<'m> {
@@ -81,7 +61,7 @@ impl<'m> NaiveSource<'m> {
             }));
         }
         let c = analysis.kriging.augmented_params();
-        let cp = pinv(c.as_ref());
+        let cp = analysis.kriging.augmented_pinv();
         let row_major = |m: &Mat<f64>| {
             (0..m.nrows())
                 .flat_map(|i| (0..m.ncols()).map(move |j| (i, j)))
