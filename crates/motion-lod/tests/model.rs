@@ -89,20 +89,21 @@ fn build_is_deterministic_whatever_the_thread_count() {
     let (model, _) = built();
     let reference = model_file::encode(model, Path::new("m")).unwrap();
     let loaded = DataSpec::default().load(&|_, _| {}).unwrap();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let single = pool.install(|| {
-        MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress).unwrap()
-    });
-    let mut single = single;
-    single.report.seconds = model.report.seconds;
-    let bytes = model_file::encode(&single, Path::new("m")).unwrap();
-    assert!(
-        bytes == reference,
-        "model bytes differ between thread counts"
-    );
+    for threads in [1, 8] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut other = pool.install(|| {
+            MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress).unwrap()
+        });
+        other.report.seconds = model.report.seconds;
+        let bytes = model_file::encode(&other, Path::new("m")).unwrap();
+        assert!(
+            bytes == reference,
+            "model bytes differ with {threads} threads"
+        );
+    }
 }
 
 /// Root travel of a walk's first cycle measured back from its BVH: (dx, dz) of the root in the start
@@ -291,4 +292,40 @@ fn leave_one_out_on_bandai_meets_the_paper_comparison() {
         "{ml:?} vs rbf {rbf}, nearest {nearest}"
     );
     assert!(*ml.last().unwrap() > ml[0], "{ml:?}");
+}
+
+#[test]
+fn crowd_poses_are_bit_identical_for_1_2_and_8_threads() {
+    let (model, _) = built();
+    let lod = &model.lod;
+    let source = LodSource::new(model);
+    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    let config = CrowdConfig {
+        seed: 5,
+        ..CrowdConfig::with_density(200, 0.05)
+    };
+    let lens = Camera::default();
+    let path = crowd_sim::CameraPath::inside_crowd(config.field_size_m);
+    let simulate = |threads: usize| -> Vec<u32> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut crowd = crowd_sim::Crowd::new(&source, config).unwrap();
+            for f in 0..45 {
+                let cam = path.camera_at(f as f32 / 30.0, &lens);
+                crowd.step(&source, &policy, &cam, 1.0 / 30.0).unwrap();
+            }
+            (0..crowd.len())
+                .flat_map(|i| crowd.joint_positions(i).to_vec())
+                .flat_map(|p| p.to_array())
+                .map(f32::to_bits)
+                .collect()
+        })
+    };
+    let one = simulate(1);
+    assert!(!one.is_empty());
+    assert!(one == simulate(2), "2 threads differ from 1");
+    assert!(one == simulate(8), "8 threads differ from 1");
 }
