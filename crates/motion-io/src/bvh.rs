@@ -85,6 +85,15 @@ pub enum BvhErrorKind {
     /// Two `End Site`s under one joint.
     #[error("joint `{0}` has more than one End Site")]
     SecondEndSite(String),
+    /// Two joints with the same name (names identify joints across files).
+    #[error("joint name `{0}` is used twice")]
+    DuplicateJoint(String),
+    /// More joints than the reader accepts (see [`MAX_JOINTS`]).
+    #[error("more than {max} joints in the hierarchy")]
+    TooManyJoints {
+        /// The limit, [`MAX_JOINTS`].
+        max: usize,
+    },
     /// The bytes are not UTF-8 text.
     #[error("file is not UTF-8 text")]
     NotUtf8,
@@ -171,17 +180,69 @@ fn err(line: usize, kind: BvhErrorKind) -> BvhError {
     }
 }
 
-/// Tokens of the hierarchy part, each with its 1-based line.
+/// Most joints (`ROOT`, `JOINT`) a hierarchy may declare. Real rigs have tens to a few hundred
+/// joints; the limit stops a hostile file from making the reader build an enormous skeleton (and
+/// one pose channel per joint per frame) before anything can check it.
+pub const MAX_JOINTS: usize = 4096;
+
+/// Tokens of the hierarchy part, each with its 1-based line, read one line at a time so that a
+/// hostile file is rejected after reading only what it takes to see the problem.
+///
+/// Tokenizing stops at the `MOTION` keyword (the rest of that line is ignored); `motion_line`
+/// then holds its line number.
 struct Tokens<'a> {
-    toks: Vec<(usize, &'a str)>,
+    lines: std::iter::Enumerate<std::str::Lines<'a>>,
+    /// Tokens of the lines read so far and not yet consumed (always whole lines).
+    buf: Vec<(usize, &'a str)>,
     pos: usize,
     last_line: usize,
+    motion_line: Option<usize>,
 }
 
 impl<'a> Tokens<'a> {
+    fn new(text: &'a str) -> Self {
+        Tokens {
+            lines: text.lines().enumerate(),
+            buf: Vec::new(),
+            pos: 0,
+            last_line: 1,
+            motion_line: None,
+        }
+    }
+
+    /// Makes sure at least `k + 1` unconsumed tokens are buffered, unless the hierarchy ends first.
+    fn fill(&mut self, k: usize) {
+        while self.buf.len() <= self.pos + k && self.motion_line.is_none() {
+            if self.pos == self.buf.len() {
+                self.buf.clear();
+                self.pos = 0;
+            }
+            let Some((i, line)) = self.lines.next() else {
+                return;
+            };
+            self.last_line = i + 1;
+            for t in line.split_ascii_whitespace() {
+                if t.eq_ignore_ascii_case("MOTION") {
+                    self.motion_line = Some(i + 1);
+                    break;
+                }
+                self.buf.push((i + 1, t));
+            }
+        }
+    }
+
+    fn peek_at(&mut self, k: usize) -> Option<(usize, &'a str)> {
+        self.fill(k);
+        self.buf.get(self.pos + k).copied()
+    }
+
+    fn peek(&mut self) -> Option<(usize, &'a str)> {
+        self.peek_at(0)
+    }
+
     fn next(&mut self, expected: &str) -> Result<(usize, &'a str), BvhError> {
-        match self.toks.get(self.pos) {
-            Some(&t) => {
+        match self.peek() {
+            Some(t) => {
                 self.pos += 1;
                 Ok(t)
             }
@@ -194,12 +255,17 @@ impl<'a> Tokens<'a> {
         }
     }
 
-    fn peek(&self) -> Option<(usize, &'a str)> {
-        self.toks.get(self.pos).copied()
+    /// Unconsumed tokens on line `line` (whole lines are buffered, so this is exact once a token
+    /// of that line has been read).
+    fn rest_of_line(&self, line: usize) -> usize {
+        self.buf[self.pos..]
+            .iter()
+            .take_while(|t| t.0 == line)
+            .count()
     }
 
     fn expect(&mut self, word: &str) -> Result<usize, BvhError> {
-        let (line, t) = self.next(&format!("`{word}`"))?;
+        let (line, t) = self.next(word)?;
         if t.eq_ignore_ascii_case(word) {
             Ok(line)
         } else {
@@ -217,6 +283,14 @@ impl<'a> Tokens<'a> {
         let (line, t) = self.next(what)?;
         parse_f64(t).map_err(|k| err(line, k))
     }
+
+    fn offset(&mut self) -> Result<DVec3, BvhError> {
+        Ok(DVec3::new(
+            self.number("offset x")?,
+            self.number("offset y")?,
+            self.number("offset z")?,
+        ))
+    }
 }
 
 fn parse_f64(t: &str) -> Result<f64, BvhErrorKind> {
@@ -231,27 +305,13 @@ fn parse_f64(t: &str) -> Result<f64, BvhErrorKind> {
 ///
 /// Position channels replace the matching OFFSET component (see
 /// [`Skeleton::local_transform`]); Euler values stay in degrees.
+///
+/// Limits (hostile input): at most [`MAX_JOINTS`] joints ([`BvhErrorKind::TooManyJoints`]),
+/// unique joint names ([`BvhErrorKind::DuplicateJoint`]), finite numbers only. Memory stays
+/// within a small multiple of the text's size whatever `Frames:` declares, and nesting depth
+/// costs no stack (the hierarchy is read without recursion).
 pub fn parse_bvh(text: &str) -> Result<Motion, BvhError> {
-    // Split at the MOTION keyword: hierarchy tokens before, numeric lines after.
-    let mut toks = Vec::new();
-    let mut lines = text.lines().enumerate();
-    let mut motion_line = None;
-    let mut last_line = 1;
-    'outer: for (i, line) in lines.by_ref() {
-        last_line = i + 1;
-        for t in line.split_ascii_whitespace() {
-            if t.eq_ignore_ascii_case("MOTION") {
-                motion_line = Some(i + 1);
-                break 'outer;
-            }
-            toks.push((i + 1, t));
-        }
-    }
-    let mut tk = Tokens {
-        toks,
-        pos: 0,
-        last_line,
-    };
+    let mut tk = Tokens::new(text);
     let skeleton = parse_hierarchy(&mut tk)?;
     if let Some((line, t)) = tk.peek() {
         return Err(err(
@@ -262,14 +322,15 @@ pub fn parse_bvh(text: &str) -> Result<Motion, BvhError> {
             },
         ));
     }
-    let Some(motion_line) = motion_line else {
+    let Some(motion_line) = tk.motion_line else {
         return Err(err(
-            last_line,
+            tk.last_line,
             BvhErrorKind::UnexpectedEof {
                 expected: "`MOTION`".into(),
             },
         ));
     };
+    let mut lines = tk.lines;
     let nch = skeleton.channel_count();
 
     // Header lines: "Frames: n" and "Frame Time: t", tokens possibly split over lines.
@@ -285,9 +346,11 @@ pub fn parse_bvh(text: &str) -> Result<Motion, BvhError> {
         }
     }
     let mut ht = Tokens {
-        toks: header,
+        lines: "".lines().enumerate(),
+        buf: header,
         pos: 0,
         last_line: header_end_line,
+        motion_line: Some(motion_line),
     };
     let frames_line = ht.expect("Frames:")?;
     let (fl, ft) = ht.next("frame count")?;
@@ -314,7 +377,9 @@ pub fn parse_bvh(text: &str) -> Result<Motion, BvhError> {
         return Err(err(frames_line, BvhErrorKind::NoFrames));
     }
 
-    let mut frames = Vec::with_capacity(declared.saturating_mul(nch).min(1 << 28));
+    // Never trust `Frames:` for the allocation: every value takes at least two bytes of text
+    // (a digit and a separator), so the text bounds how many values can follow.
+    let mut frames = Vec::with_capacity(declared.saturating_mul(nch).min(text.len() / 2 + 1));
     let mut frame = 0usize;
     let mut end_line = header_end_line;
     for (i, line) in lines {
@@ -326,11 +391,13 @@ pub fn parse_bvh(text: &str) -> Result<Motion, BvhError> {
         if frame == declared {
             return Err(err(i + 1, BvhErrorKind::TooManyFrames { declared }));
         }
-        let before = frames.len();
+        let mut found = 0;
         for t in it {
-            frames.push(parse_f64(t).map_err(|k| err(i + 1, k))?);
+            found += 1;
+            if found <= nch {
+                frames.push(parse_f64(t).map_err(|k| err(i + 1, k))?);
+            }
         }
-        let found = frames.len() - before;
         if found != nch {
             return Err(err(
                 i + 1,
@@ -371,115 +438,128 @@ fn parse_hierarchy(tk: &mut Tokens<'_>) -> Result<Skeleton, BvhError> {
             },
         ));
     }
-    let mut joints = Vec::new();
-    parse_joint(tk, &mut joints, None)?;
+    let joints = parse_joints(tk)?;
     if let Some((line, t)) = tk.peek() {
         if t.eq_ignore_ascii_case("ROOT") {
-            let name = tk.toks.get(tk.pos + 1).map_or("", |x| x.1);
+            let name = tk.peek_at(1).map_or("", |x| x.1);
             return Err(err(line, BvhErrorKind::SecondRoot(name.into())));
         }
     }
     Ok(Skeleton { joints })
 }
 
-/// Parses `name { OFFSET .. CHANNELS .. (JOINT ..)* (End Site {..})? }` after ROOT/JOINT.
-fn parse_joint(
-    tk: &mut Tokens<'_>,
-    joints: &mut Vec<Joint>,
-    parent: Option<usize>,
-) -> Result<(), BvhError> {
-    let (_, name) = tk.next("joint name")?;
-    let idx = joints.len();
-    tk.expect("{")?;
-    tk.expect("OFFSET")?;
-    let offset = DVec3::new(
-        tk.number("offset x")?,
-        tk.number("offset y")?,
-        tk.number("offset z")?,
-    );
-    let mut channels = Vec::new();
-    if tk
-        .peek()
-        .is_some_and(|t| t.1.eq_ignore_ascii_case("CHANNELS"))
-    {
-        let (cline, _) = tk.next("CHANNELS")?;
-        let (nline, nt) = tk.next("channel count")?;
-        // Names on the CHANNELS line itself: count them to report a mismatch precisely.
-        let listed = tk.toks[tk.pos..]
-            .iter()
-            .take_while(|t| t.0 == cline)
-            .count();
-        let n: usize = match nt.parse() {
-            Ok(n) if n <= 6 && nline == cline => n,
-            _ => {
+/// Parses the joint tree after `ROOT`: `name { OFFSET .. CHANNELS .. (JOINT ..)* (End Site {..})? }`
+/// for every joint, with an explicit stack of open joints instead of recursion.
+fn parse_joints(tk: &mut Tokens<'_>) -> Result<Vec<Joint>, BvhError> {
+    let mut joints: Vec<Joint> = Vec::new();
+    let mut names: std::collections::HashSet<&str> = std::collections::HashSet::new();
+    // Indices of the joints whose `}` has not been read yet.
+    let mut open: Vec<usize> = Vec::new();
+    let mut parent = None;
+    loop {
+        // A joint header: `name { OFFSET x y z [CHANNELS n ...]`.
+        let (name_line, name) = tk.next("joint name")?;
+        if joints.len() == MAX_JOINTS {
+            return Err(err(
+                name_line,
+                BvhErrorKind::TooManyJoints { max: MAX_JOINTS },
+            ));
+        }
+        if !names.insert(name) {
+            return Err(err(name_line, BvhErrorKind::DuplicateJoint(name.into())));
+        }
+        tk.expect("{")?;
+        tk.expect("OFFSET")?;
+        let offset = tk.offset()?;
+        let channels = parse_channels(tk)?;
+        open.push(joints.len());
+        joints.push(Joint {
+            name: name.to_string(),
+            parent,
+            offset,
+            channels,
+            end_site: None,
+        });
+        // The joint's body, and the closing of every joint that ends before the next `JOINT`.
+        loop {
+            let Some(&idx) = open.last() else {
+                return Ok(joints);
+            };
+            let (line, t) = tk.next("`JOINT`, `End Site` or `}`")?;
+            if t == "}" {
+                open.pop();
+            } else if t.eq_ignore_ascii_case("JOINT") {
+                parent = Some(idx);
+                break;
+            } else if t.eq_ignore_ascii_case("End") {
+                tk.expect("Site")?;
+                tk.expect("{")?;
+                tk.expect("OFFSET")?;
+                let e = tk.offset()?;
+                tk.expect("}")?;
+                if joints[idx].end_site.is_some() {
+                    return Err(err(
+                        line,
+                        BvhErrorKind::SecondEndSite(joints[idx].name.clone()),
+                    ));
+                }
+                joints[idx].end_site = Some(e);
+            } else {
                 return Err(err(
-                    nline,
-                    BvhErrorKind::ChannelCount {
-                        declared: nt.into(),
-                        listed,
+                    line,
+                    BvhErrorKind::Unexpected {
+                        expected: "`JOINT`, `End Site` or `}`".into(),
+                        found: t.into(),
                     },
                 ));
             }
-        };
-        if listed != n {
+        }
+    }
+}
+
+/// Parses an optional `CHANNELS n name..` line (all on one line, `n` in 0..=6, no repeats).
+fn parse_channels(tk: &mut Tokens<'_>) -> Result<Vec<Channel>, BvhError> {
+    let mut channels = Vec::new();
+    if !tk
+        .peek()
+        .is_some_and(|t| t.1.eq_ignore_ascii_case("CHANNELS"))
+    {
+        return Ok(channels);
+    }
+    let (cline, _) = tk.next("CHANNELS")?;
+    let (nline, nt) = tk.next("channel count")?;
+    // Names on the CHANNELS line itself: count them to report a mismatch precisely.
+    let listed = tk.rest_of_line(cline);
+    let n: usize = match nt.parse() {
+        Ok(n) if n <= 6 && nline == cline => n,
+        _ => {
             return Err(err(
-                cline,
+                nline,
                 BvhErrorKind::ChannelCount {
                     declared: nt.into(),
                     listed,
                 },
             ));
         }
-        for _ in 0..n {
-            let (l, c) = tk.next("channel name")?;
-            let ch =
-                Channel::parse(c).ok_or_else(|| err(l, BvhErrorKind::UnknownChannel(c.into())))?;
-            if channels.contains(&ch) {
-                return Err(err(l, BvhErrorKind::DuplicateChannel(c.into())));
-            }
-            channels.push(ch);
-        }
+    };
+    if listed != n {
+        return Err(err(
+            cline,
+            BvhErrorKind::ChannelCount {
+                declared: nt.into(),
+                listed,
+            },
+        ));
     }
-    joints.push(Joint {
-        name: name.to_string(),
-        parent,
-        offset,
-        channels,
-        end_site: None,
-    });
-    loop {
-        let (line, t) = tk.next("`JOINT`, `End Site` or `}`")?;
-        if t == "}" {
-            return Ok(());
-        } else if t.eq_ignore_ascii_case("JOINT") {
-            parse_joint(tk, joints, Some(idx))?;
-        } else if t.eq_ignore_ascii_case("End") {
-            tk.expect("Site")?;
-            tk.expect("{")?;
-            tk.expect("OFFSET")?;
-            let e = DVec3::new(
-                tk.number("offset x")?,
-                tk.number("offset y")?,
-                tk.number("offset z")?,
-            );
-            tk.expect("}")?;
-            if joints[idx].end_site.is_some() {
-                return Err(err(
-                    line,
-                    BvhErrorKind::SecondEndSite(joints[idx].name.clone()),
-                ));
-            }
-            joints[idx].end_site = Some(e);
-        } else {
-            return Err(err(
-                line,
-                BvhErrorKind::Unexpected {
-                    expected: "`JOINT`, `End Site` or `}`".into(),
-                    found: t.into(),
-                },
-            ));
+    for _ in 0..n {
+        let (l, c) = tk.next("channel name")?;
+        let ch = Channel::parse(c).ok_or_else(|| err(l, BvhErrorKind::UnknownChannel(c.into())))?;
+        if channels.contains(&ch) {
+            return Err(err(l, BvhErrorKind::DuplicateChannel(c.into())));
         }
+        channels.push(ch);
     }
+    Ok(channels)
 }
 
 /// Reads and parses a BVH file; errors name the file and the line.

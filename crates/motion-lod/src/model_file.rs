@@ -12,7 +12,7 @@
 //!
 //! A wrong magic, a newer version, a length that disagrees with the file, a checksum mismatch or a payload
 //! that does not decode is a [`ModelFileError`] naming the path and the offset; nothing panics and the
-//! decoder never allocates more than the file holds.
+//! decoder never allocates more than a small multiple of the file (see [`decode_payload`]).
 
 use std::fs;
 use std::io::Write;
@@ -193,7 +193,7 @@ const CLAIMS_PER_BYTE: usize = 16;
 /// Decodes the bincode payload (the bytes after the header) exactly as [`decode`] does after its
 /// checks, without them: the entry point for fuzzing the decoder itself.
 ///
-/// The decode limit grows with the payload (at most `64 x` its length, at least 256 KiB), so
+/// The decode limit grows with the payload (at most `64 x` its length, at least 64 KiB), so
 /// a corrupted length prefix cannot make the decoder allocate a buffer much larger than the
 /// file: bincode allocates a string's bytes before reading them, up to the limit.
 #[doc(hidden)]

@@ -6,10 +6,14 @@
 //! spaces and ending in `\n`, then the raw element bytes.
 //!
 //! Read: dtypes `<f8`, `<f4` (also big-endian `>f8`, `>f4` and native `=f8`, `=f4`), C or
-//! Fortran order, any number of dimensions. Values are widened to f64 and kept in file order
+//! Fortran order, up to 64 dimensions (numpy's own limit). Values are widened to f64 and kept in file order
 //! (see [`NpyArray::fortran_order`]); NaN/inf are kept here and rejected when converting to a
 //! [`Tensor3`]. Write: f64 (`<f8`) or f32 (`<f4`), format 1.0 (2.0 if the header needs it),
 //! header padded to a multiple of 64 bytes as numpy does.
+//!
+//! Hostile files: the header is at most 1 MiB, tuples nest at most 8 deep, the shape's product
+//! must not overflow and must match the data bytes present exactly, so nothing is allocated
+//! beyond what the file holds (see `tests/hostile_npy.rs`).
 //!
 //! A [`Tensor3`] goes to numpy as a Fortran-ordered `(I, J, K)` array, so `a[i, j, k]` in numpy
 //! is `X(i, j, k)` here, with no copy or transpose of the data.
@@ -22,6 +26,11 @@ const MAGIC: &[u8; 6] = b"\x93NUMPY";
 /// Largest header accepted on read (numpy itself caps untrusted headers at 10 000 bytes by
 /// default; this is generous but bounded).
 const MAX_HEADER: usize = 1 << 20;
+/// Most dimensions accepted on read (numpy 2's `NPY_MAXDIMS`).
+const MAX_DIMS: usize = 64;
+/// Deepest nesting of tuples/lists accepted in a header (a shape needs one level); bounds the
+/// recursion of the header parser on hostile input.
+const MAX_NESTING: usize = 8;
 
 /// Element type written to (or found in) an NPY file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -490,6 +499,8 @@ struct Parser<'a, 'c> {
     s: &'a [u8],
     pos: usize,
     base: usize,
+    /// Open tuples/lists around the current position.
+    depth: usize,
     cx: &'c Ctx<'c>,
 }
 
@@ -538,7 +549,13 @@ impl Parser<'_, '_> {
             Some(b'\'') | Some(b'"') => self.string().map(Lit::Str),
             Some(b'(') | Some(b'[') => {
                 let close = if self.s[self.pos] == b'(' { b')' } else { b']' };
+                if self.depth == MAX_NESTING {
+                    return Err(self.err(format!(
+                        "tuples nested deeper than {MAX_NESTING} levels in header"
+                    )));
+                }
                 self.pos += 1;
+                self.depth += 1;
                 let mut items = Vec::new();
                 loop {
                     if self.peek() == Some(close) {
@@ -552,6 +569,7 @@ impl Parser<'_, '_> {
                         _ => return Err(self.err("expected ',' or a closing bracket in header")),
                     }
                 }
+                self.depth -= 1;
                 Ok(Lit::Tuple(items))
             }
             Some(c) if c.is_ascii_digit() => {
@@ -591,6 +609,7 @@ impl Header {
             s: text.as_bytes(),
             pos: 0,
             base,
+            depth: 0,
             cx,
         };
         p.expect(b'{')?;
@@ -615,6 +634,12 @@ impl Header {
                 }
                 ("fortran_order", Lit::Bool(b)) => fortran = Some(b),
                 ("shape", Lit::Tuple(items)) => {
+                    if items.len() > MAX_DIMS {
+                        return Err(cx.unsupported(
+                            base + at,
+                            format!("{} dimensions (at most {MAX_DIMS} are read)", items.len()),
+                        ));
+                    }
                     let mut dims = Vec::with_capacity(items.len());
                     for it in items {
                         match it {
