@@ -1,7 +1,8 @@
 //! Project tasks of the motion-lod workspace, as a library behind the `xtask` binary.
 //!
 //! This crate is for: generating the committed data in `fixtures/` with a procedural walker
-//! (`cargo xtask fixtures`). It is not for: anything the runtime or the model pipeline links
+//! (`cargo xtask fixtures`), and measuring the paper's tables and figures into `docs/tables.md` and
+//! `docs/figures/` (`cargo xtask tables`, see [`tables`]). It is not for: anything the runtime or the model pipeline links
 //! against (no other crate depends on it), nor for reading real motion capture (see `motion-io`).
 //!
 //! The walker is a parametric gait: per take a performer height, a steady speed and a turn rate
@@ -40,4 +41,5 @@ pub mod gait;
 pub mod leg_ik;
 pub mod rig;
 pub mod rng;
+pub mod tables;
 pub mod walker;

@@ -1,11 +1,12 @@
 //! Project tasks: `cargo xtask fixtures` regenerates `fixtures/` (the synthetic gait set of the
-//! procedural walker, see the library part of this crate).
+//! procedural walker, see the library part of this crate); `cargo xtask tables` measures the paper's
+//! tables and figures into `docs/tables.md` and `docs/figures/`.
 
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand};
-use xtask::fixtures;
+use xtask::{fixtures, tables};
 
 /// Project tasks of the motion-lod workspace.
 #[derive(Debug, Parser)]
@@ -20,6 +21,30 @@ struct Cli {
 enum Command {
     /// Regenerate the synthetic gait set in `fixtures/` (BVH takes, controls.csv, README.md).
     Fixtures(FixturesArgs),
+    /// Measure the paper's tables and figures (storage, Figures 4 and 5, crowd frame rates, accuracy)
+    /// and write `docs/tables.md` and `docs/figures/*.svg`.
+    Tables(TablesArgs),
+}
+
+/// Options of `xtask tables`.
+#[derive(Debug, Args)]
+struct TablesArgs {
+    /// Folder of BVH takes (default: the embedded fixtures), e.g. `../shared/mocap/bandai-namco-2-walk`.
+    #[arg(long, value_name = "DIR")]
+    data: Option<PathBuf>,
+    /// Use a deterministic subset of N cycles.
+    #[arg(long, value_name = "N")]
+    samples: Option<usize>,
+    /// Markdown file to write (default: `docs/tables.md` at the workspace root). The figures go to
+    /// `figures/` beside it, or `figures/NAME/` for `tables-NAME.md`.
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// Folder of the SVG figures (default: derived from `--out`, see above).
+    #[arg(long, value_name = "DIR")]
+    figures: Option<PathBuf>,
+    /// No progress display.
+    #[arg(long)]
+    quiet: bool,
 }
 
 /// Options of `xtask fixtures`.
@@ -36,7 +61,39 @@ struct FixturesArgs {
 fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Fixtures(args) => run_fixtures(&args),
+        Command::Tables(args) => run_tables(&args),
     }
+}
+
+fn run_tables(args: &TablesArgs) -> Result<()> {
+    let root = tables::workspace_root();
+    let root = root.canonicalize().unwrap_or(root);
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| root.join("docs").join("tables.md"));
+    let figures = args
+        .figures
+        .clone()
+        .unwrap_or_else(|| tables::figures_dir_for(&out));
+    let mut command = String::from("cargo xtask tables");
+    if let Some(d) = &args.data {
+        command.push_str(&format!(" --data {}", d.display()));
+    }
+    if let Some(n) = args.samples {
+        command.push_str(&format!(" --samples {n}"));
+    }
+    if let Some(o) = &args.out {
+        command.push_str(&format!(" --out {}", o.display()));
+    }
+    if let Some(f) = &args.figures {
+        command.push_str(&format!(" --figures {}", f.display()));
+    }
+    let mut config = tables::TablesConfig::full(args.data.clone(), out, figures);
+    config.samples = args.samples;
+    config.show_progress = !args.quiet;
+    config.command = command;
+    tables::run(&config)
 }
 
 fn run_fixtures(args: &FixturesArgs) -> Result<()> {

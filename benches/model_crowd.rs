@@ -1,0 +1,155 @@
+//! Benchmarks with the REAL model built from the embedded fixtures (paper defaults): clip kernels and
+//! per-frame poses at the first and last accuracy levels, forward kinematics of the model's skeleton,
+//! and one crowd frame (cull + kernels + poses + FK) of 1k walkers with the model's `LodSource` under
+//! the paper's distance policy and with the naive source at full detail.
+
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use crowd_sim::{Camera, CameraPath, Crowd, CrowdConfig, Detail as CrowdDetail, FrameStats};
+use glam::Vec3;
+use lod_policy::{ClipKernel, Detail, DistancePolicy, KernelScratch, LevelPolicy, ViewParams};
+use motion_lod::dataset::DataSpec;
+use motion_lod::progress::NoProgress;
+use motion_lod::{Analysis, BuildConfig, LodSource, MotionModel, NaiveSource};
+
+/// Walkers per square metre (the default crowd's density: 100 on a 100 m field).
+const DENSITY: f32 = 0.01;
+
+fn model() -> (MotionModel, Analysis) {
+    let data = DataSpec::default()
+        .load(&|_, _| {})
+        .expect("embedded fixtures load");
+    MotionModel::build_with_analysis(&data.training, &BuildConfig::default(), &NoProgress)
+        .expect("model builds from the fixtures")
+}
+
+fn kernels_and_poses(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
+    let lod = &model.lod;
+    let controls: Vec<[f32; 4]> = analysis
+        .controls
+        .iter()
+        .step_by(4)
+        .map(|c| c.map(|v| v as f32))
+        .collect();
+    let mut scratch = KernelScratch::new(lod);
+    let mut kernel = ClipKernel::new(lod);
+    let mut pose = vec![0.0f32; lod.p()];
+    let last = lod.levels().len() - 1;
+    let mut g = c.benchmark_group("model_fixtures");
+    for (name, detail) in [
+        ("level0_all_joints", Detail::full()),
+        ("last_level_all_joints", Detail::new(last, usize::MAX)),
+        ("root_only", Detail::root_only()),
+    ] {
+        let mut i = 0;
+        g.bench_function(BenchmarkId::new("build_kernel", name), |b| {
+            b.iter(|| {
+                i = (i + 1) % controls.len();
+                lod.build_kernel(black_box(&controls[i]), detail, &mut scratch, &mut kernel)
+                    .unwrap();
+                black_box(kernel.duration())
+            })
+        });
+        lod.build_kernel(&controls[0], detail, &mut scratch, &mut kernel)
+            .unwrap();
+        let mut phase = 0.0f32;
+        g.bench_function(BenchmarkId::new("pose", name), |b| {
+            b.iter(|| {
+                phase = (phase + 0.37) % (lod.t() - 1) as f32;
+                lod.pose(&kernel, black_box(phase), &mut pose).unwrap();
+                black_box(pose[0])
+            })
+        });
+    }
+    lod.build_kernel(&controls[0], Detail::full(), &mut scratch, &mut kernel)
+        .unwrap();
+    lod.pose(&kernel, 10.0, &mut pose).unwrap();
+    let layout = &model.layout;
+    let mut world = vec![Vec3::ZERO; layout.skeleton().joints.len()];
+    g.bench_function("forward_kinematics_all_joints", |b| {
+        b.iter(|| {
+            layout.joint_positions(black_box(&pose), layout.joint_count(), &mut world);
+            black_box(world[0])
+        })
+    });
+    g.finish();
+}
+
+fn crowd_frame(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
+    let lod = &model.lod;
+    let policy = DistancePolicy::for_model(lod);
+    let (levels, joints) = (lod.levels().len(), lod.joints());
+    let lod_policy = move |d: f32, visible: bool, cam: &Camera| {
+        let view = ViewParams {
+            fov_y_radians: cam.fov_y,
+            image_height_px: cam.image_height as f32,
+        };
+        let det = policy.detail(d, visible, &view);
+        CrowdDetail {
+            accuracy: det.accuracy.min(levels - 1),
+            active_joints: det.active_joints.min(joints),
+        }
+    };
+    let full = move |_: f32, _: bool, _: &Camera| CrowdDetail {
+        accuracy: 0,
+        active_joints: joints,
+    };
+    let walkers = 1_000;
+    let config = CrowdConfig {
+        seed: 7,
+        ..CrowdConfig::with_density(walkers, DENSITY)
+    };
+    let path = CameraPath::inside_crowd(config.field_size_m);
+    let lens = Camera::default();
+    let dt = 1.0 / config.fps;
+    let mut g = c.benchmark_group("model_crowd_frame");
+    g.sample_size(20);
+
+    let source = LodSource::new(model);
+    let mut crowd = Crowd::new(&source, config).unwrap();
+    for f in 0..45 {
+        let cam = path.camera_at(f as f32 * dt, &lens);
+        crowd.step(&source, &lod_policy, &cam, dt).unwrap();
+    }
+    let mut f = 45u32;
+    let mut stats = FrameStats::default();
+    g.bench_function(BenchmarkId::new("lod", walkers), |b| {
+        b.iter(|| {
+            let cam = path.camera_at(f as f32 * dt, &lens);
+            crowd
+                .step_into(&source, &lod_policy, &cam, dt, &mut stats)
+                .unwrap();
+            f += 1;
+            black_box(stats.visible)
+        })
+    });
+
+    let naive = NaiveSource::new(model, analysis);
+    let mut crowd = Crowd::new(&naive, config).unwrap();
+    for f in 0..45 {
+        let cam = path.camera_at(f as f32 * dt, &lens);
+        crowd.step(&naive, &full, &cam, dt).unwrap();
+    }
+    let mut f = 45u32;
+    g.bench_function(BenchmarkId::new("naive", walkers), |b| {
+        b.iter(|| {
+            let cam = path.camera_at(f as f32 * dt, &lens);
+            crowd
+                .step_into(&naive, &full, &cam, dt, &mut stats)
+                .unwrap();
+            f += 1;
+            black_box(stats.visible)
+        })
+    });
+    g.finish();
+}
+
+fn bench(c: &mut Criterion) {
+    let (model, analysis) = model();
+    kernels_and_poses(c, &model, &analysis);
+    crowd_frame(c, &model, &analysis);
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

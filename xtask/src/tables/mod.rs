@@ -1,0 +1,621 @@
+//! `cargo xtask tables`: measures the paper's tables and figures on our data and writes them to
+//! `docs/tables.md` and `docs/figures/*.svg`.
+//!
+//! Every number in the output comes from the run that writes it: the data are loaded and aligned, the
+//! hybrid model is built ([`motion_lod::MotionModel::build_with_analysis`], paper defaults), and then
+//! 1. storage ([`storage`]): raw samples, every level by ALS, the hybrid key levels and PCA, in f64 and
+//!    f32, and the runtime model and model file;
+//! 2. Figure 4 ([`timing::figure4`]): time per pose and error per accuracy level for online truncation
+//!    ([`online`]), ALS at every level and the hybrid scheme ([`schemes`]);
+//! 3. Figure 5 ([`timing::figure5`]): size ratio, time per pose and error against distance under the
+//!    distance policy;
+//! 4. crowd frame rates with LOD and with naive interpolation ([`crowd`]);
+//! 5. leave-one-out accuracy of every method with its storage ([`accuracy`]).
+//!
+//! The paper's published values stand beside ours in columns labelled "paper (published)"; they are
+//! the only numbers not measured by the run.
+
+pub mod accuracy;
+pub mod crowd;
+pub mod figures;
+pub mod markdown;
+pub mod measure;
+pub mod online;
+pub mod progress;
+pub mod schemes;
+pub mod storage;
+pub mod timing;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use motion_lod::dataset::DataSpec;
+use motion_lod::eval::EvalConfig;
+use motion_lod::progress::Progress;
+use motion_lod::{BuildConfig, MotionModel};
+
+use markdown::{Table, duration_ns, percent, ranks, sig3};
+use measure::Budget;
+
+/// Settings of one `cargo xtask tables` run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TablesConfig {
+    /// BVH folder of the data (`None`: the embedded fixtures).
+    pub data: Option<PathBuf>,
+    /// Use a deterministic subset of this many cycles.
+    pub samples: Option<usize>,
+    /// The markdown file to write.
+    pub out: PathBuf,
+    /// Folder of the SVG figures.
+    pub figures: PathBuf,
+    /// The model settings.
+    pub build: BuildConfig,
+    /// Timing budget per measurement.
+    pub budget: Budget,
+    /// Training samples whose controls drive timings and errors (strided).
+    pub error_samples: usize,
+    /// Distance step of Figure 5 (m).
+    pub distance_step_m: f32,
+    /// Crowd sizes.
+    pub crowds: Vec<crowd::CrowdSize>,
+    /// Skip a naive crowd whose first frame is predicted to take longer than this (s).
+    pub max_naive_warmup_s: f64,
+    /// Held-out samples of the leave-one-out evaluation (`None`: all).
+    pub loo_samples: Option<usize>,
+    /// Show the progress display on standard error.
+    pub show_progress: bool,
+    /// The command line that reproduces this run, for the document.
+    pub command: String,
+}
+
+impl TablesConfig {
+    /// The full run: paper model settings, 5 x 10 ms timings, crowds of 100 to 100k walkers.
+    pub fn full(data: Option<PathBuf>, out: PathBuf, figures: PathBuf) -> TablesConfig {
+        TablesConfig {
+            data,
+            samples: None,
+            out,
+            figures,
+            build: BuildConfig::default(),
+            budget: Budget::full(),
+            error_samples: 24,
+            distance_step_m: 10.0,
+            crowds: crowd::full_sizes(),
+            max_naive_warmup_s: 60.0,
+            loo_samples: None,
+            show_progress: true,
+            command: "cargo xtask tables".into(),
+        }
+    }
+
+    /// A seconds-long configuration for smoke tests: small ranks, few levels, quick timings, two tiny
+    /// crowds.
+    pub fn quick(out: PathBuf, figures: PathBuf) -> TablesConfig {
+        let mut build = BuildConfig {
+            key_levels: 3,
+            accuracy_levels: 5,
+            max_ranks: [12, 10, 10],
+            min_ranks: [7, 4, 4],
+            importance_poses: 200,
+            error_samples: 4,
+            ..BuildConfig::default()
+        };
+        build.als.max_iter = 10;
+        TablesConfig {
+            data: None,
+            samples: Some(16),
+            out,
+            figures,
+            build,
+            budget: Budget::quick(),
+            error_samples: 3,
+            distance_step_m: 50.0,
+            crowds: vec![
+                crowd::CrowdSize {
+                    walkers: 50,
+                    frames: 2,
+                },
+                crowd::CrowdSize {
+                    walkers: 200,
+                    frames: 1,
+                },
+            ],
+            max_naive_warmup_s: 10.0,
+            loo_samples: Some(4),
+            show_progress: false,
+            command: "(smoke test)".into(),
+        }
+    }
+}
+
+/// The workspace root (parent of this crate).
+pub fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The figures folder that goes with a tables file: `figures/` beside `tables.md`, and
+/// `figures/<name>/` beside `tables-<name>.md` (or any other `<name>.md`).
+pub fn figures_dir_for(out: &Path) -> PathBuf {
+    let parent = out.parent().unwrap_or(Path::new("."));
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("tables");
+    match stem {
+        "tables" => parent.join("figures"),
+        _ => parent
+            .join("figures")
+            .join(stem.strip_prefix("tables-").unwrap_or(stem)),
+    }
+}
+
+/// `target` relative to the folder `from` when it lies below it, else `target` itself (for links).
+pub fn relative_link(from: &Path, target: &Path) -> String {
+    let norm = |p: &Path| p.components().collect::<PathBuf>();
+    match norm(target).strip_prefix(norm(from)) {
+        Ok(rel) => rel.to_string_lossy().replace('\\', "/"),
+        Err(_) => target.to_string_lossy().into_owned(),
+    }
+}
+
+/// The machine: CPU model (from `/proc/cpuinfo`) and available threads.
+pub fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!(
+        "{cpu}, {threads} hardware thread(s) available, {} {}",
+        std::env::consts::OS,
+        std::env::consts::ARCH
+    )
+}
+
+/// The commit of the workspace (`git rev-parse --short HEAD`), marked when tracked files differ from it.
+pub fn commit() -> String {
+    let root = workspace_root();
+    let git = |args: &[&str]| {
+        Command::new("git")
+            .args(args)
+            .current_dir(&root)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    match git(&["rev-parse", "--short", "HEAD"]) {
+        Some(hash) => match git(&["status", "--porcelain", "--untracked-files=no"]) {
+            Some(s) if s.is_empty() => hash,
+            _ => format!("{hash} with uncommitted changes"),
+        },
+        None => "uncommitted (no git history)".into(),
+    }
+}
+
+/// Runs every measurement and writes the tables and figures.
+pub fn run(config: &TablesConfig) -> Result<()> {
+    let started = Instant::now();
+    let bar = progress::StageBar::new(config.show_progress);
+    let progress: &dyn Progress = &bar;
+
+    // Data and model.
+    let spec = DataSpec {
+        dirs: config.data.iter().cloned().collect(),
+        samples: config.samples,
+        ..DataSpec::default()
+    };
+    progress.stage("reading and aligning the data", 1);
+    let loaded = spec
+        .load(&|_, _| {})
+        .with_context(|| format!("loading {}", spec.describe()))?;
+    progress.inc(1);
+    let (model, analysis) =
+        MotionModel::build_with_analysis(&loaded.training, &config.build, progress)
+            .context("building the model")?;
+    let trunc = schemes::with_lod(&model, schemes::truncation_only(&model)?);
+    let (als, als_sweeps) = schemes::als_every_level(&analysis, &config.build, progress)?;
+
+    // Measurements.
+    let [p, t, s] = analysis.tensor.dims();
+    let picks = timing::picked_samples(s, config.error_samples);
+    let fig4 = timing::figure4(
+        &timing::Schemes {
+            hybrid: &model,
+            als: &als,
+            truncation: &trunc,
+        },
+        &analysis,
+        &picks,
+        config.budget,
+        progress,
+    )?;
+    let fig5 = timing::figure5(
+        &model,
+        &analysis,
+        &picks,
+        config.distance_step_m,
+        config.budget,
+        progress,
+    )?;
+    let eval_config = EvalConfig {
+        max_samples: config.loo_samples,
+        ..EvalConfig::default()
+    };
+    let loo = accuracy::evaluate(&analysis, &model, &eval_config, progress)?;
+    let crowds = crowd::measure(
+        &model,
+        &analysis,
+        &config.crowds,
+        config.max_naive_warmup_s,
+        progress,
+    )?;
+
+    // Output.
+    progress.stage("writing tables and figures", 3);
+    std::fs::create_dir_all(&config.figures)
+        .with_context(|| format!("creating {}", config.figures.display()))?;
+    let data_name = match &config.data {
+        Some(d) => d
+            .file_name()
+            .map_or("data".into(), |n| n.to_string_lossy().into_owned()),
+        None => "fixtures".into(),
+    };
+    let fig4_path = config.figures.join("figure4.svg");
+    let fig5_path = config.figures.join("figure5.svg");
+    figures::figure4(&fig4_path, &fig4, &data_name)?;
+    progress.inc(1);
+    figures::figure5(&fig5_path, &fig5, &data_name)?;
+    progress.inc(1);
+    let out_dir = config.out.parent().unwrap_or(Path::new("."));
+    let mut doc = String::new();
+    let _ = writeln!(doc, "# Measured tables: {}\n", spec.describe());
+    let _ = writeln!(
+        doc,
+        "Written by `{}` ({:.0} s on this machine). Every number below was measured by that run, \
+         except the columns labelled **paper (published)**, which quote Mukai and Kuriyama.\n",
+        config.command,
+        started.elapsed().as_secs_f64()
+    );
+    let _ = writeln!(doc, "- Machine: {}", machine());
+    let _ = writeln!(doc, "- Commit: {}", commit());
+    let _ = writeln!(
+        doc,
+        "- Rerun: `{}` (release build; the progress display is on standard error). The criterion \
+         benchmarks: `cargo bench -p motion-lod-benches` (see the last section).",
+        config.command
+    );
+    let _ = writeln!(
+        doc,
+        "- Timings are medians of {} runs of at least {} ms each, on a machine shared with other work; \
+         errors are mean joint position errors after forward kinematics against the data, at the controls \
+         of {} of the {s} samples.\n",
+        config.budget.runs,
+        config.budget.run.as_secs_f64() * 1e3,
+        picks.len()
+    );
+    write_model_section(&mut doc, &model, &analysis, &als_sweeps, [p, t, s]);
+    let _ = writeln!(doc, "## 1. Storage (paper section 5.1)\n");
+    doc.push_str(&storage::section(
+        &analysis,
+        &model,
+        &als,
+        eval_config.pca_rank,
+    )?);
+    write_figure4(&mut doc, &fig4, &relative_link(out_dir, &fig4_path), t);
+    write_figure5(&mut doc, &fig5, &relative_link(out_dir, &fig5_path), &model);
+    write_crowd(&mut doc, &crowds);
+    let _ = writeln!(
+        doc,
+        "\n## 5. Accuracy: leave-one-out error per method\n\nEach sample in turn (of {} evaluated) is \
+         predicted from the others at its controls; the error is against the held-out sample. Raw samples: \
+         {}. The paper publishes no per-method numbers here; it states that kriging in the multilinear \
+         space is more accurate than the simple restorations, and that PCA needs about four times the \
+         storage at similar cost.\n",
+        loo.evaluated,
+        markdown::mib(loo.raw_bytes)
+    );
+    doc.push_str(&accuracy::table(&loo));
+    write_benches(&mut doc);
+    if let Some(dir) = config.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    std::fs::write(&config.out, doc)
+        .with_context(|| format!("writing {}", config.out.display()))?;
+    progress.inc(1);
+    bar.finish();
+    if config.show_progress {
+        eprintln!(
+            "tables: wrote {} and {} figures in {} ({:.0} s)",
+            config.out.display(),
+            2,
+            config.figures.display(),
+            started.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+fn write_model_section(
+    doc: &mut String,
+    model: &MotionModel,
+    analysis: &motion_lod::Analysis,
+    als_sweeps: &[usize],
+    dims: [usize; 3],
+) {
+    let [p, t, s] = dims;
+    let _ = writeln!(doc, "## The data and the model\n");
+    let _ = writeln!(
+        doc,
+        "Motion tensor P x T x S = {p} x {t} x {s} (paper: 94 x 100 x 186). {} key levels from {} to {} \
+         (paper: N = 10 from 40 x 40 x 60 to 7 x 7 x 9), {} distinct accuracy levels, built in {:.1} s; \
+         ALS at every other level took {} HOOI sweeps in total.\n",
+        analysis.keys.levels.len(),
+        ranks(analysis.keys.levels[0].ranks),
+        ranks(analysis.keys.levels[analysis.keys.levels.len() - 1].ranks),
+        model.lod.levels().len(),
+        model.report.seconds,
+        als_sweeps.iter().sum::<usize>()
+    );
+    let mut t = Table::new(&["key", "ranks", ">mse E", ">relative error", ">ALS sweeps"]);
+    for (k, key) in analysis.keys.levels.iter().enumerate() {
+        t.row(&[
+            k.to_string(),
+            ranks(key.ranks),
+            format!("{:.3e}", key.mse),
+            percent(key.rel_error),
+            key.iterations.to_string(),
+        ]);
+    }
+    doc.push_str(&t.render());
+    doc.push('\n');
+}
+
+fn write_figure4(doc: &mut String, fig: &timing::Figure4, link: &str, t: usize) {
+    let _ = writeln!(
+        doc,
+        "\n## 2. Figure 4: time per pose and error per accuracy level\n\n![Figure 4]({link})\n\n\
+         Time per pose = clip kernel / T + one pose (T = {t}), all joints. *Online truncation* keeps only \
+         key 0 and cuts each level out of it per clip, unfolding the full core each time (Appendix B); \
+         *ALS at every level* stores an ALS model per level; *hybrid* is the built model (key levels by \
+         ALS, the levels between them truncated from the next larger key).\n\n\
+         **paper (published)**: Figure 4 is a plot without values; the text says online truncation costs \
+         more because of the unfolding, proportional to the full core, that the hybrid and ALS schemes \
+         switch precomputed data, and that ALS slightly improves on truncation's accuracy.\n"
+    );
+    let mut tab = Table::new(&[
+        ">level",
+        "ranks",
+        ">truncation: kernel",
+        ">truncation: per pose",
+        ">truncation: error (cm)",
+        ">ALS: kernel",
+        ">ALS: per pose",
+        ">ALS: error (cm)",
+        ">hybrid: kernel",
+        ">hybrid: per pose",
+        ">hybrid: error (cm)",
+    ]);
+    for ((tr, al), hy) in fig.truncation.iter().zip(&fig.als).zip(&fig.hybrid) {
+        tab.row(&[
+            hy.level.to_string(),
+            ranks(hy.ranks),
+            duration_ns(tr.timed.kernel_ns),
+            duration_ns(tr.timed.per_pose_ns()),
+            format!("{:.3}", tr.error_cm),
+            duration_ns(al.timed.kernel_ns),
+            duration_ns(al.timed.per_pose_ns()),
+            format!("{:.3}", al.error_cm),
+            duration_ns(hy.timed.kernel_ns),
+            duration_ns(hy.timed.per_pose_ns()),
+            format!("{:.3}", hy.error_cm),
+        ]);
+    }
+    doc.push_str(&tab.render());
+    let mean = |v: &[timing::LevelPoint]| {
+        v.iter().map(|p| p.timed.per_pose_ns()).sum::<f64>() / v.len().max(1) as f64
+    };
+    let _ = writeln!(
+        doc,
+        "\nMean over levels of the time per pose: truncation {}, ALS {}, hybrid {}.",
+        duration_ns(mean(&fig.truncation)),
+        duration_ns(mean(&fig.als)),
+        duration_ns(mean(&fig.hybrid))
+    );
+}
+
+fn write_figure5(doc: &mut String, pts: &[timing::DistancePoint], link: &str, model: &MotionModel) {
+    let _ = writeln!(
+        doc,
+        "\n## 3. Figure 5: level of detail against distance from the camera\n\n![Figure 5]({link})\n\n\
+         The distance policy (`lod_policy::DistancePolicy`, defaults): full detail below 30 m, one key \
+         level more every 50 m (the levels between keys spread over each step), one joint (3 DOF) fewer \
+         every 10 m, root only past the last key step. Size ratio = r_P r_T r_S of the level over that of \
+         level 0. The model has {} joints.\n\n\
+         **paper (published)**: the same schedule (30 m, 50 m, 3 DOF per 10 m) over 10 key tensors from \
+         40 x 40 x 60 to 7 x 7 x 9; Figure 5 is a plot without values. The text reports that the error \
+         grows monotonically with distance with a jump past 200 m, and that time and key tensor size fall \
+         exponentially with distance.\n",
+        model.lod.joints()
+    );
+    let mut tab = Table::new(&[
+        ">distance (m)",
+        ">level",
+        "ranks",
+        ">joints",
+        ">size ratio",
+        ">kernel",
+        ">per pose",
+        ">error (cm)",
+    ]);
+    let levels = model.lod.levels();
+    for p in pts {
+        let r = levels[p.level].ranks;
+        tab.row(&[
+            format!("{:.0}", p.distance_m),
+            p.level.to_string(),
+            ranks([r.p, r.t, r.s]),
+            if p.detail.active_joints == 0 {
+                "root only".to_string()
+            } else {
+                p.detail.active_joints.min(model.lod.joints()).to_string()
+            },
+            format!("{:.4}", p.size_ratio),
+            duration_ns(p.timed.kernel_ns),
+            duration_ns(p.timed.per_pose_ns()),
+            format!("{:.3}", p.error_cm),
+        ]);
+    }
+    doc.push_str(&tab.render());
+}
+
+/// The paper's crowd frame rates (section 5.2, 100 walkers): worst, mean, best with LOD; mean naive.
+const PAPER_FPS: (f64, f64, f64, f64) = (9.5, 12.0, 25.0, 3.9);
+
+fn write_crowd(doc: &mut String, rows: &[crowd::CrowdRow]) {
+    let _ = writeln!(
+        doc,
+        "\n## 4. Crowd frame rates (paper section 5.2)\n\n\
+         Walkers at {} per m² (the field grows with the crowd), the camera walking inside the crowd, \
+         the paper's distance policy for *LOD* and full detail for every walker for *naive* (kriging \
+         weights applied to the raw samples). A frame is culling, clip kernels, poses and forward \
+         kinematics on all available threads, without rendering; the first frame (every walker builds a \
+         clip) is a warm-up, reported apart. Frame rates are per timed frame: worst, mean (frames / total \
+         time) and best.\n",
+        crowd::DENSITY
+    );
+    let mut tab = Table::new(&[
+        ">walkers",
+        "source",
+        ">frames",
+        ">fps worst",
+        ">fps mean",
+        ">fps best",
+        ">kernels / frame",
+        ">poses / frame",
+        ">FK / frame",
+        ">warm-up frame",
+        "paper (published)",
+    ]);
+    for r in rows {
+        let paper = match (r.walkers, r.source) {
+            (100, "lod") => format!("{} / {} / {} fps", PAPER_FPS.0, PAPER_FPS.1, PAPER_FPS.2),
+            (100, "naive") => format!("mean {} fps", PAPER_FPS.3),
+            _ => "-".into(),
+        };
+        match (&r.report, &r.skipped) {
+            (Some(rep), _) => {
+                let m = rep.mean_timings();
+                let ms = |d: std::time::Duration| duration_ns(d.as_nanos() as f64);
+                tab.row(&[
+                    r.walkers.to_string(),
+                    r.source.to_string(),
+                    rep.frames.to_string(),
+                    sig3(rep.fps_worst),
+                    sig3(rep.fps_mean),
+                    sig3(rep.fps_best),
+                    ms(m.kernels),
+                    ms(m.poses),
+                    ms(m.fk),
+                    duration_ns(r.warmup_s * 1e9),
+                    paper,
+                ]);
+            }
+            (None, skipped) => {
+                tab.row(&[
+                    r.walkers.to_string(),
+                    r.source.to_string(),
+                    "0".into(),
+                    "-".into(),
+                    "-".into(),
+                    "-".into(),
+                    "-".into(),
+                    "-".into(),
+                    "-".into(),
+                    skipped.clone().unwrap_or_default(),
+                    paper,
+                ]);
+            }
+        }
+    }
+    doc.push_str(&tab.render());
+    let _ = writeln!(
+        doc,
+        "\nThe paper measured on a 2.6 GHz Athlon 64 FX-60 with its own renderer; its rates include \
+         drawing, ours do not, so only the ratio LOD / naive compares."
+    );
+}
+
+fn write_benches(doc: &mut String) {
+    let _ = writeln!(
+        doc,
+        "\n## 6. Criterion benchmarks\n\nNot run by this command (they take longer); run them with \
+         `cargo bench -p motion-lod-benches --bench <name>`:\n"
+    );
+    let mut t = Table::new(&["bench", "measures"]);
+    for (name, what) in [
+        (
+            "pose",
+            "clip kernels and per-frame poses of a paper-sized runtime model",
+        ),
+        (
+            "model_crowd",
+            "clip kernels and poses of the model built from the fixtures, and one crowd frame with it (LOD and naive)",
+        ),
+        ("kriging", "kriging set-up and queries"),
+        (
+            "hosvd",
+            "HOSVD, HOOI and the key-level search at 94 x 100 x 186",
+        ),
+        ("motion_io", "forward kinematics and pose vectors"),
+        (
+            "crowd",
+            "one crowd frame with the procedural source, BVH culling",
+        ),
+        ("timewarp", "DTW and alignment"),
+    ] {
+        t.row(&[format!("`{name}`"), what.to_string()]);
+    }
+    doc.push_str(&t.render());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn figures_folder_follows_the_output_name() {
+        assert_eq!(
+            figures_dir_for(Path::new("docs/tables.md")),
+            Path::new("docs/figures")
+        );
+        assert_eq!(
+            figures_dir_for(Path::new("docs/tables-bandai.md")),
+            Path::new("docs/figures/bandai")
+        );
+        assert_eq!(
+            figures_dir_for(Path::new("out.md")),
+            Path::new("figures/out")
+        );
+    }
+
+    #[test]
+    fn links_are_relative_below_the_document() {
+        assert_eq!(
+            relative_link(
+                Path::new("docs"),
+                Path::new("docs/figures/bandai/figure4.svg")
+            ),
+            "figures/bandai/figure4.svg"
+        );
+        assert_eq!(
+            relative_link(Path::new("docs"), Path::new("/tmp/x.svg")),
+            "/tmp/x.svg"
+        );
+    }
+}

@@ -1,0 +1,97 @@
+//! Smoke test of the `cargo xtask tables` pipeline on a tiny configuration: every section and both
+//! figures are written, and the measured numbers are finite.
+
+use xtask::tables::{TablesConfig, run};
+
+#[test]
+fn tables_pipeline_writes_every_section_and_figure() {
+    let dir = std::env::temp_dir().join(format!("xtask-tables-smoke-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.join("tables.md");
+    let figures = dir.join("figures");
+    let config = TablesConfig::quick(out.clone(), figures.clone());
+    run(&config).expect("tables pipeline runs");
+    let doc = std::fs::read_to_string(&out).expect("tables written");
+    for heading in [
+        "## 1. Storage",
+        "## 2. Figure 4",
+        "## 3. Figure 5",
+        "## 4. Crowd frame rates",
+        "## 5. Accuracy",
+        "## 6. Criterion benchmarks",
+        "paper (published)",
+        "](figures/figure4.svg)",
+        "](figures/figure5.svg)",
+    ] {
+        assert!(doc.contains(heading), "missing {heading:?} in:\n{doc}");
+    }
+    assert!(!doc.contains("NaN"), "a measured value is NaN:\n{doc}");
+    // The quick crowds are 50 and 200 walkers, each with LOD and naive rows.
+    assert!(
+        doc.contains("| 50 | lod |") && doc.contains("| 200 | naive |"),
+        "{doc}"
+    );
+    for f in ["figure4.svg", "figure5.svg"] {
+        let svg = std::fs::read_to_string(figures.join(f)).expect("figure written");
+        assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{f}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The online-truncation kernel (unfold the full core per clip, cut the sub-block) computes the same
+/// `G(c)`, durations and poses as the runtime kernel over a model whose levels truncate key 0.
+#[test]
+fn online_truncation_matches_the_runtime_kernel_on_truncations_of_key_0() {
+    use lod_policy::{ClipKernel, Detail, KernelScratch};
+    use motion_lod::MotionModel;
+    use motion_lod::dataset::DataSpec;
+    use motion_lod::progress::NoProgress;
+    use xtask::tables::{online::OnlineTruncation, schemes};
+
+    let config = TablesConfig::quick("unused.md".into(), "unused".into());
+    let data = DataSpec {
+        samples: config.samples,
+        ..DataSpec::default()
+    }
+    .load(&|_, _| {})
+    .expect("fixtures load");
+    let (model, analysis) =
+        MotionModel::build_with_analysis(&data.training, &config.build, &NoProgress)
+            .expect("model builds");
+    let trunc = schemes::truncation_only(&model).expect("truncation model");
+    assert_eq!(trunc.keys().len(), 1);
+    assert_eq!(trunc.levels().len(), model.lod.levels().len());
+    let mut online = OnlineTruncation::new(&trunc);
+    let mut scratch = KernelScratch::new(&trunc);
+    let mut kernel = ClipKernel::new(&trunc);
+    let (mut a, mut b) = (vec![0.0f32; trunc.p()], vec![0.0f32; trunc.p()]);
+    let last = trunc.levels().len() - 1;
+    for (k, c) in analysis.controls.iter().enumerate().step_by(5) {
+        let c = c.map(|v| v as f32);
+        for level in [0, last / 2, last] {
+            for joints in [usize::MAX, 2] {
+                let detail = Detail::new(level, joints);
+                trunc
+                    .build_kernel(&c, detail, &mut scratch, &mut kernel)
+                    .expect("kernel");
+                online.build(&c, trunc.levels()[level].ranks, kernel.rows());
+                let scale = kernel.g().iter().fold(1e-6f32, |m, v| m.max(v.abs()));
+                assert_eq!(online.g().len(), kernel.g().len());
+                for (x, y) in online.g().iter().zip(kernel.g()) {
+                    assert!(
+                        (x - y).abs() <= 1e-4 * scale,
+                        "sample {k} level {level}: {x} vs {y}"
+                    );
+                }
+                assert!((online.duration() - kernel.duration()).abs() < 1e-4);
+                for phase in [0.0, 3.5, (trunc.t() - 1) as f32] {
+                    trunc.pose(&kernel, phase, &mut a).expect("pose");
+                    online.pose(phase, &mut b);
+                    for (x, y) in a.iter().zip(&b) {
+                        assert!((x - y).abs() <= 1e-4 * scale.max(1.0), "{x} vs {y}");
+                    }
+                }
+            }
+        }
+    }
+}
