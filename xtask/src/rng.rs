@@ -1,48 +1,10 @@
 //! A tiny deterministic pseudo-random generator (SplitMix64) for the fixture plan.
 //!
-//! The fixtures must be byte-identical on every machine and every run, so the generator is written
-//! here (no dependency whose stream could change between versions).
+//! The fixtures must be byte-identical on every machine and every run, so the generator is the
+//! project's own (`crowd_sim::rng::SplitMix64`, no dependency whose stream could change between
+//! versions); the tests below pin its stream.
 
-/// SplitMix64 (Steele, Lea and Flood 2014): `state += 0x9E3779B97F4A7C15`, then two
-/// xor-shift-multiply rounds. Passes BigCrush; more than enough for choosing take parameters.
-#[derive(Debug, Clone)]
-pub struct SplitMix64 {
-    state: u64,
-}
-
-impl SplitMix64 {
-    /// A generator started from `seed`.
-    pub fn new(seed: u64) -> Self {
-        SplitMix64 { state: seed }
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// A uniform number in `[0, 1)` with 53 random bits.
-    pub fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// A uniform number in `[lo, hi)`.
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next_f64()
-    }
-
-    /// Shuffles `items` in place (Fisher-Yates).
-    pub fn shuffle<T>(&mut self, items: &mut [T]) {
-        for i in (1..items.len()).rev() {
-            let j = (self.next_u64() % (i as u64 + 1)) as usize;
-            items.swap(i, j);
-        }
-    }
-}
+pub use crowd_sim::rng::SplitMix64;
 
 #[cfg(test)]
 mod tests {

@@ -1,4 +1,5 @@
-//! A tiny seeded pseudo-random generator (SplitMix64), one stream per walker.
+//! A tiny seeded pseudo-random generator (SplitMix64), one stream per walker; also the project's
+//! generator for the fixture plan and for random training subsets (same stream on every machine).
 //!
 //! Every walker draws from `SplitMix64::new(seed ^ mix(walker index))`, so its path, height and
 //! phase depend only on the crowd seed and its index, never on thread count or scheduling.
@@ -31,6 +32,24 @@ impl SplitMix64 {
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^ (z >> 31)
+    }
+
+    /// A uniform number in `[0, 1)` with 53 random bits.
+    pub fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// A uniform number in `[lo, hi)`.
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next_f64()
+    }
+
+    /// Shuffles `items` in place (Fisher-Yates).
+    pub fn shuffle<T>(&mut self, items: &mut [T]) {
+        for i in (1..items.len()).rev() {
+            let j = (self.next_u64() % (i as u64 + 1)) as usize;
+            items.swap(i, j);
+        }
     }
 
     /// Uniform `f32` in `[0, 1)` from the top 24 bits.

@@ -150,14 +150,9 @@ impl TrainingSet {
         }
         // Partial Fisher-Yates with splitmix64: the same (n, seed) always picks the same samples.
         let mut idx: Vec<usize> = (0..s).collect();
-        let mut state = seed;
+        let mut rng = crowd_sim::rng::SplitMix64::new(seed);
         for i in 0..n {
-            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^= z >> 31;
-            let j = i + (z % (s - i) as u64) as usize;
+            let j = i + (rng.next_u64() % (s - i) as u64) as usize;
             idx.swap(i, j);
         }
         let mut pick = idx[..n].to_vec();
@@ -173,6 +168,11 @@ impl TrainingSet {
             sources: pick.iter().map(|&k| self.sources[k].clone()).collect(),
         }
     }
+}
+
+/// Controls as an `S x d` matrix, one row per sample.
+fn control_matrix(controls: &[[f64; 4]]) -> Mat<f64> {
+    Mat::from_fn(controls.len(), CONTROL_NAMES.len(), |i, k| controls[i][k])
 }
 
 /// Column-major copy of a faer matrix.
@@ -281,7 +281,7 @@ impl Analysis {
 
         // 4. Universal kriging of the samples over the controls.
         progress.stage("kriging", 1);
-        let params = Mat::from_fn(s, CONTROL_NAMES.len(), |i, k| set.controls[i][k]);
+        let params = control_matrix(&set.controls);
         let values = Mat::from_fn(s, p * t, |i, j| tensor.sample(i)[j]);
         let kriging = Kriging::fit(params.as_ref(), values.as_ref(), &config.kriging)?;
         progress.inc(1);
@@ -296,6 +296,11 @@ impl Analysis {
             controls: set.controls.clone(),
             sources: set.sources.clone(),
         })
+    }
+
+    /// The raw controls as an `S x d` matrix (what the kriging was fitted on).
+    pub fn control_matrix(&self) -> Mat<f64> {
+        control_matrix(&self.controls)
     }
 
     /// Step 5: the runtime model (level errors not yet measured).

@@ -85,37 +85,30 @@ fn loo_weights_from_errors(errors: MatRef<'_, f64>) -> Mat<f64> {
     Mat::from_fn(s, s, |i, j| if i == j { 0.0 } else { -errors[(i, j)] })
 }
 
-/// Leave-one-out weights of universal kriging with the analysis's variogram and scaling.
-fn kriging_loo_weights(analysis: &Analysis) -> Result<Mat<f64>, BuildError> {
+/// Leave-one-out weights of universal kriging (`rbf` false) or of the RBF baseline (`rbf` true), both
+/// with the analysis's control scaling (kriging also with its variogram): the methods fitted to the
+/// identity values, so that their leave-one-out errors are `I - W`.
+fn loo_weights(analysis: &Analysis, rbf: bool) -> Result<Mat<f64>, BuildError> {
     let k = &analysis.kriging;
     let s = k.n_samples();
-    let params = Mat::from_fn(s, analysis.controls[0].len(), |i, d| {
-        analysis.controls[i][d]
-    });
-    let config = KrigingConfig {
-        model: ModelChoice::Given(*k.variogram()),
-        scaling: ScalingChoice::Given(k.scaling().clone()),
-        ..KrigingConfig::default()
-    };
+    let params = analysis.control_matrix();
     let identity = Mat::<f64>::identity(s, s);
-    let fit = Kriging::fit(params.as_ref(), identity.as_ref(), &config)?;
-    Ok(loo_weights_from_errors(fit.loo_errors()?.as_ref()))
-}
-
-/// Leave-one-out weights of the RBF baseline.
-fn rbf_loo_weights(analysis: &Analysis) -> Result<Mat<f64>, BuildError> {
-    let k = &analysis.kriging;
-    let s = k.n_samples();
-    let params = Mat::from_fn(s, analysis.controls[0].len(), |i, d| {
-        analysis.controls[i][d]
-    });
-    let config = RbfConfig {
-        scaling: ScalingChoice::Given(k.scaling().clone()),
-        ..RbfConfig::default()
+    let scaling = ScalingChoice::Given(k.scaling().clone());
+    let errors = if rbf {
+        let config = RbfConfig {
+            scaling,
+            ..RbfConfig::default()
+        };
+        Rbf::fit(params.as_ref(), identity.as_ref(), &config)?.loo_errors()?
+    } else {
+        let config = KrigingConfig {
+            model: ModelChoice::Given(*k.variogram()),
+            scaling,
+            ..KrigingConfig::default()
+        };
+        Kriging::fit(params.as_ref(), identity.as_ref(), &config)?.loo_errors()?
     };
-    let identity = Mat::<f64>::identity(s, s);
-    let fit = Rbf::fit(params.as_ref(), identity.as_ref(), &config)?;
-    Ok(loo_weights_from_errors(fit.loo_errors()?.as_ref()))
+    Ok(loo_weights_from_errors(errors.as_ref()))
 }
 
 /// Nearest other sample in scaled control space (ties: the lower index).
@@ -200,7 +193,7 @@ pub fn leave_one_out(
     let evaluated = (0..s).step_by(stride).count();
     let keys = &analysis.keys.levels;
     progress.stage("leave-one-out", (keys.len() + 4) as u64);
-    let w_krig = kriging_loo_weights(analysis)?;
+    let w_krig = loo_weights(analysis, false)?;
     let mut methods = Vec::new();
     for (k, key) in keys.iter().enumerate() {
         let level = analysis
@@ -233,7 +226,7 @@ pub fn leave_one_out(
         bytes: raw_bytes,
     });
     progress.inc(1);
-    let w_rbf = rbf_loo_weights(analysis)?;
+    let w_rbf = loo_weights(analysis, true)?;
     let (error_cm, shell_cm) = score(analysis, &blend_samples(x, w_rbf.as_ref()), stride);
     methods.push(MethodError {
         name: "rbf".into(),
