@@ -298,6 +298,17 @@ impl Analysis {
         })
     }
 
+    /// Brings an aligned tensor in the training layout (`set_layout`, rows as `motion-lod cycles` writes
+    /// them) into this analysis's row order and time scale, for comparison with its samples.
+    pub fn prepare(&self, set_layout: &PoseLayout, tensor: &Tensor3) -> Tensor3 {
+        let mut out = permute_rows(set_layout, &self.layout, tensor);
+        let p = out.dims()[0];
+        for pose in out.as_mut_slice().chunks_exact_mut(p) {
+            pose[TIME_ROW] *= self.time_scale;
+        }
+        out
+    }
+
     /// The raw controls as an `S x d` matrix (what the kriging was fitted on).
     pub fn control_matrix(&self) -> Mat<f64> {
         control_matrix(&self.controls)

@@ -161,6 +161,14 @@ impl CycleSet {
         counts
     }
 
+    /// The pose whose exp-map branches every cycle of the set was brought onto (the first cycle's mean).
+    pub fn branch_reference(&self) -> Vec<f64> {
+        self.cycles
+            .first()
+            .map(|c| mean_pose(c, self.layout.dof()))
+            .unwrap_or_else(|| vec![0.0; self.layout.dof()])
+    }
+
     /// Median cycle length in frames (the lower median; 0 without cycles).
     pub fn median_length(&self) -> usize {
         let mut lens: Vec<usize> = self.cycles.iter().map(GaitCycle::frame_count).collect();
@@ -266,7 +274,27 @@ pub fn load_cycles(
             r
         })
         .collect();
-    cycles_from_takes(&paths, read, config, &|_, _| tick())
+    cycles_from_takes(&paths, read, config, None, &|_, _| tick())
+}
+
+/// Loads the gait cycles of BVH folders as [`load_cycles`] does, but on the layout and exp-map branches
+/// of an existing cycle set (`like`): for held-out data that must match a model's training data. Takes
+/// whose skeleton differs from `like`'s are errors naming the file.
+pub fn load_cycles_like(
+    dirs: &[PathBuf],
+    config: &DatasetConfig,
+    like: &CycleSet,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<CycleSet, DatasetError> {
+    if dirs.is_empty() {
+        return Err(DatasetError::NoInput);
+    }
+    let paths = list_bvh_files(dirs)?;
+    let read: Vec<Result<Motion, String>> = paths
+        .par_iter()
+        .map(|p| read_bvh(p).map_err(|e| e.to_string()))
+        .collect();
+    cycles_from_takes(&paths, read, config, Some(like), progress)
 }
 
 /// Loads the gait cycles of the default data set embedded in this crate (the procedural walker's
@@ -291,7 +319,7 @@ pub fn load_embedded_fixtures(
             r
         })
         .collect();
-    cycles_from_takes(&paths, read, config, &|_, _| tick())
+    cycles_from_takes(&paths, read, config, None, &|_, _| tick())
 }
 
 /// The embedded default takes: `(file name, BVH text)`, sorted by name (generated at build time from
@@ -305,6 +333,7 @@ fn cycles_from_takes(
     paths: &[PathBuf],
     read: Vec<Result<Motion, String>>,
     config: &DatasetConfig,
+    like: Option<&CycleSet>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<CycleSet, DatasetError> {
     let tick = || progress(0, 0);
@@ -330,23 +359,49 @@ fn cycles_from_takes(
         });
     }
     check_skeletons(&motions)?;
-    let units = match config.units_per_metre {
-        Some(u) => u,
-        None => detect_units_per_metre(&motions[0].1),
+    let layout = match like {
+        Some(set) => {
+            let reference = &set.layout.skeleton().joints;
+            for (p, m) in &motions {
+                let same = m.skeleton.joints.len() == reference.len()
+                    && m.skeleton.joints.iter().zip(reference).all(|(a, b)| {
+                        a.name == b.name && a.parent == b.parent && a.channels == b.channels
+                    });
+                if !same {
+                    return Err(DatasetError::SkeletonMismatch {
+                        file: p.to_path_buf(),
+                        reference: set
+                            .cycles
+                            .first()
+                            .map(|c| c.source.clone())
+                            .unwrap_or_default(),
+                        detail: "the skeleton differs from the training data's".into(),
+                    });
+                }
+            }
+            set.layout.clone()
+        }
+        None => {
+            let units = match config.units_per_metre {
+                Some(u) => u,
+                None => detect_units_per_metre(&motions[0].1),
+            };
+            let refs: Vec<&Motion> = motions.iter().map(|(_, m)| m).collect();
+            let layout = PoseLayout::from_motions(&refs, units).map_err(|e| match e {
+                PoseError::SkeletonMismatch {
+                    motion,
+                    joint,
+                    what,
+                } => DatasetError::SkeletonMismatch {
+                    file: motions[motion].0.to_path_buf(),
+                    reference: motions[0].0.to_path_buf(),
+                    detail: format!("joint {joint}: {what}"),
+                },
+                other => DatasetError::Layout(other),
+            })?;
+            layout
+        }
     };
-    let refs: Vec<&Motion> = motions.iter().map(|(_, m)| m).collect();
-    let layout = PoseLayout::from_motions(&refs, units).map_err(|e| match e {
-        PoseError::SkeletonMismatch {
-            motion,
-            joint,
-            what,
-        } => DatasetError::SkeletonMismatch {
-            file: motions[motion].0.to_path_buf(),
-            reference: motions[0].0.to_path_buf(),
-            detail: format!("joint {joint}: {what}"),
-        },
-        other => DatasetError::Layout(other),
-    })?;
     let segmented: Vec<_> = motions
         .par_iter()
         .map(|(p, m)| {
@@ -377,7 +432,11 @@ fn cycles_from_takes(
             dropped: dropped.len(),
         });
     }
-    unify_branches(&mut cycles, layout.dof())?;
+    let reference = match like {
+        Some(set) => set.branch_reference(),
+        None => mean_pose(&cycles[0], layout.dof()),
+    };
+    unify_branches(&mut cycles, &reference)?;
     Ok(CycleSet {
         layout,
         cycles,
@@ -417,22 +476,26 @@ fn check_skeletons(motions: &[(&Path, Motion)]) -> Result<(), DatasetError> {
     Ok(())
 }
 
-/// Brings every cycle onto the exp-map branch nearest the first cycle's mean pose
-/// (`motion_io::align_sequence`: the first frame to the reference, then continuity over time).
-fn unify_branches(cycles: &mut [GaitCycle], dof: usize) -> Result<(), DatasetError> {
-    let first = &cycles[0];
-    let frames = first.frame_count() as f64;
+/// Mean pose of one cycle (`dof` rows).
+fn mean_pose(cycle: &GaitCycle, dof: usize) -> Vec<f64> {
+    let frames = cycle.frame_count() as f64;
     let mut mean = vec![0.0; dof];
-    for pose in first.poses.chunks_exact(dof) {
+    for pose in cycle.poses.chunks_exact(dof) {
         for (m, v) in mean.iter_mut().zip(pose) {
             *m += v / frames;
         }
     }
+    mean
+}
+
+/// Brings every cycle onto the exp-map branch nearest `reference` (`motion_io::align_sequence`: the
+/// first frame to the reference, then continuity over time).
+fn unify_branches(cycles: &mut [GaitCycle], reference: &[f64]) -> Result<(), DatasetError> {
     cycles
         .par_iter_mut()
         .enumerate()
         .try_for_each(|(index, c)| {
-            align_sequence(&mut c.poses, &mean).map_err(|source| DatasetError::Branch {
+            align_sequence(&mut c.poses, reference).map_err(|source| DatasetError::Branch {
                 index,
                 file: c.source.clone(),
                 source,
@@ -452,11 +515,33 @@ pub fn align_cycles(
     frames: Option<usize>,
     method: AlignMethod,
 ) -> Result<AlignedSet, DatasetError> {
+    let t_frames = frames.unwrap_or_else(|| set.median_length().max(2));
+    align_with_reference(set, t_frames, method, None)
+}
+
+/// Aligns every cycle of `set` onto `frames` aligned frames against an external reference cycle (for
+/// held-out data: the training set's reference, `training.cycles[aligned.reference]`), so that the
+/// result lines up with the training tensor. `set` must use the training layout (see
+/// [`load_cycles_like`]).
+pub fn align_cycles_to(
+    set: &CycleSet,
+    frames: usize,
+    method: AlignMethod,
+    reference: &GaitCycle,
+) -> Result<AlignedSet, DatasetError> {
+    align_with_reference(set, frames, method, Some(reference))
+}
+
+fn align_with_reference(
+    set: &CycleSet,
+    t_frames: usize,
+    method: AlignMethod,
+    reference: Option<&GaitCycle>,
+) -> Result<AlignedSet, DatasetError> {
     let p = set.layout.dof();
     debug_assert!(p > TIME_ROW);
-    let t_frames = frames.unwrap_or_else(|| set.median_length().max(2));
-    let (features, values): (Vec<FrameSeq>, Vec<FrameSeq>) = set
-        .cycles
+    let all: Vec<&GaitCycle> = reference.into_iter().chain(set.cycles.iter()).collect();
+    let (features, values): (Vec<FrameSeq>, Vec<FrameSeq>) = all
         .par_iter()
         .enumerate()
         .map(|(index, c)| {
@@ -480,14 +565,18 @@ pub fn align_cycles(
         .collect::<Result<Vec<_>, DatasetError>>()?
         .into_iter()
         .unzip();
-    let frame_time: Vec<f64> = set.cycles.iter().map(|c| c.frame_time).collect();
+    let frame_time: Vec<f64> = all.iter().map(|c| c.frame_time).collect();
     let mut config = AlignConfig::new(t_frames, method);
     config.increment_row = Some(TIME_ROW);
+    if reference.is_some() {
+        config.reference = Some(0);
+    }
     let alignment = align(&features, &values, &frame_time, &config)?;
     debug_assert_eq!(alignment.increment_col, TIME_ROW);
+    let skip = usize::from(reference.is_some());
     let s = set.cycles.len();
     let mut data = Vec::with_capacity(p * t_frames * s);
-    for a in &alignment.aligned {
+    for a in &alignment.aligned[skip..] {
         debug_assert_eq!(a.dim, p);
         data.extend_from_slice(&a.frames);
     }
@@ -506,7 +595,7 @@ pub fn align_cycles(
             })
             .collect(),
         layout: set.layout.clone(),
-        reference: alignment.reference,
+        reference: alignment.reference.saturating_sub(skip),
         method,
     })
 }

@@ -111,6 +111,69 @@ fn loo_weights(analysis: &Analysis, rbf: bool) -> Result<Mat<f64>, BuildError> {
     Ok(loo_weights_from_errors(errors.as_ref()))
 }
 
+/// Sample weights of universal kriging (`rbf` false) or RBF (`rbf` true) at new `controls`: the method
+/// fitted to the identity values predicts exactly its weights on the samples (H x S).
+fn prediction_weights(
+    analysis: &Analysis,
+    controls: &[[f64; 4]],
+    rbf: bool,
+) -> Result<Mat<f64>, BuildError> {
+    let k = &analysis.kriging;
+    let s = k.n_samples();
+    let params = analysis.control_matrix();
+    let identity = Mat::<f64>::identity(s, s);
+    let scaling = ScalingChoice::Given(k.scaling().clone());
+    let mut w = Mat::zeros(controls.len(), s);
+    let mut row = vec![0.0; s];
+    if rbf {
+        let config = RbfConfig {
+            scaling,
+            ..RbfConfig::default()
+        };
+        let fit = Rbf::fit(params.as_ref(), identity.as_ref(), &config)?;
+        for (h, c) in controls.iter().enumerate() {
+            fit.predict(c, &mut row)?;
+            (0..s).for_each(|j| w[(h, j)] = row[j]);
+        }
+    } else {
+        let config = KrigingConfig {
+            model: ModelChoice::Given(*k.variogram()),
+            scaling,
+            ..KrigingConfig::default()
+        };
+        let fit = Kriging::fit(params.as_ref(), identity.as_ref(), &config)?;
+        for (h, c) in controls.iter().enumerate() {
+            fit.predict(c, &mut row)?;
+            (0..s).for_each(|j| w[(h, j)] = row[j]);
+        }
+    }
+    Ok(w)
+}
+
+/// Weight 1 on the training sample nearest each of `controls` in scaled control space.
+fn nearest_to(analysis: &Analysis, controls: &[[f64; 4]]) -> Mat<f64> {
+    let k = &analysis.kriging;
+    let c = k.scaled_params();
+    let mut w = Mat::zeros(controls.len(), c.nrows());
+    let mut q = vec![0.0; c.ncols()];
+    for (h, ctl) in controls.iter().enumerate() {
+        k.scaling().apply(ctl, &mut q);
+        let nearest = (0..c.nrows())
+            .map(|j| {
+                (0..c.ncols())
+                    .map(|d| (c[(j, d)] - q[d]).powi(2))
+                    .sum::<f64>()
+            })
+            .enumerate()
+            .fold(
+                (0, f64::INFINITY),
+                |best, (j, d)| if d < best.1 { (j, d) } else { best },
+            );
+        w[(h, nearest.0)] = 1.0;
+    }
+    w
+}
+
 /// Nearest other sample in scaled control space (ties: the lower index).
 fn nearest_weights(analysis: &Analysis) -> Mat<f64> {
     let c = analysis.kriging.scaled_params();
@@ -150,20 +213,18 @@ fn pca_projection(x: &Tensor3, rank: usize) -> Result<Tensor3, BuildError> {
     Ok(x.mode_product(0, proj.as_ref()))
 }
 
-/// Mean joint and largest shell error of the first `evaluated` predicted samples (by stride) against
-/// the analysis's samples.
-fn score(analysis: &Analysis, predicted: &Tensor3, stride: usize) -> (f64, f64) {
+/// Mean joint and largest shell error of the predicted samples (every `stride`-th) against `targets`.
+fn score(analysis: &Analysis, targets: &Tensor3, predicted: &Tensor3, stride: usize) -> (f64, f64) {
     let mut meter = ErrorMeter::new(&analysis.layout);
-    let s = analysis.tensor.dims()[2];
-    for i in (0..s).step_by(stride) {
-        meter.compare_sequences(analysis.tensor.sample(i), predicted.sample(i));
+    for i in (0..targets.dims()[2]).step_by(stride) {
+        meter.compare_sequences(targets.sample(i), predicted.sample(i));
     }
     let e = meter.total();
     (e.mean_joint_cm, e.shell_cm)
 }
 
-/// Reconstruction of every sample at a multilinear level from the leave-one-out sample weights:
-/// `Z x1 U_P x2 U_T x3 (W U_S)`.
+/// Reconstruction of every predicted sample at a multilinear level from sample weights `W` (one row per
+/// prediction): `Z x1 U_P x2 U_T x3 (W U_S)`.
 fn multilinear_prediction(tucker: &Tucker, w: MatRef<'_, f64>) -> Tensor3 {
     let u_s = w * tucker.factors[2].as_ref();
     tensor_ops::reconstruct(
@@ -176,6 +237,95 @@ fn multilinear_prediction(tucker: &Tucker, w: MatRef<'_, f64>) -> Tensor3 {
     )
 }
 
+/// The sample weights of each method, one row per predicted cycle (H x S).
+struct Weights {
+    kriging: Mat<f64>,
+    rbf: Mat<f64>,
+    nearest: Mat<f64>,
+}
+
+/// Every method's error when predicting `targets` (P x T x H, in the analysis's layout) with `weights`.
+fn compare(
+    analysis: &Analysis,
+    weights: &Weights,
+    targets: &Tensor3,
+    model_bytes: usize,
+    key_bytes: &[usize],
+    config: &EvalConfig,
+    progress: &dyn Progress,
+) -> Result<EvalReport, BuildError> {
+    let x = &analysis.tensor;
+    let [p, t, s] = x.dims();
+    let h = targets.dims()[2];
+    let raw_bytes = p * t * s * 8;
+    let stride = config
+        .max_samples
+        .map_or(1, |m| h.div_ceil(m.max(1)).max(1));
+    let evaluated = (0..h).step_by(stride).count();
+    let keys = &analysis.keys.levels;
+    progress.stage("evaluation", (keys.len() + 4) as u64);
+    let w_krig = weights.kriging.as_ref();
+    let mut methods = Vec::new();
+    let mut push = |name: &str, level, ranks, predicted: &Tensor3, bytes| {
+        let (error_cm, shell_cm) = score(analysis, targets, predicted, stride);
+        methods.push(MethodError {
+            name: name.into(),
+            level,
+            ranks,
+            error_cm,
+            shell_cm,
+            bytes,
+        });
+        progress.inc(1);
+    };
+    for (k, key) in keys.iter().enumerate() {
+        let level = analysis
+            .levels
+            .iter()
+            .position(|l| l.key == k && l.ranks == key.ranks);
+        let bytes = key_bytes.get(k).copied().unwrap_or(0);
+        let predicted = multilinear_prediction(&key.tucker, w_krig);
+        push("multilinear", level, Some(key.ranks), &predicted, bytes);
+    }
+    push(
+        "naive-kriging",
+        None,
+        None,
+        &blend_samples(x, w_krig),
+        raw_bytes,
+    );
+    push(
+        "rbf",
+        None,
+        None,
+        &blend_samples(x, weights.rbf.as_ref()),
+        raw_bytes,
+    );
+    let r_pca = config.pca_rank.clamp(1, p);
+    let pca = blend_samples(&pca_projection(x, r_pca)?, w_krig);
+    push(
+        "pca",
+        None,
+        Some([r_pca, t, s]),
+        &pca,
+        (r_pca * t * s + p * r_pca) * 8,
+    );
+    push(
+        "nearest",
+        None,
+        None,
+        &blend_samples(x, weights.nearest.as_ref()),
+        raw_bytes,
+    );
+    Ok(EvalReport {
+        samples: s,
+        evaluated,
+        raw_bytes,
+        model_bytes,
+        methods,
+    })
+}
+
 /// Leave-one-out errors of every method on the analysis's samples (see the module documentation).
 pub fn leave_one_out(
     analysis: &Analysis,
@@ -184,87 +334,53 @@ pub fn leave_one_out(
     config: &EvalConfig,
     progress: &dyn Progress,
 ) -> Result<EvalReport, BuildError> {
-    let x = &analysis.tensor;
-    let [p, t, s] = x.dims();
-    let raw_bytes = p * t * s * 8;
-    let stride = config
-        .max_samples
-        .map_or(1, |m| s.div_ceil(m.max(1)).max(1));
-    let evaluated = (0..s).step_by(stride).count();
-    let keys = &analysis.keys.levels;
-    progress.stage("leave-one-out", (keys.len() + 4) as u64);
-    let w_krig = loo_weights(analysis, false)?;
-    let mut methods = Vec::new();
-    for (k, key) in keys.iter().enumerate() {
-        let level = analysis
-            .levels
-            .iter()
-            .position(|l| l.key == k && l.ranks == key.ranks);
-        let (error_cm, shell_cm) = score(
-            analysis,
-            &multilinear_prediction(&key.tucker, w_krig.as_ref()),
-            stride,
-        );
-        methods.push(MethodError {
-            name: "multilinear".into(),
-            level,
-            ranks: Some(key.ranks),
-            error_cm,
-            shell_cm,
-            bytes: key_bytes.get(k).copied().unwrap_or(0),
-        });
-        progress.inc(1);
-    }
-    let naive = blend_samples(x, w_krig.as_ref());
-    let (error_cm, shell_cm) = score(analysis, &naive, stride);
-    methods.push(MethodError {
-        name: "naive-kriging".into(),
-        level: None,
-        ranks: None,
-        error_cm,
-        shell_cm,
-        bytes: raw_bytes,
-    });
-    progress.inc(1);
-    let w_rbf = loo_weights(analysis, true)?;
-    let (error_cm, shell_cm) = score(analysis, &blend_samples(x, w_rbf.as_ref()), stride);
-    methods.push(MethodError {
-        name: "rbf".into(),
-        level: None,
-        ranks: None,
-        error_cm,
-        shell_cm,
-        bytes: raw_bytes,
-    });
-    progress.inc(1);
-    let r_pca = config.pca_rank.clamp(1, p);
-    let pca = pca_projection(x, r_pca)?;
-    let (error_cm, shell_cm) = score(analysis, &blend_samples(&pca, w_krig.as_ref()), stride);
-    methods.push(MethodError {
-        name: "pca".into(),
-        level: None,
-        ranks: Some([r_pca, t, s]),
-        error_cm,
-        shell_cm,
-        bytes: (r_pca * t * s + p * r_pca) * 8,
-    });
-    progress.inc(1);
-    let w_nn = nearest_weights(analysis);
-    let (error_cm, shell_cm) = score(analysis, &blend_samples(x, w_nn.as_ref()), stride);
-    methods.push(MethodError {
-        name: "nearest".into(),
-        level: None,
-        ranks: None,
-        error_cm,
-        shell_cm,
-        bytes: raw_bytes,
-    });
-    progress.inc(1);
-    Ok(EvalReport {
-        samples: s,
-        evaluated,
-        raw_bytes,
+    let weights = Weights {
+        kriging: loo_weights(analysis, false)?,
+        rbf: loo_weights(analysis, true)?,
+        nearest: nearest_weights(analysis),
+    };
+    compare(
+        analysis,
+        &weights,
+        &analysis.tensor,
         model_bytes,
-        methods,
-    })
+        key_bytes,
+        config,
+        progress,
+    )
+}
+
+/// Errors of every method on held-out cycles: `targets` (P x T x H, prepared with
+/// [`Analysis::prepare`]) predicted from all training samples at their `controls`.
+pub fn held_out(
+    analysis: &Analysis,
+    targets: &Tensor3,
+    controls: &[[f64; 4]],
+    model_bytes: usize,
+    key_bytes: &[usize],
+    config: &EvalConfig,
+    progress: &dyn Progress,
+) -> Result<EvalReport, BuildError> {
+    if targets.dims()[2] != controls.len() || targets.dims()[..2] != analysis.tensor.dims()[..2] {
+        return Err(BuildError::Data(format!(
+            "held-out tensor {:?} with {} control rows does not fit the model's {:?}",
+            targets.dims(),
+            controls.len(),
+            analysis.tensor.dims()
+        )));
+    }
+    let weights = Weights {
+        kriging: prediction_weights(analysis, controls, false)?,
+        rbf: prediction_weights(analysis, controls, true)?,
+        nearest: nearest_to(analysis, controls),
+    };
+    compare(
+        analysis,
+        &weights,
+        targets,
+        model_bytes,
+        key_bytes,
+        config,
+        progress,
+    )
 }

@@ -329,3 +329,74 @@ fn crowd_poses_are_bit_identical_for_1_2_and_8_threads() {
     assert!(one == simulate(2), "2 threads differ from 1");
     assert!(one == simulate(8), "8 threads differ from 1");
 }
+
+#[test]
+fn held_out_takes_are_predicted_from_the_training_takes() {
+    use motion_lod::dataset::{DatasetConfig, align_cycles_to, load_cycles_like};
+    let fixtures = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures"));
+    let (train, hold) = (temp("train"), temp("hold"));
+    for dir in [&train, &hold] {
+        std::fs::create_dir_all(dir).unwrap();
+    }
+    for entry in std::fs::read_dir(fixtures).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if name.ends_with(".bvh") {
+            let to = if name.ends_with("_t05.bvh") {
+                &hold
+            } else {
+                &train
+            };
+            std::fs::copy(&path, to.join(&name)).unwrap();
+        }
+    }
+    let spec = DataSpec {
+        dirs: vec![train],
+        ..DataSpec::default()
+    };
+    let loaded = spec.load(&|_, _| {}).unwrap();
+    let analysis = Analysis::run(&loaded.training, &BuildConfig::default(), &NoProgress).unwrap();
+    let held = load_cycles_like(
+        &[hold],
+        &DatasetConfig::default(),
+        &loaded.cycles,
+        &|_, _| {},
+    )
+    .unwrap();
+    assert_eq!(held.files, 3);
+    let reference = &loaded.cycles.cycles[loaded.aligned.reference];
+    let t = loaded.aligned.tensor.dims()[1];
+    let aligned = align_cycles_to(&held, t, spec.align.method(), reference).unwrap();
+    assert_eq!(aligned.tensor.dims()[1], t);
+    let targets = analysis.prepare(&loaded.aligned.layout, &aligned.tensor);
+    let controls: Vec<[f64; 4]> = aligned.controls.iter().map(|c| c.to_array()).collect();
+    let report = motion_lod::eval::held_out(
+        &analysis,
+        &targets,
+        &controls,
+        0,
+        &[],
+        &EvalConfig::default(),
+        &NoProgress,
+    )
+    .unwrap();
+    assert_eq!(report.evaluated, held.cycles.len());
+    let get = |name: &str| {
+        report
+            .methods
+            .iter()
+            .find(|m| m.name == name)
+            .unwrap()
+            .error_cm
+    };
+    let full = report.methods[0].error_cm;
+    assert!(
+        report
+            .methods
+            .iter()
+            .all(|m| m.error_cm.is_finite() && m.error_cm > 0.0)
+    );
+    assert!(full <= 1.1 * get("naive-kriging"), "{:?}", report.methods);
+    // Held-out walks are new combinations of speed and turn: interpolation beats the nearest take.
+    assert!(full < get("nearest"), "{:?}", report.methods);
+}

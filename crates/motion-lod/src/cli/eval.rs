@@ -6,7 +6,8 @@ use anyhow::Context as _;
 use clap::Args;
 use lod_policy::Precision;
 use motion_lod::build::Analysis;
-use motion_lod::eval::{EvalConfig, EvalReport, leave_one_out};
+use motion_lod::dataset::{DatasetConfig, align_cycles_to, load_cycles_like};
+use motion_lod::eval::{EvalConfig, EvalReport, held_out, leave_one_out};
 use motion_lod::progress::{BarProgress, NoProgress, Progress};
 use motion_lod::storage::Storage;
 use motion_lod::{BuildConfig, MotionModel};
@@ -24,6 +25,10 @@ pub struct EvalArgs {
     /// Model settings (for folders; a model file brings its own).
     #[command(flatten)]
     pub model: ModelArgs,
+    /// Held-out BVH folders (same skeleton): predict their cycles from all training cycles instead of
+    /// leaving one out.
+    #[arg(long, value_name = "DIR", num_args = 1..)]
+    pub holdout: Vec<std::path::PathBuf>,
     /// Evaluate at most this many held-out samples (evenly strided); default all.
     #[arg(long, value_name = "N")]
     pub max_samples: Option<usize>,
@@ -55,7 +60,14 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         }
         _ => (args.data.spec(), args.model.config()),
     };
-    let report = evaluate(&spec, &config, args.max_samples, args.pca_rank, args.json)?;
+    let report = evaluate(
+        &spec,
+        &config,
+        &args.holdout,
+        args.max_samples,
+        args.pca_rank,
+        args.json,
+    )?;
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {
@@ -68,6 +80,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
 pub fn evaluate(
     spec: &motion_lod::dataset::DataSpec,
     config: &BuildConfig,
+    holdout: &[std::path::PathBuf],
     max_samples: Option<usize>,
     pca_rank: usize,
     quiet: bool,
@@ -87,19 +100,41 @@ pub fn evaluate(
         pca_rank,
         max_samples,
     };
-    leave_one_out(
+    let model_bytes = Storage::of(&model).model_f64;
+    if holdout.is_empty() {
+        return leave_one_out(&analysis, model_bytes, &key_bytes, &eval_config, progress)
+            .context("leave-one-out evaluation");
+    }
+    let dataset_config = DatasetConfig {
+        cycle: spec.preset.cycle_config(),
+        units_per_metre: None,
+    };
+    let held = load_cycles_like(holdout, &dataset_config, &loaded.cycles, &|_, _| {})
+        .context("loading the held-out cycles")?;
+    for f in &held.failed {
+        eprintln!("warning: skipped {}: {}", f.path.display(), f.error);
+    }
+    let reference = &loaded.cycles.cycles[loaded.aligned.reference];
+    let t = loaded.aligned.tensor.dims()[1];
+    let aligned = align_cycles_to(&held, t, spec.align.method(), reference)
+        .context("aligning the held-out cycles")?;
+    let targets = analysis.prepare(&loaded.aligned.layout, &aligned.tensor);
+    let controls: Vec<[f64; 4]> = aligned.controls.iter().map(|c| c.to_array()).collect();
+    held_out(
         &analysis,
-        Storage::of(&model).model_f64,
+        &targets,
+        &controls,
+        model_bytes,
         &key_bytes,
         &eval_config,
         progress,
     )
-    .context("leave-one-out evaluation")
+    .context("held-out evaluation")
 }
 
 fn print(r: &EvalReport) {
     println!(
-        "leave-one-out over {} of {} samples; raw samples {} bytes (f64), hybrid model {} bytes (f64)",
+        "{} cycles evaluated against {} training samples; raw samples {} bytes (f64), hybrid model {} bytes (f64)",
         r.evaluated, r.samples, r.raw_bytes, r.model_bytes
     );
     println!("  method          level  ranks           joint error   shell error   bytes (f64)");
