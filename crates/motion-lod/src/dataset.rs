@@ -387,7 +387,7 @@ fn cycles_from_takes(
                 None => detect_units_per_metre(&motions[0].1),
             };
             let refs: Vec<&Motion> = motions.iter().map(|(_, m)| m).collect();
-            let layout = PoseLayout::from_motions(&refs, units).map_err(|e| match e {
+            PoseLayout::from_motions(&refs, units).map_err(|e| match e {
                 PoseError::SkeletonMismatch {
                     motion,
                     joint,
@@ -398,8 +398,7 @@ fn cycles_from_takes(
                     detail: format!("joint {joint}: {what}"),
                 },
                 other => DatasetError::Layout(other),
-            })?;
-            layout
+            })?
         }
     };
     let segmented: Vec<_> = motions
