@@ -19,6 +19,26 @@
 //! # Ok::<(), motion_lod::dataset::DatasetError>(())
 //! ```
 
+//! At runtime an engine loads a model once and, per character and cycle, builds a clip kernel for its
+//! controls and level of detail, then evaluates poses into buffers it owns (no allocation per frame):
+//!
+//! ```no_run
+//! use motion_lod::{Evaluator, MotionModel};
+//! use motion_lod::lod_policy::Detail;
+//!
+//! let model = MotionModel::load("walk.mlod".as_ref())?;
+//! let mut ev = Evaluator::new(&model); // kernel, scratch and pose buffers, allocated once
+//! let controls = [0.0, 1.3, 0.2, 1.75]; // dx, dz (m), turn (rad), height (m) of one two-step cycle
+//! model.lod.build_kernel(&controls, Detail::new(3, 12), &mut ev.scratch, &mut ev.kernel)?;
+//! let mut joints = vec![glam::Vec3::ZERO; model.layout.skeleton().joints.len()];
+//! for frame in 0..60 {
+//!     let t = frame as f64 / 60.0; // seconds into the cycle
+//!     model.lod.pose(&ev.kernel, ev.kernel.phase_at(t), &mut ev.pose)?;
+//!     model.layout.joint_positions(&ev.pose, 12, &mut joints); // metres, cycle frame
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
 pub mod build;
 pub mod crowd;
 pub mod dataset;
