@@ -31,6 +31,8 @@
 //! # Ok::<(), crowd_sim::CrowdError>(())
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod camera;
 pub mod controls;
 mod crowd;

@@ -54,6 +54,8 @@
 //! # Ok::<(), kriging::KrigingError>(())
 //! ```
 
+#![warn(missing_docs)]
+
 mod config;
 mod empirical;
 mod error;

@@ -37,6 +37,8 @@
 //! # let _ = animate;
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod error;
 pub mod kernel;
 pub mod model;

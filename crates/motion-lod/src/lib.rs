@@ -19,6 +19,8 @@
 //! # Ok::<(), motion_lod::dataset::DatasetError>(())
 //! ```
 
+#![warn(missing_docs)]
+
 //! At runtime an engine loads a model once and, per character and cycle, builds a clip kernel for its
 //! controls and level of detail, then evaluates poses into buffers it owns (no allocation per frame):
 //!

@@ -35,6 +35,8 @@
 //! # Ok::<(), timewarp::TimewarpError>(())
 //! ```
 
+#![warn(missing_docs)]
+
 mod align;
 mod dtw;
 mod error;
