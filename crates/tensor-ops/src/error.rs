@@ -96,6 +96,13 @@ pub enum TensorError {
         /// The required number of dimensions.
         expected: usize,
     },
+    /// The NPY array has no elements (a zero in its shape), so it is no matrix or tensor; its other
+    /// dimensions may be absurdly large without costing any data.
+    #[error("NPY array of shape {shape:?} has no elements")]
+    NpyEmpty {
+        /// The shape read from the header.
+        shape: Vec<usize>,
+    },
 }
 
 fn location(path: &Option<PathBuf>, offset: usize) -> String {

@@ -186,12 +186,18 @@ impl NpyArray {
 
     /// The 3-D array as a [`Tensor3`] with `X(i, j, k) = a[i, j, k]`, whatever the file order.
     ///
-    /// Errors: [`TensorError::NpyRank`] unless `ndim() == 3`; [`TensorError::NonFinite`] for NaN/inf.
+    /// Errors: [`TensorError::NpyRank`] unless `ndim() == 3`; [`TensorError::NpyEmpty`] for an array
+    /// without elements; [`TensorError::NonFinite`] for NaN/inf.
     pub fn to_tensor(&self) -> Result<Tensor3, TensorError> {
         if self.shape.len() != 3 {
             return Err(TensorError::NpyRank {
                 shape: self.shape.clone(),
                 expected: 3,
+            });
+        }
+        if self.data.is_empty() {
+            return Err(TensorError::NpyEmpty {
+                shape: self.shape.clone(),
             });
         }
         let dims = [self.shape[0], self.shape[1], self.shape[2]];
@@ -217,12 +223,18 @@ impl NpyArray {
 
     /// The 2-D array as a matrix `M(i, j) = a[i, j]`.
     ///
-    /// Errors: [`TensorError::NpyRank`] unless `ndim() == 2`.
+    /// Errors: [`TensorError::NpyRank`] unless `ndim() == 2`; [`TensorError::NpyEmpty`] for an array
+    /// without elements.
     pub fn to_matrix(&self) -> Result<Mat<f64>, TensorError> {
         if self.shape.len() != 2 {
             return Err(TensorError::NpyRank {
                 shape: self.shape.clone(),
                 expected: 2,
+            });
+        }
+        if self.data.is_empty() {
+            return Err(TensorError::NpyEmpty {
+                shape: self.shape.clone(),
             });
         }
         let f = self.to_order(true);
