@@ -190,7 +190,15 @@ pub fn commit() -> String {
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
     };
     match git(&["rev-parse", "--short", "HEAD"]) {
-        Some(hash) => match git(&["status", "--porcelain", "--untracked-files=no"]) {
+        // The run's own outputs (docs/) do not count as changes to what was measured.
+        Some(hash) => match git(&[
+            "status",
+            "--porcelain",
+            "--untracked-files=no",
+            "--",
+            ".",
+            ":(exclude)docs",
+        ]) {
             Some(s) if s.is_empty() => hash,
             _ => format!("{hash} with uncommitted changes"),
         },
