@@ -99,8 +99,10 @@ pub struct CrowdOutcome {
     pub report: CrowdReport,
     /// The last frame's statistics (its level histogram sums to the walker count).
     pub last: FrameStats,
-    /// Files written by the renderer.
+    /// Frames rendered (each a perspective PNG and a top-down map PNG).
     pub rendered: usize,
+    /// The animated GIF written at the end, if any.
+    pub gif: Option<std::path::PathBuf>,
 }
 
 /// Steps a crowd of `source` under `policy` for `run.seconds`, timing every frame; renders every n-th
@@ -139,15 +141,15 @@ where
             rendered += 1;
         }
     }
-    if let Some(rec) = recorder
-        && rec.finish()?.is_some()
-    {
-        rendered += 1;
-    }
+    let gif = match recorder {
+        Some(rec) => rec.finish()?,
+        None => None,
+    };
     Ok(CrowdOutcome {
         report,
         last,
         rendered,
+        gif,
     })
 }
 

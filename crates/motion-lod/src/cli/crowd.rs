@@ -236,7 +236,14 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         println!("LOD / naive mean frame rate: {r:.2}x");
     }
     if let Some(dir) = &args.render {
-        println!("rendered {} files into {}", main.rendered, dir.display());
+        println!(
+            "rendered {} frames into {} (frame_*.png, map_*.png){}",
+            main.rendered,
+            dir.display(),
+            main.gif
+                .as_ref()
+                .map_or(String::new(), |g| format!(" and {}", g.display()))
+        );
     }
     Ok(())
 }
