@@ -85,7 +85,14 @@ fn run_cli(args: &[&str]) -> String {
 
 /// Checks the `--json` line, the NPY shape and the CSV of `motion-lod cycles` on `dir`.
 fn check_cli(dir: &Path, set: &CycleSet, aligned: &AlignedSet, extra: &[&str]) {
-    let tmp = std::env::temp_dir().join(format!("motion-lod-dataset-test-{}", std::process::id()));
+    // One folder per data set: the tests calling this run in parallel in one process.
+    let tag = dir
+        .file_name()
+        .map_or("data".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = std::env::temp_dir().join(format!(
+        "motion-lod-dataset-test-{}-{tag}",
+        std::process::id()
+    ));
     std::fs::create_dir_all(&tmp).unwrap();
     let npy = tmp.join("tensor.npy");
     let csv = tmp.join("controls.csv");
