@@ -212,18 +212,7 @@ fn rbf_loo_matches_refitting_s_times() {
     let r = Rbf::fit(to_mat(&p).as_ref(), to_mat(&x).as_ref(), &cfg).unwrap();
     let e = r.loo_errors().unwrap();
     for k in 0..10 {
-        let pk: Vec<Vec<f64>> = p
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| *i != k)
-            .map(|(_, q)| q.clone())
-            .collect();
-        let xk: Vec<Vec<f64>> = x
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| *i != k)
-            .map(|(_, q)| q.clone())
-            .collect();
+        let (pk, xk) = (without(&p, k), without(&x, k));
         let rk = Rbf::fit(to_mat(&pk).as_ref(), to_mat(&xk).as_ref(), &cfg).unwrap();
         let mut y = vec![0.0; 3];
         rk.predict(&p[k], &mut y).unwrap();

@@ -143,22 +143,20 @@ pub fn predict(
         .collect()
 }
 
+/// The rows of `v` without row `k` (the data of a leave-one-out refit).
+pub fn without(v: &[Vec<f64>], k: usize) -> Vec<Vec<f64>> {
+    v.iter()
+        .enumerate()
+        .filter(|(i, _)| *i != k)
+        .map(|(_, q)| q.clone())
+        .collect()
+}
+
 /// Leave-one-out errors by refitting S times.
 pub fn loo(p: &[Vec<f64>], x: &[Vec<f64>], v: &Variogram, universal: bool) -> Vec<Vec<f64>> {
     (0..p.len())
         .map(|k| {
-            let pk: Vec<Vec<f64>> = p
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| *i != k)
-                .map(|(_, q)| q.clone())
-                .collect();
-            let xk: Vec<Vec<f64>> = x
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| *i != k)
-                .map(|(_, q)| q.clone())
-                .collect();
+            let (pk, xk) = (without(p, k), without(x, k));
             let pred = predict(&pk, &xk, v, universal, &p[k]);
             x[k].iter().zip(&pred).map(|(a, b)| a - b).collect()
         })
