@@ -14,7 +14,7 @@
 use std::time::Instant;
 
 use faer::Mat;
-use hosvd_als::{AlsOptions, KeyLevels, KeySearchConfig, hybrid_levels};
+use hosvd_als::{AlsOptions, AlsReport, KeyLevels, KeySearchConfig, Tucker, hybrid_levels};
 use kriging::{Kriging, KrigingConfig};
 use lod_policy::{
     AccuracyLevel, ControlSpace, Detail, KeyFactors, KeyTensor, LevelError, LodModel, ModelParts,
@@ -24,7 +24,7 @@ use motion_io::PoseLayout;
 use serde::{Deserialize, Serialize};
 use tensor_ops::Tensor3;
 
-use crate::importance::{JointImportance, joint_importance};
+use crate::importance::{JointImportance, dof_weights, joint_importance};
 use crate::metrics::ErrorMeter;
 use crate::model::{BuildReport, CONTROL_NAMES, KeyReport, MotionModel, TIME_ROW};
 use crate::progress::Progress;
@@ -53,6 +53,12 @@ pub struct BuildConfig {
     pub max_ranks: [usize; 3],
     /// Ranks of the last key level (clamped to the data).
     pub min_ranks: [usize; 3],
+    /// The DOF count `max_ranks` and `min_ranks` are meant for: their `R_P` is scaled by
+    /// `P / dof_rank_reference` (rounded, at least 1), so that the DOF mode keeps the same share of the
+    /// joint DOF on any skeleton. The default is the paper's `P = 94`; `None` uses the ranks as given.
+    pub dof_rank_reference: Option<usize>,
+    /// How the DOF rows are weighted in the decomposition.
+    pub row_weights: RowWeights,
     /// ALS stopping rule.
     pub als: AlsOptions,
     /// Kriging settings (universal kriging, variogram chosen by leave-one-out error by default).
@@ -70,11 +76,44 @@ impl Default for BuildConfig {
             accuracy_levels: 28,
             max_ranks: [40, 40, 60],
             min_ranks: [7, 7, 9],
+            dof_rank_reference: Some(PAPER_DOF),
+            row_weights: RowWeights::JointPosition,
             als: AlsOptions::default(),
             kriging: KrigingConfig::default(),
             importance_poses: 4000,
             error_samples: 48,
         }
+    }
+}
+
+/// The paper's joint DOF count `P` (section 5.1), which its ranks `(40, 40, 60)` to `(7, 7, 9)` are for.
+pub const PAPER_DOF: usize = 94;
+
+/// How the DOF rows of the motion tensor are weighted in the decomposition (beyond the paper).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum RowWeights {
+    /// Each row by how far it moves the joints ([`dof_weights`]): the squared tensor error that ALS
+    /// minimises and the greedy search compares approximates the squared joint position error, so the
+    /// ranks are spent on what shows. The runtime cost is nil (the weights are folded into `U_P`).
+    JointPosition,
+    /// No weights, as the paper: root position in metres, rotations in radians, the time increment in
+    /// units of its mean.
+    Unit,
+}
+
+impl BuildConfig {
+    /// The rank bounds `(max, min)` of the key search for `p` DOF rows, `R_P` scaled by
+    /// [`BuildConfig::dof_rank_reference`] (before clamping to the data).
+    pub fn rank_bounds(&self, p: usize) -> ([usize; 3], [usize; 3]) {
+        let scale = |r: usize| match self.dof_rank_reference {
+            Some(reference) if reference > 0 => {
+                (((r * p) as f64 / reference as f64).round() as usize).max(1)
+            }
+            _ => r,
+        };
+        let [mp, mt, ms] = self.max_ranks;
+        let [np, nt, ns] = self.min_ranks;
+        ([scale(mp), mt, ms], [scale(np), nt, ns])
     }
 }
 
@@ -216,9 +255,13 @@ pub struct Analysis {
     pub tensor: Tensor3,
     /// Row [`TIME_ROW`] of `tensor` holds `time_scale` x seconds.
     pub time_scale: f64,
+    /// Weight of every DOF row in the decomposition ([`RowWeights`]); the factors in `keys` are
+    /// already divided by them, so they reconstruct `tensor` itself.
+    pub row_weights: Vec<f64>,
     /// Joints by decreasing measured importance.
     pub importance: Vec<JointImportance>,
-    /// The key levels (ALS).
+    /// The key levels (ALS), decomposed with the rows weighted (`mse` and `rel_error` are those of the
+    /// weighted tensor, which the greedy search compares).
     pub keys: KeyLevels,
     /// The accuracy levels (distinct rank triples, each a truncation of a key).
     pub levels: Vec<hosvd_als::AccuracyLevel>,
@@ -269,13 +312,37 @@ impl Analysis {
 
         // 3. Key levels and hybrid accuracy levels.
         progress.stage("key levels (ALS)", 1);
+        let row_weights = match config.row_weights {
+            RowWeights::JointPosition => dof_weights(
+                &layout,
+                tensor.as_slice(),
+                TIME_ROW,
+                root_speed(&tensor, mean_dt) * mean_dt,
+                config.importance_poses,
+            ),
+            RowWeights::Unit => vec![1.0; p],
+        };
+        if let Some((d, w)) = row_weights
+            .iter()
+            .enumerate()
+            .find(|(_, w)| !(w.is_finite() && **w > 0.0))
+        {
+            return Err(BuildError::Data(format!(
+                "weight {w} of DOF row {d} is not positive: the skeleton does not move with that row"
+            )));
+        }
+        let weighted = weigh_rows(&tensor, &row_weights);
+        let (max_ranks, min_ranks) = config.rank_bounds(p);
         let key_cfg = KeySearchConfig {
             levels: config.key_levels,
-            max_ranks: config.max_ranks,
-            min_ranks: config.min_ranks,
+            max_ranks,
+            min_ranks,
             als: config.als,
         };
-        let keys: KeyLevels = hosvd_als::key_levels(&tensor, &key_cfg)?;
+        let mut keys: KeyLevels = hosvd_als::key_levels(&weighted, &key_cfg)?;
+        for key in &mut keys.levels {
+            unweigh_factor(&mut key.tucker, &row_weights);
+        }
         let levels = distinct_levels(&hybrid_levels(&keys, config.accuracy_levels));
         progress.inc(1);
 
@@ -289,6 +356,7 @@ impl Analysis {
             layout,
             tensor,
             time_scale,
+            row_weights,
             importance,
             keys,
             levels,
@@ -307,6 +375,19 @@ impl Analysis {
             pose[TIME_ROW] *= self.time_scale;
         }
         out
+    }
+
+    /// An ALS (HOOI) Tucker model of `tensor` at `ranks`, decomposed exactly as the key levels are (rows
+    /// weighted, `U_P` divided by the weights afterwards); the report's errors are of the weighted tensor.
+    pub fn decompose(
+        &self,
+        ranks: [usize; 3],
+        als: &AlsOptions,
+    ) -> Result<(Tucker, AlsReport), BuildError> {
+        let (mut tucker, report) =
+            hosvd_als::hooi(&weigh_rows(&self.tensor, &self.row_weights), ranks, als)?;
+        unweigh_factor(&mut tucker, &self.row_weights);
+        Ok((tucker, report))
     }
 
     /// The raw controls as an `S x d` matrix (what the kriging was fitted on).
@@ -397,6 +478,7 @@ impl Analysis {
                 dims: [p, t, s],
                 sources: self.sources.clone(),
                 importance: self.importance.clone(),
+                row_weights: self.row_weights.clone(),
                 keys: key_reports,
                 c_e: self.keys.c_e,
                 ranks_clamped: self.keys.clamped,
@@ -483,6 +565,46 @@ impl MotionModel {
     }
 }
 
+/// `W X`: every DOF row of `x` times its weight.
+fn weigh_rows(x: &Tensor3, weights: &[f64]) -> Tensor3 {
+    let p = x.dims()[0];
+    debug_assert_eq!(weights.len(), p);
+    let mut out = x.clone();
+    for pose in out.as_mut_slice().chunks_exact_mut(p) {
+        for (v, w) in pose.iter_mut().zip(weights) {
+            *v *= w;
+        }
+    }
+    out
+}
+
+/// `U_P <- W^-1 U_P`: a model of the weighted tensor `W X` becomes a model of `X` (same core).
+fn unweigh_factor(tucker: &mut Tucker, weights: &[f64]) {
+    let u = &mut tucker.factors[0];
+    debug_assert_eq!(u.nrows(), weights.len());
+    for j in 0..u.ncols() {
+        for (i, w) in weights.iter().enumerate() {
+            u[(i, j)] /= w;
+        }
+    }
+}
+
+/// Mean speed of the root (m/s): path length of the root over all samples divided by their duration.
+/// `tensor` has the time row in units of `mean_dt` seconds.
+fn root_speed(tensor: &Tensor3, mean_dt: f64) -> f64 {
+    let [p, t, s] = tensor.dims();
+    let (mut path, mut time) = (0.0, 0.0);
+    for k in 0..s {
+        let sample = tensor.sample(k);
+        for f in 1..t {
+            let (a, b) = (&sample[(f - 1) * p..], &sample[f * p..]);
+            path += ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt();
+            time += b[TIME_ROW] * mean_dt;
+        }
+    }
+    if time > 0.0 { path / time } else { 0.0 }
+}
+
 /// Removes repeated rank triples from the hybrid schedule: when the rank range between two keys is too
 /// narrow for the number of accuracy levels asked for, several levels get the same ranks. A truncation
 /// whose ranks equal a later key's is dropped in favour of that key (ALS beats truncation at equal
@@ -518,4 +640,24 @@ fn mean_rows(tensor: &Tensor3, layout: &PoseLayout) -> Vec<f64> {
     let rest = layout.rest_pose();
     mean[TIME_ROW + 1..].copy_from_slice(&rest[TIME_ROW + 1..]);
     mean
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dof_ranks_scale_with_the_data() {
+        let config = BuildConfig::default();
+        assert_eq!(config.rank_bounds(PAPER_DOF), ([40, 40, 60], [7, 7, 9]));
+        // Bandai: 67 DOF keep 40/94 of them at the first key, 7/94 at the last.
+        assert_eq!(config.rank_bounds(67), ([29, 40, 60], [5, 7, 9]));
+        // A tiny skeleton keeps at least one component.
+        assert_eq!(config.rank_bounds(10), ([4, 40, 60], [1, 7, 9]));
+        let as_given = BuildConfig {
+            dof_rank_reference: None,
+            ..BuildConfig::default()
+        };
+        assert_eq!(as_given.rank_bounds(67), ([40, 40, 60], [7, 7, 9]));
+    }
 }

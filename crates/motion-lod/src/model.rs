@@ -41,6 +41,9 @@ pub struct BuildReport {
     pub sources: Vec<String>,
     /// Joints by decreasing measured importance (the row order of the model).
     pub importance: Vec<JointImportance>,
+    /// Weight of every DOF row in the decomposition (model row order; see
+    /// [`RowWeights`](crate::build::RowWeights)).
+    pub row_weights: Vec<f64>,
     /// Key levels as searched.
     pub keys: Vec<KeyReport>,
     /// The greedy search's error coefficient `C_E = E_N / (N E_1)`.

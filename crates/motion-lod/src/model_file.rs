@@ -24,7 +24,11 @@ use serde::de::DeserializeOwned;
 /// The eight bytes every model file starts with.
 pub const MAGIC: [u8; 8] = *b"MLOD\r\n\x1a\n";
 /// The format version this build writes and the newest it reads.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
+
+// Version history: 1 (first release); 2 (the build report records the DOF row weights and the build
+// settings their choice). Files of an older version are refused with a request to rebuild: a model is
+// rebuilt from its data in seconds, and a converter would carry guesses.
 /// Bytes before the payload: magic, version, length, checksum.
 pub const HEADER_LEN: usize = 24;
 
@@ -61,6 +65,17 @@ pub enum ModelFileError {
          rebuild the model or update motion-lod"
     )]
     FutureVersion {
+        /// The file concerned.
+        path: PathBuf,
+        /// The version found at offset 8.
+        found: u32,
+    },
+    /// The file was written by an older format version, which this build no longer reads.
+    #[error(
+        "{path}: model format version {found} is older than this build reads (version {FORMAT_VERSION}); \
+         rebuild the model with `motion-lod build`"
+    )]
+    OldVersion {
         /// The file concerned.
         path: PathBuf,
         /// The version found at offset 8.
@@ -164,6 +179,12 @@ pub fn decode<T: DeserializeOwned>(bytes: &[u8], path: &Path) -> Result<T, Model
             found: version,
         });
     }
+    if version < FORMAT_VERSION {
+        return Err(ModelFileError::OldVersion {
+            path: path_buf(),
+            found: version,
+        });
+    }
     let expected_len = u64::from_le_bytes(bytes[12..20].try_into().expect("8 bytes"));
     let payload = &bytes[HEADER_LEN..];
     if expected_len != payload.len() as u64 {
@@ -222,8 +243,11 @@ pub fn decode_payload<T: DeserializeOwned>(
             }
         };
     }
-    let (value, used) = decode_with_limit!(16 18 20 22 24 26 28 30 32 34 36 38 40)
-        .map_err(|e| decode_error(e.to_string()))?;
+    #[cfg(target_pointer_width = "64")]
+    let decoded = decode_with_limit!(16 18 20 22 24 26 28 30 32 34 36 38 40);
+    #[cfg(not(target_pointer_width = "64"))]
+    let decoded = decode_with_limit!(16 18 20 22 24 26 28 30);
+    let (value, used) = decoded.map_err(|e| decode_error(e.to_string()))?;
     if used != payload.len() {
         return Err(decode_error(format!(
             "{} trailing bytes after the model",
@@ -344,6 +368,17 @@ mod tests {
             matches!(err, ModelFileError::FutureVersion { found, .. } if found == FORMAT_VERSION + 1)
         );
         assert!(err.to_string().contains("newer"));
+    }
+
+    #[test]
+    fn old_version_asks_for_a_rebuild() {
+        let mut bytes = encode(&sample(), p()).unwrap();
+        bytes[8..12].copy_from_slice(&(FORMAT_VERSION - 1).to_le_bytes());
+        let err = decode::<Sample>(&bytes, p()).unwrap_err();
+        assert!(
+            matches!(err, ModelFileError::OldVersion { found, .. } if found == FORMAT_VERSION - 1)
+        );
+        assert!(err.to_string().contains("rebuild"));
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! The model end to end on the embedded data set: build, file round trip, determinism, synthesized walks
-//! that travel what was asked, the crowd source, and the leave-one-out acceptance on the real Bandai data
-//! (skipped when `../shared/mocap` is absent).
+//! that travel what was asked and the crowd source. The acceptance on the real data is in
+//! `tests/acceptance.rs`.
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -245,53 +245,6 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
     )
     .unwrap();
     assert_eq!(n.last.level_histogram[0], 300);
-}
-
-#[test]
-fn leave_one_out_on_bandai_meets_the_paper_comparison() {
-    let root = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/mocap/bandai-namco-2-walk"
-    );
-    if !Path::new(root).is_dir() {
-        eprintln!("skipped: ../shared/mocap not found");
-        return;
-    }
-    // A random 240-cycle subset keeps the test fast; the README quotes the full 800.
-    let spec = DataSpec {
-        dirs: vec![PathBuf::from(root)],
-        samples: Some(240),
-        ..DataSpec::default()
-    };
-    let loaded = spec.load(&|_, _| {}).unwrap();
-    let config = BuildConfig::default();
-    let analysis = Analysis::run(&loaded.training, &config, &NoProgress).unwrap();
-    let report = leave_one_out(&analysis, 0, &[], &EvalConfig::default(), &NoProgress).unwrap();
-    let get = |name: &str| {
-        report
-            .methods
-            .iter()
-            .find(|m| m.name == name)
-            .unwrap()
-            .error_cm
-    };
-    let ml: Vec<f64> = report
-        .methods
-        .iter()
-        .filter(|m| m.name == "multilinear")
-        .map(|m| m.error_cm)
-        .collect();
-    let (naive, rbf, nearest) = (get("naive-kriging"), get("rbf"), get("nearest"));
-    assert!(
-        ml[0] <= 1.1 * naive,
-        "full level {:.3} cm vs naive kriging {naive:.3} cm",
-        ml[0]
-    );
-    assert!(
-        ml[0] < rbf && ml[0] < nearest,
-        "{ml:?} vs rbf {rbf}, nearest {nearest}"
-    );
-    assert!(*ml.last().unwrap() > ml[0], "{ml:?}");
 }
 
 #[test]

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Context as _;
 use clap::Args;
+use motion_lod::build::RowWeights;
 use motion_lod::progress::{BarProgress, NoProgress, Progress};
 use motion_lod::{BuildConfig, MotionModel};
 
@@ -24,6 +25,24 @@ pub struct ModelArgs {
     /// Ranks of the last key level (paper: 7,7,9).
     #[arg(long, value_parser = parse_ranks, default_value = "7,7,9")]
     pub min_ranks: [usize; 3],
+    /// The DOF count the ranks are meant for: R_P of --max-ranks and --min-ranks is scaled by
+    /// P / this (the paper's ranks are for P = 94); 0 uses them as given.
+    #[arg(long, value_name = "P", default_value_t = motion_lod::build::PAPER_DOF)]
+    pub dof_rank_reference: usize,
+    /// Weights of the DOF rows in the decomposition: `position` weighs each row by how far it moves
+    /// the joints (the tensor error then follows the joint position error); `unit` is the paper's plain
+    /// tensor.
+    #[arg(long, value_enum, default_value_t = Weights::Position)]
+    pub row_weights: Weights,
+}
+
+/// `--row-weights` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Weights {
+    /// By joint-position sensitivity.
+    Position,
+    /// None (the paper).
+    Unit,
 }
 
 impl ModelArgs {
@@ -34,6 +53,11 @@ impl ModelArgs {
             accuracy_levels: self.accuracy_levels,
             max_ranks: self.max_ranks,
             min_ranks: self.min_ranks,
+            dof_rank_reference: (self.dof_rank_reference > 0).then_some(self.dof_rank_reference),
+            row_weights: match self.row_weights {
+                Weights::Position => RowWeights::JointPosition,
+                Weights::Unit => RowWeights::Unit,
+            },
             ..BuildConfig::default()
         }
     }

@@ -134,6 +134,7 @@ pub fn print(out: &mut impl Write, model: &MotionModel) -> anyhow::Result<()> {
         .map(|j| format!("{} {:.1} cm", j.name, j.error_cm))
         .collect();
     writeln!(out, "  {}", names.join(", "))?;
+    writeln!(out, "{}", describe_weights(r))?;
     writeln!(out, "key levels (ALS):")?;
     writeln!(
         out,
@@ -195,4 +196,28 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         print(&mut std::io::stdout().lock(), &model)?;
     }
     Ok(())
+}
+
+/// One line on the DOF row weights the decomposition used.
+fn describe_weights(r: &motion_lod::BuildReport) -> String {
+    use motion_lod::build::RowWeights;
+    let w = &r.row_weights;
+    match r.config.row_weights {
+        RowWeights::Unit => "row weights: none (the paper's plain tensor)".to_string(),
+        RowWeights::JointPosition if w.len() > motion_lod::TIME_ROW + 1 => {
+            let joints = &w[motion_lod::TIME_ROW + 1..];
+            let (lo, hi) = joints.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            });
+            format!(
+                "row weights (joint displacement per unit): root position {:.2}, root rotation {:.3}-{:.3} m/rad, \
+                 joints {lo:.3}-{hi:.3} m/rad, time {:.4} m per mean increment",
+                w[0],
+                w[3].min(w[4]).min(w[5]),
+                w[3].max(w[4]).max(w[5]),
+                w[motion_lod::TIME_ROW]
+            )
+        }
+        RowWeights::JointPosition => format!("row weights: {w:?}"),
+    }
 }
