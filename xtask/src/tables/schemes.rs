@@ -9,7 +9,7 @@
 //!   [`crate::tables::online::OnlineTruncation`], which redoes the unfolding per clip.
 
 use anyhow::{Context, Result};
-use hosvd_als::{KeyLevel, KeyLevels, hooi};
+use hosvd_als::{KeyLevel, KeyLevels};
 use lod_policy::{AccuracyLevel, LodModel, Ranks};
 use motion_lod::progress::{NoProgress, Progress};
 use motion_lod::{Analysis, BuildConfig, MotionModel};
@@ -68,7 +68,8 @@ pub fn als_every_level(
                 k.clone()
             }
             None => {
-                let (tucker, report) = hooi(&analysis.tensor, level.ranks, &config.als)
+                let (tucker, report) = analysis
+                    .decompose(level.ranks, &config.als)
                     .with_context(|| format!("HOOI at level {l}, ranks {:?}", level.ranks))?;
                 sweeps.push(report.iterations);
                 KeyLevel {
