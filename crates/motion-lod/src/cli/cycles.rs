@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use clap::Args;
 use motion_lod::dataset::{AlignedSet, CycleSet};
+use motion_lod::model_file::write_atomic;
 use serde::Serialize;
-use tensor_ops::npy::{NpyDtype, write_tensor};
+use tensor_ops::npy::{NpyArray, NpyDtype, to_npy_bytes};
 
 use super::data::{AlignArg, DataArgs, load};
 
@@ -56,7 +57,9 @@ pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
     let loaded = load(&args.data.spec(), args.json)?;
     let (set, aligned) = (&loaded.cycles, &loaded.aligned);
     if let Some(path) = &args.tensor {
-        write_tensor(path, &aligned.tensor, NpyDtype::F64)
+        let bytes = to_npy_bytes(&NpyArray::from_tensor(&aligned.tensor), NpyDtype::F64)
+            .context("encoding the tensor")?;
+        write_atomic(path, &bytes)
             .with_context(|| format!("writing the tensor to {}", path.display()))?;
     }
     if let Some(path) = &args.controls {
@@ -167,7 +170,7 @@ fn write_controls_csv(path: &Path, aligned: &AlignedSet) -> anyhow::Result<()> {
             c.height
         ));
     }
-    std::fs::write(path, text)?;
+    write_atomic(path, text.as_bytes())?;
     Ok(())
 }
 
