@@ -66,3 +66,88 @@ pub fn table(report: &EvalReport) -> String {
     }
     t.render()
 }
+
+/// The paper's decomposition (rows unweighted, the ranks as published) beside the built one, level by
+/// level: leave-one-out error and the bytes of each key tensor.
+pub struct PlainVsWeighted {
+    /// Leave-one-out report of the paper's plain tensor.
+    pub plain: EvalReport,
+    /// Hybrid model bytes (f64) of the paper's plain tensor.
+    pub plain_bytes: usize,
+    /// The built model's report.
+    pub weighted: EvalReport,
+    /// Hybrid model bytes (f64) of the built model.
+    pub weighted_bytes: usize,
+}
+
+/// Builds the paper's plain decomposition of the same training data (`RowWeights::Unit`, no rank
+/// scaling) and evaluates it as [`evaluate`] does.
+pub fn plain_vs_weighted(
+    training: &motion_lod::TrainingSet,
+    config: &motion_lod::BuildConfig,
+    weighted: &EvalReport,
+    weighted_bytes: usize,
+    eval: &EvalConfig,
+    progress: &dyn Progress,
+) -> Result<PlainVsWeighted> {
+    let plain_config = motion_lod::BuildConfig {
+        row_weights: motion_lod::build::RowWeights::Unit,
+        dof_rank_reference: None,
+        ..config.clone()
+    };
+    let (model, analysis) = MotionModel::build_with_analysis(training, &plain_config, progress)
+        .context("building the paper's plain model")?;
+    let plain = evaluate(&analysis, &model, eval, progress)?;
+    Ok(PlainVsWeighted {
+        plain_bytes: Storage::of(&model).model_f64,
+        plain,
+        weighted: weighted.clone(),
+        weighted_bytes,
+    })
+}
+
+/// The side-by-side table in markdown: key level by key level.
+pub fn plain_vs_weighted_table(c: &PlainVsWeighted) -> String {
+    let levels = |r: &EvalReport| -> Vec<(Option<[usize; 3]>, f64, usize)> {
+        r.methods
+            .iter()
+            .filter(|m| m.name == "multilinear")
+            .map(|m| (m.ranks, m.error_cm, m.bytes))
+            .collect()
+    };
+    let (plain, ours) = (levels(&c.plain), levels(&c.weighted));
+    let mut t = Table::new(&[
+        ">key",
+        "paper: ranks",
+        ">LOO (cm)",
+        ">key bytes, f64",
+        "weighted: ranks",
+        ">LOO (cm)",
+        ">key bytes, f64",
+    ]);
+    for k in 0..plain.len().max(ours.len()) {
+        let cell = |v: Option<&(Option<[usize; 3]>, f64, usize)>| match v {
+            Some((r, e, b)) => [r.map_or("-".into(), ranks), format!("{e:.3}"), mib(*b)],
+            None => ["-".into(), "-".into(), "-".into()],
+        };
+        let [pr, pe, pb] = cell(plain.get(k));
+        let [wr, we, wb] = cell(ours.get(k));
+        t.row(&[k.to_string(), pr, pe, pb, wr, we, wb]);
+    }
+    let naive = c
+        .weighted
+        .methods
+        .iter()
+        .find(|m| m.name == "naive-kriging")
+        .map_or(f64::NAN, |m| m.error_cm);
+    let mut out = t.render();
+    out.push_str(&format!(
+        "\nWhole hybrid model: paper {} ({} of raw), weighted {} ({} of raw); naive kriging of the raw \
+         samples {naive:.3} cm.\n",
+        mib(c.plain_bytes),
+        percent(c.plain_bytes as f64 / c.plain.raw_bytes.max(1) as f64),
+        mib(c.weighted_bytes),
+        percent(c.weighted_bytes as f64 / c.weighted.raw_bytes.max(1) as f64),
+    ));
+    out
+}
