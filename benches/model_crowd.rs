@@ -1,7 +1,8 @@
 //! Benchmarks with the REAL model built from the embedded fixtures (paper defaults): clip kernels and
 //! per-frame poses at the first and last accuracy levels, forward kinematics of the model's skeleton,
 //! and one crowd frame (cull + kernels + poses + FK) of 1k walkers with the model's `LodSource` under
-//! the paper's distance policy and with the naive source at full detail.
+//! the paper's distance policy, with the PCA baseline (40 components, fewer per level) under the same
+//! policy, and with the naive source at full detail.
 
 use std::hint::black_box;
 
@@ -11,7 +12,7 @@ use glam::Vec3;
 use lod_policy::{ClipKernel, Detail, DistancePolicy, KernelScratch, LevelPolicy, ViewParams};
 use motion_lod::dataset::DataSpec;
 use motion_lod::progress::NoProgress;
-use motion_lod::{Analysis, BuildConfig, LodSource, MotionModel, NaiveSource};
+use motion_lod::{Analysis, BuildConfig, LodSource, MotionModel, NaiveSource, PcaSource};
 
 /// Walkers per square metre (the default crowd's density: 100 on a 100 m field).
 const DENSITY: f32 = 0.01;
@@ -119,6 +120,24 @@ fn crowd_frame(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
             let cam = path.camera_at(f as f32 * dt, &lens);
             crowd
                 .step_into(&source, &lod_policy, &cam, dt, &mut stats)
+                .unwrap();
+            f += 1;
+            black_box(stats.visible)
+        })
+    });
+
+    let pca = PcaSource::new(model, analysis, 40).expect("PCA basis of the fixtures");
+    let mut crowd = Crowd::new(&pca, config).unwrap();
+    for f in 0..45 {
+        let cam = path.camera_at(f as f32 * dt, &lens);
+        crowd.step(&pca, &lod_policy, &cam, dt).unwrap();
+    }
+    let mut f = 45u32;
+    g.bench_function(BenchmarkId::new("pca", walkers), |b| {
+        b.iter(|| {
+            let cam = path.camera_at(f as f32 * dt, &lens);
+            crowd
+                .step_into(&pca, &lod_policy, &cam, dt, &mut stats)
                 .unwrap();
             f += 1;
             black_box(stats.visible)

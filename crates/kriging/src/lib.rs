@@ -74,7 +74,7 @@ pub use fit::{FitOptions, FitWeights, FittedVariogram, fit_variogram};
 pub use kriging::{Kriging, augmented_params};
 pub use linalg::{PINV_RTOL, sym_pinv};
 pub use projected::ProjectedQuery;
-pub use rbf::{Rbf, RbfConfig, RbfKernel};
+pub use rbf::{RBF_SMOOTHING_GRID, Rbf, RbfConfig, RbfKernel, RbfSmoothing, SmoothingCandidate};
 pub use scaling::{ParamScaling, ScalingChoice};
 pub use variogram::{Variogram, VariogramModel, shape};
 

@@ -1,5 +1,6 @@
 //! Radial basis function interpolation with a linear polynomial (Rose, Cohen and Bodenheimer,
-//! "Verbs and Adverbs", 1998), the baseline the paper compares kriging against.
+//! "Verbs and Adverbs", 1998), the baseline the paper compares kriging against, with an optional
+//! smoothing (ridge) term `Phi + lambda I` chosen by leave-one-out error.
 
 use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
@@ -60,6 +61,34 @@ impl RbfKernel {
     }
 }
 
+/// Relative smoothing grid of [`RbfSmoothing::Loo`]: the candidates are `f * mean_ij |Phi_ij|`
+/// for each factor `f` here (0, then `1e-8 .. 1e0` by decades), tried in this order.
+pub const RBF_SMOOTHING_GRID: [f64; 10] =
+    [0.0, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0];
+
+/// The smoothing (ridge) term `lambda` of the RBF system `[Phi + lambda I, Q; Q^t, 0]`.
+///
+/// With `lambda = 0` the RBF interpolates the samples exactly; this is the paper's baseline (Rose et
+/// al.). When several samples have nearly the same parameters (for example the cycles of one take)
+/// `Phi` is nearly singular and the exact interpolant oscillates wildly between them; `lambda > 0`
+/// bounds the smallest eigenvalue of the kernel block away from zero (on the polynomial-free subspace,
+/// for the conditionally positive definite cubic, thin-plate and Gaussian kernels) and turns the
+/// interpolant into a smoothing spline: the fitted value at sample `k` is `x_k - lambda w_k`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub enum RbfSmoothing {
+    /// `lambda = 0`: exact interpolation, the paper's baseline. Duplicate parameter points are an
+    /// error ([`KrigingError::DuplicateParams`]).
+    None,
+    /// A given `lambda >= 0` (finite), in the units of `phi` (scaled parameter distances).
+    Fixed(f64),
+    /// `lambda` chosen as the candidate of smallest leave-one-out RMSE over the fitted values,
+    /// from `RBF_SMOOTHING_GRID[i] * mean_ij |Phi_ij|` (see [`RBF_SMOOTHING_GRID`]); ties go to the
+    /// smaller `lambda`. `lambda = 0` is skipped when two samples share their parameters, and
+    /// candidates whose system is singular are skipped.
+    #[default]
+    Loo,
+}
+
 /// Configuration of [`Rbf::fit`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct RbfConfig {
@@ -67,15 +96,30 @@ pub struct RbfConfig {
     pub kernel: RbfKernel,
     /// Per-dimension scaling of the parameters.
     pub scaling: ScalingChoice,
+    /// Smoothing term on the kernel block (default: chosen by leave-one-out error).
+    #[serde(default)]
+    pub smoothing: RbfSmoothing,
+}
+
+/// One smoothing value tried by [`RbfSmoothing::Loo`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SmoothingCandidate {
+    /// The smoothing `lambda`.
+    pub lambda: f64,
+    /// Its leave-one-out RMSE over the fitted values, `None` when the candidate was skipped
+    /// (duplicate parameters at `lambda = 0`, singular system, non-finite error).
+    pub loo_rmse: Option<f64>,
 }
 
 /// A fitted RBF interpolant `x(c) = sum_i w_i phi(|c - c_i|) + a^t [c; 1]`.
 ///
-/// Solved as the symmetric system `M = [Phi Q; Q^t 0]` where the columns of `Q` are an orthonormal
+/// Solved as the symmetric system `M = [Phi + lambda I, Q; Q^t, 0] [w; a] = [X; 0]`
+/// (`lambda` from [`RbfSmoothing`], 0 for exact interpolation) where the columns of `Q` are an orthonormal
 /// basis of the span of `C^t` (the linear polynomials at the samples; dimensions that are constant
 /// or collinear are removed with a relative eigenvalue tolerance of 1e-12 on `C C^t`). The
 /// interpolant is linear in the sample values, so it is also expressed as weights
-/// `b(c) = M^-1[:S, :] [phi(c); q(c)]` on them: they sum to one and reproduce linear functions.
+/// `b(c) = M^-1[:S, :] [phi(c); q(c)]` on them: they sum to one and reproduce linear functions
+/// (also with smoothing, because `Q^t w = 0` keeps linear data out of the kernel part).
 /// (Rose et al. first fit the hyperplane by least squares and then interpolate the residuals; the
 /// augmented system gives the same kind of interpolant and is regular for any distinct samples.)
 #[derive(Debug, Clone)]
@@ -92,13 +136,100 @@ pub struct Rbf {
     /// Row-major (S+q) x D: `M^-1[:, :S] X`.
     dual: Vec<f64>,
     values: Mat<f64>,
+    /// The smoothing `lambda` in use.
+    lambda: f64,
+    /// The candidates tried by leave-one-out choice (empty for `None` and `Fixed`).
+    candidates: Vec<SmoothingCandidate>,
+}
+
+/// `mean_ij |Phi_ij|` over all `S^2` entries, the unit of the smoothing grid (1 if it is 0 or not
+/// finite, which only an underflowing Gaussian kernel can give).
+fn kernel_scale(phi: MatRef<'_, f64>) -> f64 {
+    let mut sum = 0.0;
+    for j in 0..phi.ncols() {
+        for i in 0..phi.nrows() {
+            sum += phi[(i, j)].abs();
+        }
+    }
+    let mean = sum / (phi.nrows() * phi.ncols()).max(1) as f64;
+    if mean > 0.0 && mean.is_finite() {
+        mean
+    } else {
+        1.0
+    }
+}
+
+/// `M^-1` and `M^-1[:, :S] X` (row-major) of one smoothing value.
+struct Solved {
+    minv: Mat<f64>,
+    dual: Vec<f64>,
+}
+
+/// Inverts `M = [Phi + lambda I, Q; Q^t, 0]` and forms the dual coefficients `M^-1[:, :S] X`.
+fn solve_smoothed(
+    phi: MatRef<'_, f64>,
+    qmat: MatRef<'_, f64>,
+    lambda: f64,
+    values: MatRef<'_, f64>,
+) -> Result<Solved, KrigingError> {
+    let (s, q) = qmat.shape();
+    debug_assert_eq!(phi.shape(), (s, s));
+    let n = s + q;
+    let m = Mat::from_fn(n, n, |i, j| {
+        if i < s && j < s {
+            if i == j {
+                phi[(i, j)] + lambda
+            } else {
+                phi[(i, j)]
+            }
+        } else if i < s {
+            qmat[(i, j - s)]
+        } else if j < s {
+            qmat[(j, i - s)]
+        } else {
+            0.0
+        }
+    });
+    let minv = checked_inverse(m.as_ref(), true, "rbf")?;
+    let dm = crate::linalg::matmul_par_cols(minv.as_ref().subcols(0, s), values);
+    let dv = values.ncols();
+    let mut dual = Vec::with_capacity(n * dv);
+    for i in 0..n {
+        for j in 0..dv {
+            dual.push(dm[(i, j)]);
+        }
+    }
+    Ok(Solved { minv, dual })
+}
+
+/// Leave-one-out RMSE `sqrt(1/S sum_k |e_k|^2)` with Rippa's `e_k = dual_k / (M^-1)_kk`;
+/// `None` when a diagonal entry is zero or the result is not finite.
+fn loo_rmse(solved: &Solved, s: usize, dv: usize) -> Option<f64> {
+    let mut sum = 0.0;
+    for k in 0..s {
+        let mkk = solved.minv[(k, k)];
+        if mkk == 0.0 || !mkk.is_finite() {
+            return None;
+        }
+        for v in &solved.dual[k * dv..(k + 1) * dv] {
+            let e = v / mkk;
+            sum += e * e;
+        }
+    }
+    let rmse = (sum / s as f64).sqrt();
+    rmse.is_finite().then_some(rmse)
 }
 
 impl Rbf {
     /// Fits the interpolant to `params` (S x d) and `values` (S x D).
     ///
+    /// With [`RbfSmoothing::Loo`] one `(S+q)` inverse is formed per grid value (the distance and
+    /// kernel matrices are computed once).
+    ///
     /// Errors: shapes, NaN/inf, fewer than 2 samples, all parameters equal, duplicate parameter
-    /// points (both indices), a singular system, a Gaussian width that is not finite and positive.
+    /// points without smoothing (both indices), a singular system (for `Loo`: every candidate),
+    /// a Gaussian width that is not finite and positive, a fixed smoothing that is negative or not
+    /// finite.
     pub fn fit(
         params: MatRef<'_, f64>,
         values: MatRef<'_, f64>,
@@ -108,6 +239,13 @@ impl Rbf {
             if !(width.is_finite() && width > 0.0) {
                 return Err(KrigingError::InvalidConfig(format!(
                     "gaussian RBF width {width} must be finite and > 0"
+                )));
+            }
+        }
+        if let RbfSmoothing::Fixed(lambda) = config.smoothing {
+            if !(lambda.is_finite() && lambda >= 0.0) {
+                return Err(KrigingError::InvalidConfig(format!(
+                    "RBF smoothing lambda {lambda} must be finite and >= 0"
                 )));
             }
         }
@@ -141,12 +279,19 @@ impl Rbf {
         if dist.max().is_nan() || dist.max() <= 0.0 {
             return Err(KrigingError::NoSpread { samples: s });
         }
-        if let Some((first, second)) = dist.first_duplicate(dist.duplicate_tol()) {
-            return Err(KrigingError::DuplicateParams {
-                what: "rbf",
-                first,
-                second,
-            });
+        let duplicate = dist.first_duplicate(dist.duplicate_tol());
+        let exact_duplicate_error = |(first, second)| KrigingError::DuplicateParams {
+            what: "rbf",
+            first,
+            second,
+        };
+        match config.smoothing {
+            RbfSmoothing::None | RbfSmoothing::Fixed(0.0) => {
+                if let Some(pair) = duplicate {
+                    return Err(exact_duplicate_error(pair));
+                }
+            }
+            _ => {}
         }
         let c = augmented_params(scaled.as_ref());
         let g = matmul(c.as_ref(), c.transpose());
@@ -161,30 +306,77 @@ impl Rbf {
             vecs[(l, keep[k])] / vals[keep[k]].sqrt()
         });
         let qmat = matmul(c.transpose(), poly.as_ref()); // S x q, orthonormal columns
-        let n = s + q;
-        let m = Mat::from_fn(n, n, |i, j| {
-            if i < s && j < s {
-                if i == j {
-                    config.kernel.eval(0.0)
-                } else {
-                    config.kernel.eval(dist.get(i, j))
-                }
-            } else if i < s {
-                qmat[(i, j - s)]
-            } else if j < s {
-                qmat[(j, i - s)]
+        let phi = Mat::from_fn(s, s, |i, j| {
+            if i == j {
+                config.kernel.eval(0.0)
             } else {
-                0.0
+                config.kernel.eval(dist.get(i, j))
             }
         });
-        let minv = checked_inverse(m.as_ref(), true, "rbf")?;
-        let dm = crate::linalg::matmul_par_cols(minv.as_ref().subcols(0, s), values);
-        let mut dual = Vec::with_capacity(n * values.ncols());
-        for i in 0..n {
-            for j in 0..values.ncols() {
-                dual.push(dm[(i, j)]);
+        let mut candidates = Vec::new();
+        let (lambda, solved) = match config.smoothing {
+            RbfSmoothing::None => (
+                0.0,
+                solve_smoothed(phi.as_ref(), qmat.as_ref(), 0.0, values)?,
+            ),
+            RbfSmoothing::Fixed(lambda) => (
+                lambda,
+                solve_smoothed(phi.as_ref(), qmat.as_ref(), lambda, values)?,
+            ),
+            RbfSmoothing::Loo => {
+                let scale = kernel_scale(phi.as_ref());
+                let mut best: Option<(f64, f64, Solved)> = None;
+                let mut last_err = None;
+                for f in RBF_SMOOTHING_GRID {
+                    let lambda = f * scale;
+                    if lambda == 0.0 && duplicate.is_some() {
+                        candidates.push(SmoothingCandidate {
+                            lambda,
+                            loo_rmse: None,
+                        });
+                        last_err = duplicate.map(exact_duplicate_error);
+                        continue;
+                    }
+                    let rmse = match solve_smoothed(phi.as_ref(), qmat.as_ref(), lambda, values) {
+                        Ok(solved) => {
+                            let rmse = loo_rmse(&solved, s, values.ncols());
+                            if let Some(r) = rmse {
+                                if best.as_ref().is_none_or(|b| r < b.1) {
+                                    best = Some((lambda, r, solved));
+                                }
+                            } else {
+                                last_err = Some(KrigingError::Singular {
+                                    what: "rbf leave-one-out",
+                                    size: s,
+                                    pivot_ratio: 0.0,
+                                    residual: f64::NAN,
+                                });
+                            }
+                            rmse
+                        }
+                        Err(e) => {
+                            last_err = Some(e);
+                            None
+                        }
+                    };
+                    candidates.push(SmoothingCandidate {
+                        lambda,
+                        loo_rmse: rmse,
+                    });
+                }
+                match best {
+                    Some((lambda, _, solved)) => (lambda, solved),
+                    None => {
+                        return Err(last_err.unwrap_or(KrigingError::Singular {
+                            what: "rbf",
+                            size: s + q,
+                            pivot_ratio: 0.0,
+                            residual: f64::NAN,
+                        }));
+                    }
+                }
             }
-        }
+        };
         let mut scaled_rows = Vec::with_capacity(s * scaled.ncols());
         for i in 0..s {
             for k in 0..scaled.ncols() {
@@ -198,10 +390,22 @@ impl Rbf {
             scaled,
             scaled_rows,
             poly,
-            minv,
-            dual,
+            minv: solved.minv,
+            dual: solved.dual,
             values: values.to_owned(),
+            lambda,
+            candidates,
         })
+    }
+
+    /// The smoothing `lambda` in use (0 for exact interpolation).
+    pub fn smoothing(&self) -> f64 {
+        self.lambda
+    }
+
+    /// The candidates tried by [`RbfSmoothing::Loo`], in grid order (empty for the other choices).
+    pub fn smoothing_candidates(&self) -> &[SmoothingCandidate] {
+        &self.candidates
     }
 
     /// Number of samples S.
@@ -303,6 +507,10 @@ impl Rbf {
     }
 
     /// Leave-one-out errors (S x D) in closed form (Rippa 1999): `e_k = (M^-1 [X; 0])_k / (M^-1)_kk`.
+    ///
+    /// With smoothing this is still exact for the refit without sample `k` at the same `lambda`
+    /// (the regularised kernel `phi(|c_i - c_j|) + lambda delta_ij` is just another symmetric kernel
+    /// on the sample indices), evaluated at `c_k` where the smoothing term does not act.
     pub fn loo_errors(&self) -> Result<Mat<f64>, KrigingError> {
         let s = self.n_samples();
         let dv = self.n_values();
@@ -322,6 +530,31 @@ impl Rbf {
             }
         }
         Ok(err)
+    }
+
+    /// Leave-one-out weights `W` (S x S): the refit without sample `k` (same `lambda`) predicts
+    /// `sum_j W_kj x_j` at `c_k`, for any values. From Rippa's form, `E(X) = I - W` applied to `X`:
+    /// `W_kk = 0`, `W_kj = -(M^-1)_kj / (M^-1)_kk`. Rows sum to one.
+    pub fn loo_weights(&self) -> Result<Mat<f64>, KrigingError> {
+        let s = self.n_samples();
+        let mut w = Mat::zeros(s, s);
+        for k in 0..s {
+            let mkk = self.minv[(k, k)];
+            if mkk == 0.0 || !mkk.is_finite() {
+                return Err(KrigingError::Singular {
+                    what: "rbf leave-one-out",
+                    size: s,
+                    pivot_ratio: 0.0,
+                    residual: f64::NAN,
+                });
+            }
+            for j in 0..s {
+                if j != k {
+                    w[(k, j)] = -self.minv[(k, j)] / mkk;
+                }
+            }
+        }
+        Ok(w)
     }
 
     /// Leave-one-out cross validation summarised as in [`crate::Kriging::leave_one_out`].

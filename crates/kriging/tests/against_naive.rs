@@ -208,6 +208,7 @@ fn rbf_loo_matches_refitting_s_times() {
     let cfg = RbfConfig {
         kernel: RbfKernel::Cubic,
         scaling: ScalingChoice::None,
+        smoothing: RbfSmoothing::None,
     };
     let r = Rbf::fit(to_mat(&p).as_ref(), to_mat(&x).as_ref(), &cfg).unwrap();
     let e = r.loo_errors().unwrap();
@@ -232,6 +233,7 @@ fn rbf_matches_naive_augmented_system() {
         &RbfConfig {
             kernel: RbfKernel::Cubic,
             scaling: ScalingChoice::None,
+            smoothing: RbfSmoothing::None,
         },
     )
     .unwrap();

@@ -335,6 +335,7 @@ fn rbf_reproduces_linear_functions_and_interpolates() {
             &RbfConfig {
                 kernel,
                 scaling: ScalingChoice::Standardise,
+                smoothing: RbfSmoothing::None,
             },
         )
         .unwrap();
@@ -362,7 +363,8 @@ fn rbf_reproduces_linear_functions_and_interpolates() {
             to_mat(&x).as_ref(),
             &RbfConfig {
                 kernel: RbfKernel::Gaussian { width: 0.0 },
-                scaling: ScalingChoice::None
+                scaling: ScalingChoice::None,
+                smoothing: RbfSmoothing::None,
             }
         )
         .is_err()

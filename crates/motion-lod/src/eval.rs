@@ -10,7 +10,13 @@
 //! | `naive-kriging` | the same | the raw aligned samples |
 //! | `pca` | the same | the samples projected on the first `R_P` principal DOF directions |
 //! | `rbf` | RBF with a linear polynomial (Rose et al.), refitted without `i` | the raw aligned samples |
+//! | `rbf-smoothed` | the same with a smoothing term chosen by leave-one-out error (see below) | the raw aligned samples |
 //! | `nearest` | 1 at the nearest other sample in scaled control space | the raw aligned samples |
+//!
+//! The RBF baseline interpolates exactly, as in Rose et al. and the paper; on cycles with nearly equal
+//! controls that system is ill-conditioned (167 cm leave-one-out error on the embedded data).
+//! `rbf-smoothed` adds a ridge term `Phi + lambda I`, `lambda` chosen by its own leave-one-out error on
+//! the samples (`kriging::RbfSmoothing::Loo`): the stronger competitor.
 //!
 //! The kriging variogram and the control scaling stay those fitted on all samples (closed-form
 //! leave-one-out, see `kriging::Kriging::loo_errors`). The error of a prediction is the project's metric
@@ -19,7 +25,7 @@
 
 use faer::{Mat, MatRef};
 use hosvd_als::Tucker;
-use kriging::{Kriging, KrigingConfig, ModelChoice, Rbf, RbfConfig, ScalingChoice};
+use kriging::{Kriging, KrigingConfig, ModelChoice, Rbf, RbfConfig, RbfSmoothing, ScalingChoice};
 use serde::{Deserialize, Serialize};
 use tensor_ops::Tensor3;
 
@@ -48,7 +54,7 @@ impl Default for EvalConfig {
 /// The error of one method.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MethodError {
-    /// `multilinear`, `naive-kriging`, `rbf`, `pca` or `nearest`.
+    /// `multilinear`, `naive-kriging`, `rbf`, `rbf-smoothed`, `pca` or `nearest`.
     pub name: String,
     /// Accuracy level (multilinear only).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -85,18 +91,37 @@ fn loo_weights_from_errors(errors: MatRef<'_, f64>) -> Mat<f64> {
     Mat::from_fn(s, s, |i, j| if i == j { 0.0 } else { -errors[(i, j)] })
 }
 
-/// Leave-one-out weights of universal kriging (`rbf` false) or of the RBF baseline (`rbf` true), both
+/// The RBF baseline's smoothing `lambda`, chosen by its closed-form leave-one-out error on the samples
+/// themselves (rows weighted as the decomposition weighs them, so that the choice follows the joint
+/// position error): the weights below are then fitted to identity values with that `lambda` fixed.
+fn rbf_smoothing(analysis: &Analysis) -> Result<f64, BuildError> {
+    let k = &analysis.kriging;
+    let x = &analysis.tensor;
+    let [p, t, s] = x.dims();
+    let w = &analysis.row_weights;
+    let values = Mat::from_fn(s, p * t, |i, j| x.sample(i)[j] * w[j % p]);
+    let config = RbfConfig {
+        scaling: ScalingChoice::Given(k.scaling().clone()),
+        smoothing: RbfSmoothing::Loo,
+        ..RbfConfig::default()
+    };
+    Ok(Rbf::fit(analysis.control_matrix().as_ref(), values.as_ref(), &config)?.smoothing())
+}
+
+/// Leave-one-out weights of universal kriging (`rbf` `None`) or of the RBF baseline (`rbf` its
+/// smoothing), both
 /// with the analysis's control scaling (kriging also with its variogram): the methods fitted to the
 /// identity values, so that their leave-one-out errors are `I - W`.
-fn loo_weights(analysis: &Analysis, rbf: bool) -> Result<Mat<f64>, BuildError> {
+fn loo_weights(analysis: &Analysis, rbf: Option<f64>) -> Result<Mat<f64>, BuildError> {
     let k = &analysis.kriging;
     let s = k.n_samples();
     let params = analysis.control_matrix();
     let identity = Mat::<f64>::identity(s, s);
     let scaling = ScalingChoice::Given(k.scaling().clone());
-    let errors = if rbf {
+    let errors = if let Some(lambda) = rbf {
         let config = RbfConfig {
             scaling,
+            smoothing: RbfSmoothing::Fixed(lambda),
             ..RbfConfig::default()
         };
         Rbf::fit(params.as_ref(), identity.as_ref(), &config)?.loo_errors()?
@@ -111,12 +136,12 @@ fn loo_weights(analysis: &Analysis, rbf: bool) -> Result<Mat<f64>, BuildError> {
     Ok(loo_weights_from_errors(errors.as_ref()))
 }
 
-/// Sample weights of universal kriging (`rbf` false) or RBF (`rbf` true) at new `controls`: the method
+/// Sample weights of universal kriging (`rbf` `None`) or RBF (`rbf` its smoothing) at new `controls`: the method
 /// fitted to the identity values predicts exactly its weights on the samples (H x S).
 fn prediction_weights(
     analysis: &Analysis,
     controls: &[[f64; 4]],
-    rbf: bool,
+    rbf: Option<f64>,
 ) -> Result<Mat<f64>, BuildError> {
     let k = &analysis.kriging;
     let s = k.n_samples();
@@ -125,9 +150,10 @@ fn prediction_weights(
     let scaling = ScalingChoice::Given(k.scaling().clone());
     let mut w = Mat::zeros(controls.len(), s);
     let mut row = vec![0.0; s];
-    if rbf {
+    if let Some(lambda) = rbf {
         let config = RbfConfig {
             scaling,
+            smoothing: RbfSmoothing::Fixed(lambda),
             ..RbfConfig::default()
         };
         let fit = Rbf::fit(params.as_ref(), identity.as_ref(), &config)?;
@@ -205,11 +231,8 @@ fn blend_samples(x: &Tensor3, w: MatRef<'_, f64>) -> Tensor3 {
 /// The samples projected on the first `rank` principal directions of the DOF mode (PCA of the mode-0
 /// unfolding, without centring, as the paper's matrix SVD).
 fn pca_projection(x: &Tensor3, rank: usize) -> Result<Tensor3, BuildError> {
-    let [p, _, _] = x.dims();
-    let r = rank.clamp(1, p);
-    let full = hosvd_als::hosvd(x, [r, x.dims()[1], x.dims()[2]])?;
-    let u = full.factors[0].as_ref();
-    let proj = u * u.transpose();
+    let u = crate::pca::pca_basis(x, rank)?;
+    let proj = u.as_ref() * u.transpose();
     Ok(x.mode_product(0, proj.as_ref()))
 }
 
@@ -241,6 +264,7 @@ fn multilinear_prediction(tucker: &Tucker, w: MatRef<'_, f64>) -> Tensor3 {
 struct Weights {
     kriging: Mat<f64>,
     rbf: Mat<f64>,
+    rbf_smoothed: Mat<f64>,
     nearest: Mat<f64>,
 }
 
@@ -263,7 +287,7 @@ fn compare(
         .map_or(1, |m| h.div_ceil(m.max(1)).max(1));
     let evaluated = (0..h).step_by(stride).count();
     let keys = &analysis.keys.levels;
-    progress.stage("evaluation", (keys.len() + 4) as u64);
+    progress.stage("evaluation", (keys.len() + 5) as u64);
     let w_krig = weights.kriging.as_ref();
     let mut methods = Vec::new();
     let mut push = |name: &str, level, ranks, predicted: &Tensor3, bytes| {
@@ -301,6 +325,13 @@ fn compare(
         &blend_samples(x, weights.rbf.as_ref()),
         raw_bytes,
     );
+    push(
+        "rbf-smoothed",
+        None,
+        None,
+        &blend_samples(x, weights.rbf_smoothed.as_ref()),
+        raw_bytes,
+    );
     let r_pca = config.pca_rank.clamp(1, p);
     let pca = blend_samples(&pca_projection(x, r_pca)?, w_krig);
     push(
@@ -335,8 +366,9 @@ pub fn leave_one_out(
     progress: &dyn Progress,
 ) -> Result<EvalReport, BuildError> {
     let weights = Weights {
-        kriging: loo_weights(analysis, false)?,
-        rbf: loo_weights(analysis, true)?,
+        kriging: loo_weights(analysis, None)?,
+        rbf: loo_weights(analysis, Some(0.0))?,
+        rbf_smoothed: loo_weights(analysis, Some(rbf_smoothing(analysis)?))?,
         nearest: nearest_weights(analysis),
     };
     compare(
@@ -370,8 +402,9 @@ pub fn held_out(
         )));
     }
     let weights = Weights {
-        kriging: prediction_weights(analysis, controls, false)?,
-        rbf: prediction_weights(analysis, controls, true)?,
+        kriging: prediction_weights(analysis, controls, None)?,
+        rbf: prediction_weights(analysis, controls, Some(0.0))?,
+        rbf_smoothed: prediction_weights(analysis, controls, Some(rbf_smoothing(analysis)?))?,
         nearest: nearest_to(analysis, controls),
     };
     compare(

@@ -41,6 +41,24 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+//! The paper's baselines are crowd clip sources too, over the samples the model was built from:
+//! [`NaiveSource`] (kriging of the raw samples) and [`PcaSource`] (the samples reduced to their leading
+//! principal DOF directions, fewer components per accuracy level):
+//!
+//! ```no_run
+//! use motion_lod::{BuildConfig, MotionModel, PcaSource};
+//! use motion_lod::crowd_sim::ClipSource;
+//! use motion_lod::dataset::DataSpec;
+//! use motion_lod::progress::NoProgress;
+//!
+//! let data = DataSpec::default().load(&|_, _| {})?;
+//! let (model, analysis) =
+//!     MotionModel::build_with_analysis(&data.training, &BuildConfig::default(), &NoProgress)?;
+//! let pca = PcaSource::new(&model, &analysis, 40)?; // R_P,max = 40 as in the paper
+//! println!("components per level {:?}, {} levels", pca.level_ranks(), pca.levels().accuracy_levels);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
 pub mod build;
 pub mod crowd;
 pub mod dataset;
@@ -50,7 +68,9 @@ pub mod metrics;
 pub mod model;
 pub mod model_file;
 pub mod naive;
+pub mod pca;
 pub mod progress;
+mod sample_weights;
 pub mod source;
 pub mod storage;
 pub mod synth;
@@ -58,6 +78,7 @@ pub mod synth;
 pub use build::{Analysis, BuildConfig, BuildError, TrainingSet};
 pub use model::{BuildReport, CONTROL_NAMES, Evaluator, MotionModel, TIME_ROW};
 pub use naive::NaiveSource;
+pub use pca::PcaSource;
 pub use source::LodSource;
 
 /// The runtime crates, re-exported so that an engine can depend on this crate alone.

@@ -9,13 +9,13 @@
 use crowd_sim::{
     ClipSource, ControlBounds, Controls, Detail as CrowdDetail, LevelTable, RootMotion,
 };
-use faer::Mat;
 use glam::Vec3;
 use kriging::Kriging;
 use timewarp::TimeTable;
 
 use crate::build::Analysis;
 use crate::model::{MotionModel, TIME_ROW};
+use crate::sample_weights::SampleWeights;
 use crate::source::{bones_of, heading_of_exp_map, write_joints};
 
 /// One walker's naive clip: the blended aligned cycle and its time table.
@@ -31,6 +31,13 @@ pub struct NaiveClip {
     root_motion: RootMotion,
 }
 
+impl NaiveClip {
+    /// The clip's time table (aligned frame to seconds), from the blended time row.
+    pub fn times(&self) -> &TimeTable {
+        &self.times
+    }
+}
+
 /// Naive kriging interpolation of the raw samples, as a crowd clip source.
 #[derive(Debug)]
 pub struct NaiveSource<'m> {
@@ -38,10 +45,8 @@ pub struct NaiveSource<'m> {
     kriging: &'m Kriging,
     /// Samples, `S` blocks of `T x P` f32 (time row in seconds).
     samples: Vec<f32>,
-    /// `C^+`, `S x (d + 1)` row-major.
-    c_pinv: Vec<f64>,
-    /// `C`, `(d + 1) x S` row-major.
-    c: Vec<f64>,
+    /// `C` and `C^+` of the kriging trend, for the sample weights of eq. 8.
+    weights: SampleWeights,
     bones: Vec<(usize, usize)>,
 }
 
@@ -60,20 +65,11 @@ impl<'m> NaiveSource<'m> {
                 }
             }));
         }
-        let c = analysis.kriging.augmented_params();
-        let cp = analysis.kriging.augmented_pinv();
-        let row_major = |m: &Mat<f64>| {
-            (0..m.nrows())
-                .flat_map(|i| (0..m.ncols()).map(move |j| (i, j)))
-                .map(|(i, j)| m[(i, j)])
-                .collect::<Vec<f64>>()
-        };
         NaiveSource {
             model,
             kriging: &analysis.kriging,
             samples,
-            c_pinv: row_major(&cp),
-            c: row_major(&c),
+            weights: SampleWeights::new(&analysis.kriging),
             bones: bones_of(&model.layout),
         }
     }
@@ -111,32 +107,15 @@ impl ClipSource for NaiveSource<'_> {
     }
 
     fn build_clip(&self, controls: &Controls, _detail: CrowdDetail, clip: &mut NaiveClip) {
-        let (p, t, s, d) = self.dims();
+        let (p, t, _, _) = self.dims();
         let c = [
             f64::from(controls.dx),
             f64::from(controls.dz),
             f64::from(controls.turn),
             f64::from(controls.height),
         ];
-        if self.kriging.weights(&c, &mut clip.b).is_err() {
-            clip.b.fill(1.0 / s as f64);
-        }
-        // z = [c'; 1] - C b with c' the scaled controls; l = b + C^+ z.
-        let scaling = self.kriging.scaling();
-        let mut z = [0.0f64; 8];
-        for (k, zk) in z.iter_mut().enumerate().take(d + 1) {
-            let ck = if k < d {
-                (c[k] - scaling.offset[k]) * scaling.scale[k]
-            } else {
-                1.0
-            };
-            let cb: f64 = (0..s).map(|i| self.c[k * s + i] * clip.b[i]).sum();
-            *zk = ck - cb;
-        }
-        for i in 0..s {
-            let corr: f64 = (0..=d).map(|k| self.c_pinv[i * (d + 1) + k] * z[k]).sum();
-            clip.l[i] = clip.b[i] + corr;
-        }
+        self.weights
+            .compute(self.kriging, &c, &mut clip.b, &mut clip.l);
         clip.poses.fill(0.0);
         let block = p * t;
         for (i, &w) in clip.l.iter().enumerate() {
@@ -151,15 +130,7 @@ impl ClipSource for NaiveSource<'_> {
         }
         clip.times
             .fill_from_iter((0..t).map(|k| f64::from(clip.poses[k * p + TIME_ROW])));
-        let (start, end) = (&clip.poses[..p], &clip.poses[(t - 1) * p..]);
-        let turn = heading_of_exp_map([end[3], end[4], end[5]])
-            - heading_of_exp_map([start[3], start[4], start[5]]);
-        clip.root_motion = RootMotion {
-            dx: end[0],
-            dz: end[2],
-            turn: (turn + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
-                - std::f32::consts::PI,
-        };
+        clip.root_motion = root_motion_between(&clip.poses[..p], &clip.poses[(t - 1) * p..]);
     }
 
     fn clip_duration(&self, clip: &NaiveClip) -> f32 {
@@ -194,5 +165,18 @@ impl ClipSource for NaiveSource<'_> {
 
     fn bones(&self) -> &[(usize, usize)] {
         &self.bones
+    }
+}
+
+/// Root motion over a clip from its first and last pose (rows 0..6: root position and exponential map):
+/// the end position's `(x, z)` and the heading change wrapped into `[-pi, pi)`.
+pub(crate) fn root_motion_between(start: &[f32], end: &[f32]) -> RootMotion {
+    let turn = heading_of_exp_map([end[3], end[4], end[5]])
+        - heading_of_exp_map([start[3], start[4], start[5]]);
+    RootMotion {
+        dx: end[0],
+        dz: end[2],
+        turn: (turn + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
+            - std::f32::consts::PI,
     }
 }

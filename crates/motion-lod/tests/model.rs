@@ -12,7 +12,7 @@ use motion_io::expmap::exp_to_quat;
 use motion_lod::build::Analysis;
 use motion_lod::crowd::{CrowdRun, FullDetail, ModelPolicy, run_crowd};
 use motion_lod::dataset::DataSpec;
-use motion_lod::eval::{EvalConfig, leave_one_out};
+use motion_lod::eval::EvalConfig;
 use motion_lod::model_file;
 use motion_lod::progress::NoProgress;
 use motion_lod::synth::WalkRequest;

@@ -1,16 +1,18 @@
 //! `motion-lod crowd [MODEL] --walkers N --seconds S`: a crowd animated by the model, timed, optionally
-//! rendered and compared with naive interpolation.
+//! rendered and compared with naive interpolation and with the PCA baseline.
 
 use std::path::PathBuf;
 
 use anyhow::{Context as _, bail};
 use clap::{Args, ValueEnum};
-use crowd_sim::{Camera, CrowdConfig, CrowdReport};
-use lod_policy::{DistancePolicy, ScreenSpacePolicy};
+use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport};
+use lod_policy::{DistancePolicy, LodModel, ScreenSpacePolicy};
 use motion_lod::build::Analysis;
-use motion_lod::crowd::{CrowdRun, FullDetail, ModelPolicy, check_render_dir, run_crowd};
+use motion_lod::crowd::{
+    CrowdOutcome, CrowdRun, FullDetail, ModelPolicy, check_render_dir, run_crowd,
+};
 use motion_lod::progress::NoProgress;
-use motion_lod::{LodSource, MotionModel, NaiveSource};
+use motion_lod::{LodSource, MotionModel, NaiveSource, PcaSource};
 use serde::Serialize;
 
 use super::data::load;
@@ -49,11 +51,21 @@ pub struct CrowdArgs {
     #[arg(long, value_enum, default_value_t = PolicyArg::Distance)]
     pub policy: PolicyArg,
     /// Animate with naive interpolation instead of the model (no level of detail).
-    #[arg(long, conflicts_with = "compare_naive")]
+    #[arg(long, conflicts_with_all = ["compare_naive", "pca"])]
     pub naive: bool,
     /// Also run the naive source on the same crowd and print the speed ratio.
     #[arg(long)]
     pub compare_naive: bool,
+    /// Animate with the PCA baseline instead of the model (its components reduced per accuracy level
+    /// under the same policy).
+    #[arg(long, conflicts_with = "compare_pca")]
+    pub pca: bool,
+    /// Also run the PCA baseline on the same crowd (same policy) and print the speed ratio.
+    #[arg(long)]
+    pub compare_pca: bool,
+    /// Principal components kept by the PCA baseline (the paper: 40; at most P).
+    #[arg(long, default_value_t = 40)]
+    pub pca_rank: usize,
     /// Write PNG frames, top-down maps and a GIF here.
     #[arg(long, value_name = "DIR")]
     pub render: Option<PathBuf>,
@@ -88,11 +100,15 @@ struct Summary {
     frames: usize,
     fps: Fps,
     naive_fps: Option<Fps>,
+    /// Mean frame rate of the main source over that of the naive source.
     ratio: Option<f64>,
+    pca_fps: Option<Fps>,
+    /// Mean frame rate of the main source over that of the PCA source.
+    pca_ratio: Option<f64>,
     levels: Vec<u32>,
 }
 
-/// The model to animate and, when the naive source is needed, the analysis it was built from.
+/// The model to animate and, when the naive or PCA source is needed, the analysis it was built from.
 fn model_and_analysis(
     path: Option<&PathBuf>,
     need_analysis: bool,
@@ -114,14 +130,12 @@ fn model_and_analysis(
     if !need_analysis {
         return Ok((model, None));
     }
-    let spec = model
-        .report
-        .data
-        .clone()
-        .context("the model does not record its training data, which the naive source needs")?;
+    let spec = model.report.data.clone().context(
+        "the model does not record its training data, which the naive and PCA sources need",
+    )?;
     let loaded = load(&spec, quiet)?;
     let analysis = Analysis::run(&loaded.training, &model.report.config, &NoProgress)
-        .context("rebuilding the samples for the naive source")?;
+        .context("rebuilding the samples for the naive or PCA source")?;
     Ok((model, Some(analysis)))
 }
 
@@ -136,8 +150,11 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     if let Some(dir) = &args.render {
         check_render_dir(dir).with_context(|| format!("render folder {}", dir.display()))?;
     }
-    let need_naive = args.naive || args.compare_naive;
-    let (model, analysis) = model_and_analysis(args.model.as_ref(), need_naive, args.json)?;
+    if args.pca_rank == 0 {
+        bail!("--pca-rank must be at least 1");
+    }
+    let need_analysis = args.naive || args.compare_naive || args.pca || args.compare_pca;
+    let (model, analysis) = model_and_analysis(args.model.as_ref(), need_analysis, args.json)?;
     let run = CrowdRun {
         config: CrowdConfig {
             seed: args.seed,
@@ -154,56 +171,52 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         render: args.render.clone().map(|d| (d, args.render_every)),
     };
     let lod = &model.lod;
-    let naive_run = CrowdRun {
+    let compare_run = CrowdRun {
         render: None,
         ..run.clone()
     };
-    let (main, naive) = if args.naive {
+    let main = if args.naive {
         let analysis = analysis.as_ref().context("naive source")?;
         let source = NaiveSource::new(&model, analysis);
-        let outcome = run_crowd(
+        run_crowd(
             &source,
             &FullDetail {
                 joints: lod.joints(),
             },
             &run,
-        )?;
-        (outcome, None)
+        )?
+    } else if args.pca {
+        run_with_policy(
+            &pca_source(&model, analysis.as_ref(), args.pca_rank)?,
+            args.policy,
+            lod,
+            &run,
+        )?
     } else {
-        let source = LodSource::new(&model);
-        let outcome = match args.policy {
-            PolicyArg::Distance => run_crowd(
-                &source,
-                &ModelPolicy::new(DistancePolicy::for_model(lod), lod),
-                &run,
-            )?,
-            PolicyArg::Screen => run_crowd(
-                &source,
-                &ModelPolicy::new(
-                    ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
-                    lod,
-                ),
-                &run,
-            )?,
-        };
-        let naive = match &analysis {
-            Some(a) if args.compare_naive => {
-                let source = NaiveSource::new(&model, a);
-                Some(run_crowd(
-                    &source,
-                    &FullDetail {
-                        joints: lod.joints(),
-                    },
-                    &naive_run,
-                )?)
-            }
-            _ => None,
-        };
-        (outcome, naive)
+        run_with_policy(&LodSource::new(&model), args.policy, lod, &run)?
     };
-    let ratio = naive
-        .as_ref()
-        .map(|n| main.report.fps_mean / n.report.fps_mean.max(1e-12));
+    let naive = match &analysis {
+        Some(a) if args.compare_naive && !args.naive => {
+            let source = NaiveSource::new(&model, a);
+            Some(run_crowd(
+                &source,
+                &FullDetail {
+                    joints: lod.joints(),
+                },
+                &compare_run,
+            )?)
+        }
+        _ => None,
+    };
+    let pca = if args.compare_pca && !args.pca {
+        let source = pca_source(&model, analysis.as_ref(), args.pca_rank)?;
+        Some(run_with_policy(&source, args.policy, lod, &compare_run)?)
+    } else {
+        None
+    };
+    let ratio_to = |other: &CrowdOutcome| main.report.fps_mean / other.report.fps_mean.max(1e-12);
+    let ratio = naive.as_ref().map(ratio_to);
+    let pca_ratio = pca.as_ref().map(ratio_to);
     if args.json {
         let summary = Summary {
             walkers: args.walkers,
@@ -211,15 +224,19 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             fps: Fps::from(&main.report),
             naive_fps: naive.as_ref().map(|n| Fps::from(&n.report)),
             ratio,
+            pca_fps: pca.as_ref().map(|n| Fps::from(&n.report)),
+            pca_ratio,
             levels: main.last.level_histogram.clone(),
         };
         println!("{}", serde_json::to_string(&summary)?);
         return Ok(());
     }
-    let source_name = if args.naive {
-        "naive interpolation"
+    let (source_name, short) = if args.naive {
+        ("naive interpolation", "naive")
+    } else if args.pca {
+        ("PCA baseline (components per accuracy level)", "PCA")
     } else {
-        "multilinear LOD"
+        ("multilinear LOD", "LOD")
     };
     println!(
         "{} walkers, {:.1} s at {} fps ({} frames), {source_name}, field {:.0} m",
@@ -233,7 +250,12 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     if let (Some(n), Some(r)) = (&naive, ratio) {
         println!("naive interpolation on the same crowd:");
         println!("{}", n.report);
-        println!("LOD / naive mean frame rate: {r:.2}x");
+        println!("{short} / naive mean frame rate: {r:.2}x");
+    }
+    if let (Some(n), Some(r)) = (&pca, pca_ratio) {
+        println!("PCA baseline on the same crowd (same policy):");
+        println!("{}", n.report);
+        println!("{short} / PCA mean frame rate: {r:.2}x");
     }
     if let Some(dir) = &args.render {
         println!(
@@ -246,4 +268,39 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The PCA baseline over the model's training samples.
+fn pca_source<'m>(
+    model: &'m MotionModel,
+    analysis: Option<&'m Analysis>,
+    rank: usize,
+) -> anyhow::Result<PcaSource<'m>> {
+    let analysis = analysis.context("PCA source")?;
+    PcaSource::new(model, analysis, rank).context("building the PCA baseline")
+}
+
+/// Runs `source` under the chosen level-of-detail policy of the model `lod` (the model's and the PCA
+/// source share its accuracy levels and joints).
+fn run_with_policy<S: ClipSource>(
+    source: &S,
+    policy: PolicyArg,
+    lod: &LodModel,
+    run: &CrowdRun,
+) -> anyhow::Result<CrowdOutcome> {
+    Ok(match policy {
+        PolicyArg::Distance => run_crowd(
+            source,
+            &ModelPolicy::new(DistancePolicy::for_model(lod), lod),
+            run,
+        )?,
+        PolicyArg::Screen => run_crowd(
+            source,
+            &ModelPolicy::new(
+                ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
+                lod,
+            ),
+            run,
+        )?,
+    })
 }
