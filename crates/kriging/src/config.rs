@@ -23,8 +23,11 @@ pub enum Selection {
     /// Smallest weighted squared error of the fit to the empirical variogram.
     BestFit,
     /// Smallest leave-one-out RMSE of the predictions (closed form, no refits).
-    #[default]
     BestLoo,
+    /// Smallest leave-one-out RMSE over the fitted models and a grid of ranges and nuggets
+    /// ([`crate::search`]): the shape that predicts held-out samples best, fitted or not.
+    #[default]
+    LooSearch,
 }
 
 /// Which variogram the kriging system uses.
@@ -40,7 +43,7 @@ pub enum ModelChoice {
 
 impl Default for ModelChoice {
     fn default() -> Self {
-        ModelChoice::Auto(Selection::BestLoo)
+        ModelChoice::Auto(Selection::LooSearch)
     }
 }
 

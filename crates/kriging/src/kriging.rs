@@ -272,6 +272,34 @@ impl Kriging {
                 model.empirical = Some(emp);
                 model.install(&dist, fitted.variogram)?;
             }
+            ModelChoice::Auto(Selection::LooSearch) => {
+                let emp = EmpiricalVariogram::from_distances(
+                    &dist,
+                    model.residuals.as_ref(),
+                    config.bins,
+                )?;
+                let mut reports = crate::search::candidates(&emp, &dist, s, &opts);
+                let probe = crate::search::compress(values, crate::search::SEARCH_COLUMNS);
+                let order = crate::search::rank(params, probe.as_ref(), config, &mut reports);
+                let mut installed = false;
+                for i in order {
+                    let v = reports[i]
+                        .variogram
+                        .expect("ranked candidates have a variogram");
+                    match model.install(&dist, v) {
+                        Ok(()) => {
+                            installed = true;
+                            break;
+                        }
+                        Err(e) => reports[i].error = Some(e.to_string()),
+                    }
+                }
+                model.candidates = reports;
+                model.empirical = Some(emp);
+                if !installed {
+                    return Err(KrigingError::NoModel(model.candidate_errors()));
+                }
+            }
             ModelChoice::Auto(sel) => {
                 let emp = EmpiricalVariogram::from_distances(
                     &dist,
@@ -318,7 +346,7 @@ impl Kriging {
                     rep.wsse = Some(f.wsse);
                     let score = match sel {
                         Selection::BestFit => Ok(f.wsse),
-                        Selection::BestLoo => self
+                        Selection::BestLoo | Selection::LooSearch => self
                             .install(dist, f.variogram)
                             .and_then(|_| self.leave_one_out())
                             .map(|l| {
@@ -342,7 +370,7 @@ impl Kriging {
             .collect();
         let score = |r: &CandidateReport| match sel {
             Selection::BestFit => r.wsse.unwrap_or(f64::INFINITY),
-            Selection::BestLoo => r.loo_rmse.unwrap_or(f64::INFINITY),
+            Selection::BestLoo | Selection::LooSearch => r.loo_rmse.unwrap_or(f64::INFINITY),
         };
         order.sort_by(|&a, &b| {
             score(&reports[a])
@@ -364,15 +392,18 @@ impl Kriging {
         }
         self.candidates = reports;
         if !installed {
-            let details = self
-                .candidates
-                .iter()
-                .map(|r| format!("{}: {}", r.model.name(), r.error.as_deref().unwrap_or("?")))
-                .collect::<Vec<_>>()
-                .join("; ");
-            return Err(KrigingError::NoModel(details));
+            return Err(KrigingError::NoModel(self.candidate_errors()));
         }
         Ok(())
+    }
+
+    /// Why every candidate failed, one `model: error` per candidate.
+    fn candidate_errors(&self) -> String {
+        self.candidates
+            .iter()
+            .map(|r| format!("{}: {}", r.model.name(), r.error.as_deref().unwrap_or("?")))
+            .collect::<Vec<_>>()
+            .join("; ")
     }
 
     /// Number of samples S.

@@ -10,10 +10,13 @@
 //!   with nugget, sill and range, fitted by weighted least squares ([`fit_variogram`]);
 //! - [`Kriging`]: ordinary kriging and the paper's universal kriging (trend `F = K C^+` over
 //!   `[c; 1]`, kriging of the residuals), with automatic model choice by fit or leave-one-out error,
-//!   closed-form leave-one-out ([`Kriging::leave_one_out`]) and allocation-free queries;
+//!   by default over the fitted models and a grid of ranges and nuggets ([`search`]: the nugget smooths
+//!   noisy samples instead of interpolating them), closed-form leave-one-out
+//!   ([`Kriging::leave_one_out`]) and allocation-free queries;
 //! - [`ProjectedQuery`]: `L b(c)` for a fixed `L` in `R (S+1)` multiply-adds (runtime hot path);
 //! - [`ParamScaling`]: per-dimension scaling (none, standardise, given); constant dimensions dropped;
-//! - [`Rbf`]: the radial-basis baseline of Rose et al. with the same `fit/weights/predict/loo` shape.
+//! - [`Rbf`]: the radial-basis baseline of Rose et al. with the same `fit/weights/predict/loo` shape,
+//!   exact or with a smoothing term chosen by leave-one-out error ([`RbfSmoothing`]).
 //!
 //! Degenerate input: NaN/inf, wrong shapes, too few samples (universal kriging needs `d' + 2`
 //! with `d'` the non-constant dimensions), all-equal parameters and values that do not vary are
@@ -24,8 +27,8 @@
 //! pseudo-inverse. A singular or ill-conditioned system (pivot ratio below 1e-13) is an error,
 //! and automatic model choice skips such candidates.
 //!
-//! All results are deterministic: the linear algebra runs single-threaded and the only parallel
-//! loop (pairwise value distances) reduces in a fixed order.
+//! All results are deterministic: the linear algebra runs single-threaded, the pairwise value
+//! distances reduce in a fixed order, and the variogram search scores its candidates independently.
 //!
 //! ```
 //! use faer::Mat;
@@ -65,6 +68,7 @@ mod linalg;
 mod projected;
 mod rbf;
 mod scaling;
+pub mod search;
 mod variogram;
 
 pub use config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoice, Selection};

@@ -349,7 +349,8 @@ impl Analysis {
         // 4. Universal kriging of the samples over the controls.
         progress.stage("kriging", 1);
         let params = control_matrix(&set.controls);
-        let values = Mat::from_fn(s, p * t, |i, j| tensor.sample(i)[j]);
+        // The rows weighted as in the decomposition: the variogram is chosen on what shows.
+        let values = Mat::from_fn(s, p * t, |i, j| weighted.sample(i)[j]);
         let kriging = Kriging::fit(params.as_ref(), values.as_ref(), &config.kriging)?;
         progress.inc(1);
         Ok(Analysis {
