@@ -27,9 +27,11 @@ fn tables_pipeline_writes_every_section_and_figure() {
         assert!(doc.contains(heading), "missing {heading:?} in:\n{doc}");
     }
     assert!(!doc.contains("NaN"), "a measured value is NaN:\n{doc}");
-    // The quick crowds are 50 and 200 walkers, each with LOD and naive rows.
+    // The quick crowds are 50 and 200 walkers, each with LOD, naive and PCA rows.
     assert!(
-        doc.contains("| 50 | lod |") && doc.contains("| 200 | naive |"),
+        doc.contains("| 50 | lod |")
+            && doc.contains("| 200 | naive |")
+            && doc.contains("| 200 | pca |"),
         "{doc}"
     );
     for f in ["figure4.svg", "figure5.svg"] {

@@ -7,7 +7,8 @@
 //! rendering. The first frame builds a clip for every walker at once; it is run as a warm-up and not
 //! counted. The LOD crowd uses the paper's distance policy (section 5.1); the naive crowd blends the
 //! raw samples with the kriging weights at full detail for every walker
-//! ([`motion_lod::NaiveSource`]).
+//! ([`motion_lod::NaiveSource`]); the PCA crowd ([`motion_lod::PcaSource`], the paper's other
+//! comparison) blends per-sample DOF coefficients and drops components with the same distance policy.
 
 use std::time::Instant;
 
@@ -18,7 +19,10 @@ use crowd_sim::{
 };
 use lod_policy::{Detail, DistancePolicy, LevelPolicy, LodModel, ViewParams};
 use motion_lod::progress::Progress;
-use motion_lod::{Analysis, LodSource, MotionModel, NaiveSource};
+use motion_lod::{Analysis, LodSource, MotionModel, NaiveSource, PcaSource};
+
+/// Principal components of the PCA baseline at its first level (the paper: `R_P,max = 40`).
+pub const PCA_RANK: usize = 40;
 
 /// Walkers per square metre of every crowd (the default crowd: 100 walkers on 100 m x 100 m).
 pub const DENSITY: f32 = 0.01;
@@ -59,7 +63,7 @@ pub fn full_sizes() -> Vec<CrowdSize> {
 pub struct CrowdRow {
     /// Walkers.
     pub walkers: usize,
-    /// `lod` or `naive`.
+    /// `lod`, `naive` or `pca`.
     pub source: &'static str,
     /// Frame rates and stage timings of the timed frames; `None` when the run was skipped.
     pub report: Option<CrowdReport>,
@@ -123,9 +127,43 @@ fn run_one<S: ClipSource, P: DetailPolicy>(
     Ok((report, warmup_s))
 }
 
-/// Measures every size with the LOD model and with naive interpolation. A naive run whose warm-up is
-/// predicted (linearly in walkers from the previous size's) to exceed `max_warmup_s` is skipped and
-/// says so.
+/// A run of `source` at `size`, or a skipped row when its warm-up frame is predicted (linearly in
+/// walkers from this source's previous size, kept in `warmup_per_walker`) to exceed `max_warmup_s`.
+fn timed_or_skipped<S: ClipSource, P: DetailPolicy>(
+    name: &'static str,
+    source: &S,
+    policy: &P,
+    size: CrowdSize,
+    max_warmup_s: f64,
+    warmup_per_walker: &mut Option<f64>,
+) -> Result<CrowdRow> {
+    let predicted = warmup_per_walker.map(|w| w * size.walkers as f64);
+    if let Some(p) = predicted.filter(|&p| p > max_warmup_s) {
+        return Ok(CrowdRow {
+            walkers: size.walkers,
+            source: name,
+            report: None,
+            warmup_s: f64::NAN,
+            skipped: Some(format!(
+                "not run: its first frame would take about {p:.0} s (measured per walker at the previous size)"
+            )),
+        });
+    }
+    let (report, warmup_s) = run_one(source, policy, size)
+        .with_context(|| format!("{name} crowd of {} walkers", size.walkers))?;
+    *warmup_per_walker = Some(warmup_s / size.walkers as f64);
+    Ok(CrowdRow {
+        walkers: size.walkers,
+        source: name,
+        report: Some(report),
+        warmup_s,
+        skipped: None,
+    })
+}
+
+/// Measures every size with the LOD model, with naive interpolation (full detail) and with the PCA
+/// baseline (the same distance policy, fewer components with distance). A baseline run whose warm-up
+/// is predicted to exceed `max_warmup_s` is skipped and says so.
 pub fn measure(
     model: &MotionModel,
     analysis: &Analysis,
@@ -135,49 +173,43 @@ pub fn measure(
 ) -> Result<Vec<CrowdRow>> {
     let lod = LodSource::new(model);
     let naive = NaiveSource::new(model, analysis);
+    let pca = PcaSource::new(model, analysis, PCA_RANK).context("PCA baseline")?;
     let lod_policy = lod_policy_for(&model.lod);
     let joints = model.lod.joints();
     let full = move |_d: f32, _v: bool, _c: &Camera| CrowdDetail {
         accuracy: 0,
         active_joints: joints,
     };
-    progress.stage("crowds (LOD, naive)", 2 * sizes.len() as u64);
+    progress.stage("crowds (LOD, naive, PCA)", 3 * sizes.len() as u64);
     let mut rows = Vec::new();
-    let mut naive_warmup_per_walker: Option<f64> = None;
+    let (mut lod_warmup, mut naive_warmup, mut pca_warmup) = (None, None, None);
     for &size in sizes {
-        let (report, warmup_s) = run_one(&lod, &lod_policy, size)
-            .with_context(|| format!("LOD crowd of {} walkers", size.walkers))?;
-        rows.push(CrowdRow {
-            walkers: size.walkers,
-            source: "lod",
-            report: Some(report),
-            warmup_s,
-            skipped: None,
-        });
+        rows.push(timed_or_skipped(
+            "lod",
+            &lod,
+            &lod_policy,
+            size,
+            f64::INFINITY,
+            &mut lod_warmup,
+        )?);
         progress.inc(1);
-        let predicted = naive_warmup_per_walker.map(|w| w * size.walkers as f64);
-        if let Some(p) = predicted.filter(|&p| p > max_warmup_s) {
-            rows.push(CrowdRow {
-                walkers: size.walkers,
-                source: "naive",
-                report: None,
-                warmup_s: f64::NAN,
-                skipped: Some(format!(
-                    "not run: its first frame would take about {p:.0} s (measured per walker at the previous size)"
-                )),
-            });
-        } else {
-            let (report, warmup_s) = run_one(&naive, &full, size)
-                .with_context(|| format!("naive crowd of {} walkers", size.walkers))?;
-            naive_warmup_per_walker = Some(warmup_s / size.walkers as f64);
-            rows.push(CrowdRow {
-                walkers: size.walkers,
-                source: "naive",
-                report: Some(report),
-                warmup_s,
-                skipped: None,
-            });
-        }
+        rows.push(timed_or_skipped(
+            "naive",
+            &naive,
+            &full,
+            size,
+            max_warmup_s,
+            &mut naive_warmup,
+        )?);
+        progress.inc(1);
+        rows.push(timed_or_skipped(
+            "pca",
+            &pca,
+            &lod_policy,
+            size,
+            max_warmup_s,
+            &mut pca_warmup,
+        )?);
         progress.inc(1);
     }
     Ok(rows)

@@ -509,7 +509,8 @@ fn write_crowd(doc: &mut String, rows: &[crowd::CrowdRow]) {
         doc,
         "\n## 4. Crowd frame rates (paper section 5.2)\n\n\
          Walkers at {} per m² (the field grows with the crowd), the camera walking inside the crowd, \
-         the paper's distance policy for *LOD* and full detail for every walker for *naive* (kriging \
+         the paper's distance policy for *LOD* and *PCA* (the paper's PCA comparison: 40 DOF components \
+         at full detail, fewer with distance) and full detail for every walker for *naive* (kriging \
          weights applied to the raw samples). A frame is culling, clip kernels, poses and forward \
          kinematics on all available threads, without rendering; the first frame (every walker builds a \
          clip) is a warm-up, reported apart. Frame rates are per timed frame: worst, mean (frames / total \
