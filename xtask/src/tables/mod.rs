@@ -593,7 +593,7 @@ fn write_benches(doc: &mut String) {
         ),
         (
             "model_crowd",
-            "clip kernels and poses of the model built from the fixtures, and one crowd frame with it (LOD and naive)",
+            "clip kernels and poses of the model built from the fixtures, and one crowd frame with it (LOD, naive and PCA)",
         ),
         ("kriging", "kriging set-up and queries"),
         (
