@@ -2,8 +2,10 @@
 //! frame rate through the incremental inverse timewarp, and turned into a BVH motion.
 //!
 //! Chaining (paper section 5): cycle `k + 1` starts where cycle `k` ends; its cycle frame is placed at
-//! the root's ground position and heading at the end of cycle `k`. With `blend`, the difference between
-//! the end pose of one cycle and the start pose of the next (joint rotations and root height) is faded
+//! the root's ground position at the end of cycle `k`, turned by the cycle's travel turn (the control:
+//! the direction of travel, as the data define it, which is not always the pelvis's yaw change). With `blend`, the difference between
+//! the end pose of one cycle and the start pose of the next (joint rotations, root height and the
+//! pelvis's yaw beyond the travel turn) is faded
 //! out over the first half of the next cycle with an ease-in/out curve `3u^2 - 2u^3`, so the seam is
 //! continuous; without it, cycles are switched as they are (what the crowd does for distant walkers).
 
@@ -118,8 +120,14 @@ impl MotionModel {
         // Root motion of one cycle in its own frame.
         let start_yaw = yaw_of(exp_to_quat(DVec3::from_slice(&start[3..6])));
         let end_yaw = yaw_of(exp_to_quat(DVec3::from_slice(&end[3..6])));
-        let (step_dx, step_dz, step_turn) =
-            (end[0] - start[0], end[2] - start[2], end_yaw - start_yaw);
+        // The next cycle's frame turns by the cycle's travel turn (the control, which the kriging trend
+        // reproduces exactly), not by the pelvis's yaw change: on cycles that enter or leave a turn
+        // the two differ (by more than 5 degrees for a third of the Bandai cycles), and the walk must
+        // travel what was asked. The pelvis's extra yaw is eased out at the seam with the rest.
+        let (lo, hi) = self.control_range()[2];
+        let travel_turn = f64::from(req.controls[2].clamp(lo, hi));
+        let (step_dx, step_dz, step_turn) = (end[0] - start[0], end[2] - start[2], travel_turn);
+        let seam_yaw = motion_io::expmap::wrap_angle(end_yaw - start_yaw - travel_turn);
         // Seam offset: what the next cycle's start lacks to continue the previous cycle's end.
         let seam: Vec<f64> = (0..p)
             .map(|r| {
@@ -146,16 +154,22 @@ impl MotionModel {
             }
             let local = time - k as f64 * duration;
             let mut pose = at(ev.kernel.phase_at(local), &mut ev)?;
+            // Yaw added to the root orientation in the cycle frame: the seam's pelvis yaw beyond the
+            // travel turn, eased out with blending (without it the cycles switch as they are).
+            let mut extra_yaw = 0.0;
             if req.blend && k > 0 {
                 let w = 1.0 - ease(local / (0.5 * duration));
                 for (v, s) in pose.iter_mut().zip(&seam) {
                     *v += w * s;
                 }
+                extra_yaw = w * seam_yaw;
             }
             // Place the cycle frame in the world: root position and orientation.
             let rot = ground.rotation();
             let pos = rot * DVec3::from_slice(&pose[0..3]) + DVec3::new(ground.x, 0.0, ground.z);
-            let orient = rot * exp_to_quat(DVec3::from_slice(&pose[3..6]));
+            let orient = rot
+                * DQuat::from_rotation_y(extra_yaw)
+                * exp_to_quat(DVec3::from_slice(&pose[3..6]));
             pose[0..3].copy_from_slice(&pos.to_array());
             pose[3..6].copy_from_slice(&quat_to_exp(orient).to_array());
             pose[TIME_ROW] /= lod.parts().time_scale;

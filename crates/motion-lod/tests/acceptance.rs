@@ -6,17 +6,23 @@
 //!   below RBF and nearest neighbour;
 //! - the error grows strictly with every key level;
 //! - at the paper's settings (186 cycles, T = 100, 10 key levels from (40, 40, 60) to (7, 7, 9), `R_P`
-//!   scaled to the data's DOF) the hybrid model keeps at most 1/8 of the raw samples' bytes in f64.
+//!   scaled to the data's DOF) the hybrid model keeps at most 1/8 of the raw samples' bytes in f64;
+//! - a synthesized walk, written as BVH and measured back from the file, travels the requested
+//!   (dx, dz, turn) within 10% of the step length and 5 degrees, for controls inside the data.
 //!
 //! It also checks the row weighting against the paper's unweighted tensor (`RowWeights::Unit`).
 
 use std::path::{Path, PathBuf};
 
+use glam::DVec3;
+use lod_policy::Detail;
+use motion_io::expmap::exp_to_quat;
 use motion_lod::build::{Analysis, RowWeights};
 use motion_lod::dataset::{DataSpec, Preset};
 use motion_lod::eval::{EvalConfig, EvalReport, leave_one_out};
 use motion_lod::progress::NoProgress;
 use motion_lod::storage::Storage;
+use motion_lod::synth::WalkRequest;
 use motion_lod::{BuildConfig, MotionModel};
 
 const MOCAP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/mocap");
@@ -30,6 +36,113 @@ fn mocap(name: &str) -> Option<PathBuf> {
         eprintln!("skipped: ../shared/mocap not found ({name})");
         None
     }
+}
+
+/// Travel of a three-cycle walk's cycles, measured back from its BVH:
+///
+/// - `(dx, dz)`: the root's ground displacement over the first cycle, whose frame is the walk's world
+///   frame (the cycle starts over the origin, travelling along +z);
+/// - `turn`: the heading change over the middle cycle, measured as the data's controls are
+///   (motion-io's cycles module): the heading at a frame is the direction of the root's ground chord
+///   over one cycle centred on it.
+///
+/// It also checks that the pelvis's yaw is continuous across the two seams.
+fn measured_cycle(model: &MotionModel, bvh: &Path, cycle_frames: usize) -> (f64, f64, f64) {
+    let motion = motion_io::read_bvh(bvh).unwrap();
+    let layout = &model.layout;
+    let mut pose = vec![0.0; layout.dof()];
+    let mut yaws = Vec::new();
+    let track: Vec<(f64, f64)> = (0..motion.frame_count())
+        .map(|f| {
+            layout.pose_from_frame(&motion, f, &mut pose).unwrap();
+            let forward = exp_to_quat(DVec3::from_slice(&pose[3..6])) * DVec3::Z;
+            yaws.push(forward.x.atan2(forward.z));
+            (pose[0], pose[2])
+        })
+        .collect();
+    // The blended seams are continuous: the pelvis turns no faster across them than inside a cycle.
+    let step = |f: usize| motion_io::expmap::wrap_angle(yaws[f] - yaws[f - 1]).abs();
+    let inside = (1..cycle_frames).map(step).fold(0.0, f64::max);
+    for seam in [cycle_frames, 2 * cycle_frames] {
+        let jump = step(seam).max(step(seam + 1));
+        assert!(
+            jump <= 2.0 * inside + 0.5f64.to_radians(),
+            "pelvis yaw jumps {:.2} deg at frame {seam} (at most {:.2} deg per frame inside a cycle)",
+            jump.to_degrees(),
+            inside.to_degrees()
+        );
+    }
+    let (first, last, half) = (cycle_frames, 2 * cycle_frames, cycle_frames / 2);
+    assert!(last + half < track.len(), "walk too short to measure");
+    let heading = |f: usize| {
+        let (a, b) = (track[f - half], track[f + half]);
+        (b.0 - a.0).atan2(b.1 - a.1)
+    };
+    let turn = motion_io::expmap::wrap_angle(heading(last) - heading(first));
+    (
+        track[first].0 - track[0].0,
+        track[first].1 - track[0].1,
+        turn,
+    )
+}
+
+/// Builds a model from `spec` and checks that walks synthesized at training controls (every
+/// `S / 6`-th) and at midpoints between pairs of them travel what was asked, measured from the BVH.
+fn assert_walks_travel(what: &str, spec: &DataSpec) {
+    let loaded = spec.load(&|_, _| {}).expect("data loads");
+    let model = MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress)
+        .expect("model builds");
+    let c = &loaded.training.controls;
+    let s = c.len();
+    let stride = (s / 6).max(1);
+    let picks: Vec<[f64; 4]> = (0..s).step_by(stride).map(|i| c[i]).collect();
+    let mids: Vec<[f64; 4]> = (0..picks.len() / 2)
+        .map(|i| {
+            let (a, b) = (
+                c[(i * stride + stride / 2) % s],
+                c[(s - 1 - i * stride) % s],
+            );
+            std::array::from_fn(|k| 0.5 * (a[k] + b[k]))
+        })
+        .collect();
+    let dir = std::env::temp_dir().join(format!(
+        "motion-lod-acceptance-{}-{}",
+        what.to_lowercase(),
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let fps = 120.0;
+    for (n, ctl) in picks.iter().chain(&mids).enumerate() {
+        let req = WalkRequest {
+            controls: ctl.map(|v| v as f32),
+            detail: Detail::full(),
+            cycles: 3,
+            fps,
+            blend: true,
+        };
+        let walk = model.synthesize_walk(&req).unwrap();
+        assert!(!walk.clamped, "{what} walk {n}: {ctl:?} is inside the data");
+        let path = dir.join(format!("walk{n}.bvh"));
+        motion_io::write_bvh(&model.walk_motion(&walk).unwrap(), &path).unwrap();
+        let frames = (walk.cycle_seconds * fps).round() as usize;
+        let (dx, dz, turn) = measured_cycle(&model, &path, frames);
+        let step = (ctl[0].powi(2) + ctl[1].powi(2)).sqrt();
+        let err = ((dx - ctl[0]).powi(2) + (dz - ctl[1]).powi(2)).sqrt();
+        assert!(
+            err <= 0.1 * step,
+            "{what} walk {n}: travelled ({dx:.3}, {dz:.3}) for ({:.3}, {:.3}): {err:.3} m > 10% of {step:.3} m",
+            ctl[0],
+            ctl[1]
+        );
+        let turn_err = (turn - ctl[2]).to_degrees().abs();
+        assert!(
+            turn_err <= 5.0,
+            "{what} walk {n}: turned {:.1} deg for {:.1} deg",
+            turn.to_degrees(),
+            ctl[2].to_degrees()
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 fn loo(spec: &DataSpec, config: &BuildConfig) -> EvalReport {
@@ -175,4 +288,35 @@ fn bandai_at_the_papers_settings_keeps_at_most_an_eighth_of_the_samples() {
         100.0 * st.model_f64 as f64 / st.raw_f64 as f64
     );
     assert!(st.model_f32 < st.model_f64);
+}
+
+#[test]
+fn embedded_walks_travel_the_requested_controls() {
+    assert_walks_travel("embedded", &DataSpec::default());
+}
+
+#[test]
+fn bandai_walks_travel_the_requested_controls() {
+    let Some(dir) = mocap("bandai-namco-2-walk") else {
+        return;
+    };
+    let spec = DataSpec {
+        dirs: vec![dir],
+        samples: Some(240),
+        ..DataSpec::default()
+    };
+    assert_walks_travel("Bandai", &spec);
+}
+
+#[test]
+fn cmu_walks_travel_the_requested_controls() {
+    let Some(dir) = mocap("cmu-daz-walk-s07-s08") else {
+        return;
+    };
+    let spec = DataSpec {
+        dirs: vec![dir],
+        preset: Preset::Cmu,
+        ..DataSpec::default()
+    };
+    assert_walks_travel("CMU", &spec);
 }
