@@ -506,6 +506,20 @@ impl Rbf {
         Ok(())
     }
 
+    /// `(M^-1)_kk`, the divisor of Rippa's leave-one-out form; an error when it is zero or not finite.
+    fn loo_pivot(&self, k: usize) -> Result<f64, KrigingError> {
+        let mkk = self.minv[(k, k)];
+        if mkk == 0.0 || !mkk.is_finite() {
+            return Err(KrigingError::Singular {
+                what: "rbf leave-one-out",
+                size: self.n_samples(),
+                pivot_ratio: 0.0,
+                residual: f64::NAN,
+            });
+        }
+        Ok(mkk)
+    }
+
     /// Leave-one-out errors (S x D) in closed form (Rippa 1999): `e_k = (M^-1 [X; 0])_k / (M^-1)_kk`.
     ///
     /// With smoothing this is still exact for the refit without sample `k` at the same `lambda`
@@ -516,15 +530,7 @@ impl Rbf {
         let dv = self.n_values();
         let mut err = Mat::zeros(s, dv);
         for k in 0..s {
-            let mkk = self.minv[(k, k)];
-            if mkk == 0.0 || !mkk.is_finite() {
-                return Err(KrigingError::Singular {
-                    what: "rbf leave-one-out",
-                    size: s,
-                    pivot_ratio: 0.0,
-                    residual: f64::NAN,
-                });
-            }
+            let mkk = self.loo_pivot(k)?;
             for j in 0..dv {
                 err[(k, j)] = self.dual[k * dv + j] / mkk;
             }
@@ -539,15 +545,7 @@ impl Rbf {
         let s = self.n_samples();
         let mut w = Mat::zeros(s, s);
         for k in 0..s {
-            let mkk = self.minv[(k, k)];
-            if mkk == 0.0 || !mkk.is_finite() {
-                return Err(KrigingError::Singular {
-                    what: "rbf leave-one-out",
-                    size: s,
-                    pivot_ratio: 0.0,
-                    residual: f64::NAN,
-                });
-            }
+            let mkk = self.loo_pivot(k)?;
             for j in 0..s {
                 if j != k {
                     w[(k, j)] = -self.minv[(k, j)] / mkk;

@@ -108,12 +108,7 @@ impl ClipSource for NaiveSource<'_> {
 
     fn build_clip(&self, controls: &Controls, _detail: CrowdDetail, clip: &mut NaiveClip) {
         let (p, t, _, _) = self.dims();
-        let c = [
-            f64::from(controls.dx),
-            f64::from(controls.dz),
-            f64::from(controls.turn),
-            f64::from(controls.height),
-        ];
+        let c = crate::sample_weights::control_vector(controls);
         self.weights
             .compute(self.kriging, &c, &mut clip.b, &mut clip.l);
         clip.poses.fill(0.0);

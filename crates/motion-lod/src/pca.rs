@@ -268,12 +268,7 @@ impl ClipSource for PcaSource<'_> {
         clip.rank = r;
         clip.active_joints = detail.active_joints.min(lod.joints());
         clip.rows = lod.active_rows(clip.active_joints).min(p);
-        let c = [
-            f64::from(controls.dx),
-            f64::from(controls.dz),
-            f64::from(controls.turn),
-            f64::from(controls.height),
-        ];
+        let c = crate::sample_weights::control_vector(controls);
         self.weights
             .compute(self.kriging, &c, &mut clip.b, &mut clip.l);
         // Y(c) = sum_i l_i Y_i, first r components of every frame.

@@ -72,3 +72,13 @@ impl SampleWeights {
         }
     }
 }
+
+/// A crowd's controls as the `(dx, dz, turn, height)` the kriging takes.
+pub(crate) fn control_vector(controls: &crowd_sim::Controls) -> [f64; 4] {
+    [
+        f64::from(controls.dx),
+        f64::from(controls.dz),
+        f64::from(controls.turn),
+        f64::from(controls.height),
+    ]
+}

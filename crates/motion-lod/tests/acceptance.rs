@@ -145,6 +145,24 @@ fn assert_walks_travel(what: &str, spec: &DataSpec) {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A random 240-cycle subset of the Bandai data (keeps the tests fast; the README quotes all 800).
+fn bandai_subset() -> Option<DataSpec> {
+    Some(DataSpec {
+        dirs: vec![mocap("bandai-namco-2-walk")?],
+        samples: Some(240),
+        ..DataSpec::default()
+    })
+}
+
+/// The CMU folder with its contact preset.
+fn cmu() -> Option<DataSpec> {
+    Some(DataSpec {
+        dirs: vec![mocap("cmu-daz-walk-s07-s08")?],
+        preset: Preset::Cmu,
+        ..DataSpec::default()
+    })
+}
+
 fn loo(spec: &DataSpec, config: &BuildConfig) -> EvalReport {
     let loaded = spec.load(&|_, _| {}).expect("data loads");
     let analysis = Analysis::run(&loaded.training, config, &NoProgress).expect("analysis runs");
@@ -231,29 +249,16 @@ fn row_weights_lower_the_error_of_every_reduced_level() {
 
 #[test]
 fn bandai_meets_the_comparison_and_grows_with_every_level() {
-    let Some(dir) = mocap("bandai-namco-2-walk") else {
-        return;
-    };
-    // A random 240-cycle subset keeps the test fast; the README quotes all 800.
-    let spec = DataSpec {
-        dirs: vec![dir],
-        samples: Some(240),
-        ..DataSpec::default()
-    };
-    assert_acceptance("Bandai", &loo(&spec, &BuildConfig::default()));
+    if let Some(spec) = bandai_subset() {
+        assert_acceptance("Bandai", &loo(&spec, &BuildConfig::default()));
+    }
 }
 
 #[test]
 fn cmu_meets_the_comparison_and_grows_with_every_level() {
-    let Some(dir) = mocap("cmu-daz-walk-s07-s08") else {
-        return;
-    };
-    let spec = DataSpec {
-        dirs: vec![dir],
-        preset: Preset::Cmu,
-        ..DataSpec::default()
-    };
-    assert_acceptance("CMU", &loo(&spec, &BuildConfig::default()));
+    if let Some(spec) = cmu() {
+        assert_acceptance("CMU", &loo(&spec, &BuildConfig::default()));
+    }
 }
 
 #[test]
@@ -297,26 +302,14 @@ fn embedded_walks_travel_the_requested_controls() {
 
 #[test]
 fn bandai_walks_travel_the_requested_controls() {
-    let Some(dir) = mocap("bandai-namco-2-walk") else {
-        return;
-    };
-    let spec = DataSpec {
-        dirs: vec![dir],
-        samples: Some(240),
-        ..DataSpec::default()
-    };
-    assert_walks_travel("Bandai", &spec);
+    if let Some(spec) = bandai_subset() {
+        assert_walks_travel("Bandai", &spec);
+    }
 }
 
 #[test]
 fn cmu_walks_travel_the_requested_controls() {
-    let Some(dir) = mocap("cmu-daz-walk-s07-s08") else {
-        return;
-    };
-    let spec = DataSpec {
-        dirs: vec![dir],
-        preset: Preset::Cmu,
-        ..DataSpec::default()
-    };
-    assert_walks_travel("CMU", &spec);
+    if let Some(spec) = cmu() {
+        assert_walks_travel("CMU", &spec);
+    }
 }
