@@ -33,7 +33,7 @@ fn paper_model() -> LodModel {
         core: rng.vec(r.core_len(), 1.0),
         u_p: rng.vec(P * r.p, 0.2),
         u_t: rng.vec(T * r.t, 0.2),
-        projection: rng.vec((r.s + D + 1) * (S + 1), 0.1),
+        projection: rng.vec(r.s * (S + 1), 0.1),
         trend: rng.vec(r.s * (D + 1), 0.1),
     };
     let (big, small) = (Ranks::new(40, 40, 60), Ranks::new(7, 7, 9));
@@ -47,7 +47,9 @@ fn paper_model() -> LodModel {
     ];
     let raw = rng.vec(S * D, 1.0);
     let variogram = Variogram::new(VariogramModel::Exponential, 0.05, 1.0, 1.5, 1.0).unwrap();
-    let controls = ControlSpace::from_raw(variogram, &raw, S, vec![0.0; D], vec![1.0; D]).unwrap();
+    let mut controls =
+        ControlSpace::from_raw(variogram, &raw, S, vec![0.0; D], vec![1.0; D]).unwrap();
+    controls.projection = rng.vec((D + 1) * (S + 1), 0.1);
     LodModel::new(ModelParts {
         p: P,
         t: T,

@@ -289,17 +289,20 @@ impl LodModel {
         }
         scratch.x[s] = 1.0;
 
-        // 3. y = [U_S^T b (first r_S rows) ; C b] = Q x, Q column-major (R_S + d + 1) x (S + 1).
-        let nq = big.s + d + 1;
+        // 3. y = [U_S^T b (first r_S rows) ; C b] = [Q x ; P_C x], Q column-major R_S x (S + 1) (the
+        //    key's), P_C column-major (d + 1) x (S + 1) (the control space's, shared by every key).
         let y = &mut scratch.y[..r.s + d + 1];
         y.fill(0.0);
-        for (j, col) in key.projection.chunks_exact(nq).enumerate() {
+        let (y_top, y_c) = y.split_at_mut(r.s);
+        for (j, col) in key.projection.chunks_exact(big.s).enumerate() {
             let xj = scratch.x[j];
-            let (y_top, y_c) = y.split_at_mut(r.s);
             for (yl, &q) in y_top.iter_mut().zip(&col[..r.s]) {
                 *yl += f64::from(q) * xj;
             }
-            for (ym, &q) in y_c.iter_mut().zip(&col[big.s..]) {
+        }
+        for (j, col) in cs.projection.chunks_exact(d + 1).enumerate() {
+            let xj = scratch.x[j];
+            for (ym, &q) in y_c.iter_mut().zip(col) {
                 *ym += f64::from(q) * xj;
             }
         }

@@ -54,9 +54,9 @@ impl Ranks {
 /// Layouts (all column-major, first index fastest):
 /// - `core`: `Z` of size `R_P x R_T x R_S`, element `(i, j, l)` at `i + R_P (j + R_T l)`;
 /// - `u_p`: `U_P` of size `P x R_P`; `u_t`: `U_T` of size `T x R_T`;
-/// - `projection`: `Q = [U_S^T ; C] A^{-1}[:S, :]` of size `(R_S + d + 1) x (S + 1)`, where
-///   `A = [Gamma 1; 1^T 0]` is the kriging matrix (appendix A) and `C` the `(d + 1) x S` matrix of
-///   columns `[c_i; 1]` (scaled controls);
+/// - `projection`: `Q = U_S^T A^{-1}[:S, :]` of size `R_S x (S + 1)`, where `A = [Gamma 1; 1^T 0]`
+///   is the kriging matrix (appendix A); its companion `C A^{-1}[:S, :]`, the same for every key, is
+///   [`ControlSpace::projection`];
 /// - `trend`: `V = U_S^T C^+` of size `R_S x (d + 1)`, so that the trend of eq. 8 is
 ///   `F = Z_(12) V` (`F = K C^+` with `K = Z_(12) U_S^T`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -69,7 +69,7 @@ pub struct KeyTensor {
     pub u_p: Vec<f32>,
     /// Time factor `U_T`, `T x R_T`.
     pub u_t: Vec<f32>,
-    /// Kriging projection `Q`, `(R_S + d + 1) x (S + 1)`.
+    /// Kriging projection `Q = U_S^T A^{-1}[:S, :]`, `R_S x (S + 1)`.
     pub projection: Vec<f32>,
     /// Trend projection `V = U_S^T C^+`, `R_S x (d + 1)`.
     pub trend: Vec<f32>,
@@ -105,6 +105,10 @@ pub struct ControlSpace {
     pub min: Vec<f32>,
     /// Per-dimension maximum of the raw sample controls (length `d`).
     pub max: Vec<f32>,
+    /// `C A^{-1}[:S, :]`, `(d + 1) x (S + 1)` column-major, with `C` the `(d + 1) x S` matrix of
+    /// columns `[c_i; 1]` (scaled controls) and `A` the kriging matrix: `C b(c)` for the trend of
+    /// eq. 8. Shared by every key (stored once, not per key).
+    pub projection: Vec<f32>,
 }
 
 /// Measured error of one accuracy level (or of one joint count), filled by the model builder.
@@ -295,7 +299,7 @@ impl LodModel {
             check_array(
                 &format!("key {k} projection"),
                 &key.projection,
-                (r.s + d + 1) * (s + 1),
+                r.s * (s + 1),
             )?;
             check_array(&format!("key {k} trend"), &key.trend, r.s * (d + 1))?;
             max_ranks.p = max_ranks.p.max(r.p);
@@ -332,6 +336,7 @@ impl LodModel {
         check_array("controls min", &c.min, d)?;
         check_array("controls max", &c.max, d)?;
         check_array("controls samples", &c.samples, s * d)?;
+        check_array("controls projection", &c.projection, (d + 1) * (s + 1))?;
         for k in 0..d {
             if c.scale[k] < 0.0 {
                 return Err(ModelError::Controls(format!(
@@ -492,8 +497,13 @@ impl LodModel {
             .map(|k| self.key_bytes(k, precision))
             .sum();
         let c = &self.parts.controls;
-        let controls =
-            (c.samples.len() + c.offset.len() + c.scale.len() + c.min.len() + c.max.len()) * b;
+        let controls = (c.samples.len()
+            + c.offset.len()
+            + c.scale.len()
+            + c.min.len()
+            + c.max.len()
+            + c.projection.len())
+            * b;
         let tables = self.parts.levels.len() * 4 * std::mem::size_of::<u32>()
             + (self.parts.level_errors.len() + self.parts.joint_errors.len()) * 2 * b;
         keys + controls + self.parts.mean_pose.len() * b + tables

@@ -62,7 +62,7 @@ impl KeyTensor {
     ///   as an `S x (S + 1)` column-major matrix, so that `b(c) = kriging_rows [gamma(c); 1]`;
     /// - `controls`: the scaled sample controls, `S x d` column-major (as in [`ControlSpace`]).
     ///
-    /// Computes `Q = [U_S^T ; C] A^{-1}[:S, :]` and `V = U_S^T C^+` with
+    /// Computes `Q = U_S^T A^{-1}[:S, :]` and `V = U_S^T C^+` with
     /// `C^+ = C^T (C C^T)^+` (eq. 8's `F = K C^+` then equals `Z_(12) V`), and stores
     /// everything in f32.
     pub fn from_factors(
@@ -98,16 +98,13 @@ impl KeyTensor {
         // C[m, i] = c_i[m] (m < d), 1 (m = d).
         let cmat = |m: usize, i: usize| if m < d { controls[i + s * m] } else { 1.0 };
 
-        let nq = r.s + dc;
+        let nq = r.s;
         let mut q = vec![0.0f64; nq * (s + 1)];
         for j in 0..=s {
             let acol = &kriging_rows[s * j..][..s];
             let qcol = &mut q[nq * j..][..nq];
             for (ql, ucol) in qcol.iter_mut().zip(f.u_s.chunks_exact(s)) {
                 *ql = ucol.iter().zip(acol).map(|(u, a)| u * a).sum();
-            }
-            for m in 0..dc {
-                qcol[r.s + m] = (0..s).map(|i| cmat(m, i) * acol[i]).sum();
             }
         }
 
@@ -197,7 +194,37 @@ impl ControlSpace {
             samples,
             min,
             max,
+            projection: Vec::new(),
         })
+    }
+
+    /// Sets [`ControlSpace::projection`] `= C A^{-1}[:S, :]` from the same inputs as
+    /// [`KeyTensor::from_factors`]: `kriging_rows` (`S x (S + 1)` column-major, the first `S` rows of
+    /// `A^{-1}`) and the scaled sample controls `controls` (`S x d` column-major, f64).
+    pub fn with_projection(
+        mut self,
+        kriging_rows: &[f64],
+        controls: &[f64],
+    ) -> Result<ControlSpace, ModelError> {
+        let d = self.offset.len();
+        let s = self.samples.len() / d.max(1);
+        len_check("kriging_rows", kriging_rows, s * (s + 1))?;
+        len_check("controls", controls, s * d)?;
+        let dc = d + 1;
+        let mut out = vec![0.0f32; dc * (s + 1)];
+        for j in 0..=s {
+            let acol = &kriging_rows[s * j..][..s];
+            for m in 0..dc {
+                let v: f64 = if m < d {
+                    (0..s).map(|i| controls[i + s * m] * acol[i]).sum()
+                } else {
+                    acol.iter().sum()
+                };
+                out[m + dc * j] = v as f32;
+            }
+        }
+        self.projection = out;
+        Ok(self)
     }
 }
 

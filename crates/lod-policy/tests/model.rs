@@ -202,10 +202,11 @@ fn storage_accounting_counts_every_array() {
     let mut values = 0usize;
     for k in model.keys() {
         let r = k.ranks;
-        values += r.core_len() + P * r.p + T * r.t + (r.s + D + 1) * (S + 1) + r.s * (D + 1);
+        values += r.core_len() + P * r.p + T * r.t + r.s * (S + 1) + r.s * (D + 1);
     }
     let key_values = values;
-    values += S * D + 4 * D + P; // samples, offset/scale/min/max, mean pose
+    // Samples, offset/scale/min/max, the controls' kriging rows (stored once), mean pose.
+    values += S * D + 4 * D + (D + 1) * (S + 1) + P;
     values += 2 * (4 + JOINTS + 1); // error tables
     let level_table = 4 * 4 * 4; // four u32 per level
     assert_eq!(model.bytes(Precision::F32), 4 * values + level_table);

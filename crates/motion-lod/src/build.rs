@@ -447,7 +447,8 @@ impl Analysis {
             s,
             scaling.offset.iter().map(|&v| v as f32).collect(),
             scaling.scale.iter().map(|&v| v as f32).collect(),
-        )?;
+        )?
+        .with_projection(&kriging_rows, &scaled)?;
         let mean_pose = mean_rows(&self.tensor, &self.layout);
         let parts = ModelParts {
             p,

@@ -74,7 +74,9 @@ fn check_truncations_and_flips<T: serde::de::DeserializeOwned>(bytes: &[u8]) {
                 0..8 => matches!(e, ModelFileError::BadMagic { .. }),
                 8..12 => matches!(
                     e,
-                    ModelFileError::BadVersion { .. } | ModelFileError::FutureVersion { .. }
+                    ModelFileError::BadVersion { .. }
+                        | ModelFileError::FutureVersion { .. }
+                        | ModelFileError::OldVersion { .. }
                 ),
                 12..20 => matches!(e, ModelFileError::LengthMismatch { .. }),
                 _ => matches!(e, ModelFileError::Checksum { .. }),

@@ -115,16 +115,18 @@ impl<'m> OnlineTruncation<'m> {
             self.x[i] = cs.variogram.eval(h2.sqrt());
         }
         self.x[s] = 1.0;
-        let nq = big.s + d + 1;
         let y = &mut self.y[..r.s + d + 1];
         y.fill(0.0);
-        for (j, col) in key.projection.chunks_exact(nq).enumerate() {
+        let (y_top, y_c) = y.split_at_mut(r.s);
+        for (j, col) in key.projection.chunks_exact(big.s).enumerate() {
             let xj = self.x[j];
-            let (y_top, y_c) = y.split_at_mut(r.s);
             for (yl, &q) in y_top.iter_mut().zip(&col[..r.s]) {
                 *yl += f64::from(q) * xj;
             }
-            for (ym, &q) in y_c.iter_mut().zip(&col[big.s..]) {
+        }
+        for (j, col) in cs.projection.chunks_exact(d + 1).enumerate() {
+            let xj = self.x[j];
+            for (ym, &q) in y_c.iter_mut().zip(col) {
                 *ym += f64::from(q) * xj;
             }
         }

@@ -144,8 +144,9 @@ pub fn section(
     }
     out.push_str(
         "\nWhat the runtime keeps instead (`LodModel::bytes`): per key the core, `U_P`, `U_T`, the kriging \
-         projection `Q` ((R_S + d + 1) x (S + 1)) and the trend `V` in place of `U_S`, plus the control \
-         space and the mean pose; the model file is the f32 model with the skeleton and the build report.\n\n",
+         projection `Q` (R_S x (S + 1)) and the trend `V` in place of `U_S`, plus the control space \
+         (with the kriging rows of the controls, (d + 1) x (S + 1), stored once for all keys) and the mean \
+         pose; the model file is the f32 model with the skeleton and the build report.\n\n",
     );
     out.push_str(&rt.render());
     Ok(out)

@@ -258,7 +258,10 @@ pub fn build_model(truth: &Truth) -> LodModel {
         samples: f32v(&truth.controls),
         min: f32v(&truth.min),
         max: f32v(&truth.max),
-    };
+        projection: Vec::new(),
+    }
+    .with_projection(&rows, &truth.controls)
+    .unwrap();
     LodModel::new(ModelParts {
         p: truth.p,
         t: truth.t,
