@@ -44,7 +44,11 @@ pub struct Kriging {
 }
 
 /// Checks shapes and finiteness of `params` (S x d) and `values` (S x D).
-fn check_inputs(params: MatRef<'_, f64>, values: MatRef<'_, f64>) -> Result<(), KrigingError> {
+/// Shapes (one row per sample, at least one parameter and one value dimension) and finiteness.
+pub(crate) fn check_inputs(
+    params: MatRef<'_, f64>,
+    values: MatRef<'_, f64>,
+) -> Result<(), KrigingError> {
     if params.nrows() != values.nrows() {
         return Err(KrigingError::ShapeMismatch {
             what: "values rows vs parameter rows",
@@ -152,10 +156,11 @@ fn kriging_inverse(
     checked_inverse(a.as_ref(), true, "kriging")
 }
 
-/// Row-major `A^-1[:, :S] R` ((S+1) x D).
-fn dual_coefficients(ainv: &Mat<f64>, residuals: &Mat<f64>) -> Vec<f64> {
+/// Row-major `A^-1[:, :S] R` (`n x D` for an `n x n` inverse of a system over `S` samples): the dual
+/// coefficients of kriging (`n = S + 1`) and of the RBF baseline (`n = S + q`).
+pub(crate) fn dual_coefficients(ainv: MatRef<'_, f64>, residuals: MatRef<'_, f64>) -> Vec<f64> {
     let s = residuals.nrows();
-    let dm = matmul_par_cols(ainv.as_ref().subcols(0, s), residuals.as_ref());
+    let dm = matmul_par_cols(ainv.subcols(0, s), residuals);
     let (r, c) = dm.shape();
     let mut out = Vec::with_capacity(r * c);
     for i in 0..r {
@@ -281,24 +286,8 @@ impl Kriging {
                 let mut reports = crate::search::candidates(&emp, &dist, s, &opts);
                 let probe = crate::search::compress(values, crate::search::SEARCH_COLUMNS);
                 let order = crate::search::rank(params, probe.as_ref(), config, &mut reports);
-                let mut installed = false;
-                for i in order {
-                    let v = reports[i]
-                        .variogram
-                        .expect("ranked candidates have a variogram");
-                    match model.install(&dist, v) {
-                        Ok(()) => {
-                            installed = true;
-                            break;
-                        }
-                        Err(e) => reports[i].error = Some(e.to_string()),
-                    }
-                }
-                model.candidates = reports;
                 model.empirical = Some(emp);
-                if !installed {
-                    return Err(KrigingError::NoModel(model.candidate_errors()));
-                }
+                model.install_first(&dist, reports, &order)?;
             }
             ModelChoice::Auto(sel) => {
                 let emp = EmpiricalVariogram::from_distances(
@@ -316,7 +305,7 @@ impl Kriging {
     /// Factorises the system for `v` and stores everything that depends on it.
     fn install(&mut self, dist: &PairDistances, v: Variogram) -> Result<(), KrigingError> {
         let ainv = kriging_inverse(dist, self.n_samples(), &v)?;
-        self.dual = dual_coefficients(&ainv, &self.residuals);
+        self.dual = dual_coefficients(ainv.as_ref(), self.residuals.as_ref());
         self.ainv = ainv;
         self.variogram = v;
         Ok(())
@@ -330,38 +319,26 @@ impl Kriging {
         sel: Selection,
         opts: &FitOptions,
     ) -> Result<(), KrigingError> {
-        let mut reports = Vec::new();
-        for m in VariogramModel::ALL {
-            let mut rep = CandidateReport {
-                model: m,
-                variogram: None,
-                wsse: None,
-                loo_rmse: None,
-                error: None,
+        let mut reports = crate::search::fitted_candidates(emp, opts);
+        for rep in &mut reports {
+            let (Some(v), Some(wsse)) = (rep.variogram, rep.wsse) else {
+                continue;
             };
-            match fit_variogram(emp, m, opts) {
+            let score = match sel {
+                Selection::BestFit => Ok(wsse),
+                Selection::BestLoo | Selection::LooSearch => self
+                    .install(dist, v)
+                    .and_then(|_| self.leave_one_out())
+                    .map(|l| {
+                        rep.loo_rmse = Some(l.rmse);
+                        l.rmse
+                    }),
+            };
+            match score {
                 Err(e) => rep.error = Some(e.to_string()),
-                Ok(f) => {
-                    rep.variogram = Some(f.variogram);
-                    rep.wsse = Some(f.wsse);
-                    let score = match sel {
-                        Selection::BestFit => Ok(f.wsse),
-                        Selection::BestLoo | Selection::LooSearch => self
-                            .install(dist, f.variogram)
-                            .and_then(|_| self.leave_one_out())
-                            .map(|l| {
-                                rep.loo_rmse = Some(l.rmse);
-                                l.rmse
-                            }),
-                    };
-                    match score {
-                        Err(e) => rep.error = Some(e.to_string()),
-                        Ok(sc) if sc.is_finite() => {}
-                        Ok(sc) => rep.error = Some(format!("non-finite score {sc}")),
-                    }
-                }
+                Ok(sc) if sc.is_finite() => {}
+                Ok(sc) => rep.error = Some(format!("non-finite score {sc}")),
             }
-            reports.push(rep);
         }
         // For BestFit a model with the best fit may still give a singular system: fall back
         // through the candidates in order of fit error.
@@ -377,11 +354,22 @@ impl Kriging {
                 .total_cmp(&score(&reports[b]))
                 .then(a.cmp(&b))
         });
+        self.install_first(dist, reports, &order)
+    }
+
+    /// Installs the first candidate in `order` whose system is regular (recording why earlier ones
+    /// failed) and keeps `reports` as [`Kriging::candidates`]; [`KrigingError::NoModel`] if none is.
+    fn install_first(
+        &mut self,
+        dist: &PairDistances,
+        mut reports: Vec<CandidateReport>,
+        order: &[usize],
+    ) -> Result<(), KrigingError> {
         let mut installed = false;
-        for i in order {
+        for &i in order {
             let v = reports[i]
                 .variogram
-                .expect("candidate without error has a variogram");
+                .expect("ranked candidates have a variogram");
             match self.install(dist, v) {
                 Ok(()) => {
                     installed = true;

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::config::LooReport;
 use crate::empirical::PairDistances;
 use crate::error::KrigingError;
-use crate::kriging::{augmented_params, check_query, scaled_dist};
+use crate::kriging::{augmented_params, check_inputs, check_query, dual_coefficients, scaled_dist};
 use crate::linalg::{checked_inverse, matmul, sym_eigen};
 use crate::scaling::{ParamScaling, ScalingChoice};
 
@@ -106,7 +106,8 @@ pub struct RbfConfig {
 pub struct SmoothingCandidate {
     /// The smoothing `lambda`.
     pub lambda: f64,
-    /// Its leave-one-out RMSE over the fitted values, `None` when the candidate was skipped
+    /// Its leave-one-out RMSE over the fitted values (over their leading principal columns when
+    /// there are more than [`crate::search::SEARCH_COLUMNS`]), `None` when the candidate was skipped
     /// (duplicate parameters at `lambda = 0`, singular system, non-finite error).
     pub loo_rmse: Option<f64>,
 }
@@ -191,14 +192,7 @@ fn solve_smoothed(
         }
     });
     let minv = checked_inverse(m.as_ref(), true, "rbf")?;
-    let dm = crate::linalg::matmul_par_cols(minv.as_ref().subcols(0, s), values);
-    let dv = values.ncols();
-    let mut dual = Vec::with_capacity(n * dv);
-    for i in 0..n {
-        for j in 0..dv {
-            dual.push(dm[(i, j)]);
-        }
-    }
+    let dual = dual_coefficients(minv.as_ref(), values);
     Ok(Solved { minv, dual })
 }
 
@@ -224,7 +218,9 @@ impl Rbf {
     /// Fits the interpolant to `params` (S x d) and `values` (S x D).
     ///
     /// With [`RbfSmoothing::Loo`] one `(S+q)` inverse is formed per grid value (the distance and
-    /// kernel matrices are computed once).
+    /// kernel matrices are computed once); the values are ranked on their
+    /// [`crate::search::SEARCH_COLUMNS`] leading principal columns, exact when they have at most that
+    /// rank, and the chosen value is solved once on the values themselves.
     ///
     /// Errors: shapes, NaN/inf, fewer than 2 samples, all parameters equal, duplicate parameter
     /// points without smoothing (both indices), a singular system (for `Loo`: every candidate),
@@ -249,22 +245,7 @@ impl Rbf {
                 )));
             }
         }
-        if params.nrows() != values.nrows() {
-            return Err(KrigingError::ShapeMismatch {
-                what: "values rows vs parameter rows",
-                expected: params.nrows(),
-                got: values.nrows(),
-            });
-        }
-        if params.ncols() == 0 || values.ncols() == 0 {
-            return Err(KrigingError::ShapeMismatch {
-                what: "parameter and value dimensions (need at least one each)",
-                expected: 1,
-                got: 0,
-            });
-        }
-        crate::check_finite("params", params)?;
-        crate::check_finite("values", values)?;
+        check_inputs(params, values)?;
         let s = params.nrows();
         if s < 2 {
             return Err(KrigingError::TooFewSamples {
@@ -325,6 +306,10 @@ impl Rbf {
             ),
             RbfSmoothing::Loo => {
                 let scale = kernel_scale(phi.as_ref());
+                // Candidates are ranked on the values' leading principal columns (the leave-one-out
+                // error is linear in the values), as the kriging search ranks its variograms.
+                let probe = crate::search::compress(values, crate::search::SEARCH_COLUMNS);
+                let compressed = probe.ncols() < values.ncols();
                 let mut best: Option<(f64, f64, Solved)> = None;
                 let mut last_err = None;
                 for f in RBF_SMOOTHING_GRID {
@@ -337,35 +322,40 @@ impl Rbf {
                         last_err = duplicate.map(exact_duplicate_error);
                         continue;
                     }
-                    let rmse = match solve_smoothed(phi.as_ref(), qmat.as_ref(), lambda, values) {
-                        Ok(solved) => {
-                            let rmse = loo_rmse(&solved, s, values.ncols());
-                            if let Some(r) = rmse {
-                                if best.as_ref().is_none_or(|b| r < b.1) {
-                                    best = Some((lambda, r, solved));
+                    let rmse =
+                        match solve_smoothed(phi.as_ref(), qmat.as_ref(), lambda, probe.as_ref()) {
+                            Ok(solved) => {
+                                let rmse = loo_rmse(&solved, s, probe.ncols());
+                                if let Some(r) = rmse {
+                                    if best.as_ref().is_none_or(|b| r < b.1) {
+                                        best = Some((lambda, r, solved));
+                                    }
+                                } else {
+                                    last_err = Some(KrigingError::Singular {
+                                        what: "rbf leave-one-out",
+                                        size: s,
+                                        pivot_ratio: 0.0,
+                                        residual: f64::NAN,
+                                    });
                                 }
-                            } else {
-                                last_err = Some(KrigingError::Singular {
-                                    what: "rbf leave-one-out",
-                                    size: s,
-                                    pivot_ratio: 0.0,
-                                    residual: f64::NAN,
-                                });
+                                rmse
                             }
-                            rmse
-                        }
-                        Err(e) => {
-                            last_err = Some(e);
-                            None
-                        }
-                    };
+                            Err(e) => {
+                                last_err = Some(e);
+                                None
+                            }
+                        };
                     candidates.push(SmoothingCandidate {
                         lambda,
                         loo_rmse: rmse,
                     });
                 }
                 match best {
-                    Some((lambda, _, solved)) => (lambda, solved),
+                    Some((lambda, _, solved)) if !compressed => (lambda, solved),
+                    Some((lambda, _, _)) => (
+                        lambda,
+                        solve_smoothed(phi.as_ref(), qmat.as_ref(), lambda, values)?,
+                    ),
                     None => {
                         return Err(last_err.unwrap_or(KrigingError::Singular {
                             what: "rbf",

@@ -73,12 +73,10 @@ fn mean_distance(dist: &PairDistances, s: usize) -> f64 {
     sum / (s * (s - 1) / 2).max(1) as f64
 }
 
-/// Every candidate variogram: the models fitted to `emp` (as [`crate::Selection::BestLoo`] tries
-/// them), then the grid.
-pub(crate) fn candidates(
+/// Every model of [`VariogramModel::ALL`] fitted to `emp` (not yet scored); a failed fit keeps its
+/// error.
+pub(crate) fn fitted_candidates(
     emp: &EmpiricalVariogram,
-    dist: &PairDistances,
-    s: usize,
     opts: &FitOptions,
 ) -> Vec<CandidateReport> {
     let mut out = Vec::new();
@@ -99,6 +97,17 @@ pub(crate) fn candidates(
         }
         out.push(rep);
     }
+    out
+}
+
+/// Every candidate variogram: the models fitted to `emp` ([`fitted_candidates`]), then the grid.
+pub(crate) fn candidates(
+    emp: &EmpiricalVariogram,
+    dist: &PairDistances,
+    s: usize,
+    opts: &FitOptions,
+) -> Vec<CandidateReport> {
+    let mut out = fitted_candidates(emp, opts);
     let (sum, n) = emp
         .gamma
         .iter()

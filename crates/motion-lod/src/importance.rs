@@ -8,7 +8,7 @@
 
 use motion_io::PoseLayout;
 
-use crate::metrics::{ErrorMeter, SHELL_RADIUS_M};
+use crate::metrics::{ErrorMeter, SHELL_RADIUS_M, measured_joints};
 
 /// The importance of one rotating joint.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -79,12 +79,8 @@ pub fn dof_weights(
     let p = layout.dof();
     let n = poses.len() / p;
     let stride = n.div_ceil(max_poses.max(1)).max(1);
-    let sk = layout.skeleton();
-    let root = layout.root();
-    let measured: Vec<usize> = (0..sk.joints.len())
-        .filter(|&j| sk.is_ancestor_or_self(root, j))
-        .collect();
-    let nj = sk.joints.len();
+    let measured = measured_joints(layout);
+    let nj = layout.skeleton().joints.len();
     let mut base = vec![glam::DVec3::ZERO; nj];
     let mut moved = vec![glam::DVec3::ZERO; nj];
     let mut edited = vec![0.0; p];

@@ -26,6 +26,16 @@ pub struct PoseErrorCm {
     pub shell_cm: f64,
 }
 
+/// The joints the metrics measure: the motion root and every joint below it (static joints above the
+/// root, such as Bandai's `joint_Root`, are left out).
+pub fn measured_joints(layout: &PoseLayout) -> Vec<usize> {
+    let sk = layout.skeleton();
+    let root = layout.root();
+    (0..sk.joints.len())
+        .filter(|&j| sk.is_ancestor_or_self(root, j))
+        .collect()
+}
+
 /// Reusable buffers for [`ErrorMeter::compare`]: one comparison allocates nothing.
 #[derive(Debug, Clone)]
 pub struct ErrorMeter<'a> {
@@ -43,12 +53,8 @@ impl<'a> ErrorMeter<'a> {
     /// A meter for poses of `layout`. Joints that are not the motion root or below it (static joints
     /// above the root, such as Bandai's `joint_Root`) are not measured.
     pub fn new(layout: &'a PoseLayout) -> ErrorMeter<'a> {
-        let sk = layout.skeleton();
-        let root = layout.root();
-        let measured = (0..sk.joints.len())
-            .filter(|&j| sk.is_ancestor_or_self(root, j))
-            .collect();
-        let n = sk.joints.len();
+        let measured = measured_joints(layout);
+        let n = layout.skeleton().joints.len();
         ErrorMeter {
             layout,
             a: vec![Transform::default(); n],

@@ -3,7 +3,6 @@
 //! `tests/acceptance.rs`.
 
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 
 use crowd_sim::{Camera, ClipSource, CrowdConfig};
 use lod_policy::{Detail, DistancePolicy};
@@ -16,16 +15,9 @@ use motion_lod::progress::NoProgress;
 use motion_lod::synth::WalkRequest;
 use motion_lod::{BuildConfig, LodSource, MotionModel, NaiveSource};
 
-fn built() -> &'static (MotionModel, Analysis) {
-    static MODEL: OnceLock<(MotionModel, Analysis)> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let loaded = DataSpec::default()
-            .load(&|_, _| {})
-            .expect("embedded data loads");
-        MotionModel::build_with_analysis(&loaded.training, &BuildConfig::default(), &NoProgress)
-            .expect("model builds")
-    })
-}
+mod common;
+
+use common::built;
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("motion-lod-test-{}", std::process::id()));

@@ -3,28 +3,17 @@
 //! components and more error at lower accuracy levels, root-only clips, thread-count determinism and
 //! rejected inputs.
 
-use std::sync::OnceLock;
-
 use crowd_sim::{Camera, ClipSource, Controls, CrowdConfig, Detail};
 use glam::Vec3;
 use lod_policy::{DistancePolicy, Precision};
 use motion_lod::build::Analysis;
 use motion_lod::crowd::ModelPolicy;
-use motion_lod::dataset::DataSpec;
 use motion_lod::metrics::ErrorMeter;
-use motion_lod::progress::NoProgress;
-use motion_lod::{BuildConfig, MotionModel, NaiveSource, PcaSource, TIME_ROW};
+use motion_lod::{MotionModel, NaiveSource, PcaSource, TIME_ROW};
 
-fn built() -> &'static (MotionModel, Analysis) {
-    static MODEL: OnceLock<(MotionModel, Analysis)> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let loaded = DataSpec::default()
-            .load(&|_, _| {})
-            .expect("embedded data loads");
-        MotionModel::build_with_analysis(&loaded.training, &BuildConfig::default(), &NoProgress)
-            .expect("model builds")
-    })
-}
+mod common;
+
+use common::built;
 
 /// Training controls of a few samples and midpoints between pairs of them.
 fn test_controls(analysis: &Analysis) -> Vec<Controls> {
