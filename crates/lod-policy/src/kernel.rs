@@ -19,7 +19,20 @@ use serde::{Deserialize, Serialize};
 use crate::error::KernelError;
 use timewarp::TimeTable;
 
+use crate::chain::{RootMotion, exp_map_to_quat};
 use crate::model::{LodModel, Ranks, TIME_ROW};
+
+/// Index of the control that is a clip's travel turn (radians, + = left): the heading of the
+/// direction of travel changes by it over one cycle (the data's definition; the pelvis may turn by more
+/// or less on cycles that enter or leave a turn).
+pub const TURN_CONTROL: usize = 2;
+
+/// Heading (yaw about +y, radians, 0 = +z, + = towards +x) of a root orientation given as an
+/// exponential map.
+pub fn yaw_of_exp_map(v: &[f32]) -> f32 {
+    let f = exp_map_to_quat(glam::Vec3::new(v[0], v[1], v[2])) * glam::Vec3::Z;
+    f.x.atan2(f.z)
+}
 
 /// Level of detail of one clip: an accuracy level and the number of evaluated joints.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -142,6 +155,8 @@ pub struct ClipKernel {
     g: Vec<f32>,
     /// Playback times of the `T` aligned frames (incremental inverse timewarp).
     times: TimeTable,
+    /// Root motion from the first to the last aligned frame ([`crate::chain`]).
+    root_motion: RootMotion,
 }
 
 impl ClipKernel {
@@ -160,6 +175,7 @@ impl ClipKernel {
             clamped: false,
             g: vec![0.0; model.p() * r.t],
             times: TimeTable::with_capacity(model.t()),
+            root_motion: RootMotion::default(),
         }
     }
 
@@ -186,6 +202,13 @@ impl ClipKernel {
     /// `G(c)` as a `rows x r_T` column-major matrix.
     pub fn g(&self) -> &[f32] {
         &self.g[..self.rows * self.ranks.t]
+    }
+    /// The clip's root motion: the root's ground displacement `(dx, dz)` from the first to the last
+    /// aligned frame in the cycle frame, and the travel turn (the clamped turn control,
+    /// [`TURN_CONTROL`]; the pelvis's yaw change for a model without one). The next cycle frame
+    /// follows from it ([`crate::chain`]).
+    pub fn root_motion(&self) -> RootMotion {
+        self.root_motion
     }
     /// The clip's time table: playback time (seconds) of each aligned frame, built from the
     /// time-increment row (row 6) of `G(c)` at every aligned frame (`timewarp::TimeTable`: the
@@ -359,6 +382,27 @@ impl LodModel {
         out.ranks = r;
         out.rows = rows;
         out.clamped = clamped;
+
+        // 8. Root motion: the root's ground displacement from the first to the last aligned frame, and
+        //    the travel turn (the clamped turn control; the pelvis's yaw change without one).
+        let mut ends = [[0.0f32; 6]; 2];
+        for (e, phase) in ends.iter_mut().zip([0.0, (t - 1) as f32]) {
+            self.pose_rows(out, phase, e)?;
+        }
+        let [start, end] = ends;
+        let turn = match controls.get(TURN_CONTROL) {
+            Some(&c) if d > TURN_CONTROL && cs.scale[TURN_CONTROL] > 0.0 => {
+                c.clamp(cs.min[TURN_CONTROL], cs.max[TURN_CONTROL])
+            }
+            _ => {
+                crate::chain::wrap_angle(yaw_of_exp_map(&end[3..6]) - yaw_of_exp_map(&start[3..6]))
+            }
+        };
+        out.root_motion = RootMotion {
+            dx: end[0] - start[0],
+            dz: end[2] - start[2],
+            turn,
+        };
         Ok(())
     }
 

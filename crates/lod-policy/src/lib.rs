@@ -39,14 +39,16 @@
 
 #![warn(missing_docs)]
 
+pub mod chain;
 pub mod error;
 pub mod kernel;
 pub mod model;
 pub mod policy;
 pub mod projection;
 
+pub use chain::{CycleFrame, PoseState, RootMotion, SeamTransition};
 pub use error::{KernelError, ModelError};
-pub use kernel::{ClipKernel, Detail, KernelScratch};
+pub use kernel::{ClipKernel, Detail, KernelScratch, TURN_CONTROL};
 pub use model::{
     ALWAYS_ROWS, AccuracyLevel, ControlSpace, KeyTensor, LevelError, LodModel, ModelParts,
     Precision, ROWS_PER_JOINT, Ranks, TIME_ROW, Variogram, VariogramModel,

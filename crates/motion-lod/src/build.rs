@@ -40,6 +40,8 @@ pub struct TrainingSet {
     pub controls: Vec<[f64; 4]>,
     /// Where each sample came from (file and frame range), for reports.
     pub sources: Vec<String>,
+    /// The motion-quality meter on the data's own takes, when they were measured.
+    pub quality: Option<crate::quality::QualityReference>,
 }
 
 /// Settings of [`MotionModel::build`]; the defaults are the paper's section 5.1.
@@ -205,6 +207,7 @@ impl TrainingSet {
             tensor: Tensor3::from_vec([p, t, n], data).expect("subset of a valid tensor"),
             controls: pick.iter().map(|&k| self.controls[k]).collect(),
             sources: pick.iter().map(|&k| self.sources[k].clone()).collect(),
+            quality: self.quality.clone(),
         }
     }
 }
@@ -487,6 +490,7 @@ impl Analysis {
                 variogram: *krig.variogram(),
                 dropped_controls: krig.dropped_dims().to_vec(),
                 kriging_loo_rmse: None,
+                quality: None,
                 seconds: 0.0,
                 data: None,
                 config: config.clone(),
@@ -514,6 +518,7 @@ impl MotionModel {
         let started = Instant::now();
         let analysis = Analysis::run(set, config, progress)?;
         let mut model = analysis.runtime_model(config, progress)?;
+        model.report.quality = set.quality.clone();
         // 6. Measured errors of every accuracy level and joint count.
         progress.stage("level errors", 1);
         let (level_errors, joint_errors) =

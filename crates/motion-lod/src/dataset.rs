@@ -18,11 +18,13 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use motion_io::pose::TIME_ROW;
 use motion_io::{
     Controls, CycleConfig, DropReason, DroppedCycle, GaitCycle, Motion, PoseError, PoseLayout,
-    align_sequence, detect_units_per_metre, read_bvh, segment_cycles,
+    align_sequence, detect_units_per_metre, find_feet, read_bvh, segment_cycles,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use tensor_ops::Tensor3;
+
+use crate::quality::{self, FootJoints, MotionQuality, QualityReference};
 use timewarp::{AlignConfig, AlignMethod, FrameSeq, TimewarpError, align};
 
 /// Errors of the dataset pipeline. Failures of single files are not errors: they are reported in
@@ -149,6 +151,9 @@ pub struct CycleSet {
     pub failed: Vec<FailedFile>,
     /// Dropped candidate cycles with their take.
     pub dropped: Vec<(PathBuf, DroppedCycle)>,
+    /// The motion-quality meter on the data's own takes (the steady stretch of every take that gave
+    /// cycles); `None` when the feet cannot be found.
+    pub quality: Option<QualityReference>,
 }
 
 impl CycleSet {
@@ -411,6 +416,18 @@ fn cycles_from_takes(
         .collect();
     let mut cycles = Vec::new();
     let mut dropped = Vec::new();
+    let feet = find_feet(layout.skeleton(), &config.cycle.feet)
+        .ok()
+        .map(|f| FootJoints::from_feet(&f));
+    let measured: Vec<Option<(MotionQuality, f64)>> = motions
+        .par_iter()
+        .zip(&segmented)
+        .map(|((_, m), r)| {
+            let (feet, report) = (feet.as_ref()?, r.as_ref().ok()?);
+            take_quality(&layout, feet, m, &report.cycles)
+        })
+        .collect();
+    let takes: Vec<(MotionQuality, f64)> = measured.into_iter().flatten().collect();
     for ((p, _), r) in motions.iter().zip(segmented) {
         match r {
             Ok(report) => {
@@ -436,13 +453,44 @@ fn cycles_from_takes(
         None => mean_pose(&cycles[0], layout.dof()),
     };
     unify_branches(&mut cycles, &reference)?;
+    let steps = cycles
+        .iter()
+        .map(|c| (c.controls.dx.hypot(c.controls.dz), c.duration()))
+        .collect();
+    let quality = feet
+        .as_ref()
+        .and_then(|f| quality::reference_from_takes(f, &takes, steps));
     Ok(CycleSet {
         layout,
         cycles,
         files: paths.len(),
         failed,
         dropped,
+        quality,
     })
+}
+
+/// The meter on the steady stretch of one take (from its first kept cycle's start to its last kept
+/// cycle's end), against the take's own floor, and that floor (m); `None` when the take gave no cycle.
+fn take_quality(
+    layout: &PoseLayout,
+    feet: &FootJoints,
+    motion: &Motion,
+    cycles: &[GaitCycle],
+) -> Option<(MotionQuality, f64)> {
+    let first = cycles.iter().map(|c| c.first_frame).min()?;
+    let last = cycles.iter().map(|c| c.last_frame).max()?;
+    let mut durations: Vec<f64> = cycles.iter().map(GaitCycle::duration).collect();
+    let cycle_s = quality::median(&mut durations);
+    let dof = layout.dof();
+    let mut poses = vec![0.0; (last - first + 1) * dof];
+    for (f, row) in (first..=last).zip(poses.chunks_exact_mut(dof)) {
+        layout.pose_from_frame(motion, f, row).ok()?;
+    }
+    let dt = motion.frame_time;
+    let q = quality::measure(layout, feet, &poses, dt, None, cycle_s, &[]).ok()?;
+    let floor = quality::floor_of(layout, feet, &poses, dt, cycle_s).ok()?;
+    Some((q, floor))
 }
 
 /// Checks that every take has the first take's joint names (in order), for a clear message.
@@ -710,7 +758,8 @@ impl DataSpec {
             load_cycles(&self.dirs, &config, progress)?
         };
         let aligned = align_cycles(&cycles, self.frames, self.align.method())?;
-        let all = aligned.training_set();
+        let mut all = aligned.training_set();
+        all.quality = cycles.quality.clone();
         let training = match self.samples {
             Some(n) => all.subset(n, self.seed),
             None => all,
@@ -752,6 +801,7 @@ impl AlignedSet {
             layout: self.layout.clone(),
             tensor: self.tensor.clone(),
             controls: self.controls.iter().map(|c| c.to_array()).collect(),
+            quality: None,
             sources: self
                 .sources
                 .iter()

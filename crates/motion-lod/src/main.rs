@@ -24,6 +24,8 @@ enum Command {
     Info(cli::info::InfoArgs),
     /// Leave-one-out error of the model at each key level against naive kriging, RBF, PCA and nearest.
     Eval(cli::eval::EvalArgs),
+    /// Motion quality (pop, foot skate, floor, facing, cadence) of walks over the data's controls.
+    Quality(cli::quality::QualityArgs),
     /// Synthesize a walk for given controls and write it as a BVH file.
     Synth(cli::synth::SynthArgs),
     /// Animate a crowd with the model's level of detail; time it, render it, compare with naive.
@@ -40,6 +42,7 @@ fn main() -> anyhow::Result<()> {
         Command::Info(args) => cli::info::run(args),
         Command::Eval(args) => cli::eval::run(args),
         Command::Synth(args) => cli::synth::run(args),
+        Command::Quality(args) => cli::quality::run(args),
         Command::Crowd(args) => cli::crowd::run(args),
         Command::Demo(args) => cli::demo::run(args),
     }

@@ -56,6 +56,8 @@ pub struct BuildReport {
     pub dropped_controls: Vec<usize>,
     /// Leave-one-out RMSE of the kriging fit, when measured.
     pub kriging_loo_rmse: Option<f64>,
+    /// The motion-quality meter on the training takes (the reference of [`crate::quality`]).
+    pub quality: Option<crate::quality::QualityReference>,
     /// Wall-clock seconds of the build.
     pub seconds: f64,
     /// Where the training data came from (set by the command line; `None` for in-memory data).

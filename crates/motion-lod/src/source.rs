@@ -189,22 +189,13 @@ impl ClipSource for LodSource<'_> {
                 .with_scratch(|s| lod.build_kernel(&c, Detail::root_only(), s, &mut clip.kernel));
         }
         clip.duration = (clip.kernel.duration() as f32).max(1e-3);
-        // Root motion over the whole clip: the root at the last aligned frame, in the cycle frame.
-        let mut end = [0.0f32; 7];
-        let mut start = [0.0f32; 7];
-        let t = lod.t() as f32;
-        let ok = lod.pose_rows(&clip.kernel, t - 1.0, &mut end).is_ok()
-            && lod.pose_rows(&clip.kernel, 0.0, &mut start).is_ok();
-        clip.root_motion = if ok {
-            let turn = heading_of_exp_map([end[3], end[4], end[5]])
-                - heading_of_exp_map([start[3], start[4], start[5]]);
-            RootMotion {
-                dx: end[0],
-                dz: end[2],
-                turn: wrap_pi(turn),
-            }
-        } else {
-            RootMotion::default()
+        // Root motion of the clip: ground displacement and travel turn, the runtime's one chaining
+        // rule (lod_policy::chain), as `synth` uses it.
+        let m = clip.kernel.root_motion();
+        clip.root_motion = RootMotion {
+            dx: m.dx,
+            dz: m.dz,
+            turn: m.turn,
         };
     }
 
@@ -237,16 +228,5 @@ impl ClipSource for LodSource<'_> {
 
     fn bones(&self) -> &[(usize, usize)] {
         &self.bones
-    }
-}
-
-/// Wraps an angle into `(-pi, pi]`.
-fn wrap_pi(a: f32) -> f32 {
-    let tau = std::f32::consts::TAU;
-    let w = a - tau * (a / tau).round();
-    if w <= -std::f32::consts::PI {
-        w + tau
-    } else {
-        w
     }
 }

@@ -1,18 +1,19 @@
 //! Walks from the model: cycles synthesized at given controls, chained end to start, played back at any
 //! frame rate through the incremental inverse timewarp, and turned into a BVH motion.
 //!
-//! Chaining (paper section 5): cycle `k + 1` starts where cycle `k` ends; its cycle frame is placed at
-//! the root's ground position at the end of cycle `k`, turned by the cycle's travel turn (the control:
-//! the direction of travel, as the data define it, which is not always the pelvis's yaw change). With `blend`, the difference between
-//! the end pose of one cycle and the start pose of the next (joint rotations, root height and the
-//! pelvis's yaw beyond the travel turn) is faded
-//! out over the first half of the next cycle with an ease-in/out curve `3u^2 - 2u^3`, so the seam is
-//! continuous; without it, cycles are switched as they are (what the crowd does for distant walkers).
+//! Chaining is the runtime's one routine ([`lod_policy::chain`]): cycle `k + 1`'s frame is cycle `k`'s
+//! advanced by the clip's root motion (ground displacement and travel turn), and with `blend` the seam
+//! is inertialized, so every joint and the whole root are continuous in position and velocity; without
+//! it, cycles are switched as they are (what the crowd does for distant walkers). With `plant_feet`,
+//! feet on the floor are held in place by two-bone IK ([`crate::footlock`]).
 
-use glam::{DQuat, DVec3};
+use glam::Vec3;
 use lod_policy::Detail;
+use lod_policy::chain::{self, CycleFrame, PoseState, SeamTransition};
 use motion_io::Motion;
-use motion_io::expmap::{exp_to_quat, quat_to_exp};
+
+/// Step of the finite differences that give the velocities at a seam (s).
+const SEAM_STEP_S: f64 = 1.0 / 240.0;
 
 use crate::model::{Evaluator, MotionModel, TIME_ROW};
 
@@ -27,8 +28,11 @@ pub struct WalkRequest {
     pub cycles: usize,
     /// Output frames per second.
     pub fps: f64,
-    /// Ease-in/out blending at the seams between cycles.
+    /// Seamless transitions between cycles ([`lod_policy::chain`]); without, cycles switch as they
+    /// are (what the crowd does for distant walkers).
     pub blend: bool,
+    /// Keep planted feet planted ([`crate::footlock`]; needs the model's quality reference).
+    pub plant_feet: bool,
 }
 
 /// Why a walk could not be synthesized.
@@ -58,42 +62,6 @@ pub struct Walk {
     pub clamped: bool,
 }
 
-/// Ground transform of a cycle frame: position on the ground plane and heading (yaw about +y).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-struct Ground {
-    x: f64,
-    z: f64,
-    yaw: f64,
-}
-
-impl Ground {
-    fn rotation(&self) -> DQuat {
-        DQuat::from_rotation_y(self.yaw)
-    }
-
-    /// `self` followed by a local motion `(dx, dz, turn)` in `self`'s frame.
-    fn then(&self, dx: f64, dz: f64, turn: f64) -> Ground {
-        let v = self.rotation() * DVec3::new(dx, 0.0, dz);
-        Ground {
-            x: self.x + v.x,
-            z: self.z + v.z,
-            yaw: self.yaw + turn,
-        }
-    }
-}
-
-/// Heading (yaw) of a rotation: the direction its +z axis points to on the ground.
-fn yaw_of(q: DQuat) -> f64 {
-    let f = q * DVec3::Z;
-    f.x.atan2(f.z)
-}
-
-/// Ease-in/out weight `3u^2 - 2u^3` on `[0, 1]`.
-fn ease(u: f64) -> f64 {
-    let u = u.clamp(0.0, 1.0);
-    u * u * (3.0 - 2.0 * u)
-}
-
 impl MotionModel {
     /// Synthesizes a walk of `req.cycles` cycles (see the module documentation).
     pub fn synthesize_walk(&self, req: &WalkRequest) -> Result<Walk, SynthError> {
@@ -107,80 +75,77 @@ impl MotionModel {
             )));
         }
         let lod = &self.lod;
-        let (p, t) = (lod.p(), lod.t());
+        let p = lod.p();
         let mut ev = Evaluator::new(self);
         lod.build_kernel(&req.controls, req.detail, &mut ev.scratch, &mut ev.kernel)?;
-        let duration = ev.kernel.duration();
-        let at = |phase: f32, ev: &mut Evaluator| -> Result<Vec<f64>, SynthError> {
-            lod.pose(&ev.kernel, phase, &mut ev.pose)?;
-            Ok(ev.pose.iter().map(|&v| f64::from(v)).collect())
+        let kernel = &ev.kernel;
+        let duration = kernel.duration();
+        let motion = kernel.root_motion();
+        let eval = |t: f64, out: &mut [f32]| lod.pose(kernel, kernel.phase_at(t), out);
+        // Displayed pose `t` seconds into the current cycle: the clip's pose and the running seam
+        // transition (chain.rs).
+        let displayed = |t: f64, tr: &SeamTransition, out: &mut [f32]| -> Result<(), SynthError> {
+            eval(t, out)?;
+            if req.blend {
+                tr.apply(t as f32, out);
+            }
+            Ok(())
         };
-        let start = at(0.0, &mut ev)?;
-        let end = at((t - 1) as f32, &mut ev)?;
-        // Root motion of one cycle in its own frame.
-        let start_yaw = yaw_of(exp_to_quat(DVec3::from_slice(&start[3..6])));
-        let end_yaw = yaw_of(exp_to_quat(DVec3::from_slice(&end[3..6])));
-        // The next cycle's frame turns by the cycle's travel turn (the control, which the kriging trend
-        // reproduces exactly), not by the pelvis's yaw change: on cycles that enter or leave a turn
-        // the two differ (by more than 5 degrees for a third of the Bandai cycles), and the walk must
-        // travel what was asked. The pelvis's extra yaw is eased out at the seam with the rest.
-        let (lo, hi) = self.control_range()[2];
-        let travel_turn = f64::from(req.controls[2].clamp(lo, hi));
-        let (step_dx, step_dz, step_turn) = (end[0] - start[0], end[2] - start[2], travel_turn);
-        let seam_yaw = motion_io::expmap::wrap_angle(end_yaw - start_yaw - travel_turn);
-        // Seam offset: what the next cycle's start lacks to continue the previous cycle's end.
-        let seam: Vec<f64> = (0..p)
-            .map(|r| {
-                if r == 1 || r > TIME_ROW {
-                    end[r] - start[r]
-                } else {
-                    0.0
-                }
-            })
-            .collect();
 
         let frame_time = 1.0 / req.fps;
         let total = duration * req.cycles as f64;
         let frames = (total / frame_time).floor() as usize + 1;
         let mut poses = Vec::with_capacity(frames * p);
-        let mut ground = Ground::default();
+        let mut transition = SeamTransition::new(p, chain::DEFAULT_HALFLIFE_S);
+        let (mut prev, mut next) = (PoseState::new(p), PoseState::new(p));
+        let (mut a, mut b, mut pose) = (vec![0.0f32; p], vec![0.0f32; p], vec![0.0f32; p]);
+        let h = SEAM_STEP_S.min(0.25 * duration);
+        let mut frame = CycleFrame::default();
         let mut cycle = 0usize;
         for f in 0..frames {
             let time = f as f64 * frame_time;
             let k = ((time / duration).floor() as usize).min(req.cycles - 1);
             while cycle < k {
-                ground = ground.then(step_dx, step_dz, step_turn);
+                // The seam: the displayed end of this cycle, in the next cycle's frame, against the
+                // next cycle's own start.
+                displayed(duration - h, &transition, &mut a)?;
+                displayed(duration, &transition, &mut b)?;
+                prev.set(&b, &a, &b, h as f32);
+                prev.into_next_frame(&motion);
+                eval(0.0, &mut a)?;
+                eval(h, &mut b)?;
+                next.set(&a, &a, &b, h as f32);
+                transition.start(&prev, &next, kernel.rows());
+                frame = frame.next(&motion);
                 cycle += 1;
             }
             let local = time - k as f64 * duration;
-            let mut pose = at(ev.kernel.phase_at(local), &mut ev)?;
-            // Yaw added to the root orientation in the cycle frame: the seam's pelvis yaw beyond the
-            // travel turn, eased out with blending (without it the cycles switch as they are).
-            let mut extra_yaw = 0.0;
-            if req.blend && k > 0 {
-                let w = 1.0 - ease(local / (0.5 * duration));
-                for (v, s) in pose.iter_mut().zip(&seam) {
-                    *v += w * s;
-                }
-                extra_yaw = w * seam_yaw;
-            }
+            displayed(local, &transition, &mut pose)?;
             // Place the cycle frame in the world: root position and orientation.
-            let rot = ground.rotation();
-            let pos = rot * DVec3::from_slice(&pose[0..3]) + DVec3::new(ground.x, 0.0, ground.z);
-            let orient = rot
-                * DQuat::from_rotation_y(extra_yaw)
-                * exp_to_quat(DVec3::from_slice(&pose[3..6]));
-            pose[0..3].copy_from_slice(&pos.to_array());
-            pose[3..6].copy_from_slice(&quat_to_exp(orient).to_array());
-            pose[TIME_ROW] /= lod.parts().time_scale;
-            poses.extend_from_slice(&pose);
+            let root = frame.to_world(Vec3::from_slice(&pose[0..3]));
+            let orient = frame.rotation() * chain::exp_map_to_quat(Vec3::from_slice(&pose[3..6]));
+            pose[0..3].copy_from_slice(&root.to_array());
+            pose[3..6].copy_from_slice(&chain::quat_to_exp_map(orient).to_array());
+            poses.extend(pose.iter().map(|&v| f64::from(v)));
+            poses[f * p + TIME_ROW] /= lod.parts().time_scale;
         }
         motion_io::unwrap_exp_maps(&mut poses, p)?;
+        if req.plant_feet {
+            if let Some(reference) = &self.report.quality {
+                crate::footlock::plant_feet(
+                    &self.layout,
+                    &reference.feet,
+                    reference.floor_m,
+                    &mut poses,
+                    frame_time,
+                );
+            }
+        }
         Ok(Walk {
             poses,
             frame_time,
             cycle_seconds: duration,
-            clamped: ev.kernel.clamped(),
+            clamped: kernel.clamped(),
         })
     }
 

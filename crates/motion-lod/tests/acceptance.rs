@@ -119,6 +119,7 @@ fn assert_walks_travel(what: &str, spec: &DataSpec) {
             cycles: 3,
             fps,
             blend: true,
+            plant_feet: true,
         };
         let walk = model.synthesize_walk(&req).unwrap();
         assert!(!walk.clamped, "{what} walk {n}: {ctl:?} is inside the data");

@@ -106,6 +106,7 @@ fn out_of_range_controls_are_clamped_and_reported() {
         cycles: 1,
         fps: 30.0,
         blend: false,
+        plant_feet: true,
     };
     assert!(model.synthesize_walk(&req).unwrap().clamped);
     let bad = WalkRequest {

@@ -38,9 +38,12 @@ pub struct SynthArgs {
     /// Output frames per second.
     #[arg(long, default_value_t = 30.0)]
     pub fps: f64,
-    /// Switch cycles without the ease-in/out blend.
+    /// Switch cycles as they are, without the seam transition (what the crowd does far away).
     #[arg(long)]
     pub no_blend: bool,
+    /// Let feet slide as synthesized (no foot lock).
+    #[arg(long)]
+    pub no_foot_lock: bool,
     /// Refuse controls outside the data's range instead of clamping them.
     #[arg(long)]
     pub strict: bool,
@@ -92,6 +95,7 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
         cycles: args.cycles,
         fps: args.fps,
         blend: !args.no_blend,
+        plant_feet: !args.no_foot_lock,
     };
     let walk = model
         .synthesize_walk(&req)

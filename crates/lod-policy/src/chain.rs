@@ -1,0 +1,388 @@
+//! Chaining clips into continuous locomotion: the one routine `synth`, the crowd and an engine use.
+//!
+//! A clip is one gait cycle in its own *cycle frame* (root on the ground origin at the start, facing
+//! +z, +x left, y up). Consecutive clips are chained in two steps:
+//!
+//! 1. **Root motion.** The next cycle frame is the previous one advanced by the clip's
+//!    [`RootMotion`]: the root's ground displacement `(dx, dz)` from the first to the last aligned
+//!    frame and the travel turn (the control the clip was built for: the direction of travel, as the
+//!    data define it, not the pelvis's yaw change). [`RootMotion::next_frame`].
+//! 2. **Inertialization of the seam.** What the next clip's first pose lacks to continue the
+//!    previous clip's last displayed pose, position *and* velocity, is an offset that decays to zero
+//!    with a critically damped spring (the inertialization of motion-matching systems):
+//!    `o(t) = (x0 + (v0 + y x0) t) e^{-y t}`, `y = 2 ln 2 / halflife`, so `o(0) = x0`,
+//!    `o'(0) = v0`. `x0` and `v0` are the differences of the poses and of their velocities at the
+//!    seam, with the previous pose brought into the next cycle frame. Joint rows (exponential maps
+//!    on one branch) and the root position take the difference row by row; the root orientation
+//!    takes the rotation `log(q_prev q_next^-1)` and the difference of the angular velocities, and is
+//!    applied as `exp(o(t)) q_next(t)`. The time-increment row is not touched.
+//!
+//! The result is continuous in position and velocity for every row, whatever the controls of the two
+//! clips (changing controls and levels between cycles included), and costs `2 P` floats per character.
+//! A transition started while another is running starts from the displayed pose, so the offsets never
+//! jump. The paper's ease-in/out blend of the overlapping halves (section 5) only hides the jump in
+//! position and leaves a kink in velocity; [`SeamTransition`] replaces it.
+
+use glam::{Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::model::{ALWAYS_ROWS, TIME_ROW};
+
+/// Default half-life of a seam offset (s), chosen with the motion-quality meter (`motion-lod
+/// quality`): the offset is under 5% of its start 0.5 s after the seam, inside the first half of a
+/// 1.1 s walk cycle.
+pub const DEFAULT_HALFLIFE_S: f32 = 0.15;
+
+/// Root motion of one clip in its start cycle frame: ground displacement and travel turn.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct RootMotion {
+    /// Displacement to the character's left (m).
+    pub dx: f32,
+    /// Displacement forward (m).
+    pub dz: f32,
+    /// Turn of the cycle frame (radians, + = left).
+    pub turn: f32,
+}
+
+/// A cycle frame on the ground: origin `(x, z)` and heading (radians about +y, 0 = facing +z).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct CycleFrame {
+    /// Ground x of the origin (m).
+    pub x: f32,
+    /// Ground z of the origin (m).
+    pub z: f32,
+    /// Heading (radians).
+    pub heading: f32,
+}
+
+impl CycleFrame {
+    /// The frame's rotation.
+    pub fn rotation(&self) -> Quat {
+        Quat::from_rotation_y(self.heading)
+    }
+
+    /// A point of the cycle frame in the world.
+    pub fn to_world(&self, p: Vec3) -> Vec3 {
+        self.rotation() * p + Vec3::new(self.x, 0.0, self.z)
+    }
+
+    /// The frame after `motion` (step 1 of the module documentation); the heading wraps to `(-pi, pi]`.
+    pub fn next(&self, motion: &RootMotion) -> CycleFrame {
+        let v = self.rotation() * Vec3::new(motion.dx, 0.0, motion.dz);
+        CycleFrame {
+            x: self.x + v.x,
+            z: self.z + v.z,
+            heading: wrap_angle(self.heading + motion.turn),
+        }
+    }
+}
+
+impl RootMotion {
+    /// The next cycle frame after this motion, from `frame`.
+    pub fn next_frame(&self, frame: &CycleFrame) -> CycleFrame {
+        frame.next(self)
+    }
+}
+
+/// Wraps an angle into `(-pi, pi]`.
+pub fn wrap_angle(a: f32) -> f32 {
+    let tau = std::f32::consts::TAU;
+    let w = a - tau * (a / tau).round();
+    if w <= -std::f32::consts::PI {
+        w + tau
+    } else {
+        w
+    }
+}
+
+/// Ease-in/out weight `3u^2 - 2u^3` for `u` clamped to `[0, 1]` (zero slope at both ends).
+pub fn ease_in_out(u: f32) -> f32 {
+    let u = u.clamp(0.0, 1.0);
+    u * u * (3.0 - 2.0 * u)
+}
+
+/// The quaternion of an exponential map (rotation vector).
+pub fn exp_map_to_quat(v: Vec3) -> Quat {
+    let angle = v.length();
+    if angle > 1e-12 {
+        Quat::from_axis_angle(v / angle, angle)
+    } else {
+        Quat::IDENTITY
+    }
+}
+
+/// The exponential map (rotation vector, `|v| <= pi`) of a quaternion.
+pub fn quat_to_exp_map(q: Quat) -> Vec3 {
+    let q = if q.w < 0.0 { -q } else { q };
+    let (axis, angle) = q.to_axis_angle();
+    if angle.abs() < 1e-12 {
+        Vec3::ZERO
+    } else {
+        axis * angle
+    }
+}
+
+/// A pose and its velocity (per second) at one instant: the state a seam transition starts from.
+///
+/// Rows as the model's pose vector; in `velocity`, rows `3..6` hold the root's angular velocity (rad/s,
+/// cycle frame) instead of the derivative of its exponential map.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseState {
+    /// Pose rows.
+    pub pose: Vec<f32>,
+    /// Velocity rows.
+    pub velocity: Vec<f32>,
+}
+
+impl PoseState {
+    /// A zero state of `p` rows.
+    pub fn new(p: usize) -> PoseState {
+        PoseState {
+            pose: vec![0.0; p],
+            velocity: vec![0.0; p],
+        }
+    }
+
+    /// Sets the state to `pose` with the velocity from `earlier` to `later`, two poses `h` seconds
+    /// apart (finite differences; `pose` is usually one of them). `h > 0`.
+    pub fn set(&mut self, pose: &[f32], earlier: &[f32], later: &[f32], h: f32) {
+        let n = pose
+            .len()
+            .min(earlier.len())
+            .min(later.len())
+            .min(self.pose.len());
+        debug_assert!(h > 0.0);
+        self.pose[..n].copy_from_slice(&pose[..n]);
+        for ((v, &a), &b) in self.velocity[..n].iter_mut().zip(later).zip(earlier) {
+            *v = (a - b) / h;
+        }
+        if n >= 6 {
+            let q1 = exp_map_to_quat(Vec3::from_slice(&later[3..6]));
+            let q0 = exp_map_to_quat(Vec3::from_slice(&earlier[3..6]));
+            let w = quat_to_exp_map(q1 * q0.inverse()) / h;
+            self.velocity[3..6].copy_from_slice(&w.to_array());
+        }
+    }
+
+    /// Re-expresses the state, given in a cycle frame, in the frame after `motion` (the next cycle's):
+    /// root position `R_y(-turn) (p - (dx, 0, dz))`, orientation `R_y(-turn) q`, and the velocities
+    /// rotated likewise.
+    pub fn into_next_frame(&mut self, motion: &RootMotion) {
+        if self.pose.len() < 6 {
+            return;
+        }
+        let r = Quat::from_rotation_y(-motion.turn);
+        let p = Vec3::from_slice(&self.pose[0..3]) - Vec3::new(motion.dx, 0.0, motion.dz);
+        self.pose[0..3].copy_from_slice(&(r * p).to_array());
+        let q = r * exp_map_to_quat(Vec3::from_slice(&self.pose[3..6]));
+        self.pose[3..6].copy_from_slice(&quat_to_exp_map(q).to_array());
+        for range in [0..3, 3..6] {
+            let v = r * Vec3::from_slice(&self.velocity[range.clone()]);
+            self.velocity[range].copy_from_slice(&v.to_array());
+        }
+    }
+}
+
+/// The inertialized seam between two clips (module documentation): offsets that decay from the
+/// previous clip's displayed state to the next clip's own motion. Holds `2 P` floats; starting and
+/// applying allocate nothing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeamTransition {
+    offset: Vec<f32>,
+    velocity: Vec<f32>,
+    rows: usize,
+    decay: f32,
+    active: bool,
+}
+
+impl SeamTransition {
+    /// A transition over pose vectors of `p` rows with the given half-life (s, clamped to at least 1 ms).
+    pub fn new(p: usize, halflife_s: f32) -> SeamTransition {
+        SeamTransition {
+            offset: vec![0.0; p],
+            velocity: vec![0.0; p],
+            rows: 0,
+            decay: 2.0 * std::f32::consts::LN_2 / halflife_s.max(1e-3),
+            active: false,
+        }
+    }
+
+    /// Whether a transition is running (until [`SeamTransition::finish`] or [`SeamTransition::clear`]).
+    pub fn is_active(&self) -> bool {
+        self.active
+    }
+
+    /// Stops any transition.
+    pub fn clear(&mut self) {
+        self.active = false;
+        self.rows = 0;
+    }
+
+    /// Stops the transition once its offset has decayed below `1e-4` of its start (`t` seconds after
+    /// the seam); returns whether it is still active.
+    pub fn finish_after(&mut self, t: f32) -> bool {
+        if self.active && (1.0 + self.decay * t) * (-self.decay * t).exp() < 1e-4 {
+            self.clear();
+        }
+        self.active
+    }
+
+    /// Starts a transition from `prev` (the displayed state at the seam, already in the next clip's
+    /// cycle frame, see [`PoseState::into_next_frame`]) to `next` (the next clip's own state at the
+    /// seam). Only the first `rows` rows are blended (both clips evaluate at least that many).
+    pub fn start(&mut self, prev: &PoseState, next: &PoseState, rows: usize) {
+        let rows = rows
+            .min(self.offset.len())
+            .min(prev.pose.len())
+            .min(next.pose.len());
+        for r in 0..rows {
+            let (x, v) = if r == TIME_ROW || (3..6).contains(&r) {
+                (0.0, 0.0)
+            } else {
+                (
+                    prev.pose[r] - next.pose[r],
+                    prev.velocity[r] - next.velocity[r],
+                )
+            };
+            self.offset[r] = x;
+            self.velocity[r] = v;
+        }
+        if rows >= 6 {
+            let qp = exp_map_to_quat(Vec3::from_slice(&prev.pose[3..6]));
+            let qn = exp_map_to_quat(Vec3::from_slice(&next.pose[3..6]));
+            let x = quat_to_exp_map(qp * qn.inverse());
+            let v = Vec3::from_slice(&prev.velocity[3..6]) - Vec3::from_slice(&next.velocity[3..6]);
+            self.offset[3..6].copy_from_slice(&x.to_array());
+            self.velocity[3..6].copy_from_slice(&v.to_array());
+        }
+        self.rows = rows;
+        self.active = rows > 0;
+    }
+
+    /// Applies the transition `t` seconds after the seam to the next clip's pose (its first `rows`
+    /// rows, in its cycle frame). Does nothing when no transition is active.
+    pub fn apply(&self, t: f32, pose: &mut [f32]) {
+        if !self.active {
+            return;
+        }
+        let t = t.max(0.0);
+        let e = (-self.decay * t).exp();
+        let (a, b) = ((1.0 + self.decay * t) * e, t * e);
+        let rows = self.rows.min(pose.len());
+        for r in 0..rows {
+            if r == TIME_ROW || (3..6).contains(&r) {
+                continue;
+            }
+            pose[r] += a * self.offset[r] + b * self.velocity[r];
+        }
+        if rows >= 6 {
+            let o = a * Vec3::from_slice(&self.offset[3..6])
+                + b * Vec3::from_slice(&self.velocity[3..6]);
+            let q = exp_map_to_quat(o) * exp_map_to_quat(Vec3::from_slice(&pose[3..6]));
+            let v = nearest_branch(quat_to_exp_map(q), Vec3::from_slice(&pose[3..6]));
+            pose[3..6].copy_from_slice(&v.to_array());
+        }
+        debug_assert!(rows <= ALWAYS_ROWS || rows <= self.offset.len());
+    }
+}
+
+/// The exponential map of the same rotation as `v` on the branch nearest `reference`
+/// (`v + 2 pi k v / |v|` for the integer `k` that brings it closest).
+pub fn nearest_branch(v: Vec3, reference: Vec3) -> Vec3 {
+    let angle = v.length();
+    if angle < 1e-6 {
+        return v;
+    }
+    let axis = v / angle;
+    let tau = std::f32::consts::TAU;
+    let k = ((axis.dot(reference) - angle) / tau).round();
+    let w = axis * (angle + k * tau);
+    if (w - reference).length() <= (v - reference).length() {
+        w
+    } else {
+        v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offset_starts_at_the_difference_with_its_velocity_and_decays() {
+        let p = 10;
+        let mut prev = PoseState::new(p);
+        let mut next = PoseState::new(p);
+        prev.pose[8] = 0.3;
+        prev.velocity[8] = 2.0;
+        next.velocity[8] = -1.0;
+        prev.pose[1] = 0.9;
+        next.pose[1] = 1.0;
+        let mut s = SeamTransition::new(p, 0.15);
+        s.start(&prev, &next, p);
+        let at = |t: f32, base: f32, vel: f32, row: usize| {
+            let mut pose = vec![0.0; p];
+            pose[row] = base + vel * t;
+            s.apply(t, &mut pose);
+            pose[row]
+        };
+        // Position continuous at the seam.
+        assert!((at(0.0, 0.0, -1.0, 8) - 0.3).abs() < 1e-6);
+        assert!((at(0.0, 1.0, 0.0, 1) - 0.9).abs() < 1e-6);
+        // Velocity continuous: the displayed slope right after the seam is the previous clip's.
+        let h = 1e-3;
+        let slope = (at(h, 0.0, -1.0, 8) - at(0.0, 0.0, -1.0, 8)) / h;
+        assert!((slope - 2.0).abs() < 0.05, "slope {slope}");
+        // Decays: after ten half-lives the offset is gone.
+        assert!((at(1.5, 0.0, -1.0, 8) - (-1.5)).abs() < 0.01);
+        // The time row is never touched.
+        let mut pose = vec![0.0; p];
+        pose[TIME_ROW] = 0.5;
+        s.apply(0.0, &mut pose);
+        assert_eq!(pose[TIME_ROW], 0.5);
+    }
+
+    #[test]
+    fn root_rotation_offset_is_a_rotation_applied_on_the_left() {
+        let p = 7;
+        let mut prev = PoseState::new(p);
+        let next = PoseState::new(p);
+        // The previous clip ends rolled 11 degrees; the next starts level.
+        let roll = exp_map_to_quat(Vec3::new(0.0, 0.0, 11f32.to_radians()));
+        prev.pose[3..6].copy_from_slice(&quat_to_exp_map(roll).to_array());
+        let mut s = SeamTransition::new(p, 0.15);
+        s.start(&prev, &next, p);
+        let mut pose = vec![0.0; p];
+        s.apply(0.0, &mut pose);
+        let q = exp_map_to_quat(Vec3::from_slice(&pose[3..6]));
+        assert!(q.angle_between(roll) < 1e-5);
+    }
+
+    #[test]
+    fn frames_chain_by_the_root_motion() {
+        let f = CycleFrame::default();
+        let m = RootMotion {
+            dx: 0.0,
+            dz: 1.0,
+            turn: std::f32::consts::FRAC_PI_2,
+        };
+        let g = f.next(&m).next(&m);
+        assert!(
+            (g.z - 1.0).abs() < 1e-6 && (g.x - 1.0).abs() < 1e-6,
+            "{g:?}"
+        );
+        assert!((g.heading - std::f32::consts::PI).abs() < 1e-6);
+        // A state at the end of the clip is at the origin of the next frame.
+        let mut s = PoseState::new(7);
+        s.pose[0..3].copy_from_slice(&[0.0, 0.9, 1.0]);
+        s.velocity[2] = 1.0;
+        s.into_next_frame(&m);
+        assert!(Vec3::from_slice(&s.pose[0..3]).distance(Vec3::new(0.0, 0.9, 0.0)) < 1e-6);
+        // Forward velocity in the old frame is sideways (to the right, -x) in the turned one.
+        assert!(
+            (s.velocity[0] + 1.0).abs() < 1e-6,
+            "{:?}",
+            &s.velocity[0..3]
+        );
+    }
+}

@@ -1,0 +1,166 @@
+//! `motion-lod quality MODEL`: the motion-quality meter over a grid of walks covering the data's
+//! controls, at every accuracy level (or one), beside the data's own takes.
+
+use std::path::PathBuf;
+
+use anyhow::{Context as _, bail};
+use clap::Args;
+use lod_policy::Detail;
+use motion_lod::MotionModel;
+use motion_lod::quality::{self, GridWalk, MotionQuality};
+use motion_lod::synth::WalkRequest;
+use serde::Serialize;
+
+/// Arguments of `motion-lod quality`.
+#[derive(Debug, Args)]
+pub struct QualityArgs {
+    /// The model file.
+    #[arg(value_name = "MODEL")]
+    pub model: PathBuf,
+    /// Only this accuracy level (0 = full detail; default: every level).
+    #[arg(long)]
+    pub level: Option<usize>,
+    /// Evaluated joints (default: all).
+    #[arg(long)]
+    pub joints: Option<usize>,
+    /// Cycles per walk (2 to 64).
+    #[arg(long, default_value_t = 4)]
+    pub cycles: usize,
+    /// Switch cycles without the seam transition (as the crowd does for far walkers).
+    #[arg(long)]
+    pub no_blend: bool,
+    /// Let feet slide as synthesized (no foot lock).
+    #[arg(long)]
+    pub no_foot_lock: bool,
+    /// Print one JSON document instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One measured walk.
+#[derive(Debug, Serialize)]
+struct Row {
+    walk: GridWalk,
+    level: usize,
+    joints: usize,
+    quality: MotionQuality,
+    cycle_seconds: f64,
+    data_cycle_seconds: Option<f64>,
+}
+
+/// Runs the subcommand.
+pub fn run(args: QualityArgs) -> anyhow::Result<()> {
+    if !(2..=64).contains(&args.cycles) {
+        bail!("--cycles {} is outside 2..=64", args.cycles);
+    }
+    let model = MotionModel::load(&args.model)
+        .with_context(|| format!("reading {}", args.model.display()))?;
+    let Some(reference) = model.report.quality.clone() else {
+        bail!(
+            "{} has no motion-quality reference: the build did not find the feet; rebuild it",
+            args.model.display()
+        );
+    };
+    let levels = model.lod.levels().len();
+    let chosen: Vec<usize> = match args.level {
+        Some(l) if l >= levels => bail!("--level {l}: the model has levels 0..{}", levels - 1),
+        Some(l) => vec![l],
+        None => (0..levels).collect(),
+    };
+    let joints = args
+        .joints
+        .unwrap_or(model.lod.joints())
+        .min(model.lod.joints());
+    let grid = quality::walk_grid(&model);
+    let mut rows = Vec::new();
+    for &level in &chosen {
+        for walk in &grid {
+            let req = WalkRequest {
+                controls: walk.controls,
+                detail: Detail::new(level, joints),
+                cycles: args.cycles,
+                fps: 30.0,
+                blend: !args.no_blend,
+                plant_feet: !args.no_foot_lock,
+            };
+            let w = model
+                .synthesize_walk(&req)
+                .with_context(|| format!("synthesizing `{}` at level {level}", walk.name))?;
+            let q = quality::measure_walk(&model, &w)
+                .with_context(|| format!("measuring `{}` at level {level}", walk.name))?;
+            let step = f64::from(walk.controls[0]).hypot(f64::from(walk.controls[1]));
+            rows.push(Row {
+                walk: walk.clone(),
+                level,
+                joints,
+                quality: q,
+                cycle_seconds: w.cycle_seconds,
+                data_cycle_seconds: reference.duration_for_step(step),
+            });
+        }
+    }
+    if args.json {
+        #[derive(Serialize)]
+        struct Doc<'a> {
+            reference: &'a quality::QualityReference,
+            walks: &'a [Row],
+        }
+        let mut reference = reference.clone();
+        reference.cycle_steps.clear();
+        println!(
+            "{}",
+            serde_json::to_string(&Doc {
+                reference: &reference,
+                walks: &rows
+            })?
+        );
+        return Ok(());
+    }
+    let m = &reference.median;
+    println!(
+        "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s, float {:.2} cm, facing {:.1} deg \
+         (range {:.1}..{:.1}), floor at {:.3} m",
+        reference.takes,
+        m.pop_cm,
+        m.skate_cm_s,
+        m.float_cm,
+        m.facing_deg,
+        reference.facing_range_deg.0,
+        reference.facing_range_deg.1,
+        reference.floor_m
+    );
+    println!(
+        "{:<16} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>12}",
+        "walk",
+        "level",
+        "pop",
+        "x data",
+        "seam",
+        "skate",
+        "x data",
+        "floor",
+        "float",
+        "facing",
+        "cycle/data"
+    );
+    for r in &rows {
+        let q = &r.quality;
+        println!(
+            "{:<16} {:>5} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.1} {:>12}",
+            r.walk.name,
+            r.level,
+            q.pop_cm,
+            q.pop_cm / m.pop_cm,
+            q.seam_pop_cm,
+            q.skate_cm_s,
+            q.skate_cm_s / m.skate_cm_s,
+            q.floor_offset_cm,
+            q.float_cm,
+            q.facing_deg,
+            r.data_cycle_seconds
+                .map(|d| format!("{:.2}/{:.2}", r.cycle_seconds, d))
+                .unwrap_or_default()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,662 @@
+//! The motion-quality meter, defined once beside the joint error ([`crate::metrics`]) and used by every
+//! test, table and the `quality` command. It sees what a viewer sees and a per-pose error cannot: a pop
+//! at a cycle seam, a sliding planted foot, feet that float or sink, a pelvis that crabs against its path,
+//! a cadence that does not fit the speed.
+//!
+//! It works on any motion given as world-frame pose vectors of a [`PoseLayout`] (`frames x dof`, metres,
+//! y up), synthesized or captured, after forward kinematics. With `h` = the frame step nearest 1/30 s
+//! (`k = max(1, round(1 / (30 dt)))` frames, so 30 fps data use neighbouring frames and 120 Hz data every
+//! fourth):
+//!
+//! - **pop** (cm per frame² at 30 fps): the largest joint acceleration,
+//!   `max_{f, j} |x_j(f + k) - 2 x_j(f) + x_j(f - k)| (1 / (30 k dt))^2`, over the measured joints
+//!   ([`measured_joints`]); **seam pop**: the same maximum over frames within `k` of a seam.
+//! - **foot skate** (cm/s): per foot, the lowest of its points (ankle, and toe when the skeleton has
+//!   one); while that point is within [`CONTACT_HEIGHT_M`] of the floor, its horizontal speed
+//!   `|x(f + k) - x(f - k)|_xz / (2 k dt)`; the mean over those (foot, frame) pairs.
+//! - **floor offset** (cm): the lowest point of both feet is at the floor at least once in every step.
+//!   Over windows of [`STEP_WINDOW_S`], the window's lowest height minus the floor: the median is the
+//!   offset (positive floats, negative sinks), the largest is the **float** (both feet off the floor
+//!   for a whole step).
+//! - **facing against travel** (degrees): the pelvis heading (perpendicular to the line from the right
+//!   hip to the left hip on the ground) minus the travel heading (the root's ground displacement over one
+//!   cycle centred on the frame), averaged over frames; the smallest and largest one-cycle means are
+//!   reported too.
+//! - **cycle duration** (s) against the data's cycles of similar step length (see
+//!   [`QualityReference::duration_for_step`]).
+//!
+//! The floor is the data's: [`QualityReference::floor_m`], measured on the training takes by the same
+//! window rule. Every figure is also reported as a ratio to the data's median ([`QualityReference`]),
+//! measured on the data's own takes (the steady walking stretch of every take that gave cycles).
+
+use glam::DVec3;
+use motion_io::{Feet, PoseLayout};
+use serde::{Deserialize, Serialize};
+
+use crate::metrics::measured_joints;
+
+/// A foot point counts as on the floor within this height above it (2 cm).
+pub const CONTACT_HEIGHT_M: f64 = 0.02;
+/// Window of the floor rule: at walking pace one foot is flat on the floor at least once in 0.5 s.
+pub const STEP_WINDOW_S: f64 = 0.5;
+/// The rate accelerations and speeds are taken at (frames per second).
+pub const REFERENCE_FPS: f64 = 30.0;
+
+/// The joints the meter reads: the two feet (ankle and optional toe) and the two hips.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FootJoints {
+    /// Points of the left foot (ankle, then toe when present).
+    pub left: Vec<usize>,
+    /// Points of the right foot.
+    pub right: Vec<usize>,
+    /// Left hip joint.
+    pub left_hip: usize,
+    /// Right hip joint.
+    pub right_hip: usize,
+}
+
+impl FootJoints {
+    /// The meter's joints from the feet found by [`motion_io::find_feet`].
+    pub fn from_feet(feet: &Feet) -> FootJoints {
+        FootJoints {
+            left: std::iter::once(feet.left_foot)
+                .chain(feet.left_toe)
+                .collect(),
+            right: std::iter::once(feet.right_foot)
+                .chain(feet.right_toe)
+                .collect(),
+            left_hip: feet.left_hip,
+            right_hip: feet.right_hip,
+        }
+    }
+
+    /// Every joint index is below `joints`.
+    pub fn fits(&self, joints: usize) -> bool {
+        self.left
+            .iter()
+            .chain(&self.right)
+            .chain([&self.left_hip, &self.right_hip])
+            .all(|&j| j < joints)
+            && !self.left.is_empty()
+            && !self.right.is_empty()
+    }
+}
+
+/// What the meter measured on one motion.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct MotionQuality {
+    /// Frames measured.
+    pub frames: usize,
+    /// Largest joint acceleration, cm per frame² at 30 fps.
+    pub pop_cm: f64,
+    /// Largest joint acceleration within one 30 fps frame of a seam (0 without seams).
+    pub seam_pop_cm: f64,
+    /// Mean horizontal speed of the lowest foot point while it is on the floor, cm/s.
+    pub skate_cm_s: f64,
+    /// Share of (foot, frame) pairs on the floor.
+    pub contact_share: f64,
+    /// Median over step windows of the lowest foot point above the floor, cm (negative: sinks).
+    pub floor_offset_cm: f64,
+    /// Largest step-window lowest point above the floor, cm (both feet in the air for a step).
+    pub float_cm: f64,
+    /// Deepest foot point below the floor, cm (0 when none sinks).
+    pub sink_cm: f64,
+    /// Mean pelvis heading minus travel heading, degrees (+ = facing left of the path).
+    pub facing_deg: f64,
+    /// Smallest mean facing against travel over one-cycle windows, degrees.
+    pub facing_min_deg: f64,
+    /// Largest mean facing against travel over one-cycle windows, degrees.
+    pub facing_max_deg: f64,
+}
+
+/// The data's own figures: the median over the training takes of each take's [`MotionQuality`], the
+/// floor, the range of facing against travel, and cycle durations by step length.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct QualityReference {
+    /// The feet and hips of the data's skeleton the meter reads.
+    pub feet: FootJoints,
+    /// Takes measured.
+    pub takes: usize,
+    /// The floor height (m) in the data's frame: median over takes of each take's floor.
+    pub floor_m: f64,
+    /// Median over takes of the per-take figures (the floor figures relative to each take's own floor).
+    pub median: MotionQuality,
+    /// The data's range of facing against travel, degrees: the 2nd percentile of the takes' smallest
+    /// one-cycle means and the 98th percentile of their largest.
+    pub facing_range_deg: (f64, f64),
+    /// `(step length m, duration s)` of every training cycle, sorted by step length.
+    pub cycle_steps: Vec<(f64, f64)>,
+}
+
+impl QualityReference {
+    /// Median duration of the data's cycles whose step length is within 10% of `step_m` (the 9 nearest
+    /// when fewer are that close); `None` without cycles.
+    pub fn duration_for_step(&self, step_m: f64) -> Option<f64> {
+        if self.cycle_steps.is_empty() {
+            return None;
+        }
+        let mut near: Vec<f64> = self
+            .cycle_steps
+            .iter()
+            .filter(|(s, _)| (s - step_m).abs() <= 0.1 * step_m.abs())
+            .map(|&(_, d)| d)
+            .collect();
+        if near.len() < 9 {
+            let mut by_dist: Vec<(f64, f64)> = self
+                .cycle_steps
+                .iter()
+                .map(|&(s, d)| ((s - step_m).abs(), d))
+                .collect();
+            by_dist.sort_by(|a, b| a.0.total_cmp(&b.0));
+            near = by_dist.iter().take(9).map(|&(_, d)| d).collect();
+        }
+        Some(median(&mut near))
+    }
+}
+
+/// Median of `v` (the mean of the two middle values for an even count; 0 when empty). Reorders `v`.
+pub fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Why a motion could not be measured.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum QualityError {
+    /// The poses do not fit the layout.
+    #[error("{len} pose values do not make frames of {dof} DOF")]
+    Shape {
+        /// Values given.
+        len: usize,
+        /// The layout's DOF.
+        dof: usize,
+    },
+    /// Too few frames for a second difference at the 30 fps step.
+    #[error("{frames} frames are too few to measure (at least {needed})")]
+    TooShort {
+        /// Frames given.
+        frames: usize,
+        /// Frames needed.
+        needed: usize,
+    },
+    /// A bad frame time or window.
+    #[error("invalid {what}: {value}")]
+    Bad {
+        /// What is invalid.
+        what: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A foot or hip joint is not in the skeleton.
+    #[error("foot joints {0:?} are not all in the skeleton")]
+    Joints(Box<FootJoints>),
+    /// A pose holds NaN or infinity.
+    #[error("frame {0} holds a non-finite value")]
+    NonFinite(usize),
+    /// The model carries no reference (built before format 4, or the feet were not found).
+    #[error("the model has no motion-quality reference (its feet were not found in the data)")]
+    NoReference,
+}
+
+/// The frame step nearest 1/30 s for frames `dt` seconds apart.
+pub fn step_frames(dt: f64) -> usize {
+    ((1.0 / (REFERENCE_FPS * dt)).round() as usize).max(1)
+}
+
+/// Ground heading (radians, 0 = +z, + = towards +x) of a horizontal vector.
+fn heading(v: DVec3) -> f64 {
+    v.x.atan2(v.z)
+}
+
+/// Measures one motion (module documentation).
+///
+/// `poses`: `frames x dof` world-frame pose vectors of `layout`; `dt`: seconds between frames;
+/// `floor_m`: the floor height (the data's, [`QualityReference::floor_m`]; `None` measures against
+/// the motion's own floor, as the reference does); `cycle_s`: the gait cycle duration, the window of
+/// the travel heading; `seams`: frames where one cycle hands over to the next.
+pub fn measure(
+    layout: &PoseLayout,
+    feet: &FootJoints,
+    poses: &[f64],
+    dt: f64,
+    floor_m: Option<f64>,
+    cycle_s: f64,
+    seams: &[usize],
+) -> Result<MotionQuality, QualityError> {
+    let dof = layout.dof();
+    if dof == 0 || poses.len() % dof != 0 {
+        return Err(QualityError::Shape {
+            len: poses.len(),
+            dof,
+        });
+    }
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(QualityError::Bad {
+            what: "frame time",
+            value: dt,
+        });
+    }
+    if !(cycle_s.is_finite() && cycle_s > 0.0) {
+        return Err(QualityError::Bad {
+            what: "cycle duration",
+            value: cycle_s,
+        });
+    }
+    let nj = layout.skeleton().joints.len();
+    if !feet.fits(nj) {
+        return Err(QualityError::Joints(Box::new(feet.clone())));
+    }
+    let n = poses.len() / dof;
+    let k = step_frames(dt);
+    if n < 2 * k + 1 {
+        return Err(QualityError::TooShort {
+            frames: n,
+            needed: 2 * k + 1,
+        });
+    }
+    if let Some(f) = poses
+        .chunks_exact(dof)
+        .position(|p| p.iter().any(|v| !v.is_finite()))
+    {
+        return Err(QualityError::NonFinite(f));
+    }
+    // World positions of every joint, frame by frame.
+    let mut x = vec![DVec3::ZERO; n * nj];
+    for (pose, out) in poses.chunks_exact(dof).zip(x.chunks_exact_mut(nj)) {
+        layout.joint_positions_f64(pose, out);
+    }
+    let at = |f: usize, j: usize| x[f * nj + j];
+
+    // Pop.
+    let measured = measured_joints(layout);
+    let scale = 100.0 / (REFERENCE_FPS * k as f64 * dt).powi(2);
+    let mut pop: f64 = 0.0;
+    let mut seam_pop: f64 = 0.0;
+    for f in k..n - k {
+        let a = measured
+            .iter()
+            .map(|&j| (at(f + k, j) - 2.0 * at(f, j) + at(f - k, j)).length())
+            .fold(0.0, f64::max)
+            * scale;
+        pop = pop.max(a);
+        if seams.iter().any(|&s| f + k >= s && f <= s + k) {
+            seam_pop = seam_pop.max(a);
+        }
+    }
+
+    // Lowest point of each foot, per frame.
+    let lowest = |f: usize, pts: &[usize]| -> usize {
+        *pts.iter()
+            .min_by(|&&a, &&b| at(f, a).y.total_cmp(&at(f, b).y))
+            .expect("a foot has a point")
+    };
+    let both_low: Vec<f64> = (0..n)
+        .map(|f| {
+            at(f, lowest(f, &feet.left))
+                .y
+                .min(at(f, lowest(f, &feet.right)).y)
+        })
+        .collect();
+    let window = ((STEP_WINDOW_S / dt).round() as usize).clamp(1, n);
+    let mut window_mins: Vec<f64> = both_low
+        .chunks(window)
+        .filter(|c| c.len() * 2 >= window)
+        .map(|c| c.iter().copied().fold(f64::INFINITY, f64::min))
+        .collect();
+    if window_mins.is_empty() {
+        window_mins.push(both_low.iter().copied().fold(f64::INFINITY, f64::min));
+    }
+    let float_m = window_mins
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    let offset_m = median(&mut window_mins.clone());
+    let floor = floor_m.unwrap_or(offset_m);
+    let sink_m = both_low.iter().map(|&y| floor - y).fold(0.0, f64::max);
+
+    // Skate.
+    let (mut skate_sum, mut contacts) = (0.0, 0usize);
+    for pts in [&feet.left, &feet.right] {
+        for f in k..n - k {
+            let j = lowest(f, pts);
+            if at(f, j).y - floor < CONTACT_HEIGHT_M {
+                let d = at(f + k, j) - at(f - k, j);
+                skate_sum += DVec3::new(d.x, 0.0, d.z).length() / (2.0 * k as f64 * dt);
+                contacts += 1;
+            }
+        }
+    }
+
+    // Facing against travel.
+    let root = layout.root();
+    let half = ((0.5 * cycle_s / dt).round() as usize).max(1);
+    let mut facing = Vec::new();
+    for f in 0..n {
+        let (a, b) = (f.saturating_sub(half), (f + half).min(n - 1));
+        let travel = at(b, root) - at(a, root);
+        let travel = DVec3::new(travel.x, 0.0, travel.z);
+        if b - a < half || travel.length() < 1e-3 {
+            continue;
+        }
+        let across = at(f, feet.left_hip) - at(f, feet.right_hip);
+        let forward = DVec3::new(across.x, 0.0, across.z).cross(DVec3::Y);
+        if forward.length() < 1e-6 {
+            continue;
+        }
+        facing.push(motion_io::expmap::wrap_angle(
+            heading(forward) - heading(travel),
+        ));
+    }
+    let mean_facing = if facing.is_empty() {
+        0.0
+    } else {
+        facing.iter().sum::<f64>() / facing.len() as f64
+    };
+    let cycle_frames = (2 * half).max(1);
+    let window_means: Vec<f64> = facing
+        .chunks(cycle_frames)
+        .filter(|c| 2 * c.len() >= cycle_frames)
+        .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+        .collect();
+    let facing_min = window_means.iter().copied().fold(mean_facing, f64::min);
+    let facing_max = window_means.iter().copied().fold(mean_facing, f64::max);
+
+    Ok(MotionQuality {
+        frames: n,
+        pop_cm: pop,
+        seam_pop_cm: seam_pop,
+        skate_cm_s: if contacts > 0 {
+            100.0 * skate_sum / contacts as f64
+        } else {
+            0.0
+        },
+        contact_share: contacts as f64 / (2 * (n - 2 * k)) as f64,
+        floor_offset_cm: 100.0 * (offset_m - floor),
+        float_cm: 100.0 * (float_m - floor),
+        sink_cm: 100.0 * sink_m,
+        facing_deg: mean_facing.to_degrees(),
+        facing_min_deg: facing_min.to_degrees(),
+        facing_max_deg: facing_max.to_degrees(),
+    })
+}
+
+/// The data's reference from per-take measurements (each against its own floor) and every cycle's
+/// `(step length, duration)`.
+pub fn reference_from_takes(
+    feet: &FootJoints,
+    takes: &[(MotionQuality, f64)],
+    mut cycle_steps: Vec<(f64, f64)>,
+) -> Option<QualityReference> {
+    if takes.is_empty() {
+        return None;
+    }
+    let pick = |f: &dyn Fn(&MotionQuality) -> f64| {
+        let mut v: Vec<f64> = takes.iter().map(|(q, _)| f(q)).collect();
+        median(&mut v)
+    };
+    let mut floors: Vec<f64> = takes.iter().map(|&(_, fl)| fl).collect();
+    let percentile = |f: &dyn Fn(&MotionQuality) -> f64, q: f64| {
+        let mut v: Vec<f64> = takes.iter().map(|(m, _)| f(m)).collect();
+        v.sort_by(f64::total_cmp);
+        v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)]
+    };
+    let facing_range = (
+        percentile(&|m| m.facing_min_deg, 0.02),
+        percentile(&|m| m.facing_max_deg, 0.98),
+    );
+    cycle_steps.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Some(QualityReference {
+        feet: feet.clone(),
+        takes: takes.len(),
+        floor_m: median(&mut floors),
+        median: MotionQuality {
+            frames: pick(&|q| q.frames as f64) as usize,
+            pop_cm: pick(&|q| q.pop_cm),
+            seam_pop_cm: 0.0,
+            skate_cm_s: pick(&|q| q.skate_cm_s),
+            contact_share: pick(&|q| q.contact_share),
+            floor_offset_cm: pick(&|q| q.floor_offset_cm),
+            float_cm: pick(&|q| q.float_cm),
+            sink_cm: pick(&|q| q.sink_cm),
+            facing_deg: pick(&|q| q.facing_deg),
+            facing_min_deg: pick(&|q| q.facing_min_deg),
+            facing_max_deg: pick(&|q| q.facing_max_deg),
+        },
+        facing_range_deg: facing_range,
+        cycle_steps,
+    })
+}
+
+/// The floor of a motion by the meter's window rule: the median over [`STEP_WINDOW_S`] windows of the
+/// lowest foot point (m).
+pub fn floor_of(
+    layout: &PoseLayout,
+    feet: &FootJoints,
+    poses: &[f64],
+    dt: f64,
+    cycle_s: f64,
+) -> Result<f64, QualityError> {
+    let q = measure(layout, feet, poses, dt, Some(0.0), cycle_s, &[])?;
+    Ok(q.floor_offset_cm / 100.0)
+}
+
+/// A named walk of the quality grid: controls `(dx m, dz m, turn rad, height m)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GridWalk {
+    /// What the walk is (`straight`, `turn +30`, `corner +turn`, ...).
+    pub name: String,
+    /// Controls of every cycle.
+    pub controls: [f32; 4],
+}
+
+/// The walks the `quality` command and the tables measure, covering the data's hull: straight at the
+/// data's median step, turns of 30 degrees both ways and sidesteps of 0.3 m (each pulled inside the
+/// data's range), slow and fast (the 10th and 90th percentile of dz), and the training samples that
+/// reach furthest along each of the six control directions (`+-dx`, `+-dz`, `+-turn`, in units of each
+/// control's range): the corners of the hull, inside it by construction.
+pub fn walk_grid(model: &crate::MotionModel) -> Vec<GridWalk> {
+    let cs = model.lod.controls();
+    let s = model.lod.s();
+    let d = model.lod.d();
+    let raw = |i: usize, k: usize| -> f32 {
+        if cs.scale[k] > 0.0 {
+            cs.samples[i + s * k] / cs.scale[k] + cs.offset[k]
+        } else {
+            cs.offset[k]
+        }
+    };
+    let pct = |k: usize, q: f64| -> f32 {
+        let mut v: Vec<f64> = (0..s).map(|i| f64::from(raw(i, k))).collect();
+        v.sort_by(f64::total_cmp);
+        v[((q * (s - 1) as f64).round() as usize).min(s - 1)] as f32
+    };
+    let height = 0.5 * (cs.min[3] + cs.max[3]);
+    let dz = pct(1, 0.5);
+    let inside = |k: usize, v: f32| v.clamp(0.9 * cs.min[k], 0.9 * cs.max[k]);
+    let mut grid = vec![
+        ("straight".to_string(), [0.0, dz, 0.0, height]),
+        (
+            "turn +30".into(),
+            [0.0, dz, inside(2, 30f32.to_radians()), height],
+        ),
+        (
+            "turn -30".into(),
+            [0.0, dz, inside(2, -30f32.to_radians()), height],
+        ),
+        ("sidestep +0.3".into(), [inside(0, 0.3), dz, 0.0, height]),
+        ("sidestep -0.3".into(), [inside(0, -0.3), dz, 0.0, height]),
+        ("slow".into(), [0.0, pct(1, 0.1), 0.0, height]),
+        ("fast".into(), [0.0, pct(1, 0.9), 0.0, height]),
+    ];
+    for (k, name) in [(0, "dx"), (1, "dz"), (2, "turn")] {
+        if k >= d || cs.max[k] <= cs.min[k] {
+            continue;
+        }
+        for sign in [1.0f32, -1.0] {
+            let span = |k: usize| (cs.max[k] - cs.min[k]).max(f32::EPSILON);
+            // The sample furthest along +-k, ties broken by the smallest other controls.
+            let best = (0..s)
+                .max_by(|&a, &b| {
+                    let score = |i: usize| {
+                        sign * (raw(i, k) - 0.5 * (cs.min[k] + cs.max[k])) / span(k)
+                            - 0.25
+                                * (0..3)
+                                    .filter(|&o| o != k)
+                                    .map(|o| {
+                                        ((raw(i, o) - 0.5 * (cs.min[o] + cs.max[o])) / span(o))
+                                            .abs()
+                                    })
+                                    .sum::<f32>()
+                    };
+                    score(a).total_cmp(&score(b)).then(b.cmp(&a))
+                })
+                .expect("a model has samples");
+            let c = [raw(best, 0), raw(best, 1), raw(best, 2), height];
+            let sign = if sign > 0.0 { '+' } else { '-' };
+            grid.push((format!("corner {sign}{name}"), c));
+        }
+    }
+    grid.into_iter()
+        .map(|(name, controls)| GridWalk { name, controls })
+        .collect()
+}
+
+/// Measures a synthesized walk against the model's reference floor (the walk's own without a
+/// reference), with its cycle seams.
+pub fn measure_walk(
+    model: &crate::MotionModel,
+    walk: &crate::synth::Walk,
+) -> Result<MotionQuality, QualityError> {
+    let reference = model
+        .report
+        .quality
+        .as_ref()
+        .ok_or(QualityError::NoReference)?;
+    let cycles = ((walk.poses.len() / model.layout.dof()) as f64 * walk.frame_time
+        / walk.cycle_seconds)
+        .floor() as usize;
+    let seams: Vec<usize> = (1..=cycles)
+        .map(|c| (c as f64 * walk.cycle_seconds / walk.frame_time).round() as usize)
+        .collect();
+    measure(
+        &model.layout,
+        &reference.feet,
+        &walk.poses,
+        walk.frame_time,
+        Some(reference.floor_m),
+        walk.cycle_seconds,
+        &seams,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use motion_io::bvh::parse_bvh;
+
+    /// Hips -> thigh -> shin -> foot -> toe on each side, metres, feet 0.05 m above y = 0 in the rest pose.
+    fn legs() -> (PoseLayout, FootJoints) {
+        let leg = |side: &str, x: f64| {
+            format!(
+                "JOINT {side}Thigh\n{{\nOFFSET {x} 0 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+                 JOINT {side}Shin\n{{\nOFFSET 0 -0.45 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+                 JOINT {side}Foot\n{{\nOFFSET 0 -0.4 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+                 JOINT {side}Toe\n{{\nOFFSET 0 0 0.1\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+                 End Site\n{{\nOFFSET 0 0 0.05\n}}\n}}\n}}\n}}\n}}\n"
+            )
+        };
+        let text = format!(
+            "HIERARCHY\nROOT Hips\n{{\nOFFSET 0 0 0\nCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n{}{}}}\nMOTION\nFrames: 1\nFrame Time: 0.0333333\n{}\n",
+            leg("Left", 0.1),
+            leg("Right", -0.1),
+            "0 0.9 0 0 0 0 ".to_string() + &"0 ".repeat(24)
+        );
+        let motion = parse_bvh(&text).expect("parses");
+        let layout = PoseLayout::new(&motion.skeleton, 1.0).expect("layout");
+        let feet = motion_io::find_feet(&motion.skeleton, &Default::default()).expect("feet");
+        (layout, FootJoints::from_feet(&feet))
+    }
+
+    /// `n` frames of the rest pose with the root at `root(f)`.
+    fn track(layout: &PoseLayout, n: usize, root: impl Fn(usize) -> [f64; 3]) -> Vec<f64> {
+        let rest = layout.rest_pose();
+        (0..n)
+            .flat_map(|f| {
+                let mut p = rest.clone();
+                p[0..3].copy_from_slice(&root(f));
+                p
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_gliding_body_skates_at_its_speed_and_does_not_pop() {
+        let (layout, feet) = legs();
+        let dt = 1.0 / 30.0;
+        // Gliding forward at 0.6 m/s with both feet 5 cm above y = 0: on the floor, skating.
+        let poses = track(&layout, 60, |f| [0.0, 0.9, 0.6 * f as f64 * dt]);
+        let q = measure(&layout, &feet, &poses, dt, Some(0.05), 1.0, &[]).unwrap();
+        assert!(q.pop_cm < 1e-9, "{q:?}");
+        assert!((q.skate_cm_s - 60.0).abs() < 1e-6, "{q:?}");
+        assert!(q.floor_offset_cm.abs() < 1e-9 && q.sink_cm < 1e-9, "{q:?}");
+        assert!(q.facing_deg.abs() < 1e-6, "{q:?}");
+        // Against a floor 3 cm lower the feet float 3 cm: not on the floor, no skate.
+        let q = measure(&layout, &feet, &poses, dt, Some(0.02), 1.0, &[]).unwrap();
+        assert_eq!(q.skate_cm_s, 0.0);
+        assert!((q.floor_offset_cm - 3.0).abs() < 1e-9 && (q.float_cm - 3.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_jump_at_a_seam_is_a_seam_pop_at_any_frame_rate() {
+        let (layout, feet) = legs();
+        for fps in [30.0, 120.0] {
+            let dt = 1.0 / fps;
+            let seam = (1.0 / dt) as usize;
+            // The body jumps 6 cm sideways at the seam.
+            let poses = track(&layout, 2 * seam, |f| {
+                [if f >= seam { 0.06 } else { 0.0 }, 0.9, 0.0]
+            });
+            let q = measure(&layout, &feet, &poses, dt, Some(0.05), 1.0, &[seam]).unwrap();
+            // Second difference over the 30 fps step: 6 cm.
+            assert!((q.pop_cm - 6.0).abs() < 1e-6, "{fps}: {q:?}");
+            assert_eq!(q.seam_pop_cm, q.pop_cm);
+        }
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let (layout, feet) = legs();
+        let poses = track(&layout, 10, |_| [0.0, 0.9, 0.0]);
+        assert!(matches!(
+            measure(&layout, &feet, &poses[1..], 0.1, None, 1.0, &[]),
+            Err(QualityError::Shape { .. })
+        ));
+        assert!(measure(&layout, &feet, &poses, 0.0, None, 1.0, &[]).is_err());
+        assert!(matches!(
+            measure(
+                &layout,
+                &feet,
+                &poses[..2 * layout.dof()],
+                1.0 / 120.0,
+                None,
+                1.0,
+                &[]
+            ),
+            Err(QualityError::TooShort { .. })
+        ));
+        let mut nan = poses.clone();
+        nan[3 * layout.dof() + 8] = f64::NAN;
+        assert_eq!(
+            measure(&layout, &feet, &nan, 0.1, None, 1.0, &[]),
+            Err(QualityError::NonFinite(3))
+        );
+    }
+}
