@@ -232,7 +232,7 @@ fn real_model_file_is_checked_like_any_other() {
     use motion_lod::{BuildConfig, MotionModel};
 
     if !Path::new(FIXTURES).join("walk_p160_t01.bvh").exists() {
-        println!("skipped: fixtures/ not found");
+        motion_io::test_data::missing("fixtures/ not found");
         return;
     }
     let spec = DataSpec {
