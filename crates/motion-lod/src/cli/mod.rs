@@ -8,4 +8,5 @@ pub mod data;
 pub mod demo;
 pub mod eval;
 pub mod info;
+pub mod ranges;
 pub mod synth;
