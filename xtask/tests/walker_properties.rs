@@ -346,7 +346,7 @@ fn fixture_set_is_small_enough_to_commit() {
 fn committed_fixtures_match_the_generator() {
     let dir = fixtures::default_dir();
     if !dir.join("controls.csv").exists() {
-        println!("skipped: fixtures/ not generated yet (run `cargo xtask fixtures`)");
+        motion_io::test_data::missing("fixtures/ not generated yet (run `cargo xtask fixtures`)");
         return;
     }
     let files = fixtures::generate_all(SEED).unwrap();

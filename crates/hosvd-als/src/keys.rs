@@ -74,6 +74,19 @@ pub struct KeyLevel {
     pub threshold: Option<f64>,
     /// ALS runs spent on this level (confirmations of candidate triples).
     pub als_runs: usize,
+    /// True when the accepted ALS run met its tolerance; false when it stopped at the iteration
+    /// cap ([`AlsOptions::max_iter`]) with the core norm still changing.
+    pub converged: bool,
+}
+
+impl KeyLevels {
+    /// Indices of the key levels whose accepted ALS run stopped at the iteration cap without
+    /// meeting its tolerance (empty when every key converged).
+    pub fn unconverged(&self) -> Vec<usize> {
+        (0..self.levels.len())
+            .filter(|&k| !self.levels[k].converged)
+            .collect()
+    }
 }
 
 /// The result of [`key_levels`]: level 0 has the max ranks, the last level the min ranks.
@@ -181,6 +194,7 @@ pub fn key_levels(x: &Tensor3, cfg: &KeySearchConfig) -> Result<KeyLevels, Hosvd
         iterations: first.1.iterations,
         threshold: None,
         als_runs: 1,
+        converged: first.1.converged,
     }];
 
     for idx in 1..n_levels.saturating_sub(1) {
@@ -220,6 +234,7 @@ pub fn key_levels(x: &Tensor3, cfg: &KeySearchConfig) -> Result<KeyLevels, Hosvd
             iterations: accepted.1.iterations,
             threshold: Some(threshold),
             als_runs,
+            converged: accepted.1.converged,
         });
     }
     if let Some((t, rep)) = last {
@@ -231,6 +246,7 @@ pub fn key_levels(x: &Tensor3, cfg: &KeySearchConfig) -> Result<KeyLevels, Hosvd
             iterations: rep.iterations,
             threshold: None,
             als_runs: 1,
+            converged: rep.converged,
         });
     }
     Ok(KeyLevels {

@@ -49,10 +49,24 @@ fn key_levels_decrease_in_ranks_and_increase_in_error() {
     for (idx, l) in keys.levels.iter().enumerate().take(5).skip(1) {
         let t = l.threshold.unwrap();
         assert!((t - (idx + 1) as f64 * keys.c_e * e1).abs() <= 1e-9 * t);
-        assert!(l.mse > t || l.als_runs >= 1);
+        assert!(l.als_runs >= 1, "level {idx} was never confirmed by ALS");
+        // A key is accepted when its ALS error exceeds the threshold, or when the ranks left above
+        // the minimum are only enough for the levels still to come (one step each).
+        let slack: usize = (0..3).map(|n| l.ranks[n] - c.min_ranks[n]).sum();
+        let reserve = 6 - 1 - idx;
+        assert!(
+            l.mse > t || slack <= reserve,
+            "level {idx}: mse {} under its threshold {t} with {slack} rank steps left for {reserve} levels",
+            l.mse
+        );
         assert_eq!(l.tucker.ranks(), l.ranks);
         assert!((l.tucker.explicit_mse(&x).unwrap() - l.mse).abs() <= 1e-8 * l.mse.max(1e-12));
     }
+    assert!(
+        keys.unconverged().is_empty(),
+        "ALS hit its cap at keys {:?}",
+        keys.unconverged()
+    );
     // Deterministic.
     assert_eq!(key_levels(&x, &c).unwrap(), keys);
 }
@@ -145,4 +159,32 @@ fn storage_counts_cores_and_factors() {
     assert_eq!(key_levels_bytes(&keys, Precision::F32) * 2, sum);
     let acc = hybrid_levels(&keys, 9);
     assert!(all_levels_bytes(x.dims(), &acc, Precision::F64) > sum);
+}
+
+#[test]
+fn convergence_is_reported_per_key() {
+    let x = data();
+    let converged = key_levels(&x, &cfg(3, [12, 12, 14], [3, 3, 4])).unwrap();
+    for (k, l) in converged.levels.iter().enumerate() {
+        assert!(
+            l.converged,
+            "key {k} did not converge in {} sweeps",
+            l.iterations
+        );
+        assert!(l.iterations < AlsOptions::default().max_iter, "key {k}");
+    }
+    // One sweep with tolerance 0 (which no sweep meets): every key stops at the cap and says so.
+    let capped = KeySearchConfig {
+        als: AlsOptions {
+            tol: 0.0,
+            max_iter: 1,
+        },
+        ..cfg(3, [12, 12, 14], [3, 3, 4])
+    };
+    let keys = key_levels(&x, &capped).unwrap();
+    assert_eq!(
+        keys.unconverged(),
+        (0..keys.levels.len()).collect::<Vec<_>>()
+    );
+    assert!(keys.levels.iter().all(|l| l.iterations == 1));
 }

@@ -52,6 +52,25 @@ pub enum ModelError {
         /// Number of key tensors.
         keys: usize,
     },
+    /// Accuracy levels are out of key order (a level truncates an earlier key than the level
+    /// before it).
+    #[error(
+        "accuracy level {level} truncates key {key}, after a level of key {previous}: levels go from key 0 down"
+    )]
+    KeyOrder {
+        /// Accuracy level index.
+        level: usize,
+        /// Key it truncates.
+        key: usize,
+        /// Key of the level before it.
+        previous: usize,
+    },
+    /// Dimensions whose product (an array's size) overflows the address space.
+    #[error("{what}: its dimensions are too large to hold in memory")]
+    TooLarge {
+        /// Which array.
+        what: String,
+    },
     /// The DOF row layout is inconsistent (`always_rows`, `rows_per_joint` and `P`).
     #[error("row layout: {0}")]
     RowLayout(String),

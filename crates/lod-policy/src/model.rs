@@ -224,6 +224,13 @@ fn check_array(what: &str, v: &[f32], expected: usize) -> Result<(), ModelError>
     check_finite(|| what.to_string(), v)
 }
 
+/// `a * b`, or an error naming `what` when the product does not fit in memory sizes (a hostile
+/// file can claim any dimensions).
+fn product(what: impl FnOnce() -> String, a: usize, b: usize) -> Result<usize, ModelError> {
+    a.checked_mul(b)
+        .ok_or_else(|| ModelError::TooLarge { what: what() })
+}
+
 fn positive(what: &str, v: usize) -> Result<(), ModelError> {
     if v == 0 {
         return Err(ModelError::ZeroSize {
@@ -247,10 +254,12 @@ impl LodModel {
     /// Validates `parts` and builds the model.
     ///
     /// Checks: positive sizes; `6 < always_rows <= P` and `(P - always_rows)` divisible by
-    /// `rows_per_joint`; every key's ranks within `(P, T, S)` and every array's length against
-    /// its dimensions; accuracy levels naming an existing key with ranks within it; control
-    /// bounds `min <= max`, scales `>= 0`; error tables of the right length and non-negative; and
-    /// every value finite (the variogram is checked at `h = 0` and at the sample spread).
+    /// `rows_per_joint`; every key's ranks within `(P, T, S)` and within the previous key's (keys
+    /// go from the largest down), and every array's length against its dimensions (sizes whose
+    /// product overflows are an error, not a panic); accuracy levels naming an existing key with
+    /// ranks within it, in key order; a valid variogram ([`Variogram::validate`]); control bounds
+    /// `min <= max`, scales `>= 0`; error tables of the right length and non-negative; and every
+    /// value finite (the variogram is also evaluated at `h = 0` and at the sample spread).
     pub fn new(parts: ModelParts) -> Result<LodModel, ModelError> {
         let ModelParts {
             p,
@@ -293,15 +302,36 @@ impl LodModel {
             rank_limit(format!("key {k} R_P"), r.p, p)?;
             rank_limit(format!("key {k} R_T"), r.t, t)?;
             rank_limit(format!("key {k} R_S"), r.s, s)?;
-            check_array(&format!("key {k} core"), &key.core, r.core_len())?;
-            check_array(&format!("key {k} u_p"), &key.u_p, p * r.p)?;
-            check_array(&format!("key {k} u_t"), &key.u_t, t * r.t)?;
+            if let Some(prev) = k.checked_sub(1).map(|j| parts.keys[j].ranks) {
+                // Keys go from the largest down.
+                let j = k - 1;
+                rank_limit(format!("key {k} R_P (keys shrink: key {j}'s)"), r.p, prev.p)?;
+                rank_limit(format!("key {k} R_T (keys shrink: key {j}'s)"), r.t, prev.t)?;
+                rank_limit(format!("key {k} R_S (keys shrink: key {j}'s)"), r.s, prev.s)?;
+            }
+            let name = |a: &'static str| move || format!("key {k} {a}");
+            let core_len = product(name("core"), product(name("core"), r.p, r.t)?, r.s)?;
+            check_array(&format!("key {k} core"), &key.core, core_len)?;
+            check_array(
+                &format!("key {k} u_p"),
+                &key.u_p,
+                product(name("u_p"), p, r.p)?,
+            )?;
+            check_array(
+                &format!("key {k} u_t"),
+                &key.u_t,
+                product(name("u_t"), t, r.t)?,
+            )?;
             check_array(
                 &format!("key {k} projection"),
                 &key.projection,
-                r.s * (s + 1),
+                product(name("projection"), r.s, s.saturating_add(1))?,
             )?;
-            check_array(&format!("key {k} trend"), &key.trend, r.s * (d + 1))?;
+            check_array(
+                &format!("key {k} trend"),
+                &key.trend,
+                product(name("trend"), r.s, d.saturating_add(1))?,
+            )?;
             max_ranks.p = max_ranks.p.max(r.p);
             max_ranks.t = max_ranks.t.max(r.t);
             max_ranks.s = max_ranks.s.max(r.s);
@@ -315,6 +345,15 @@ impl LodModel {
             rank_limit(format!("level {l} r_P"), level.ranks.p, key.ranks.p)?;
             rank_limit(format!("level {l} r_T"), level.ranks.t, key.ranks.t)?;
             rank_limit(format!("level {l} r_S"), level.ranks.s, key.ranks.s)?;
+            if let Some(prev) = l.checked_sub(1).map(|m| parts.levels[m].key)
+                && level.key < prev
+            {
+                return Err(ModelError::KeyOrder {
+                    level: l,
+                    key: level.key,
+                    previous: prev,
+                });
+            }
         }
         if !(parts.time_scale.is_finite() && parts.time_scale > 0.0) {
             return Err(ModelError::NonFinite {
@@ -331,12 +370,21 @@ impl LodModel {
     }
 
     fn check_controls(c: &ControlSpace, s: usize, d: usize) -> Result<(), ModelError> {
+        c.variogram
+            .validate()
+            .map_err(|e| ModelError::Controls(format!("variogram: {e}")))?;
         check_array("controls offset", &c.offset, d)?;
         check_array("controls scale", &c.scale, d)?;
         check_array("controls min", &c.min, d)?;
         check_array("controls max", &c.max, d)?;
-        check_array("controls samples", &c.samples, s * d)?;
-        check_array("controls projection", &c.projection, (d + 1) * (s + 1))?;
+        let samples = product(|| "controls samples".into(), s, d)?;
+        check_array("controls samples", &c.samples, samples)?;
+        let projection = product(
+            || "controls projection".into(),
+            d.saturating_add(1),
+            s.saturating_add(1),
+        )?;
+        check_array("controls projection", &c.projection, projection)?;
         for k in 0..d {
             if c.scale[k] < 0.0 {
                 return Err(ModelError::Controls(format!(

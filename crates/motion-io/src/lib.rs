@@ -41,6 +41,7 @@ mod folder;
 mod motion;
 pub mod pose;
 mod skeleton;
+pub mod test_data;
 pub mod units;
 
 pub use bvh::{BvhError, BvhErrorKind, parse_bvh, read_bvh, to_bvh_string, write_bvh};
@@ -50,6 +51,8 @@ pub use cycles::{
 };
 pub use folder::{FolderReport, read_folder};
 pub use motion::Motion;
-pub use pose::{PoseError, PoseLayout, align_exp_maps, align_sequence, unwrap_exp_maps};
+pub use pose::{
+    PoseError, PoseLayout, PoseLayoutParts, align_exp_maps, align_sequence, unwrap_exp_maps,
+};
 pub use skeleton::{Channel, Joint, Skeleton, SkeletonError, Transform, axis_rotation};
 pub use units::{detect_units_per_metre, motion_root, to_metres};

@@ -81,6 +81,10 @@ pub enum PoseError {
         /// Index of the value.
         index: usize,
     },
+    /// Stored layout parts that do not describe a layout of their skeleton
+    /// ([`PoseLayout::from_parts`]).
+    #[error("invalid pose layout: {0}")]
+    BadLayout(String),
 }
 
 /// How a joint is evaluated by the layout's forward kinematics.
@@ -103,7 +107,11 @@ enum Role {
 /// joints are the joints below the root whose rotation channels vary; the others keep the constant
 /// rotation of a template frame. Joint translations are the OFFSETs, or for joints with position
 /// channels the template frame's values.
+///
+/// Serialises as [`PoseLayoutParts`] (what it is built from); deserialisation validates them and
+/// derives the rest, as [`PoseLayout::from_parts`] does.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "PoseLayoutParts", into = "PoseLayoutParts")]
 pub struct PoseLayout {
     skeleton: Skeleton,
     units_per_metre: f64,
@@ -123,6 +131,48 @@ pub struct PoseLayout {
     offset_m_f32: Vec<Vec3>,
     offset_m: Vec<DVec3>,
 }
+
+/// What a [`PoseLayout`] is made of, as stored in files: everything else is derived from these.
+///
+/// Nothing here is validated; [`PoseLayout::from_parts`] does that.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PoseLayoutParts {
+    /// The skeleton.
+    pub skeleton: Skeleton,
+    /// File units per metre (positive, finite).
+    pub units_per_metre: f64,
+    /// Skeleton index of the motion root.
+    pub root: usize,
+    /// Rotating joints (skeleton indices below the root, each with rotation channels) in row order.
+    pub joint_order: Vec<usize>,
+    /// Channel values used for everything the pose vector does not hold (one per channel).
+    pub template: Vec<f64>,
+    /// Rest local rotation of every joint (unit quaternions, one per joint).
+    pub rest: Vec<DQuat>,
+}
+
+impl TryFrom<PoseLayoutParts> for PoseLayout {
+    type Error = PoseError;
+    fn try_from(parts: PoseLayoutParts) -> Result<PoseLayout, PoseError> {
+        PoseLayout::from_parts(parts)
+    }
+}
+
+impl From<PoseLayout> for PoseLayoutParts {
+    fn from(layout: PoseLayout) -> PoseLayoutParts {
+        PoseLayoutParts {
+            skeleton: layout.skeleton,
+            units_per_metre: layout.units_per_metre,
+            root: layout.root,
+            joint_order: layout.order,
+            template: layout.template,
+            rest: layout.rest,
+        }
+    }
+}
+
+/// Largest `| |q| - 1 |` accepted for a stored rest rotation.
+const UNIT_TOLERANCE: f64 = 1e-6;
 
 /// Rotation channels of joint `j` vary more than `tol` degrees over the motions.
 fn channel_ranges(motions: &[&Motion]) -> (Vec<f64>, Vec<f64>) {
@@ -259,6 +309,95 @@ impl PoseLayout {
                 layout.rest[j] = DQuat::from_vec4(s).normalize();
             }
         }
+        layout.refresh_f32();
+        Ok(layout)
+    }
+
+    /// Validates stored parts and derives the layout from them (the inverse of
+    /// `PoseLayoutParts::from`): a valid skeleton ([`Skeleton::validate`]: one root, parents in
+    /// range and before their children, finite offsets); positive finite units; the root one of
+    /// its joints; a finite template with one value per channel; a joint order of distinct joints
+    /// below the root, each with rotation channels; and one unit rest rotation per joint. Each
+    /// failure names the joint or value concerned.
+    pub fn from_parts(parts: PoseLayoutParts) -> Result<PoseLayout, PoseError> {
+        let PoseLayoutParts {
+            skeleton,
+            units_per_metre,
+            root,
+            joint_order,
+            template,
+            rest,
+        } = parts;
+        skeleton.validate()?;
+        let nj = skeleton.joints.len();
+        let bad = |m: String| Err(PoseError::BadLayout(m));
+        if root >= nj {
+            return bad(format!(
+                "root joint {root} is not one of the skeleton's {nj} joints"
+            ));
+        }
+        let channels = skeleton.channel_count();
+        if template.len() != channels {
+            return Err(PoseError::Length {
+                what: "template frame (one value per channel)",
+                expected: channels,
+                found: template.len(),
+            });
+        }
+        if let Some(index) = template.iter().position(|v| !v.is_finite()) {
+            return Err(PoseError::NonFinite {
+                what: "template frame",
+                index,
+            });
+        }
+        let mut seen = vec![false; nj];
+        for (k, &j) in joint_order.iter().enumerate() {
+            if j >= nj {
+                return bad(format!(
+                    "joint order entry {k} names joint {j}; the skeleton has {nj} joints"
+                ));
+            }
+            let name = &skeleton.joints[j].name;
+            if j == root || !skeleton.is_ancestor_or_self(root, j) {
+                return bad(format!(
+                    "joint order entry {k}: joint {j} ({name}) is not below the root joint {root}"
+                ));
+            }
+            if std::mem::replace(&mut seen[j], true) {
+                return bad(format!(
+                    "joint order entry {k}: joint {j} ({name}) is listed twice"
+                ));
+            }
+            if !skeleton.joints[j].channels.iter().any(|c| c.is_rotation()) {
+                return bad(format!(
+                    "joint order entry {k}: joint {j} ({name}) has no rotation channels"
+                ));
+            }
+        }
+        if rest.len() != nj {
+            return Err(PoseError::Length {
+                what: "rest rotations (one per joint)",
+                expected: nj,
+                found: rest.len(),
+            });
+        }
+        for (j, q) in rest.iter().enumerate() {
+            if !q.is_finite() || (q.length() - 1.0).abs() > UNIT_TOLERANCE {
+                return bad(format!(
+                    "rest rotation of joint {j} ({}) is not a unit quaternion: {q:?}",
+                    skeleton.joints[j].name
+                ));
+            }
+        }
+        let mut layout = Self::build(
+            skeleton,
+            units_per_metre,
+            root,
+            &[],
+            template,
+            Some(joint_order),
+        )?;
+        layout.rest = rest;
         layout.refresh_f32();
         Ok(layout)
     }

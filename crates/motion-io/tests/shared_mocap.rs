@@ -1,4 +1,5 @@
-//! Acceptance on the shared BVH folders (skipped when ../shared/mocap is absent).
+//! Acceptance on the shared BVH folders (skipped when ../shared/mocap is absent; a failure then when
+//! `MOTION_LOD_REQUIRE_DATA` is set, as in CI).
 
 use std::path::PathBuf;
 
@@ -8,17 +9,7 @@ use motion_io::{
 };
 
 fn folder(name: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/mocap"
-    ))
-    .join(name);
-    if p.is_dir() {
-        Some(p)
-    } else {
-        println!("skipped: ../shared/mocap not found");
-        None
-    }
+    motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), name)
 }
 
 fn load(name: &str, expected: usize) -> Option<Vec<(PathBuf, Motion)>> {

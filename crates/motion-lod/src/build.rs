@@ -11,8 +11,6 @@
 //! 5. per key level the runtime parts: `Q = [U_S^T; C] A^{-1}[:S, :]` and `V = U_S^T C^+`;
 //! 6. the measured error of every accuracy level and every joint count ([`crate::metrics`]).
 
-use std::time::Instant;
-
 use faer::Mat;
 use hosvd_als::{AlsOptions, AlsReport, KeyLevels, KeySearchConfig, Tucker, hybrid_levels};
 use kriging::{Kriging, KrigingConfig};
@@ -185,7 +183,7 @@ impl TrainingSet {
 
     /// A deterministic random subset of `n` samples (all when `n >= S`), in their original order.
     pub fn subset(&self, n: usize, seed: u64) -> TrainingSet {
-        let [p, t, s] = self.tensor.dims();
+        let s = self.tensor.dims()[2];
         if n >= s {
             return self.clone();
         }
@@ -198,15 +196,25 @@ impl TrainingSet {
         }
         let mut pick = idx[..n].to_vec();
         pick.sort_unstable();
+        self.select(&pick)
+    }
+
+    /// The samples at `indices` (each below `S`), in that order.
+    ///
+    /// # Panics
+    /// When an index is out of range (a programming error: callers pass indices of this set).
+    pub fn select(&self, indices: &[usize]) -> TrainingSet {
+        let [p, t, _] = self.tensor.dims();
+        let n = indices.len();
         let mut data = Vec::with_capacity(p * t * n);
-        for &k in &pick {
+        for &k in indices {
             data.extend_from_slice(self.tensor.sample(k));
         }
         TrainingSet {
             layout: self.layout.clone(),
-            tensor: Tensor3::from_vec([p, t, n], data).expect("subset of a valid tensor"),
-            controls: pick.iter().map(|&k| self.controls[k]).collect(),
-            sources: pick.iter().map(|&k| self.sources[k].clone()).collect(),
+            tensor: Tensor3::from_vec([p, t, n], data).expect("samples of a valid tensor"),
+            controls: indices.iter().map(|&k| self.controls[k]).collect(),
+            sources: indices.iter().map(|&k| self.sources[k].clone()).collect(),
             quality: self.quality.clone(),
         }
     }
@@ -437,6 +445,7 @@ impl Analysis {
                 mse: key.mse,
                 rel_error: key.rel_error,
                 iterations: key.iterations,
+                converged: key.converged,
             });
             progress.inc(1);
         }
@@ -491,7 +500,6 @@ impl Analysis {
                 dropped_controls: krig.dropped_dims().to_vec(),
                 kriging_loo_rmse: None,
                 quality: None,
-                seconds: 0.0,
                 data: None,
                 config: config.clone(),
             },
@@ -515,7 +523,6 @@ impl MotionModel {
         config: &BuildConfig,
         progress: &dyn Progress,
     ) -> Result<(MotionModel, Analysis), BuildError> {
-        let started = Instant::now();
         let analysis = Analysis::run(set, config, progress)?;
         let mut model = analysis.runtime_model(config, progress)?;
         model.report.quality = set.quality.clone();
@@ -525,7 +532,6 @@ impl MotionModel {
             model.measure_lod_errors(&set.controls, config.error_samples)?;
         model.lod.set_errors(level_errors, joint_errors)?;
         progress.inc(1);
-        model.report.seconds = started.elapsed().as_secs_f64();
         Ok((model, analysis))
     }
 

@@ -794,8 +794,18 @@ impl DataSpec {
     }
 }
 
+/// The take (source file) of a training sample's source as [`AlignedSet::training_set`] writes it
+/// (`<file> [<first>..=<last>]`): the file part, or the whole string when it has no frame range.
+pub fn take_of(source: &str) -> &str {
+    match source.rsplit_once(" [") {
+        Some((file, range)) if range.ends_with(']') => file,
+        _ => source,
+    }
+}
+
 impl AlignedSet {
-    /// The training set of every aligned sample, for `MotionModel::build`.
+    /// The training set of every aligned sample, for `MotionModel::build`; each source reads
+    /// `<file> [<first>..=<last>]` ([`take_of`] gives the file back).
     pub fn training_set(&self) -> crate::build::TrainingSet {
         crate::build::TrainingSet {
             layout: self.layout.clone(),

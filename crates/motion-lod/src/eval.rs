@@ -417,3 +417,150 @@ pub fn held_out(
         progress,
     )
 }
+
+/// How [`k_fold`] splits the samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FoldBy {
+    /// Whole takes (source files) stay together: no cycle is predicted from cycles of its own take.
+    Take,
+    /// Sample `i` goes to fold `i mod K`.
+    Sample,
+}
+
+/// The fold of every sample: by take, the distinct takes in name order dealt round-robin to the
+/// `folds` folds; by sample, `i mod folds`. Errors when there are fewer takes (or samples) than
+/// folds.
+pub fn fold_of_samples(
+    sources: &[String],
+    folds: usize,
+    by: FoldBy,
+) -> Result<Vec<usize>, BuildError> {
+    if folds < 2 {
+        return Err(BuildError::Data(format!(
+            "{folds} folds: cross-validation needs at least 2"
+        )));
+    }
+    match by {
+        FoldBy::Sample => {
+            if sources.len() < folds {
+                return Err(BuildError::Data(format!(
+                    "{} samples cannot fill {folds} folds",
+                    sources.len()
+                )));
+            }
+            Ok((0..sources.len()).map(|i| i % folds).collect())
+        }
+        FoldBy::Take => {
+            let mut takes: Vec<&str> = sources.iter().map(|s| crate::dataset::take_of(s)).collect();
+            takes.sort_unstable();
+            takes.dedup();
+            if takes.len() < folds {
+                return Err(BuildError::Data(format!(
+                    "{} takes cannot fill {folds} folds (use fewer folds or split by sample)",
+                    takes.len()
+                )));
+            }
+            Ok(sources
+                .iter()
+                .map(|s| {
+                    let take = crate::dataset::take_of(s);
+                    takes.binary_search(&take).map_or(0, |t| t % folds)
+                })
+                .collect())
+        }
+    }
+}
+
+/// The result of [`k_fold`]: every method's error over all held-out cycles, each predicted by a
+/// model refitted on the other folds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FoldReport {
+    /// Folds `K`.
+    pub folds: usize,
+    /// How the samples were split.
+    pub by: FoldBy,
+    /// Held-out samples per fold.
+    pub fold_sizes: Vec<usize>,
+    /// The pooled result: `samples` is the whole set, `evaluated` the held-out cycles scored over
+    /// all folds, `error_cm` their mean and `shell_cm` their largest; ranks and bytes are the first
+    /// fold's model's.
+    pub pooled: EvalReport,
+}
+
+/// K-fold cross-validation by refitting: for each fold, the whole pipeline ([`Analysis::run`]:
+/// joint order, row weights, key levels, the variogram chosen by leave-one-out on the training
+/// folds, and in the comparison the RBF smoothing and the PCA basis) is fitted on the other folds
+/// with `build`, and every method predicts the fold's cycles at their own controls
+/// ([`held_out`]). Nothing of a held-out cycle enters its prediction except through the time
+/// alignment of the data set (the reference cycle and `T`), which is fixed before the split.
+pub fn k_fold(
+    set: &crate::build::TrainingSet,
+    build: &crate::build::BuildConfig,
+    folds: usize,
+    by: FoldBy,
+    config: &EvalConfig,
+    progress: &dyn Progress,
+) -> Result<FoldReport, BuildError> {
+    set.validate()?;
+    let fold = fold_of_samples(&set.sources, folds, by)?;
+    let mut pooled: Option<EvalReport> = None;
+    let mut weights: Vec<f64> = Vec::new();
+    let mut fold_sizes = Vec::with_capacity(folds);
+    for f in 0..folds {
+        let (test, train): (Vec<usize>, Vec<usize>) = (0..fold.len()).partition(|&i| fold[i] == f);
+        fold_sizes.push(test.len());
+        let training = set.select(&train);
+        let held = set.select(&test);
+        let analysis = Analysis::run(&training, build, &crate::progress::NoProgress)?;
+        let model = analysis.runtime_model(build, &crate::progress::NoProgress)?;
+        let key_bytes: Vec<usize> = (0..model.lod.keys().len())
+            .map(|k| model.lod.key_bytes(k, lod_policy::Precision::F64))
+            .collect();
+        let model_bytes = crate::storage::Storage::of(&model).model_f64;
+        let targets = analysis.prepare(&set.layout, &held.tensor);
+        let report = held_out(
+            &analysis,
+            &targets,
+            &held.controls,
+            model_bytes,
+            &key_bytes,
+            config,
+            progress,
+        )?;
+        let n = report.evaluated as f64;
+        match &mut pooled {
+            None => {
+                weights = vec![n; report.methods.len()];
+                pooled = Some(EvalReport {
+                    samples: set.tensor.dims()[2],
+                    ..report
+                });
+            }
+            Some(p) => {
+                if p.methods.len() != report.methods.len()
+                    || p.methods
+                        .iter()
+                        .zip(&report.methods)
+                        .any(|(a, b)| a.name != b.name)
+                {
+                    return Err(BuildError::Data(format!(
+                        "fold {f} built a different set of key levels than fold 0; \
+                         use fewer key levels or more data per fold"
+                    )));
+                }
+                p.evaluated += report.evaluated;
+                for ((m, w), r) in p.methods.iter_mut().zip(&mut weights).zip(&report.methods) {
+                    m.error_cm = (m.error_cm * *w + r.error_cm * n) / (*w + n);
+                    m.shell_cm = m.shell_cm.max(r.shell_cm);
+                    *w += n;
+                }
+            }
+        }
+    }
+    Ok(FoldReport {
+        folds,
+        by,
+        fold_sizes,
+        pooled: pooled.expect("at least two folds"),
+    })
+}

@@ -65,6 +65,7 @@ pub mod dataset;
 pub mod eval;
 pub mod footlock;
 pub mod importance;
+pub mod info;
 pub mod metrics;
 pub mod model;
 pub mod model_file;

@@ -28,6 +28,9 @@ pub struct KeyReport {
     pub rel_error: f64,
     /// ALS sweeps.
     pub iterations: usize,
+    /// True when ALS met its tolerance; false when it stopped at the iteration cap (a warning of
+    /// the build report, [`BuildReport::warnings`]).
+    pub converged: bool,
 }
 
 /// What the build measured and decided, stored with the model.
@@ -58,13 +61,38 @@ pub struct BuildReport {
     pub kriging_loo_rmse: Option<f64>,
     /// The motion-quality meter on the training takes (the reference of [`crate::quality`]).
     pub quality: Option<crate::quality::QualityReference>,
-    /// Wall-clock seconds of the build.
-    pub seconds: f64,
     /// Where the training data came from (set by the command line; `None` for in-memory data).
     pub data: Option<crate::dataset::DataSpec>,
     /// The settings the model was built with.
     pub config: crate::build::BuildConfig,
 }
+
+impl BuildReport {
+    /// What the build should be warned about: key levels whose ALS stopped at the iteration cap
+    /// before meeting its tolerance. Empty when all is well.
+    ///
+    /// The report holds only what the data, the settings and the seed determine (no timings), so
+    /// that the same build writes the same bytes.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for (k, key) in self.keys.iter().enumerate() {
+            if !key.converged {
+                out.push(format!(
+                    "key level {k} {:?}: ALS stopped at the iteration cap ({} sweeps) before its \
+                     tolerance {:e}; raise the cap or accept a less accurate key",
+                    key.ranks, key.iterations, self.config.als.tol
+                ));
+            }
+        }
+        out
+    }
+}
+
+/// What is wrong with a decoded model whose parts do not fit together
+/// ([`MotionModel::validate`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct InvalidModel(pub String);
 
 /// The multilinear motion model with level-of-detail controls.
 ///
@@ -109,20 +137,144 @@ impl MotionModel {
         model_file::save(self, path)
     }
 
-    /// Reads and validates a model file.
+    /// Reads a model file: framing and checksum ([`model_file::decode`]), then the semantic
+    /// validation of [`MotionModel::validate`]. Every failure names the file and what is wrong.
     pub fn load(path: &Path) -> Result<MotionModel, ModelFileError> {
-        let model: MotionModel = model_file::load(path)?;
-        if model.layout.dof() != model.lod.p() {
-            return Err(ModelFileError::Decode {
-                path: path.to_path_buf(),
-                message: format!(
-                    "layout has {} DOF, the runtime model {}",
-                    model.layout.dof(),
-                    model.lod.p()
-                ),
-            });
-        }
+        let bytes = std::fs::read(path).map_err(|source| ModelFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        MotionModel::from_bytes(&bytes, path)
+    }
+
+    /// Decodes and validates a model from the bytes of a model file (`path` only labels errors).
+    ///
+    /// Decoding already validates the parts that check themselves (the pose layout and its
+    /// skeleton, [`PoseLayout::from_parts`]; the runtime model, [`LodModel::new`]);
+    /// [`MotionModel::validate`] then checks how they fit together.
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<MotionModel, ModelFileError> {
+        let model: MotionModel = model_file::decode(bytes, path)?;
+        model.validate().map_err(|source| ModelFileError::Invalid {
+            path: path.to_path_buf(),
+            source,
+        })?;
         Ok(model)
+    }
+
+    /// Checks that the parts fit together (each part validates itself when it is built or
+    /// decoded): the runtime model's row layout is the pose layout's (7 root and time rows, 3 per
+    /// rotating joint, as many joints) with the 4 controls of [`CONTROL_NAMES`]; the build report
+    /// describes this model (samples, dimensions, one source per sample, the importance order
+    /// equal to the layout's joint order, one positive row weight per DOF row, one key report per
+    /// key with its ranks, dropped controls among the 4) and holds finite numbers.
+    pub fn validate(&self) -> Result<(), InvalidModel> {
+        let bad = |what: String| Err(InvalidModel(what));
+        let lod = &self.lod;
+        let (p, t, s) = (lod.p(), lod.t(), lod.s());
+        if self.layout.dof() != p {
+            return bad(format!(
+                "the pose layout has {} DOF rows, the runtime model {p}",
+                self.layout.dof()
+            ));
+        }
+        if lod.always_rows() != motion_io::pose::ROOT_ROWS || lod.rows_per_joint() != 3 {
+            return bad(format!(
+                "the runtime model has {} root rows and {} rows per joint; pose vectors have {} and 3",
+                lod.always_rows(),
+                lod.rows_per_joint(),
+                motion_io::pose::ROOT_ROWS
+            ));
+        }
+        if lod.d() != CONTROL_NAMES.len() {
+            return bad(format!(
+                "the runtime model has {} controls; a walk model has {} ({})",
+                lod.d(),
+                CONTROL_NAMES.len(),
+                CONTROL_NAMES.join(", ")
+            ));
+        }
+        let r = &self.report;
+        if r.samples != s || r.dims != [p, t, s] {
+            return bad(format!(
+                "the build report describes {} samples of dimensions {:?}, the model has {:?}",
+                r.samples,
+                r.dims,
+                [p, t, s]
+            ));
+        }
+        if r.sources.len() != s {
+            return bad(format!(
+                "the build report names {} sources for {s} samples",
+                r.sources.len()
+            ));
+        }
+        let order = self.layout.joint_order();
+        if r.importance.len() != order.len()
+            || r.importance.iter().zip(order).any(|(i, &j)| i.joint != j)
+        {
+            return bad(
+                "the build report's joint importance order differs from the pose layout's joint order"
+                    .into(),
+            );
+        }
+        if let Some(i) = r.importance.iter().position(|i| !i.error_cm.is_finite()) {
+            return bad(format!(
+                "the build report's importance of joint {} is not finite",
+                r.importance[i].joint
+            ));
+        }
+        if r.row_weights.len() != p {
+            return bad(format!(
+                "the build report has {} row weights for {p} DOF rows",
+                r.row_weights.len()
+            ));
+        }
+        if let Some(i) = r
+            .row_weights
+            .iter()
+            .position(|w| !(w.is_finite() && *w > 0.0))
+        {
+            return bad(format!(
+                "row weight {i} is {} (must be positive and finite)",
+                r.row_weights[i]
+            ));
+        }
+        if r.keys.len() != lod.keys().len() {
+            return bad(format!(
+                "the build report describes {} key levels, the model holds {}",
+                r.keys.len(),
+                lod.keys().len()
+            ));
+        }
+        for (k, (kr, key)) in r.keys.iter().zip(lod.keys()).enumerate() {
+            let ranks = [key.ranks.p, key.ranks.t, key.ranks.s];
+            if kr.ranks != ranks {
+                return bad(format!(
+                    "key {k}: the build report has ranks {:?}, the model {ranks:?}",
+                    kr.ranks
+                ));
+            }
+            if !(kr.mse.is_finite() && kr.rel_error.is_finite()) {
+                return bad(format!("key {k}: the build report's errors are not finite"));
+            }
+        }
+        if r.c_e.is_nan() {
+            return bad("the build report's error coefficient C_E is NaN".into());
+        }
+        if let Some(k) = r
+            .dropped_controls
+            .iter()
+            .find(|&&k| k >= CONTROL_NAMES.len())
+        {
+            return bad(format!(
+                "the build report drops control {k}; there are {}",
+                CONTROL_NAMES.len()
+            ));
+        }
+        if r.kriging_loo_rmse.is_some_and(|v| !v.is_finite()) {
+            return bad("the build report's kriging leave-one-out error is not finite".into());
+        }
+        Ok(())
     }
 
     /// The synthesized cycle for `controls` at `detail`, at the `T` aligned frames, as `T x P` f64 pose

@@ -28,7 +28,9 @@ pub const FORMAT_VERSION: u32 = 4;
 
 // Version history: 1 (first release); 2 (the build report records the DOF row weights and the build
 // settings their choice); 3 (the kriging rows of the controls, `C A^-1`, are stored once in the control
-// space instead of in every key's projection); 4 (the build report holds the motion-quality reference
+// space instead of in every key's projection); 4 (no build time in the report, so that the same build
+// writes the same bytes; ALS convergence per key; the pose layout stores only what it is built from
+// and is validated on load; the motion-quality reference
 // measured on the training takes). Files of an older version are refused with a request to rebuild: a model is
 // rebuilt from its data in seconds, and a converter would carry guesses.
 /// Bytes before the payload: magic, version, length, checksum.
@@ -123,6 +125,15 @@ pub enum ModelFileError {
         path: PathBuf,
         /// What bincode reported.
         message: String,
+    },
+    /// The payload decoded, but the model's parts do not fit together (a hand-made or damaged
+    /// file with a valid checksum).
+    #[error("{path}: invalid model (rebuild it with `motion-lod build`): {source}")]
+    Invalid {
+        /// The file concerned.
+        path: PathBuf,
+        /// What is wrong.
+        source: crate::model::InvalidModel,
     },
     /// The value could not be encoded.
     #[error("{path}: cannot encode model: {message}")]
@@ -249,7 +260,14 @@ pub fn decode_payload<T: DeserializeOwned>(
     let decoded = decode_with_limit!(16 18 20 22 24 26 28 30 32 34 36 38 40);
     #[cfg(not(target_pointer_width = "64"))]
     let decoded = decode_with_limit!(16 18 20 22 24 26 28 30);
-    let (value, used) = decoded.map_err(|e| decode_error(e.to_string()))?;
+    let (value, used) = decoded.map_err(|e| match e {
+        // A part that validates itself on decoding (a `try_from` in its serde form) refused its
+        // values: its message says what is wrong, without bincode's debug wrapping.
+        bincode::error::DecodeError::OtherString(message) => decode_error(format!(
+            "invalid model (rebuild it with `motion-lod build`): {message}"
+        )),
+        other => decode_error(other.to_string()),
+    })?;
     if used != payload.len() {
         return Err(decode_error(format!(
             "{} trailing bytes after the model",

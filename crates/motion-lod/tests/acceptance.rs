@@ -1,5 +1,6 @@
 //! Issue 5's acceptance on the real data in `../shared/mocap` (each test prints
-//! `skipped: ../shared/mocap not found` and passes when it is absent), and the same checks on the
+//! `skipped: ../shared/mocap not found` and passes when it is absent, and fails when
+//! `MOTION_LOD_REQUIRE_DATA` is set, as CI sets it), and the same checks on the
 //! embedded data set, which is always present:
 //!
 //! - the leave-one-out error of the full level is within 10% of naive kriging of the raw samples and
@@ -25,17 +26,10 @@ use motion_lod::storage::Storage;
 use motion_lod::synth::WalkRequest;
 use motion_lod::{BuildConfig, MotionModel};
 
-const MOCAP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/mocap");
-
-/// The data folder `name` under `../shared/mocap`, or `None` (with the skip message) when absent.
+/// The data folder `name` under `../shared/mocap`, or `None` (with the skip message) when absent;
+/// a test failure instead when `MOTION_LOD_REQUIRE_DATA` is set (CI).
 fn mocap(name: &str) -> Option<PathBuf> {
-    let dir = Path::new(MOCAP).join(name);
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: ../shared/mocap not found ({name})");
-        None
-    }
+    motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), name)
 }
 
 /// Travel of a three-cycle walk's cycles, measured back from its BVH:

@@ -8,7 +8,6 @@ use motion_lod::dataset::{AlignedSet, CycleSet, DatasetConfig, align_cycles, loa
 use timewarp::{AlignMethod, DtwConfig};
 
 const FIXTURES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
-const MOCAP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/mocap");
 
 /// Folders under `root` (and `root` itself) that hold at least one `.bvh` file.
 fn bvh_folders(root: &Path) -> Vec<PathBuf> {
@@ -140,7 +139,7 @@ fn check_cli(dir: &Path, set: &CycleSet, aligned: &AlignedSet, extra: &[&str]) {
 fn fixtures_load_align_and_report() {
     let dirs = bvh_folders(Path::new(FIXTURES));
     let Some(dir) = dirs.first() else {
-        println!("skipped: fixtures/ has no .bvh yet");
+        motion_io::test_data::missing("fixtures/ has no .bvh yet");
         return;
     };
     let set = match load_cycles(
@@ -190,11 +189,11 @@ fn fixtures_load_align_and_report() {
 
 #[test]
 fn bandai_counts_ranges_and_cli() {
-    let dir = Path::new(MOCAP).join("bandai-namco-2-walk");
-    if !dir.is_dir() {
-        println!("skipped: ../shared/mocap not found");
+    let Some(dir) =
+        motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), "bandai-namco-2-walk")
+    else {
         return;
-    }
+    };
     let set = load_cycles(
         std::slice::from_ref(&dir),
         &DatasetConfig::default(),

@@ -225,15 +225,16 @@ fn random_payloads_behind_a_valid_frame_never_panic() {
 }
 
 /// A real (small) model built from `fixtures/`: truncations, flips, a future version.
-#[test]
-fn real_model_file_is_checked_like_any_other() {
+/// A small real model built from `fixtures/` (8 cycles, 2 key levels), or `None` with the skip
+/// message when the fixtures are missing.
+fn small_model() -> Option<motion_lod::MotionModel> {
     use motion_lod::dataset::DataSpec;
     use motion_lod::progress::NoProgress;
     use motion_lod::{BuildConfig, MotionModel};
 
     if !Path::new(FIXTURES).join("walk_p160_t01.bvh").exists() {
-        println!("skipped: fixtures/ not found");
-        return;
+        motion_io::test_data::missing("fixtures/ not found");
+        return None;
     }
     let spec = DataSpec {
         dirs: vec![FIXTURES.into()],
@@ -251,7 +252,16 @@ fn real_model_file_is_checked_like_any_other() {
         error_samples: 4,
         ..BuildConfig::default()
     };
-    let model = MotionModel::build(&data.training, &config, &NoProgress).unwrap();
+    Some(MotionModel::build(&data.training, &config, &NoProgress).unwrap())
+}
+
+#[test]
+fn real_model_file_is_checked_like_any_other() {
+    use motion_lod::MotionModel;
+
+    let Some(model) = small_model() else {
+        return;
+    };
     let bytes = encode(&model, p()).unwrap();
     assert_eq!(decode::<MotionModel>(&bytes, p()).unwrap(), model);
 
@@ -296,4 +306,84 @@ fn real_model_file_is_checked_like_any_other() {
         );
     }
     println!("{decoded} corrupted payloads still decoded (changed numbers)");
+}
+
+/// A model's parts as the file stores them (the same serde layout as `MotionModel`), so that a test
+/// can write values the validated types would never hold.
+#[derive(Serialize)]
+struct RawModel {
+    layout: motion_io::PoseLayoutParts,
+    lod: lod_policy::ModelParts,
+    report: motion_lod::BuildReport,
+}
+
+/// Hand-made files with a valid checksum and a broken part: every command refuses each with a
+/// clear error naming what is wrong, and none panics.
+#[test]
+fn valid_checksum_broken_models_are_refused_by_every_command() {
+    let Some(model) = small_model() else {
+        return;
+    };
+    {
+        let dir = std::env::temp_dir().join(format!("mlod-hostile-cli-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let raw = || RawModel {
+            layout: model.layout.clone().into(),
+            lod: model.lod.clone().into_parts(),
+            report: model.report.clone(),
+        };
+        let mut parent = raw();
+        parent.layout.skeleton.joints[3].parent = Some(200);
+        let mut rank = raw();
+        rank.lod.keys[0].ranks.p = rank.lod.p + 1;
+        let mut nan = raw();
+        nan.lod.keys[0].core[5] = f32::NAN;
+        let mut report = raw();
+        report.report.row_weights.pop();
+        let cases = [
+            ("parent.mlod", parent, "parent"),
+            ("rank.mlod", rank, "rank"),
+            ("nan.mlod", nan, "non-finite"),
+            ("weights.mlod", report, "row weights"),
+        ];
+        let exe = env!("CARGO_BIN_EXE_motion-lod");
+        for (name, value, expected) in cases {
+            let path = dir.join(name);
+            std::fs::write(&path, encode(&value, &path).unwrap()).unwrap();
+            let err = motion_lod::MotionModel::load(&path)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.contains(name) && err.contains(expected),
+                "{name}: {err}"
+            );
+            let path_s = path.to_str().unwrap();
+            let out = dir.join("walk.bvh");
+            let commands: [&[&str]; 4] = [
+                &["info", path_s],
+                &["crowd", path_s, "--walkers", "3", "--seconds", "0.1"],
+                &[
+                    "synth",
+                    path_s,
+                    "--dx",
+                    "0",
+                    "--dz",
+                    "1",
+                    "--turn",
+                    "0",
+                    "-o",
+                    out.to_str().unwrap(),
+                ],
+                &["eval", path_s],
+            ];
+            for args in commands {
+                let o = std::process::Command::new(exe).args(args).output().unwrap();
+                let stderr = String::from_utf8_lossy(&o.stderr);
+                assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
+                assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+                assert!(stderr.contains(expected), "{args:?}: {stderr}");
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }

@@ -80,6 +80,7 @@ pub fn als_every_level(
                     iterations: report.iterations,
                     threshold: None,
                     als_runs: 1,
+                    converged: report.converged,
                 }
             }
         };

@@ -13,21 +13,26 @@ use super::data::{DataArgs, load};
 /// Model settings shared by `build` and `eval`.
 #[derive(Debug, Clone, Args)]
 pub struct ModelArgs {
-    /// Key levels N (paper: 10).
-    #[arg(long, default_value_t = BuildConfig::default().key_levels)]
+    /// Key levels N (paper: 10; 1..=100).
+    #[arg(long, default_value_t = BuildConfig::default().key_levels,
+          value_parser = super::ranges::count(super::ranges::KEY_LEVELS))]
     pub levels: usize,
-    /// Accuracy levels N_A (at least N); levels between keys are truncations of the larger key.
-    #[arg(long, default_value_t = BuildConfig::default().accuracy_levels)]
+    /// Accuracy levels N_A (at least N; 1..=1000); levels between keys are truncations of the
+    /// larger key.
+    #[arg(long, default_value_t = BuildConfig::default().accuracy_levels,
+          value_parser = super::ranges::count(super::ranges::ACCURACY_LEVELS))]
     pub accuracy_levels: usize,
-    /// Ranks (R_P, R_T, R_S) of the first key level, clamped to the data (paper: 40,40,60).
+    /// Ranks (R_P, R_T, R_S) of the first key level, clamped to the data (paper: 40,40,60; each
+    /// 1..=10000).
     #[arg(long, value_parser = parse_ranks, default_value = "40,40,60")]
     pub max_ranks: [usize; 3],
-    /// Ranks of the last key level (paper: 7,7,9).
+    /// Ranks of the last key level (paper: 7,7,9; each 1..=10000).
     #[arg(long, value_parser = parse_ranks, default_value = "7,7,9")]
     pub min_ranks: [usize; 3],
     /// The DOF count the ranks are meant for: R_P of --max-ranks and --min-ranks is scaled by
-    /// P / this (the paper's ranks are for P = 94); 0 uses them as given.
-    #[arg(long, value_name = "P", default_value_t = motion_lod::build::PAPER_DOF)]
+    /// P / this (the paper's ranks are for P = 94); 0 uses them as given (0..=10000).
+    #[arg(long, value_name = "P", default_value_t = motion_lod::build::PAPER_DOF,
+          value_parser = super::ranges::count(super::ranges::DOF_REFERENCE))]
     pub dof_rank_reference: usize,
     /// Weights of the DOF rows in the decomposition: `position` weighs each row by how far it moves
     /// the joints (the tensor error then follows the joint position error); `unit` is the paper's plain
@@ -70,10 +75,12 @@ pub fn parse_ranks(s: &str) -> Result<[usize; 3], String> {
         .map(|x| x.trim().parse::<usize>())
         .collect::<Result<_, _>>()
         .map_err(|e| format!("`{s}`: {e} (expected three numbers like 40,40,60)"))?;
+    let (lo, hi) = super::ranges::RANK;
+    let ok = |r: usize| (lo..=hi).contains(&(r as u64));
     match v.as_slice() {
-        &[a, b, c] if a > 0 && b > 0 && c > 0 => Ok([a, b, c]),
+        &[a, b, c] if ok(a) && ok(b) && ok(c) => Ok([a, b, c]),
         _ => Err(format!(
-            "`{s}`: expected three positive numbers like 40,40,60"
+            "`{s}`: expected three numbers in {lo}..={hi} like 40,40,60"
         )),
     }
 }
@@ -109,15 +116,23 @@ pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::R
 
 /// Runs the subcommand.
 pub fn run(args: BuildArgs) -> anyhow::Result<()> {
+    let started = std::time::Instant::now();
     let model = build_model(&args.data, &args.model, args.json)?;
+    // The build time goes to stdout only: the file holds what the data and settings determine.
+    let seconds = started.elapsed().as_secs_f64();
     model
         .save(&args.output)
         .with_context(|| format!("writing {}", args.output.display()))?;
+    for w in model.report.warnings() {
+        eprintln!("warning: {w}");
+    }
     if args.json {
-        println!("{}", serde_json::to_string(&super::info::summary(&model))?);
+        let mut line = serde_json::to_value(motion_lod::info::summary(&model))?;
+        line["seconds"] = serde_json::json!(seconds);
+        println!("{line}");
     } else {
-        super::info::print(&mut std::io::stdout().lock(), &model)?;
-        println!("wrote {}", args.output.display());
+        motion_lod::info::write_report(&mut std::io::stdout().lock(), &model)?;
+        println!("built in {seconds:.1} s; wrote {}", args.output.display());
     }
     Ok(())
 }

@@ -32,17 +32,17 @@ pub struct CrowdArgs {
     /// The model file (default: a model built from the embedded data set).
     #[arg(value_name = "MODEL")]
     pub model: Option<PathBuf>,
-    /// Number of walkers.
-    #[arg(long, default_value_t = 1000)]
+    /// Number of walkers (1..=1000000).
+    #[arg(long, default_value_t = 1000, value_parser = super::ranges::count(super::ranges::WALKERS))]
     pub walkers: usize,
-    /// Simulated seconds.
-    #[arg(long, default_value_t = 10.0)]
+    /// Simulated seconds (0 < s <= 3600).
+    #[arg(long, default_value_t = 10.0, value_parser = super::ranges::seconds)]
     pub seconds: f32,
-    /// Walkers per square metre (sets the field size).
-    #[arg(long, default_value_t = 0.05)]
+    /// Walkers per square metre, sets the field size (0 < d <= 10).
+    #[arg(long, default_value_t = 0.05, value_parser = super::ranges::density)]
     pub density: f32,
-    /// Frames per second of the simulation.
-    #[arg(long, default_value_t = 30.0)]
+    /// Frames per second of the simulation (0 < fps <= 1000).
+    #[arg(long, default_value_t = 30.0, value_parser = super::ranges::fps_f32)]
     pub fps: f32,
     /// Seed of the walkers' paths.
     #[arg(long, default_value_t = 1)]
@@ -63,14 +63,14 @@ pub struct CrowdArgs {
     /// Also run the PCA baseline on the same crowd (same policy) and print the speed ratio.
     #[arg(long)]
     pub compare_pca: bool,
-    /// Principal components kept by the PCA baseline (the paper: 40; at most P).
-    #[arg(long, default_value_t = 40)]
+    /// Principal components kept by the PCA baseline (the paper: 40; 1..=10000, at most P used).
+    #[arg(long, default_value_t = 40, value_parser = super::ranges::count(super::ranges::PCA_RANK))]
     pub pca_rank: usize,
     /// Write PNG frames, top-down maps and a GIF here.
     #[arg(long, value_name = "DIR")]
     pub render: Option<PathBuf>,
-    /// Render every n-th frame.
-    #[arg(long, default_value_t = 30)]
+    /// Render every n-th frame (1..=1000000).
+    #[arg(long, default_value_t = 30, value_parser = super::ranges::count(super::ranges::RENDER_EVERY))]
     pub render_every: usize,
     /// Print one JSON line instead of the report.
     #[arg(long)]

@@ -32,8 +32,8 @@ pub struct DataArgs {
     /// Folders of BVH takes (all of one skeleton); without any, the embedded default data set.
     #[arg(value_name = "DIR")]
     pub dirs: Vec<PathBuf>,
-    /// Aligned frames per cycle, T (default: the median cycle length in frames).
-    #[arg(long, value_name = "T")]
+    /// Aligned frames per cycle, T (default: the median cycle length in frames; 2..=2000).
+    #[arg(long, value_name = "T", value_parser = super::ranges::count(super::ranges::FRAMES))]
     pub frames: Option<usize>,
     /// Time alignment method.
     #[arg(long, value_enum, default_value_t = AlignArg::Dtw)]
@@ -47,8 +47,8 @@ pub struct DataArgs {
     /// Contact detection preset.
     #[arg(long, value_enum, default_value_t = PresetArg::Default)]
     pub preset: PresetArg,
-    /// Use a random subset of N cycles (the paper used 186).
-    #[arg(long, value_name = "N")]
+    /// Use a random subset of N cycles (the paper used 186; 1..=10000000).
+    #[arg(long, value_name = "N", value_parser = super::ranges::count(super::ranges::SAMPLES))]
     pub samples: Option<usize>,
     /// Seed of the random subset.
     #[arg(long, default_value_t = 1)]

@@ -12,10 +12,10 @@ use super::crowd::{CrowdArgs, PolicyArg};
 #[derive(Debug, Args)]
 pub struct DemoArgs {
     /// Number of walkers.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = super::ranges::count(super::ranges::WALKERS))]
     pub walkers: usize,
     /// Simulated seconds.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, value_parser = super::ranges::seconds)]
     pub seconds: f32,
     /// Where to write the rendered frames, maps and GIF.
     #[arg(long, default_value = "out/demo")]

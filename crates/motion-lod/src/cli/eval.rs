@@ -7,7 +7,7 @@ use clap::Args;
 use lod_policy::Precision;
 use motion_lod::build::Analysis;
 use motion_lod::dataset::{DatasetConfig, align_cycles_to, load_cycles_like};
-use motion_lod::eval::{EvalConfig, EvalReport, held_out, leave_one_out};
+use motion_lod::eval::{EvalConfig, EvalReport, FoldBy, held_out, k_fold, leave_one_out};
 use motion_lod::progress::{BarProgress, NoProgress, Progress};
 use motion_lod::storage::Storage;
 use motion_lod::{BuildConfig, MotionModel};
@@ -27,17 +27,35 @@ pub struct EvalArgs {
     pub model: ModelArgs,
     /// Held-out BVH folders (same skeleton): predict their cycles from all training cycles instead of
     /// leaving one out.
-    #[arg(long, value_name = "DIR", num_args = 1..)]
+    #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with = "folds")]
     pub holdout: Vec<std::path::PathBuf>,
-    /// Evaluate at most this many held-out samples (evenly strided); default all.
-    #[arg(long, value_name = "N")]
+    /// K-fold cross-validation by refitting (2..=1000): the whole pipeline (decomposition, row
+    /// weights, variogram choice, RBF smoothing, PCA basis) is refitted on K-1 folds and every
+    /// method predicts the held-out fold. Without it, the fast leave-one-out with the factors
+    /// fitted on all samples.
+    #[arg(long, value_name = "K", value_parser = super::ranges::count(super::ranges::FOLDS))]
+    pub folds: Option<usize>,
+    /// How `--folds` splits the cycles: by take (a take's cycles stay together) or by sample.
+    #[arg(long, value_enum, default_value_t = ByArg::Take, requires = "folds")]
+    pub by: ByArg,
+    /// Evaluate at most this many held-out samples (evenly strided); default all (1..=10000000).
+    #[arg(long, value_name = "N", value_parser = super::ranges::count(super::ranges::SAMPLES))]
     pub max_samples: Option<usize>,
-    /// Principal DOF directions of the PCA baseline (the paper: 40).
-    #[arg(long, default_value_t = 40)]
+    /// Principal DOF directions of the PCA baseline (the paper: 40; 1..=10000).
+    #[arg(long, default_value_t = 40, value_parser = super::ranges::count(super::ranges::PCA_RANK))]
     pub pca_rank: usize,
     /// Print one JSON line instead of the table.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `--by` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ByArg {
+    /// Whole takes per fold.
+    Take,
+    /// Sample i in fold i mod K.
+    Sample,
 }
 
 fn is_model_file(p: &Path) -> bool {
@@ -60,6 +78,36 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         }
         _ => (args.data.spec(), args.model.config()),
     };
+    if let Some(folds) = args.folds {
+        let loaded = load(&spec, args.json)?;
+        let bar = BarProgress::new(!args.json);
+        let progress: &dyn Progress = if args.json { &NoProgress } else { &bar };
+        let by = match args.by {
+            ByArg::Take => FoldBy::Take,
+            ByArg::Sample => FoldBy::Sample,
+        };
+        let eval_config = EvalConfig {
+            pca_rank: args.pca_rank,
+            max_samples: args.max_samples,
+        };
+        let report = k_fold(&loaded.training, &config, folds, by, &eval_config, progress)
+            .context("cross-validation by refitting")?;
+        if args.json {
+            println!("{}", serde_json::to_string(&report)?);
+        } else {
+            println!(
+                "{folds}-fold cross-validation by {}, every method refitted on the other folds \
+                 (held out per fold: {:?})",
+                match by {
+                    FoldBy::Take => "take",
+                    FoldBy::Sample => "sample",
+                },
+                report.fold_sizes
+            );
+            print(&report.pooled);
+        }
+        return Ok(());
+    }
     let report = evaluate(
         &spec,
         &config,
@@ -71,6 +119,11 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {
+        if args.holdout.is_empty() {
+            println!(
+                "leave-one-out with the factors fitted on all samples (--folds K refits them)"
+            );
+        }
         print(&report);
     }
     Ok(())

@@ -9,4 +9,5 @@ pub mod demo;
 pub mod eval;
 pub mod info;
 pub mod quality;
+pub mod ranges;
 pub mod synth;

@@ -26,17 +26,17 @@ pub struct SynthArgs {
     /// Standing height of the character, metres (default: the middle of the data's range).
     #[arg(long)]
     pub height: Option<f32>,
-    /// Accuracy level (0 = full detail).
-    #[arg(long, default_value_t = 0)]
+    /// Accuracy level (0 = full detail; 0..=10000, and below the model's level count).
+    #[arg(long, default_value_t = 0, value_parser = super::ranges::count(super::ranges::LEVEL))]
     pub level: usize,
-    /// Evaluated joints (default: all).
-    #[arg(long)]
+    /// Evaluated joints (default: all; 0..=10000, more than the model has means all).
+    #[arg(long, value_parser = super::ranges::count(super::ranges::JOINTS))]
     pub joints: Option<usize>,
-    /// Number of cycles.
-    #[arg(long, default_value_t = 4)]
+    /// Number of cycles (1..=10000).
+    #[arg(long, default_value_t = 4, value_parser = super::ranges::count(super::ranges::CYCLES))]
     pub cycles: usize,
-    /// Output frames per second.
-    #[arg(long, default_value_t = 30.0)]
+    /// Output frames per second (0 < fps <= 1000).
+    #[arg(long, default_value_t = 30.0, value_parser = super::ranges::fps)]
     pub fps: f64,
     /// Switch cycles as they are, without the seam transition (what the crowd does far away).
     #[arg(long)]

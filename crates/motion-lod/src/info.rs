@@ -1,0 +1,202 @@
+//! What `motion-lod info` prints about a model: the JSON summary and the human-readable report.
+//! In the library so that every consumer (the CLI, the fuzz targets, tools) shows a model the same way.
+
+use std::io::Write;
+
+use lod_policy::Precision;
+use serde::Serialize;
+
+use crate::MotionModel;
+use crate::storage::Storage;
+
+/// One accuracy level in the JSON summary.
+#[derive(Debug, Serialize)]
+pub struct LevelSummary {
+    /// Key level it truncates.
+    pub key: usize,
+    /// Ranks (R_P, R_T, R_S).
+    pub ranks: [usize; 3],
+    /// Mean joint position error against full detail (cm).
+    pub error_cm: f32,
+    /// Shell error against full detail (cm).
+    pub shell_cm: f32,
+}
+
+/// The JSON summary of a model.
+#[derive(Debug, Serialize)]
+pub struct Summary {
+    /// Joint DOF.
+    #[serde(rename = "P")]
+    pub p: usize,
+    /// Aligned frames.
+    #[serde(rename = "T")]
+    pub t: usize,
+    /// Samples.
+    #[serde(rename = "S")]
+    pub s: usize,
+    /// Rotating joints.
+    pub joints: usize,
+    /// Key levels.
+    pub key_levels: usize,
+    /// Accuracy levels.
+    pub levels: Vec<LevelSummary>,
+    /// Storage in bytes.
+    pub storage: Storage,
+}
+
+/// The JSON summary of `model`.
+pub fn summary(model: &MotionModel) -> Summary {
+    let lod = &model.lod;
+    let errors = lod.level_errors();
+    Summary {
+        p: lod.p(),
+        t: lod.t(),
+        s: lod.s(),
+        joints: lod.joints(),
+        key_levels: lod.keys().len(),
+        levels: lod
+            .levels()
+            .iter()
+            .enumerate()
+            .map(|(l, lv)| LevelSummary {
+                key: lv.key,
+                ranks: [lv.ranks.p, lv.ranks.t, lv.ranks.s],
+                error_cm: errors.get(l).map_or(f32::NAN, |e| e.mean_joint_cm),
+                shell_cm: errors.get(l).map_or(f32::NAN, |e| e.shell_cm),
+            })
+            .collect(),
+        storage: Storage::of(model),
+    }
+}
+
+/// Writes the human-readable report of `model`.
+pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Result<()> {
+    let lod = &model.lod;
+    let r = &model.report;
+    writeln!(
+        out,
+        "model: P = {} DOF ({} rotating joints), T = {} frames, S = {} samples, d = {} controls",
+        lod.p(),
+        lod.joints(),
+        lod.t(),
+        lod.s(),
+        lod.d()
+    )?;
+    if let Some(spec) = &r.data {
+        writeln!(out, "data: {}", spec.describe())?;
+    }
+    let range = model.control_range();
+    writeln!(
+        out,
+        "controls: dx [{:.3}, {:.3}] m, dz [{:.3}, {:.3}] m, turn [{:.1}, {:.1}] deg, height [{:.3}, {:.3}] m",
+        range[0].0,
+        range[0].1,
+        range[1].0,
+        range[1].1,
+        range[2].0.to_degrees(),
+        range[2].1.to_degrees(),
+        range[3].0,
+        range[3].1
+    )?;
+    if !r.dropped_controls.is_empty() {
+        let names: Vec<&str> = r
+            .dropped_controls
+            .iter()
+            .map(|&k| crate::CONTROL_NAMES[k])
+            .collect();
+        writeln!(
+            out,
+            "constant over the data (ignored): {}",
+            names.join(", ")
+        )?;
+    }
+    writeln!(
+        out,
+        "variogram: {:?}, nugget {:.4}, sill {:.4}, range {:.3}",
+        r.variogram.model, r.variogram.nugget, r.variogram.sill, r.variogram.range
+    )?;
+    writeln!(out, "joints by importance (error when held at the mean):")?;
+    let names: Vec<String> = r
+        .importance
+        .iter()
+        .map(|j| format!("{} {:.1} cm", j.name, j.error_cm))
+        .collect();
+    writeln!(out, "  {}", names.join(", "))?;
+    writeln!(out, "{}", describe_weights(r))?;
+    writeln!(out, "key levels (ALS):")?;
+    for w in r.warnings() {
+        writeln!(out, "  warning: {w}")?;
+    }
+    writeln!(
+        out,
+        "  key  ranks          rel.error  MSE        sweeps  bytes (f32)"
+    )?;
+    for (k, key) in r.keys.iter().enumerate() {
+        writeln!(
+            out,
+            "  {k:>3}  {:<13}  {:>9.5}  {:>9.3e}  {:>6}  {:>10}",
+            format!("{:?}", key.ranks),
+            key.rel_error,
+            key.mse,
+            key.iterations,
+            lod.key_bytes(k, Precision::F32)
+        )?;
+    }
+    writeln!(
+        out,
+        "accuracy levels (error against full detail at the training controls):"
+    )?;
+    writeln!(out, "  level  key  ranks          joint error  shell error")?;
+    let errors = lod.level_errors();
+    for (l, lv) in lod.levels().iter().enumerate() {
+        let e = errors.get(l).copied().unwrap_or_default();
+        writeln!(
+            out,
+            "  {l:>5}  {:>3}  {:<13}  {:>8.3} cm  {:>8.3} cm",
+            lv.key,
+            format!("[{}, {}, {}]", lv.ranks.p, lv.ranks.t, lv.ranks.s),
+            e.mean_joint_cm,
+            e.shell_cm
+        )?;
+    }
+    let st = Storage::of(model);
+    writeln!(out, "storage:")?;
+    writeln!(out, "  raw samples (f64)        {:>12} bytes", st.raw_f64)?;
+    writeln!(
+        out,
+        "  hybrid model (f64)       {:>12} bytes  ({:.1}% of raw)",
+        st.model_f64,
+        100.0 * st.model_f64 as f64 / st.raw_f64 as f64
+    )?;
+    writeln!(
+        out,
+        "  hybrid model (f32)       {:>12} bytes  ({:.1}% of raw)",
+        st.model_f32,
+        100.0 * st.model_f32 as f64 / st.raw_f64 as f64
+    )?;
+    Ok(())
+}
+
+/// One line on the DOF row weights the decomposition used.
+fn describe_weights(r: &crate::BuildReport) -> String {
+    use crate::build::RowWeights;
+    let w = &r.row_weights;
+    match r.config.row_weights {
+        RowWeights::Unit => "row weights: none (the paper's plain tensor)".to_string(),
+        RowWeights::JointPosition if w.len() > crate::TIME_ROW + 1 => {
+            let joints = &w[crate::TIME_ROW + 1..];
+            let (lo, hi) = joints.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            });
+            format!(
+                "row weights (joint displacement per unit): root position {:.2}, root rotation {:.3}-{:.3} m/rad, \
+                 joints {lo:.3}-{hi:.3} m/rad, time {:.4} m per mean increment",
+                w[0],
+                w[3].min(w[4]).min(w[5]),
+                w[3].max(w[4]).max(w[5]),
+                w[crate::TIME_ROW]
+            )
+        }
+        RowWeights::JointPosition => format!("row weights: {w:?}"),
+    }
+}
