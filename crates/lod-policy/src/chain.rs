@@ -26,7 +26,7 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::model::{ALWAYS_ROWS, TIME_ROW};
+use crate::model::TIME_ROW;
 
 /// Default half-life of a seam offset (s), chosen with the motion-quality meter (`motion-lod
 /// quality`): the offset is under 5% of its start 0.5 s after the seam, inside the first half of a
@@ -269,11 +269,16 @@ impl SeamTransition {
         let e = (-self.decay * t).exp();
         let (a, b) = ((1.0 + self.decay * t) * e, t * e);
         let rows = self.rows.min(pose.len());
-        for r in 0..rows {
-            if r == TIME_ROW || (3..6).contains(&r) {
-                continue;
+        for (r, ((v, &x), &w)) in pose
+            .iter_mut()
+            .zip(&self.offset)
+            .zip(&self.velocity)
+            .enumerate()
+            .take(rows)
+        {
+            if r != TIME_ROW && !(3..6).contains(&r) {
+                *v += a * x + b * w;
             }
-            pose[r] += a * self.offset[r] + b * self.velocity[r];
         }
         if rows >= 6 {
             let o = a * Vec3::from_slice(&self.offset[3..6])
@@ -282,7 +287,6 @@ impl SeamTransition {
             let v = nearest_branch(quat_to_exp_map(q), Vec3::from_slice(&pose[3..6]));
             pose[3..6].copy_from_slice(&v.to_array());
         }
-        debug_assert!(rows <= ALWAYS_ROWS || rows <= self.offset.len());
     }
 }
 

@@ -70,7 +70,7 @@ pub fn plant_feet(
 ) {
     let dof = layout.dof();
     let nj = layout.skeleton().joints.len();
-    if dof == 0 || poses.len() % dof != 0 || !feet.fits(nj) || !(dt > 0.0) {
+    if dof == 0 || poses.len() % dof != 0 || !feet.fits(nj) || dt.is_nan() || dt <= 0.0 {
         return;
     }
     let n = poses.len() / dof;
@@ -196,7 +196,7 @@ fn correction(world: &[Transform], nj: usize, points: &[usize], floor: f64, dt: 
         })
         .collect();
     let spread = ((CLEARANCE_S / dt).round() as usize).max(1);
-    for f in 0..n {
+    for (f, df) in d.iter_mut().enumerate() {
         let mut y: f64 = 0.0;
         for (g, &l) in lift
             .iter()
@@ -207,7 +207,7 @@ fn correction(world: &[Transform], nj: usize, points: &[usize], floor: f64, dt: 
             let u = 1.0 - f.abs_diff(g) as f32 / (spread + 1) as f32;
             y = y.max(l * f64::from(lod_policy::chain::ease_in_out(u)));
         }
-        d[f].y += y;
+        df.y += y;
     }
     d
 }

@@ -12,8 +12,9 @@ use lod_policy::Detail;
 use lod_policy::chain::{self, CycleFrame, PoseState, SeamTransition};
 use motion_io::Motion;
 
-/// Step of the finite differences that give the velocities at a seam (s).
-const SEAM_STEP_S: f64 = 1.0 / 240.0;
+/// Step of the finite differences that give the velocities at a seam (s): one 30 fps frame, longer
+/// than an aligned frame of 120 Hz data, whose single-segment slopes are noisy.
+const SEAM_STEP_S: f64 = 1.0 / 30.0;
 
 use crate::model::{Evaluator, MotionModel, TIME_ROW};
 

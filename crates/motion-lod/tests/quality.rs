@@ -1,16 +1,16 @@
 //! Issue 12's motion-quality acceptance: walks measured by the one motion-quality meter
 //! (`motion_lod::quality`) against the data's own takes.
 //!
-//! On Bandai (a 240-cycle subset; skipped with `skipped: ../shared/mocap not found` when the data is
-//! absent), every walk of the quality grid (straight, turns of 30 degrees both ways, sidesteps, slow,
+//! On Bandai (all 800 cycles, as the README quotes; skipped with `skipped: ../shared/mocap not found` when the data is
+//! absent, failed under `MOTION_LOD_REQUIRE_DATA`), every walk of the quality grid (straight, turns of 30 degrees both ways, sidesteps, slow,
 //! fast and the corners of the control hull), 4 cycles at full detail: largest joint acceleration at
 //! most 1.25x the data's median, foot skate at most 1.5x, floor offset within 1 cm, facing against
-//! travel within the data's range. On the embedded data (always present): the inertialized seams
-//! and the foot lock each measurably beat the plain switch and the sliding feet.
+//! travel within the data's range. On the embedded data (always present): the foot lock measurably
+//! beats the sliding feet. (Seam continuity itself is tested in `lod_policy::chain`.)
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use lod_policy::Detail;
 use motion_lod::MotionModel;
@@ -19,16 +19,10 @@ use motion_lod::progress::NoProgress;
 use motion_lod::quality::{self, MotionQuality};
 use motion_lod::synth::WalkRequest;
 
-const MOCAP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/mocap");
-
+/// The data folder `name` under `../shared/mocap`, or `None` (with the skip message) when absent; a
+/// test failure instead when `MOTION_LOD_REQUIRE_DATA` is set (CI).
 fn mocap(name: &str) -> Option<PathBuf> {
-    let dir = Path::new(MOCAP).join(name);
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: ../shared/mocap not found ({name})");
-        None
-    }
+    motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), name)
 }
 
 fn walk(model: &MotionModel, controls: [f32; 4], blend: bool, plant_feet: bool) -> MotionQuality {
@@ -51,7 +45,6 @@ fn bandai_walks_look_like_the_data() {
     };
     let spec = DataSpec {
         dirs: vec![dir],
-        samples: Some(240),
         ..DataSpec::default()
     };
     let loaded = spec.load(&|_, _| {}).expect("data loads");
@@ -90,25 +83,15 @@ fn bandai_walks_look_like_the_data() {
 }
 
 #[test]
-fn seams_and_feet_are_better_than_switching_and_sliding() {
+fn planted_feet_skate_less_than_sliding_ones() {
     let (model, _) = common::built();
     let reference = model.report.quality.as_ref().expect("reference measured");
     assert!(reference.takes > 0 && reference.median.pop_cm > 0.0);
-    let grid = quality::walk_grid(model);
-    let (mut seam_switch, mut seam_inert, mut skate_free, mut skate_locked) = (0.0, 0.0, 0.0, 0.0);
-    for g in &grid {
-        let switched = walk(model, g.controls, false, false);
-        let inert = walk(model, g.controls, true, false);
-        let locked = walk(model, g.controls, true, true);
-        seam_switch += switched.seam_pop_cm;
-        seam_inert += inert.seam_pop_cm;
-        skate_free += inert.skate_cm_s;
-        skate_locked += locked.skate_cm_s;
+    let (mut skate_free, mut skate_locked) = (0.0, 0.0);
+    for g in quality::walk_grid(model) {
+        skate_free += walk(model, g.controls, true, false).skate_cm_s;
+        skate_locked += walk(model, g.controls, true, true).skate_cm_s;
     }
-    assert!(
-        seam_inert < 0.8 * seam_switch,
-        "inertialized seams pop {seam_inert:.2} against {seam_switch:.2} switched"
-    );
     assert!(
         skate_locked < 0.5 * skate_free,
         "locked feet skate {skate_locked:.2} against {skate_free:.2} free"
