@@ -79,6 +79,9 @@ pub struct DimSelection {
     pub loo_rmse: f64,
 }
 
+/// A fitted kriging with its per-sample squared leave-one-out errors.
+type Fitted = (Kriging, Vec<f64>);
+
 /// Per-sample squared leave-one-out error of `k` over the scored columns.
 fn sample_errors(k: &Kriging, scored: Option<&[bool]>) -> Result<Vec<f64>, KrigingError> {
     let e = k.loo_errors()?;
@@ -152,7 +155,7 @@ pub fn select_dims(
         }
     }
     let base = ParamScaling::from_choice(&config.scaling, params)?;
-    let fit = |scaling: &ParamScaling| -> Result<(Kriging, Vec<f64>), KrigingError> {
+    let fit = |scaling: &ParamScaling| -> Result<Fitted, KrigingError> {
         let cfg = KrigingConfig {
             scaling: ScalingChoice::Given(scaling.clone()),
             ..config.clone()
@@ -176,14 +179,14 @@ pub fn select_dims(
         s
     };
     let mut chosen: Vec<usize> = Vec::new();
-    let mut current: Option<(Kriging, Vec<f64>)> = None;
+    let mut current: Option<Fitted> = None;
     loop {
         let remaining: Vec<usize> = (0..d).filter(|&k| decisions[k].is_none()).collect();
         if remaining.is_empty() {
             break;
         }
         // (dimension, fit with it added, its RMSE, t of the fall in error) per remaining dimension.
-        let mut trials: Vec<(usize, Option<(Kriging, Vec<f64>)>, f64, f64)> = Vec::new();
+        let mut trials: Vec<(usize, Option<Fitted>, f64, f64)> = Vec::new();
         for &k in &remaining {
             let mut on = chosen.clone();
             on.push(k);
