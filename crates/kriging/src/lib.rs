@@ -15,6 +15,8 @@
 //!   ([`Kriging::leave_one_out`]) and allocation-free queries;
 //! - [`ProjectedQuery`]: `L b(c)` for a fixed `L` in `R (S+1)` multiply-adds (runtime hot path);
 //! - [`ParamScaling`]: per-dimension scaling (none, standardise, given); constant dimensions dropped;
+//! - [`select_dims`]: drops the dimensions that carry no signal (backward elimination by
+//!   leave-one-out error);
 //! - [`Rbf`]: the radial-basis baseline of Rose et al. with the same `fit/weights/predict/loo` shape,
 //!   exact or with a smoothing term chosen by leave-one-out error ([`RbfSmoothing`]).
 //!
@@ -69,6 +71,7 @@ mod projected;
 mod rbf;
 mod scaling;
 pub mod search;
+mod select;
 mod variogram;
 
 pub use config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoice, Selection};
@@ -80,6 +83,7 @@ pub use linalg::{PINV_RTOL, sym_pinv};
 pub use projected::ProjectedQuery;
 pub use rbf::{RBF_SMOOTHING_GRID, Rbf, RbfConfig, RbfKernel, RbfSmoothing, SmoothingCandidate};
 pub use scaling::{ParamScaling, ScalingChoice};
+pub use select::{DimDecision, DimSelection, SelectRule, select_dims};
 pub use variogram::{Variogram, VariogramModel, shape};
 
 /// Fails with [`KrigingError::NonFinite`] at the first NaN or infinity of `m` (column by column).

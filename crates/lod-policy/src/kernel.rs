@@ -205,7 +205,9 @@ impl ClipKernel {
     }
     /// The clip's root motion: the root's ground displacement `(dx, dz)` from the first to the last
     /// aligned frame in the cycle frame, and the travel turn (the clamped turn control,
-    /// [`TURN_CONTROL`]; the pelvis's yaw change for a model without one). The next cycle frame
+    /// [`TURN_CONTROL`]; when the model ignores turn, the turn the data imply for the other controls,
+    /// [`crate::ControlSpace::implied`]; the pelvis's yaw change for a model without a turn
+    /// dimension). The next cycle frame
     /// follows from it ([`crate::chain`]).
     pub fn root_motion(&self) -> RootMotion {
         self.root_motion
@@ -384,16 +386,16 @@ impl LodModel {
         out.clamped = clamped;
 
         // 8. Root motion: the root's ground displacement from the first to the last aligned frame, and
-        //    the travel turn (the clamped turn control; the pelvis's yaw change without one).
+        //    the travel turn (the clamped turn control; when the model ignores turn, the turn the data
+        //    imply for the other controls, `ControlSpace::implied`; the pelvis's yaw change for a model
+        //    without a turn dimension).
         let mut ends = [[0.0f32; 6]; 2];
         for (e, phase) in ends.iter_mut().zip([0.0, (t - 1) as f32]) {
             self.pose_rows(out, phase, e)?;
         }
         let [start, end] = ends;
         let turn = match controls.get(TURN_CONTROL) {
-            Some(&c) if d > TURN_CONTROL && cs.scale[TURN_CONTROL] > 0.0 => {
-                c.clamp(cs.min[TURN_CONTROL], cs.max[TURN_CONTROL])
-            }
+            Some(_) if d > TURN_CONTROL => cs.implied(TURN_CONTROL, controls),
             _ => {
                 crate::chain::wrap_angle(yaw_of_exp_map(&end[3..6]) - yaw_of_exp_map(&start[3..6]))
             }

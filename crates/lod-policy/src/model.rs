@@ -109,6 +109,40 @@ pub struct ControlSpace {
     /// columns `[c_i; 1]` (scaled controls) and `A` the kriging matrix: `C b(c)` for the trend of
     /// eq. 8. Shared by every key (stored once, not per key).
     pub projection: Vec<f32>,
+    /// What the data imply for the dimensions the kriging ignores (`scale_k = 0`), as a linear
+    /// function of the raw controls: row `k` (`d + 1` values, rows stored one after another) holds
+    /// `beta` with `c_k ~ beta[..d] . c + beta[d]`, the least-squares fit of the samples' `c_k` on
+    /// the dimensions kept (zero weights elsewhere); a kept dimension's row is the identity. Read by
+    /// [`ControlSpace::implied`]: e.g. the travel turn of a clip when turn is not a control of the
+    /// model. Empty when not computed (ignored dimensions then read as their data midpoint).
+    #[serde(default)]
+    pub implied: Vec<f32>,
+}
+
+impl ControlSpace {
+    /// The value of dimension `k` that the controls `c` (raw, length `d`, each clamped to the data's
+    /// range here) imply: `c_k` itself for a kept dimension, else the least-squares prediction from
+    /// the kept ones ([`ControlSpace::implied`] field), clamped to the data's range of `c_k`.
+    pub fn implied(&self, k: usize, c: &[f32]) -> f32 {
+        let d = self.scale.len();
+        debug_assert!(k < d && c.len() >= d);
+        let clamp = |j: usize| c[j].clamp(self.min[j], self.max[j]);
+        if self.scale[k] > 0.0 {
+            return clamp(k);
+        }
+        if self.implied.len() != d * (d + 1) {
+            return 0.5 * (self.min[k] + self.max[k]);
+        }
+        let beta = &self.implied[k * (d + 1)..(k + 1) * (d + 1)];
+        let v = (0..d).fold(beta[d], |acc, j| {
+            if beta[j] == 0.0 {
+                acc
+            } else {
+                acc + beta[j] * clamp(j)
+            }
+        });
+        v.clamp(self.min[k], self.max[k])
+    }
 }
 
 /// Measured error of one accuracy level (or of one joint count), filled by the model builder.
@@ -385,6 +419,9 @@ impl LodModel {
             s.saturating_add(1),
         )?;
         check_array("controls projection", &c.projection, projection)?;
+        if !c.implied.is_empty() {
+            check_array("controls implied", &c.implied, d * (d + 1))?;
+        }
         for k in 0..d {
             if c.scale[k] < 0.0 {
                 return Err(ModelError::Controls(format!(

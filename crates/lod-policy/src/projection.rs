@@ -187,6 +187,7 @@ impl ControlSpace {
                 samples[i + s * k] = (v - offset[k]) * scale[k];
             }
         }
+        let implied = implied_controls(raw, s, &scale, &min, &max);
         Ok(ControlSpace {
             variogram,
             offset,
@@ -195,6 +196,7 @@ impl ControlSpace {
             min,
             max,
             projection: Vec::new(),
+            implied,
         })
     }
 
@@ -258,5 +260,121 @@ mod tests {
             assert!((mmpm[i] - m[i]).abs() < 1e-9, "M M+ M != M at {i}");
             assert!((mpmmp[i] - mp[i]).abs() < 1e-9, "M+ M M+ != M+ at {i}");
         }
+    }
+}
+
+/// [`ControlSpace::implied`] (the field): per dimension `k`, `d + 1` coefficients. A kept dimension
+/// (`scale_k > 0`) or a constant one gets the identity or its constant; an ignored dimension that
+/// varies gets the least-squares fit of its sample values on the kept dimensions and an intercept
+/// (normal equations, in f64, with the kept dimensions centred; a singular system falls back to the
+/// mean).
+fn implied_controls(raw: &[f32], s: usize, scale: &[f32], min: &[f32], max: &[f32]) -> Vec<f32> {
+    let d = scale.len();
+    let kept: Vec<usize> = (0..d).filter(|&k| scale[k] > 0.0).collect();
+    let col = |k: usize| raw[s * k..s * (k + 1)].iter().map(|&v| f64::from(v));
+    let mean = |k: usize| col(k).sum::<f64>() / s as f64;
+    let mut out = vec![0.0f32; d * (d + 1)];
+    for k in 0..d {
+        let row = &mut out[k * (d + 1)..(k + 1) * (d + 1)];
+        if scale[k] > 0.0 {
+            row[k] = 1.0;
+            continue;
+        }
+        let mk = mean(k);
+        row[d] = mk as f32;
+        if min[k] == max[k] || kept.is_empty() {
+            continue;
+        }
+        // Centred normal equations X^T X beta = X^T y over the kept dimensions.
+        let m = kept.len();
+        let means: Vec<f64> = kept.iter().map(|&j| mean(j)).collect();
+        let mut a = vec![0.0f64; m * m];
+        let mut b = vec![0.0f64; m];
+        for i in 0..s {
+            let y = f64::from(raw[i + s * k]) - mk;
+            for (p, &jp) in kept.iter().enumerate() {
+                let xp = f64::from(raw[i + s * jp]) - means[p];
+                b[p] += xp * y;
+                for (q, &jq) in kept.iter().enumerate() {
+                    a[p * m + q] += xp * (f64::from(raw[i + s * jq]) - means[q]);
+                }
+            }
+        }
+        if let Some(beta) = solve_spd(&mut a, &mut b, m) {
+            let mut intercept = mk;
+            for (p, &j) in kept.iter().enumerate() {
+                row[j] = beta[p] as f32;
+                intercept -= beta[p] * means[p];
+            }
+            row[d] = intercept as f32;
+        }
+    }
+    out
+}
+
+/// Solves the small symmetric positive definite system `a x = b` (`m x m`, row-major) by Cholesky;
+/// `None` when a pivot is not positive relative to the diagonal (singular or indefinite).
+fn solve_spd(a: &mut [f64], b: &mut [f64], m: usize) -> Option<Vec<f64>> {
+    let scale = (0..m).map(|i| a[i * m + i]).fold(0.0f64, f64::max);
+    for j in 0..m {
+        let mut diag = a[j * m + j];
+        for k in 0..j {
+            diag -= a[j * m + k] * a[j * m + k];
+        }
+        if diag.is_nan() || diag <= 1e-12 * scale {
+            return None;
+        }
+        let l = diag.sqrt();
+        a[j * m + j] = l;
+        for i in j + 1..m {
+            let mut v = a[i * m + j];
+            for k in 0..j {
+                v -= a[i * m + k] * a[j * m + k];
+            }
+            a[i * m + j] = v / l;
+        }
+    }
+    for i in 0..m {
+        let mut v = b[i];
+        for k in 0..i {
+            v -= a[i * m + k] * b[k];
+        }
+        b[i] = v / a[i * m + i];
+    }
+    for i in (0..m).rev() {
+        let mut v = b[i];
+        for k in i + 1..m {
+            v -= a[k * m + i] * b[k];
+        }
+        b[i] = v / a[i * m + i];
+    }
+    Some(b.to_vec())
+}
+
+#[cfg(test)]
+mod implied_tests {
+    use super::*;
+
+    #[test]
+    fn an_ignored_dimension_is_predicted_from_the_kept_ones() {
+        // 6 samples, d = 3: dim 0 kept, dim 1 = 2 c0 + 0.5 ignored, dim 2 constant ignored.
+        let c0 = [0.0f32, 0.1, 0.2, 0.5, 0.7, 1.0];
+        let mut raw = Vec::new();
+        raw.extend(c0);
+        raw.extend(c0.iter().map(|v| 2.0 * v + 0.5));
+        raw.extend([3.0f32; 6]);
+        let cs = ControlSpace::from_raw(
+            Variogram::new(kriging::VariogramModel::Linear, 0.0, 1.0, 0.0, 1.0).unwrap(),
+            &raw,
+            6,
+            vec![0.0; 3],
+            vec![1.0, 0.0, 0.0],
+        )
+        .unwrap();
+        assert!((cs.implied(1, &[0.3, 9.0, 0.0]) - 1.1).abs() < 1e-5);
+        assert_eq!(cs.implied(2, &[0.3, 9.0, 0.0]), 3.0);
+        assert_eq!(cs.implied(0, &[0.3, 9.0, 0.0]), 0.3);
+        // Clamped into the data's range: c0 = 5 reads as 1, giving 2.5.
+        assert!((cs.implied(1, &[5.0, 0.0, 0.0]) - 2.5).abs() < 1e-5);
     }
 }

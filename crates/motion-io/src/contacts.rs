@@ -57,8 +57,10 @@ pub struct Feet {
     pub leg_length: f64,
 }
 
-/// Side of a joint name: `Some(true)` left, `Some(false)` right.
-fn side_of(name: &str) -> Option<bool> {
+/// Side of a joint name: `Some(true)` left, `Some(false)` right, `None` when the name carries no
+/// side marker (or both): `left`/`right` anywhere (any case), `l_`/`r_` prefixes, `_l`/`_r` and
+/// `.l`/`.r` suffixes, and camel-case `lFoot`/`RFoot` prefixes.
+pub fn side_of(name: &str) -> Option<bool> {
     let lower = name.to_ascii_lowercase();
     let b = name.as_bytes();
     let camel = |c: u8| b.len() > 1 && (b[0] == c) && b[1].is_ascii_uppercase();
@@ -79,6 +81,60 @@ fn side_of(name: &str) -> Option<bool> {
         (false, true) => Some(false),
         _ => None,
     }
+}
+
+/// Names the joint `name` would have on the other side: every single swap of one side marker that
+/// [`side_of`] recognises (`Left`<->`Right` in the case written, `l_`<->`r_`, `_L`<->`_R`, `.l`<->`.r`,
+/// `lFoot`<->`rFoot`), without duplicates. Empty for a name without a side marker. A caller picks the
+/// candidate that exists in its skeleton.
+pub fn mirrored_names(name: &str) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    let mut push = |n: String| {
+        if n != name && !out.contains(&n) {
+            out.push(n);
+        }
+    };
+    for (a, b) in [
+        ("left", "right"),
+        ("Left", "Right"),
+        ("LEFT", "RIGHT"),
+        ("right", "left"),
+        ("Right", "Left"),
+        ("RIGHT", "LEFT"),
+    ] {
+        if name.contains(a) {
+            push(name.replacen(a, b, 1));
+        }
+    }
+    let swap = |c: char| match c {
+        'l' => Some('r'),
+        'r' => Some('l'),
+        'L' => Some('R'),
+        'R' => Some('L'),
+        _ => None,
+    };
+    let chars: Vec<char> = name.chars().collect();
+    let n = chars.len();
+    let replace_at = |i: usize, c: char| {
+        let mut v = chars.clone();
+        v[i] = c;
+        v.into_iter().collect::<String>()
+    };
+    if n > 1 {
+        // Prefix `l_` / camel `lFoot`.
+        if let Some(c) = swap(chars[0]) {
+            if chars[1] == '_' || chars[1].is_ascii_uppercase() {
+                push(replace_at(0, c));
+            }
+        }
+        // Suffix `_l` / `.l`.
+        if let Some(c) = swap(chars[n - 1]) {
+            if chars[n - 2] == '_' || chars[n - 2] == '.' {
+                push(replace_at(n - 1, c));
+            }
+        }
+    }
+    out
 }
 
 fn depth(sk: &Skeleton, mut j: usize) -> usize {

@@ -486,6 +486,46 @@ impl PoseLayout {
         Ok(self)
     }
 
+    /// The same layout with the rotating joints `joints` (skeleton indices) made static: they leave
+    /// the joint order (and the pose vector, whose remaining joint rows keep their relative order),
+    /// and hold their current rest rotation ([`PoseLayout::rest_rotation`], e.g. the data's mean after
+    /// [`PoseLayout::set_rest_from_poses`]) in the forward kinematics and in written BVH frames (the
+    /// template frame's channels of those joints are set to it).
+    ///
+    /// Fails when a listed joint is not a rotating joint of this layout.
+    pub fn freeze_joints(mut self, joints: &[usize]) -> Result<PoseLayout, PoseError> {
+        for &j in joints {
+            if !matches!(self.role.get(j), Some(Role::Rotating(_))) {
+                return Err(PoseError::BadJointOrder(format!(
+                    "joint {j} to freeze is not a rotating joint of the layout"
+                )));
+            }
+        }
+        for &j in joints {
+            self.role[j] = Role::Static;
+            let s = self.channel_starts[j];
+            let ch = &self.skeleton.joints[j].channels;
+            let reference = self.template[s..s + ch.len()].to_vec();
+            quat_to_channels(
+                self.rest[j],
+                ch,
+                Some(&reference),
+                &mut self.template[s..s + ch.len()],
+            );
+        }
+        let order: Vec<usize> = self
+            .order
+            .iter()
+            .copied()
+            .filter(|j| !joints.contains(j))
+            .collect();
+        for (k, &j) in order.iter().enumerate() {
+            self.role[j] = Role::Rotating(k);
+        }
+        self.order = order;
+        Ok(self)
+    }
+
     /// The skeleton this layout was built for.
     pub fn skeleton(&self) -> &Skeleton {
         &self.skeleton

@@ -327,3 +327,70 @@ fn conversions_reject_bad_input() {
         Err(PoseError::SkeletonMismatch { .. })
     ));
 }
+
+#[test]
+fn frozen_joints_leave_the_pose_and_hold_their_rest_rotation() {
+    let m = test_motion();
+    let layout = PoseLayout::from_motions(&[&m], 100.0).unwrap();
+    let poses = layout.poses_from_motion(&m).unwrap();
+    let p = layout.dof();
+    // Freeze the shin (joint 3): the thigh and spine keep their relative order.
+    let frozen = layout.clone().freeze_joints(&[3]).unwrap();
+    assert_eq!(frozen.joint_order(), &[2, 5]);
+    assert_eq!(frozen.dof(), p - 3);
+    assert_eq!(frozen.joint_rows(3), None);
+    assert_eq!(frozen.joint_rows(5), Some(10..13));
+    // FK of the frozen layout = FK of the full layout with the shin at its rest rotation.
+    let rest = layout.rest_pose();
+    let shin = layout.joint_rows(3).unwrap();
+    let nj = m.skeleton.joints.len();
+    let (mut a, mut b) = (vec![DVec3::ZERO; nj], vec![DVec3::ZERO; nj]);
+    for pose in poses.chunks_exact(p).step_by(7) {
+        let mut held = pose.to_vec();
+        held[shin.clone()].copy_from_slice(&rest[shin.clone()]);
+        let short: Vec<f64> = (0..p)
+            .filter(|r| !shin.contains(r))
+            .map(|r| pose[r])
+            .collect();
+        layout.joint_positions_f64(&held, &mut a);
+        frozen.joint_positions_f64(&short, &mut b);
+        for (x, y) in a.iter().zip(&b) {
+            assert!((*x - *y).length() < 1e-12, "{x} vs {y}");
+        }
+        // Written BVH channels carry the rest rotation of the frozen joint.
+        let mut ch = vec![0.0; m.skeleton.channel_count()];
+        frozen.frame_from_pose(&short, &mut ch).unwrap();
+        let s = m.skeleton.channel_starts()[3];
+        let q = channels_to_quat(&m.skeleton.joints[3].channels, &ch[s..s + 3]);
+        assert!(same_rotation(q, layout.rest_rotation(3), 1e-12));
+    }
+    // Only rotating joints can be frozen.
+    assert!(matches!(
+        layout.clone().freeze_joints(&[4]),
+        Err(PoseError::BadJointOrder(_))
+    ));
+    assert!(matches!(
+        layout.freeze_joints(&[99]),
+        Err(PoseError::BadJointOrder(_))
+    ));
+}
+
+#[test]
+fn mirrored_names_swap_one_side_marker() {
+    use motion_io::{mirrored_names, side_of};
+    let cases = [
+        ("LeftUpLeg", "RightUpLeg"),
+        ("UpperLeg_L", "UpperLeg_R"),
+        ("rShldr", "lShldr"),
+        ("l_knee", "r_knee"),
+        ("foot.R", "foot.L"),
+        ("leftEye", "rightEye"),
+    ];
+    for (a, b) in cases {
+        assert!(mirrored_names(a).contains(&b.to_string()), "{a}");
+        assert!(mirrored_names(b).contains(&a.to_string()), "{b}");
+        assert_eq!(side_of(a), side_of(b).map(|s| !s), "{a} vs {b}");
+    }
+    assert!(mirrored_names("Spine").is_empty());
+    assert!(mirrored_names("abdomen").is_empty());
+}

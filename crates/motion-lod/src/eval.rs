@@ -25,7 +25,9 @@
 
 use faer::{Mat, MatRef};
 use hosvd_als::Tucker;
-use kriging::{Kriging, KrigingConfig, ModelChoice, Rbf, RbfConfig, RbfSmoothing, ScalingChoice};
+use kriging::{
+    Kriging, KrigingConfig, ModelChoice, ParamScaling, Rbf, RbfConfig, RbfSmoothing, ScalingChoice,
+};
 use serde::{Deserialize, Serialize};
 use tensor_ops::Tensor3;
 
@@ -95,17 +97,33 @@ fn loo_weights_from_errors(errors: MatRef<'_, f64>) -> Mat<f64> {
 /// themselves (rows weighted as the decomposition weighs them, so that the choice follows the joint
 /// position error): the weights below are then fitted to identity values with that `lambda` fixed.
 fn rbf_smoothing(analysis: &Analysis) -> Result<f64, BuildError> {
-    let k = &analysis.kriging;
     let x = &analysis.tensor;
     let [p, t, s] = x.dims();
     let w = &analysis.row_weights;
     let values = Mat::from_fn(s, p * t, |i, j| x.sample(i)[j] * w[j % p]);
     let config = RbfConfig {
-        scaling: ScalingChoice::Given(k.scaling().clone()),
+        scaling: rbf_scaling(analysis)?,
         smoothing: RbfSmoothing::Loo,
         ..RbfConfig::default()
     };
     Ok(Rbf::fit(analysis.control_matrix().as_ref(), values.as_ref(), &config)?.smoothing())
+}
+
+/// The control scaling of the RBF baselines: the kriging's, with the controls that the build's
+/// selection dropped for carrying no signal put back (standardised). Rose et al. interpolate over
+/// every control that varies, and an exact RBF over fewer controls is singular wherever cycles share
+/// the kept ones (several cycles of one take).
+fn rbf_scaling(analysis: &Analysis) -> Result<ScalingChoice, BuildError> {
+    let params = analysis.control_matrix();
+    let all = ParamScaling::standardise(params.as_ref())?;
+    let mut scaling = analysis.kriging.scaling().clone();
+    for k in 0..scaling.scale.len() {
+        if scaling.scale[k] == 0.0 && all.scale[k] > 0.0 {
+            scaling.scale[k] = all.scale[k];
+            scaling.offset[k] = all.offset[k];
+        }
+    }
+    Ok(ScalingChoice::Given(scaling))
 }
 
 /// Leave-one-out weights of universal kriging (`rbf` `None`) or of the RBF baseline (`rbf` its
@@ -120,7 +138,7 @@ fn loo_weights(analysis: &Analysis, rbf: Option<f64>) -> Result<Mat<f64>, BuildE
     let scaling = ScalingChoice::Given(k.scaling().clone());
     let errors = if let Some(lambda) = rbf {
         let config = RbfConfig {
-            scaling,
+            scaling: rbf_scaling(analysis)?,
             smoothing: RbfSmoothing::Fixed(lambda),
             ..RbfConfig::default()
         };
@@ -152,7 +170,7 @@ fn prediction_weights(
     let mut row = vec![0.0; s];
     if let Some(lambda) = rbf {
         let config = RbfConfig {
-            scaling,
+            scaling: rbf_scaling(analysis)?,
             smoothing: RbfSmoothing::Fixed(lambda),
             ..RbfConfig::default()
         };

@@ -98,24 +98,34 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
         range[3].0,
         range[3].1
     )?;
-    if !r.dropped_controls.is_empty() {
-        let names: Vec<&str> = r
-            .dropped_controls
-            .iter()
-            .map(|&k| crate::CONTROL_NAMES[k])
-            .collect();
-        writeln!(
-            out,
-            "constant over the data (ignored): {}",
-            names.join(", ")
-        )?;
+    for line in control_notes(r) {
+        writeln!(out, "{line}")?;
     }
     writeln!(
         out,
         "variogram: {:?}, nugget {:.4}, sill {:.4}, range {:.3}",
         r.variogram.model, r.variogram.nugget, r.variogram.sill, r.variogram.range
     )?;
-    writeln!(out, "joints by importance (error when held at the mean):")?;
+    if !r.static_joints.is_empty() {
+        let names: Vec<String> = r
+            .static_joints
+            .iter()
+            .map(|j| format!("{} ({:.2} deg)", j.name, j.rms_deg))
+            .collect();
+        writeln!(
+            out,
+            "static joints (RMS rotation about the mean below {} deg; held, not counted): {}",
+            r.config.static_rms_deg,
+            names.join(", ")
+        )?;
+    }
+    if let Some(note) = &r.order_note {
+        writeln!(out, "joint order: {note}")?;
+    }
+    writeln!(
+        out,
+        "joints in evaluation order (legs before arms, left/right adjacent; error when held at the mean):"
+    )?;
     let names: Vec<String> = r
         .importance
         .iter()
@@ -199,4 +209,45 @@ fn describe_weights(r: &crate::BuildReport) -> String {
         }
         RowWeights::JointPosition => format!("row weights: {w:?}"),
     }
+}
+
+/// One line per control: ignored because constant over the data, ignored because it carries no signal,
+/// or used, with the leave-one-out errors that decided it (RMSE of the weighted samples, whose squared
+/// error approximates the squared joint displacement in metres).
+pub fn control_notes(r: &crate::BuildReport) -> Vec<String> {
+    use kriging::DimDecision;
+    let mut lines = Vec::new();
+    for (k, name) in crate::CONTROL_NAMES.iter().enumerate() {
+        match r.control_decisions.get(k) {
+            Some(DimDecision::Constant) => {
+                lines.push(format!("control {name} ignored: constant over the data"));
+            }
+            Some(DimDecision::NoSignal {
+                loo_with,
+                loo_without,
+                t,
+            }) => lines.push(format!(
+                "control {name} ignored: no signal beyond noise (leave-one-out RMSE {loo_without:.4} \
+                 without it, {loo_with:.4} with it, t = {t:.2}; kept only above {:.1}% and t >= {})",
+                100.0 * r.config.control_margin,
+                r.config.control_min_t
+            )),
+            Some(DimDecision::Kept { loo_with, .. }) if loo_with.is_nan() => {
+                lines.push(format!("control {name} used (no selection)"));
+            }
+            Some(DimDecision::Kept {
+                loo_with,
+                loo_without,
+                t,
+            }) => lines.push(format!(
+                "control {name} used: leave-one-out RMSE {loo_with:.4} with it, {loo_without:.4} \
+                 without, t = {t:.2}"
+            )),
+            None if r.dropped_controls.contains(&k) => {
+                lines.push(format!("control {name} ignored: constant over the data"));
+            }
+            None => {}
+        }
+    }
+    lines
 }

@@ -55,8 +55,16 @@ pub struct BuildReport {
     pub ranks_clamped: bool,
     /// The fitted residual variogram.
     pub variogram: Variogram,
-    /// Control dimensions that are constant over the data and were dropped from kriging.
+    /// Control dimensions dropped from kriging: constant over the data, or carrying no signal
+    /// (see `control_decisions`). The runtime ignores them.
     pub dropped_controls: Vec<usize>,
+    /// Per control, what the build's leave-one-out selection decided and measured
+    /// ([`kriging::select_dims`]).
+    pub control_decisions: Vec<kriging::DimDecision>,
+    /// Rotating joints of the data that are static (held at their mean rotation, not counted).
+    pub static_joints: Vec<crate::importance::StaticJoint>,
+    /// Why the legs-before-arms order could not be applied, when it could not.
+    pub order_note: Option<String>,
     /// Leave-one-out RMSE of the kriging fit, when measured.
     pub kriging_loo_rmse: Option<f64>,
     /// The motion-quality meter on the training takes (the reference of [`crate::quality`]).
@@ -296,6 +304,13 @@ impl MotionModel {
             out[tau * p + TIME_ROW] /= time_scale;
         }
         Ok(out)
+    }
+
+    /// For every control, whether the model ignores it (constant over the data, or dropped at build
+    /// for carrying no signal; its scale in the control space is 0).
+    pub fn ignored_controls(&self) -> [bool; 4] {
+        let scale = &self.lod.controls().scale;
+        std::array::from_fn(|k| scale.get(k).is_none_or(|&v| v == 0.0))
     }
 
     /// The range `[min, max]` of every control over the training data.

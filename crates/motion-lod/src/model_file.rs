@@ -30,8 +30,9 @@ pub const FORMAT_VERSION: u32 = 4;
 // settings their choice); 3 (the kriging rows of the controls, `C A^-1`, are stored once in the control
 // space instead of in every key's projection); 4 (no build time in the report, so that the same build
 // writes the same bytes; ALS convergence per key; the pose layout stores only what it is built from
-// and is validated on load; the motion-quality reference
-// measured on the training takes). Files of an older version are refused with a request to rebuild: a model is
+// and is validated on load; the motion-quality reference measured on the training takes; static
+// joints leave the pose vector, and the build report records them, the control selection and the
+// joint-order note). Files of an older version are refused with a request to rebuild: a model is
 // rebuilt from its data in seconds, and a converter would carry guesses.
 /// Bytes before the payload: magic, version, length, checksum.
 pub const HEADER_LEN: usize = 24;

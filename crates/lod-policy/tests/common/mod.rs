@@ -259,6 +259,7 @@ pub fn build_model(truth: &Truth) -> LodModel {
         min: f32v(&truth.min),
         max: f32v(&truth.max),
         projection: Vec::new(),
+        implied: Vec::new(),
     }
     .with_projection(&rows, &truth.controls)
     .unwrap();

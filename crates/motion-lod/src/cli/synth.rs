@@ -60,6 +60,7 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     let height = args.height.unwrap_or(0.5 * (range[3].0 + range[3].1));
     let controls = [args.dx, args.dz, args.turn.to_radians(), height];
     let names = ["dx", "dz", "turn", "height"];
+    let ignored = model.ignored_controls();
     for (k, (&c, &(lo, hi))) in controls.iter().zip(&range).enumerate() {
         if !c.is_finite() {
             bail!("--{} is not a finite number", names[k]);
@@ -69,6 +70,23 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
             if args.height.is_some() && (c - lo).abs() > 1e-3 {
                 eprintln!(
                     "warning: the training data has one height ({lo:.3} m); --height {c:.3} has no effect"
+                );
+            }
+            continue;
+        }
+        if ignored[k] {
+            // Dropped at build: the data's variation of this control is noise (see `info`).
+            let given = k != 3 || args.height.is_some();
+            if given && (c < lo || c > hi) {
+                let (show, lo_s, hi_s) = if k == 2 {
+                    (c.to_degrees(), lo.to_degrees(), hi.to_degrees())
+                } else {
+                    (c, lo, hi)
+                };
+                eprintln!(
+                    "warning: --{} {show:.3} has no effect: the model ignores {} (the data's range \
+                     [{lo_s:.3}, {hi_s:.3}] carries no signal; see `motion-lod info`)",
+                    names[k], names[k]
                 );
             }
             continue;
