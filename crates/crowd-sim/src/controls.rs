@@ -138,16 +138,9 @@ impl LevelTable {
     }
 }
 
-/// Motion of the root over a whole clip, in the clip's start heading frame.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct RootMotion {
-    /// Displacement to the left (m).
-    pub dx: f32,
-    /// Displacement forward (m).
-    pub dz: f32,
-    /// Heading change (rad, positive = left).
-    pub turn: f32,
-}
+/// Motion of the root over a whole clip, in the clip's start cycle frame: the runtime's
+/// [`lod_policy::RootMotion`] (ground displacement and travel turn).
+pub use lod_policy::RootMotion;
 
 #[cfg(test)]
 mod tests {

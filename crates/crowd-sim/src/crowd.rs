@@ -11,6 +11,7 @@ use crate::source::ClipSource;
 use crate::stats::{CrowdReport, FrameStats, StageTimings};
 use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
 use glam::{Vec2, Vec3};
+use lod_policy::chain::{SeamScratch, SeamTransition};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -30,11 +31,12 @@ pub struct CrowdConfig {
     pub seed: u64,
     /// Frames per second of `Crowd::run` (`dt = 1 / fps`).
     pub fps: f32,
-    /// Accuracy levels `0..blend_levels` blend clip transitions with ease-in/out; coarser levels
-    /// and root-only walkers switch clips directly (paper section 5.2).
-    pub blend_levels: usize,
-    /// Length of a blend window as a fraction of the new cycle (the paper blends half a cycle).
-    pub blend_fraction: f32,
+    /// At accuracy levels `0..seam_levels` a change of clip (a cycle seam, or a finer detail
+    /// mid-cycle) is inertialized ([`lod_policy::chain`]): every row stays continuous in position
+    /// and velocity. Coarser levels and root-only walkers switch clips as they are.
+    pub seam_levels: usize,
+    /// Half-life of a seam's offset (s).
+    pub seam_halflife_s: f32,
     /// Distance kept between paths and the field border (m).
     pub border_m: f32,
     /// Growth of each walker's culling box beyond its body, covering one frame of motion (m).
@@ -51,8 +53,8 @@ impl Default for CrowdConfig {
             field_size_m: 100.0,
             seed: 1,
             fps: 30.0,
-            blend_levels: 3,
-            blend_fraction: 0.5,
+            seam_levels: 3,
+            seam_halflife_s: lod_policy::chain::DEFAULT_HALFLIFE_S,
             border_m: 2.0,
             cull_margin_m: 0.25,
             bvh_rebuild_interval: 240,
@@ -87,8 +89,8 @@ impl CrowdConfig {
         if !(self.fps.is_finite() && self.fps > 0.0) {
             return bad("fps", self.fps);
         }
-        if !(self.blend_fraction > 0.0 && self.blend_fraction <= 1.0) {
-            return bad("blend_fraction", self.blend_fraction);
+        if !(self.seam_halflife_s.is_finite() && self.seam_halflife_s > 0.0) {
+            return bad("seam_halflife_s", self.seam_halflife_s);
         }
         if !(self.border_m.is_finite() && self.border_m >= 0.0) {
             return bad("border_m", self.border_m);
@@ -112,7 +114,6 @@ pub struct Crowd<C> {
     params: StageParams,
     walkers: Vec<Walker<C>>,
     poses: Vec<f32>,
-    scratch: Vec<f32>,
     joints: Vec<Vec3>,
     bounds: Vec<Bounds>,
     visible: Vec<bool>,
@@ -144,8 +145,7 @@ impl<C: Send> Crowd<C> {
         let params = StageParams {
             levels,
             bounds,
-            blend_levels: config.blend_levels,
-            blend_fraction: config.blend_fraction,
+            seam_levels: config.seam_levels,
         };
         // Preferred strides and the tightest curvature they can follow with half the turn range.
         let dz_lo = bounds.min.dz.max(0.2 * bounds.max.dz);
@@ -194,10 +194,8 @@ impl<C: Send> Crowd<C> {
                 cur_detail: root_only,
                 cur_dur: dur,
                 cur_motion,
-                prev: source.new_clip(),
-                prev_detail: root_only,
-                prev_dur: dur,
-                blend: None,
+                seam: SeamTransition::new(levels.pose_len, config.seam_halflife_s),
+                seam_start: 0.0,
                 rows: 0,
                 n_joints: 0,
                 root: Vec3::new(base.x, 0.0, base.y),
@@ -215,7 +213,6 @@ impl<C: Send> Crowd<C> {
             params,
             walkers,
             poses: vec![0.0; n * levels.pose_len],
-            scratch: vec![0.0; n * levels.pose_len],
             joints: vec![Vec3::ZERO; n * npos],
             bounds: vec![
                 Bounds {
@@ -269,7 +266,7 @@ impl<C: Send> Crowd<C> {
     ///
     /// Stages: (1) cull: boxes from last frame's roots, BVH refit (or rebuild), frustum query;
     /// (2) kernels: per walker, detail from `policy` (distance from the camera to the root,
-    /// visibility), cycle scheduling and clip builds; (3) poses with transition blending;
+    /// visibility), cycle scheduling and clip builds; (3) poses with the running seam transitions;
     /// (4) forward kinematics into world positions. Stages 2-4 run in parallel over walkers and
     /// give the same bytes for any thread count.
     pub fn step_into<S, P>(
@@ -309,13 +306,16 @@ impl<C: Send> Crowd<C> {
             .zip(self.visible.par_iter())
             .enumerate()
             .with_min_len(CHUNK)
-            .map(|(i, (w, &vis))| {
-                let d = policy.detail(w.root.distance(eye), vis, camera);
-                match w.advance(source, &params, d, dt) {
-                    Ok(n) => (n, None),
-                    Err(e) => (0, Some((i, e))),
-                }
-            })
+            .map_init(
+                || SeamScratch::new(params.levels.pose_len),
+                |scratch, (i, (w, &vis))| {
+                    let d = policy.detail(w.root.distance(eye), vis, camera);
+                    match w.advance(source, &params, d, dt, scratch) {
+                        Ok(n) => (n, None),
+                        Err(e) => (0, Some((i, e))),
+                    }
+                },
+            )
             .reduce(
                 || (0, None),
                 |a, b| {
@@ -343,9 +343,8 @@ impl<C: Send> Crowd<C> {
         self.walkers
             .par_iter_mut()
             .zip(self.poses.par_chunks_mut(pl))
-            .zip(self.scratch.par_chunks_mut(pl))
             .with_min_len(CHUNK)
-            .for_each(|((w, pose), scratch)| w.pose(source, pose, scratch));
+            .for_each(|(w, pose)| w.pose(source, pose));
 
         // (4) Forward kinematics.
         let t3 = Instant::now();
@@ -368,10 +367,10 @@ impl<C: Send> Crowd<C> {
         stats
             .level_histogram
             .resize(params.levels.histogram_bins(), 0);
-        stats.blending = 0;
+        stats.in_transition = 0;
         for w in &self.walkers {
             stats.level_histogram[params.levels.bin(&w.cur_detail)] += 1;
-            stats.blending += usize::from(w.blend.is_some());
+            stats.in_transition += usize::from(w.seam.is_active());
         }
         stats.visible = visible;
         stats.kernels_built = fault.0;
@@ -499,8 +498,8 @@ impl<C> Crowd<C> {
         (self.walkers[i].base, self.walkers[i].heading)
     }
 
-    /// Whether walker `i` is inside a transition blend.
-    pub fn is_blending(&self, i: usize) -> bool {
-        self.walkers[i].blend.is_some()
+    /// Whether walker `i` is inside a seam transition.
+    pub fn in_transition(&self, i: usize) -> bool {
+        self.walkers[i].seam.is_active()
     }
 }

@@ -8,8 +8,9 @@
 //! Each walker follows a seeded closed path inside the field; every gait cycle asks the source
 //! for a clip at controls taken from the path ahead (clamped to the source's
 //! [`ControlBounds`]) and at the [`Detail`] a [`DetailPolicy`] picks from the walker's distance to
-//! the camera and its visibility. Cycles chain through their root motion; transitions blend with
-//! ease-in/out at the first levels and switch directly beyond (paper section 5.2). Each frame
+//! the camera and its visibility. Cycles chain through their root motion with the runtime's one
+//! chaining routine ([`lod_policy::chain`]): changes of clip are inertialized at the first levels
+//! (continuous in position and velocity) and switched as they are beyond. Each frame
 //! culls walker boxes against the camera frustum through a BVH, then runs kernels, poses and
 //! forward kinematics in parallel over walkers (rayon), with the same result for any thread
 //! count, and reports per-stage timings and a level histogram. [`render`] draws stick figures
@@ -45,7 +46,6 @@ pub mod rng;
 pub mod source;
 pub mod stats;
 pub mod testing;
-pub mod transition;
 mod walker;
 
 pub use camera::{Bounds, Camera, CameraPath, Frustum};

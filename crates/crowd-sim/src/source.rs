@@ -16,8 +16,11 @@ use glam::Vec3;
 /// `clip_root_motion` must match where `joints` puts the root at `t = clip_duration` (else
 /// walkers jump at cycle boundaries); the next cycle starts there.
 ///
-/// Pose vectors are blended linearly (ease-in/out transitions), so every row must be a quantity
-/// that can be interpolated (positions, exponential maps on one branch, ...).
+/// Pose vectors follow the runtime's row layout (`lod_policy`): rows 0-2 the root position in the
+/// cycle frame, rows 3-5 the root orientation as an exponential map, row 6 the time increment
+/// (left alone by transitions), then three rows per joint (exponential maps on one branch). Seam
+/// transitions ([`lod_policy::chain`]) offset the rows by decaying differences, so every joint row
+/// must be a quantity that can be interpolated.
 pub trait ClipSource: Sync {
     /// A per-walker clip buffer, allocated once by `new_clip` and refilled by `build_clip`.
     type Clip: Send;

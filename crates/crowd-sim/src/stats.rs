@@ -9,7 +9,7 @@ pub struct StageTimings {
     pub cull: Duration,
     /// Detail choice, cycle scheduling and clip kernels (`ClipSource::build_clip`).
     pub kernels: Duration,
-    /// Pose vectors (`ClipSource::pose`) and transition blending.
+    /// Pose vectors (`ClipSource::pose`) and seam transitions.
     pub poses: Duration,
     /// Forward kinematics (`ClipSource::joints`) and placement in the world.
     pub fk: Duration,
@@ -41,8 +41,8 @@ pub struct FrameStats {
     pub visible: usize,
     /// Clip kernels built during the frame (cycle changes and detail upgrades).
     pub kernels_built: usize,
-    /// Walkers currently blending two clips.
-    pub blending: usize,
+    /// Walkers inside a seam transition (`lod_policy::chain`).
+    pub in_transition: usize,
 }
 
 /// Aggregate of many frames: frames per second worst/mean/best and summed histograms.

@@ -1,22 +1,22 @@
 //! Per-walker state and the three per-frame stages run for each walker: advance and rebuild
-//! clips (kernels), evaluate and blend poses, forward kinematics into the world.
+//! clips (kernels), evaluate poses with the running seam transition, forward kinematics into the
+//! world.
 
 use crate::controls::{ControlBounds, Controls, Detail, LevelTable, RootMotion};
 use crate::path::{EllipsePath, forward, left, path_controls, wrap_angle};
 use crate::source::ClipSource;
-use crate::transition::{BlendWindow, blend_into};
 use glam::{Vec2, Vec3};
+use lod_policy::chain::{SeamScratch, SeamTransition};
 
 /// Settings the stages need, copied out of the crowd config.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct StageParams {
     pub levels: LevelTable,
     pub bounds: ControlBounds,
-    pub blend_levels: usize,
-    pub blend_fraction: f32,
+    pub seam_levels: usize,
 }
 
-/// One walker: its path, cycle base frame, current and previous clips.
+/// One walker: its path, cycle base frame, current clip and the seam transition into it.
 #[derive(Debug, Clone)]
 pub(crate) struct Walker<C> {
     pub path: EllipsePath,
@@ -36,10 +36,10 @@ pub(crate) struct Walker<C> {
     pub cur_detail: Detail,
     pub cur_dur: f32,
     pub cur_motion: RootMotion,
-    pub prev: C,
-    pub prev_detail: Detail,
-    pub prev_dur: f32,
-    pub blend: Option<BlendWindow>,
+    /// The inertialized seam into the current clip (`lod_policy::chain`), inactive when none runs.
+    pub seam: SeamTransition,
+    /// Clip time at which the running seam started (its clock is `t - seam_start`).
+    pub seam_start: f32,
     /// Rows of the pose vector written this frame.
     pub rows: usize,
     /// Joint positions written this frame.
@@ -61,15 +61,23 @@ pub(crate) enum WalkerFault {
 }
 
 impl<C> Walker<C> {
-    fn blends(p: &StageParams, new: &Detail, old: &Detail) -> bool {
-        new.accuracy < p.blend_levels && new.active_joints > 0 && old.active_joints > 0
+    /// Whether a change from `old` to `new` is inertialized: both have joints and `new` is one of
+    /// the first `seam_levels` accuracy levels (farther walkers switch clips as they are).
+    fn seams(p: &StageParams, new: &Detail, old: &Detail) -> bool {
+        new.accuracy < p.seam_levels && new.active_joints > 0 && old.active_joints > 0
     }
 
-    /// Builds `cur` for `self.controls` at `d`, after moving the old clip to `prev`.
+    /// The pose the walker shows at clip time `t`: the current clip's pose with the running seam
+    /// applied. Returns the rows written.
+    fn displayed<S: ClipSource<Clip = C>>(&self, src: &S, t: f32, out: &mut [f32]) -> usize {
+        let rows = src.pose(&self.cur, t, out).min(out.len());
+        self.seam.apply(t - self.seam_start, &mut out[..rows]);
+        rows
+    }
+
+    /// Rebuilds `cur` for `self.controls` at `d` (in place: the outgoing clip's state has been
+    /// captured before when a seam follows).
     fn rebuild<S: ClipSource<Clip = C>>(&mut self, src: &S, d: Detail) -> Result<(), WalkerFault> {
-        std::mem::swap(&mut self.cur, &mut self.prev);
-        self.prev_detail = self.cur_detail;
-        self.prev_dur = self.cur_dur;
         src.build_clip(&self.controls, d, &mut self.cur);
         let dur = src.clip_duration(&self.cur);
         if !valid_duration(dur) {
@@ -81,16 +89,59 @@ impl<C> Walker<C> {
         Ok(())
     }
 
-    /// Kernel stage: advance time by `dt`; at each cycle end accumulate the root motion, pick
-    /// controls from the path ahead and build the next clip at `d` (blended in over the first
-    /// `blend_fraction` of the cycle at blending levels); mid-cycle, rebuild when `d` is finer
-    /// than the clip held (see the deferral rule inside). Returns the number of kernels built.
+    /// Replaces the current clip by one at `d` (and `self.controls`), shown from clip phase
+    /// `phase` of the new clip; with `seam`, the change is inertialized from the displayed state at
+    /// clip time `t_out` of the outgoing clip (in the next cycle frame when `motion` is given).
+    #[allow(clippy::too_many_arguments)]
+    fn switch<S: ClipSource<Clip = C>>(
+        &mut self,
+        src: &S,
+        d: Detail,
+        seam: Option<&mut SeamScratch>,
+        t_out: f32,
+        motion: Option<&RootMotion>,
+        phase: f32,
+    ) -> Result<(), WalkerFault> {
+        match seam {
+            Some(scratch) => {
+                let (dur_out, this) = (self.cur_dur, &*self);
+                let captured = scratch.capture(t_out, dur_out, motion, |t, out| {
+                    Ok::<usize, std::convert::Infallible>(this.displayed(src, t, out))
+                });
+                let Ok(()) = captured;
+                self.rebuild(src, d)?;
+                let t_in = phase * self.cur_dur;
+                let cur = &self.cur;
+                let started = scratch.start(
+                    t_in,
+                    self.cur_dur,
+                    |t, out| Ok::<usize, std::convert::Infallible>(src.pose(cur, t, out)),
+                    &mut self.seam,
+                );
+                let Ok(()) = started;
+                self.seam_start = t_in;
+            }
+            None => {
+                self.seam.clear();
+                self.rebuild(src, d)?;
+                self.seam_start = 0.0;
+            }
+        }
+        Ok(())
+    }
+
+    /// Kernel stage: advance time by `dt`; at each cycle end move the cycle frame by the clip's
+    /// root motion, pick controls from the path ahead and build the next clip at `d`, with an
+    /// inertialized seam at the first `seam_levels` levels; mid-cycle, rebuild at once when `d` is
+    /// finer than the clip held (inertialized likewise). `scratch` is the thread's seam scratch.
+    /// Returns the number of kernels built.
     pub fn advance<S: ClipSource<Clip = C>>(
         &mut self,
         src: &S,
         p: &StageParams,
         d: Detail,
         dt: f32,
+        scratch: &mut SeamScratch,
     ) -> Result<usize, WalkerFault> {
         if d.accuracy >= p.levels.accuracy_levels {
             return Err(WalkerFault::Level(d.accuracy));
@@ -102,8 +153,9 @@ impl<C> Walker<C> {
         let mut built = 0;
         self.t += dt;
         while self.t >= self.cur_dur {
-            self.t -= self.cur_dur;
             let m = self.cur_motion;
+            let end = self.cur_dur;
+            self.t -= end;
             self.base += left(self.heading) * m.dx + forward(self.heading) * m.dz;
             self.heading = wrap_angle(self.heading + m.turn);
             self.s = self.path.closest_param_near(self.base, self.s);
@@ -116,48 +168,26 @@ impl<C> Walker<C> {
                 self.height,
                 &p.bounds,
             );
-            self.rebuild(src, d)?;
+            let seam = Self::seams(p, &d, &self.cur_detail).then_some(&mut *scratch);
+            self.switch(src, d, seam, end, Some(&m), 0.0)?;
             built += 1;
-            self.blend = Self::blends(p, &d, &self.prev_detail).then_some(BlendWindow {
-                start: 0.0,
-                end: p.blend_fraction,
-            });
         }
         if built == 0 && d.is_finer_than(&self.cur_detail) {
             let u = self.t / self.cur_dur;
-            // A blended upgrade needs a whole window before the cycle ends and no blend running;
-            // otherwise it waits (at most one window) for the cycle boundary, where it is built
-            // anyway. Upgrades that need no blend (from root only, or beyond the blend levels)
-            // happen at once.
-            let blend = Self::blends(p, &d, &self.cur_detail);
-            if !blend || (self.blend.is_none() && u + p.blend_fraction <= 1.0) {
-                self.rebuild(src, d)?;
-                built += 1;
-                self.t = (u * self.cur_dur).min(self.cur_dur * 0.999_999);
-                self.blend = blend.then_some(BlendWindow {
-                    start: u,
-                    end: u + p.blend_fraction,
-                });
-            }
+            let seam = Self::seams(p, &d, &self.cur_detail).then_some(&mut *scratch);
+            let t_out = self.t;
+            self.switch(src, d, seam, t_out, None, u)?;
+            built += 1;
+            self.t = (u * self.cur_dur).min(self.cur_dur * 0.999_999);
         }
         Ok(built)
     }
 
-    /// Pose stage: the current clip's pose at `t`, blended with the previous clip at the same
-    /// phase inside a blend window. `scratch` has the pose length.
-    pub fn pose<S: ClipSource<Clip = C>>(&mut self, src: &S, out: &mut [f32], scratch: &mut [f32]) {
-        let u = self.t / self.cur_dur;
-        self.rows = src.pose(&self.cur, self.t, out).min(out.len());
-        if let Some(w) = self.blend {
-            if u < w.end {
-                let n_prev = src
-                    .pose(&self.prev, (u * self.prev_dur).min(self.prev_dur), scratch)
-                    .min(scratch.len());
-                blend_into(&scratch[..n_prev], &mut out[..self.rows], w.weight(u));
-            } else {
-                self.blend = None;
-            }
-        }
+    /// Pose stage: the current clip's pose at `t` with the running seam applied (the seam ends
+    /// once its offset has decayed).
+    pub fn pose<S: ClipSource<Clip = C>>(&mut self, src: &S, out: &mut [f32]) {
+        self.rows = self.displayed(src, self.t, out);
+        self.seam.finish_after(self.t - self.seam_start);
     }
 
     /// FK stage: cycle-frame joint positions from the source, then `world = base + R_y(h) p`

@@ -146,7 +146,7 @@ fn root_motion_is_continuous_across_cycle_boundaries() {
 }
 
 #[test]
-fn blending_happens_only_at_the_first_levels_and_is_smooth() {
+fn seams_happen_only_at_the_first_levels_and_are_smooth() {
     let source = ProceduralSource::new();
     let lv = source.levels();
     // Near walkers at level 0, the rest at level 6, all with every joint, all visible or not.
@@ -155,7 +155,7 @@ fn blending_happens_only_at_the_first_levels_and_is_smooth() {
         active_joints: lv.joints,
     };
     let cfg = CrowdConfig {
-        blend_levels: 2,
+        seam_levels: 2,
         ..config(150, 60.0)
     };
     let mut crowd = Crowd::new(&source, cfg).unwrap();
@@ -174,8 +174,8 @@ fn blending_happens_only_at_the_first_levels_and_is_smooth() {
     for f in 1..400 {
         let stats = crowd.step(&source, &policy, &cam, 0.5 * DT).unwrap();
         assert_eq!(
-            stats.blending,
-            (0..crowd.len()).filter(|&i| crowd.is_blending(i)).count()
+            stats.in_transition,
+            (0..crowd.len()).filter(|&i| crowd.in_transition(i)).count()
         );
         for (i, prev_i) in prev.iter_mut().enumerate() {
             let d = crowd.detail(i);
@@ -187,7 +187,7 @@ fn blending_happens_only_at_the_first_levels_and_is_smooth() {
                 .zip(prev_i.iter())
                 .map(|(a, b)| ((*a - *b) - root_step).length())
                 .fold(0.0, f32::max);
-            if crowd.is_blending(i) {
+            if crowd.in_transition(i) {
                 assert!(
                     d.accuracy < 2,
                     "walker {i} blends at level {} in frame {f}",

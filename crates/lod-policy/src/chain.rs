@@ -290,6 +290,129 @@ impl SeamTransition {
     }
 }
 
+/// Step of the finite differences that give the velocities at a seam (s): one 30 fps frame, longer
+/// than an aligned frame of 120 Hz data, whose single-segment slopes are noisy.
+pub const SEAM_STEP_S: f32 = 1.0 / 30.0;
+
+/// Caller-owned scratch that starts seam transitions: the states of the outgoing and incoming
+/// clips and two pose buffers (`4 P` floats and two `P`-float buffers, allocated once; starting a
+/// seam allocates nothing). One per thread is enough; it holds nothing between seams.
+///
+/// A seam is started in two calls, so that the outgoing clip's buffer may be rebuilt in between:
+/// [`SeamScratch::capture`] reads the outgoing clip's *displayed* pose (with the transition already
+/// running applied) and its velocity, [`SeamScratch::start`] reads the incoming clip and starts the
+/// transition from the captured state. Both take the pose as a function of clip time, so the same
+/// routine serves `synth`, the crowd and an engine.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeamScratch {
+    prev: PoseState,
+    next: PoseState,
+    a: Vec<f32>,
+    b: Vec<f32>,
+    rows: usize,
+}
+
+/// The two times whose poses give the velocity at `t` in a clip of `duration` seconds by a finite
+/// difference over `h`: backward `(t - h, t)` when there is room, else forward `(t, t + h)`; `h` is
+/// at most a quarter of the clip.
+fn difference_window(t: f32, duration: f32, h: f32) -> (f32, f32) {
+    let h = h.min(0.25 * duration).max(1e-4);
+    if t - h >= 0.0 { (t - h, t) } else { (t, t + h) }
+}
+
+impl SeamScratch {
+    /// Scratch for pose vectors of length `p`.
+    pub fn new(p: usize) -> SeamScratch {
+        SeamScratch {
+            prev: PoseState::new(p),
+            next: PoseState::new(p),
+            a: vec![0.0; p],
+            b: vec![0.0; p],
+            rows: 0,
+        }
+    }
+
+    /// Fills `state` with the pose at `t` and its velocity over `h` (see [`difference_window`]);
+    /// returns the rows both evaluations wrote.
+    #[allow(clippy::too_many_arguments)]
+    fn sample<E, F>(
+        state: &mut PoseState,
+        a: &mut [f32],
+        b: &mut [f32],
+        t: f32,
+        duration: f32,
+        h: f32,
+        mut pose_at: F,
+    ) -> Result<usize, E>
+    where
+        F: FnMut(f32, &mut [f32]) -> Result<usize, E>,
+    {
+        let (t0, t1) = difference_window(t, duration, h);
+        let rows = pose_at(t0, a)?.min(pose_at(t1, b)?);
+        let at = if t1 == t { &*b } else { &*a };
+        state.set(at, a, b, t1 - t0);
+        Ok(rows)
+    }
+
+    /// Captures the outgoing clip at `t` seconds (of its `duration`): `displayed(t, out)` writes the
+    /// pose the character shows at clip time `t` (the clip's pose with any running transition
+    /// applied) and returns how many rows it wrote. With `motion` (a seam at the end of a cycle) the
+    /// state is re-expressed in the next cycle frame ([`PoseState::into_next_frame`]); without (a
+    /// change of detail mid-cycle) it stays in the current frame.
+    pub fn capture<E, F>(
+        &mut self,
+        t: f32,
+        duration: f32,
+        motion: Option<&RootMotion>,
+        displayed: F,
+    ) -> Result<(), E>
+    where
+        F: FnMut(f32, &mut [f32]) -> Result<usize, E>,
+    {
+        let h = SEAM_STEP_S;
+        self.rows = Self::sample(
+            &mut self.prev,
+            &mut self.a,
+            &mut self.b,
+            t,
+            duration,
+            h,
+            displayed,
+        )?;
+        if let Some(m) = motion {
+            self.prev.into_next_frame(m);
+        }
+        Ok(())
+    }
+
+    /// Starts `transition` from the captured state to the incoming clip at its time `t` (of its
+    /// `duration`; `pose_at(t, out)` writes the clip's own pose and returns the rows written). The
+    /// transition then applies over the rows both clips hold, with its clock at 0 at `t`.
+    pub fn start<E, F>(
+        &mut self,
+        t: f32,
+        duration: f32,
+        pose_at: F,
+        transition: &mut SeamTransition,
+    ) -> Result<(), E>
+    where
+        F: FnMut(f32, &mut [f32]) -> Result<usize, E>,
+    {
+        let h = SEAM_STEP_S;
+        let rows = Self::sample(
+            &mut self.next,
+            &mut self.a,
+            &mut self.b,
+            t,
+            duration,
+            h,
+            pose_at,
+        )?;
+        transition.start(&self.prev, &self.next, rows.min(self.rows));
+        Ok(())
+    }
+}
+
 /// The exponential map of the same rotation as `v` on the branch nearest `reference`
 /// (`v + 2 pi k v / |v|` for the integer `k` that brings it closest).
 pub fn nearest_branch(v: Vec3, reference: Vec3) -> Vec3 {

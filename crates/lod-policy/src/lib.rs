@@ -46,7 +46,7 @@ pub mod model;
 pub mod policy;
 pub mod projection;
 
-pub use chain::{CycleFrame, PoseState, RootMotion, SeamTransition};
+pub use chain::{CycleFrame, PoseState, RootMotion, SeamScratch, SeamTransition};
 pub use error::{KernelError, ModelError};
 pub use kernel::{ClipKernel, Detail, KernelScratch, TURN_CONTROL};
 pub use model::{

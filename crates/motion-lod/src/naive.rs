@@ -16,7 +16,7 @@ use timewarp::TimeTable;
 use crate::build::Analysis;
 use crate::model::{MotionModel, TIME_ROW};
 use crate::sample_weights::SampleWeights;
-use crate::source::{bones_of, heading_of_exp_map, write_joints};
+use crate::source::{bones_of, write_joints};
 
 /// One walker's naive clip: the blended aligned cycle and its time table.
 #[derive(Debug, Clone)]
@@ -125,7 +125,12 @@ impl ClipSource for NaiveSource<'_> {
         }
         clip.times
             .fill_from_iter((0..t).map(|k| f64::from(clip.poses[k * p + TIME_ROW])));
-        clip.root_motion = root_motion_between(&clip.poses[..p], &clip.poses[(t - 1) * p..]);
+        clip.root_motion = root_motion_between(
+            self.model,
+            controls,
+            &clip.poses[..p],
+            &clip.poses[(t - 1) * p..],
+        );
     }
 
     fn clip_duration(&self, clip: &NaiveClip) -> f32 {
@@ -163,15 +168,20 @@ impl ClipSource for NaiveSource<'_> {
     }
 }
 
-/// Root motion over a clip from its first and last pose (rows 0..6: root position and exponential map):
-/// the end position's `(x, z)` and the heading change wrapped into `[-pi, pi)`.
-pub(crate) fn root_motion_between(start: &[f32], end: &[f32]) -> RootMotion {
-    let turn = heading_of_exp_map([end[3], end[4], end[5]])
-        - heading_of_exp_map([start[3], start[4], start[5]]);
+/// Root motion of a clip built for `controls` from its first and last pose (rows 0..6): the root's
+/// ground displacement and the travel turn the model's control space gives for them (the clamped
+/// turn control, or what the data imply when the model ignores turn: `ControlSpace::implied`), the
+/// rule of the model's own clips (`lod_policy::ClipKernel::root_motion`).
+pub(crate) fn root_motion_between(
+    model: &MotionModel,
+    controls: &Controls,
+    start: &[f32],
+    end: &[f32],
+) -> RootMotion {
+    let c = [controls.dx, controls.dz, controls.turn, controls.height];
     RootMotion {
-        dx: end[0],
-        dz: end[2],
-        turn: (turn + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
-            - std::f32::consts::PI,
+        dx: end[0] - start[0],
+        dz: end[2] - start[2],
+        turn: model.lod.controls().implied(lod_policy::TURN_CONTROL, &c),
     }
 }

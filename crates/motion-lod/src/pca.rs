@@ -294,7 +294,7 @@ impl ClipSource for PcaSource<'_> {
         let (mut start, mut end) = ([0.0f32; ROOT_ROWS], [0.0f32; ROOT_ROWS]);
         self.expand(&coeffs[..r], &mut start[..root]);
         self.expand(&coeffs[(t - 1) * r..], &mut end[..root]);
-        clip.root_motion = root_motion_between(&start, &end);
+        clip.root_motion = root_motion_between(self.model, controls, &start, &end);
     }
 
     fn clip_duration(&self, clip: &PcaClip) -> f32 {

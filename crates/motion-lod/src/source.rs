@@ -8,7 +8,7 @@
 use crowd_sim::{
     ClipSource, ControlBounds, Controls, Detail as CrowdDetail, LevelTable, RootMotion,
 };
-use glam::{Quat, Vec3};
+use glam::Vec3;
 use lod_policy::{ClipKernel, Detail, KernelScratch};
 use motion_io::PoseLayout;
 use std::sync::Mutex;
@@ -17,20 +17,6 @@ use crate::model::MotionModel;
 
 /// Largest skeleton handled without allocation in [`ClipSource::joints`].
 const MAX_JOINTS: usize = 128;
-
-/// Heading (yaw about +y, radians) of a root orientation given as an exponential map; 0 = facing +z,
-/// positive = turned left (towards +x).
-pub fn heading_of_exp_map(v: [f32; 3]) -> f32 {
-    let axis = Vec3::from_array(v);
-    let angle = axis.length();
-    let q = if angle > 1e-12 {
-        Quat::from_axis_angle(axis / angle, angle)
-    } else {
-        Quat::IDENTITY
-    };
-    let f = q * Vec3::Z;
-    f.x.atan2(f.z)
-}
 
 /// Bones between the root and the rotating joints of `layout`, as indices into the crowd's joint list
 /// (0 = root, `1 + k` = k-th rotating joint in row order).

@@ -9,12 +9,8 @@
 
 use glam::Vec3;
 use lod_policy::Detail;
-use lod_policy::chain::{self, CycleFrame, PoseState, SeamTransition};
+use lod_policy::chain::{self, CycleFrame, SeamScratch, SeamTransition};
 use motion_io::Motion;
-
-/// Step of the finite differences that give the velocities at a seam (s): one 30 fps frame, longer
-/// than an aligned frame of 120 Hz data, whose single-segment slopes are noisy.
-const SEAM_STEP_S: f64 = 1.0 / 30.0;
 
 use crate::model::{Evaluator, MotionModel, TIME_ROW};
 
@@ -98,9 +94,9 @@ impl MotionModel {
         let frames = (total / frame_time).floor() as usize + 1;
         let mut poses = Vec::with_capacity(frames * p);
         let mut transition = SeamTransition::new(p, chain::DEFAULT_HALFLIFE_S);
-        let (mut prev, mut next) = (PoseState::new(p), PoseState::new(p));
-        let (mut a, mut b, mut pose) = (vec![0.0f32; p], vec![0.0f32; p], vec![0.0f32; p]);
-        let h = SEAM_STEP_S.min(0.25 * duration);
+        let mut seam = SeamScratch::new(p);
+        let mut pose = vec![0.0f32; p];
+        let rows = kernel.rows();
         let mut frame = CycleFrame::default();
         let mut cycle = 0usize;
         for f in 0..frames {
@@ -109,14 +105,16 @@ impl MotionModel {
             while cycle < k {
                 // The seam: the displayed end of this cycle, in the next cycle's frame, against the
                 // next cycle's own start.
-                displayed(duration - h, &transition, &mut a)?;
-                displayed(duration, &transition, &mut b)?;
-                prev.set(&b, &a, &b, h as f32);
-                prev.into_next_frame(&motion);
-                eval(0.0, &mut a)?;
-                eval(h, &mut b)?;
-                next.set(&a, &a, &b, h as f32);
-                transition.start(&prev, &next, kernel.rows());
+                let end = duration as f32;
+                seam.capture(end, end, Some(&motion), |t, out| {
+                    displayed(f64::from(t), &transition, out).map(|()| rows)
+                })?;
+                seam.start(
+                    0.0,
+                    end,
+                    |t, out| eval(f64::from(t), out).map(|()| rows),
+                    &mut transition,
+                )?;
                 frame = frame.next(&motion);
                 cycle += 1;
             }
