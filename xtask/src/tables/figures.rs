@@ -227,6 +227,59 @@ pub fn figure5(path: &Path, pts: &[DistancePoint], data: &str) -> Result<()> {
     Ok(())
 }
 
+/// Section 7's figure: pop and skate as ratios to the data's median, worst and median over the grid
+/// walks per accuracy level (left), and at level 0 per walk against its step length (right).
+pub fn quality_figure(
+    path: &Path,
+    rows: &[super::quality::LevelRow],
+    level0: &[(f64, f64, f64)],
+    data: &str,
+) -> Result<()> {
+    let root = SVGBackend::new(path, (1200, 480)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (left, right) = root.split_horizontally(600);
+    let by_level = |name, color, y: &dyn Fn(&super::quality::LevelRow) -> f64| Series {
+        name,
+        color,
+        points: rows.iter().map(|r| (r.0 as f64, y(r))).collect(),
+    };
+    panel(
+        &left,
+        &format!("Pop and skate per level ({data})"),
+        "accuracy level",
+        "ratio to the data's median",
+        &[
+            by_level("pop, worst walk", COLORS[0], &|r| r.1),
+            by_level("skate, worst walk", COLORS[1], &|r| r.3),
+            by_level("pop, median walk", COLORS[2], &|r| r.2),
+        ],
+        false,
+    )?;
+    let mut sorted = level0.to_vec();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    panel(
+        &right,
+        "Level 0: pop and skate against the walk's step",
+        "step per cycle, |(dx, dz)| (m)",
+        "ratio to the data's median",
+        &[
+            Series {
+                name: "pop",
+                color: COLORS[0],
+                points: sorted.iter().map(|p| (p.0, p.1)).collect(),
+            },
+            Series {
+                name: "skate",
+                color: COLORS[1],
+                points: sorted.iter().map(|p| (p.0, p.2)).collect(),
+            },
+        ],
+        false,
+    )?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

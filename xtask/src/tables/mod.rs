@@ -22,6 +22,7 @@ pub mod markdown;
 pub mod measure;
 pub mod online;
 pub mod progress;
+pub mod quality;
 pub mod schemes;
 pub mod storage;
 pub mod timing;
@@ -266,6 +267,7 @@ pub fn run(config: &TablesConfig) -> Result<()> {
         &eval_config,
         progress,
     )?;
+    let motion_quality = quality::measure(&model, progress)?;
     let crowds = crowd::measure(
         &model,
         &analysis,
@@ -355,6 +357,37 @@ pub fn run(config: &TablesConfig) -> Result<()> {
          error of every key level, as in section 5.\n"
     );
     doc.push_str(&accuracy::plain_vs_weighted_table(&plain));
+    let mut figures_written = 2;
+    if let Some((reference, points)) = &motion_quality {
+        let path = config.figures.join("quality.svg");
+        let rows = quality::level_rows(reference, points);
+        let m = &reference.median;
+        let level0: Vec<(f64, f64, f64)> = points
+            .iter()
+            .filter(|p| p.level == 0)
+            .map(|p| {
+                (
+                    f64::from(p.walk.controls[0]).hypot(f64::from(p.walk.controls[1])),
+                    p.quality.pop_cm / m.pop_cm,
+                    p.quality.skate_cm_s / m.skate_cm_s,
+                )
+            })
+            .collect();
+        figures::quality_figure(&path, &rows, &level0, &data_name)?;
+        figures_written += 1;
+        doc.push_str(&quality::section(
+            &model,
+            reference,
+            points,
+            &relative_link(out_dir, &path),
+        ));
+    } else {
+        let _ = writeln!(
+            doc,
+            "\n## 7. Motion quality per accuracy level\n\nNot measured: the build found no feet in \
+             the skeleton, so the model has no motion-quality reference.\n"
+        );
+    }
     write_benches(&mut doc);
     if let Some(dir) = config.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -367,7 +400,7 @@ pub fn run(config: &TablesConfig) -> Result<()> {
         eprintln!(
             "tables: wrote {} and {} figures in {} ({:.0} s)",
             config.out.display(),
-            2,
+            figures_written,
             config.figures.display(),
             started.elapsed().as_secs_f64()
         );
@@ -592,7 +625,7 @@ fn write_crowd(doc: &mut String, rows: &[crowd::CrowdRow]) {
 fn write_benches(doc: &mut String) {
     let _ = writeln!(
         doc,
-        "\n## 7. Criterion benchmarks\n\nNot run by this command (they take longer); run them with \
+        "\n## 8. Criterion benchmarks\n\nNot run by this command (they take longer); run them with \
          `cargo bench -p motion-lod-benches --bench <name>`:\n"
     );
     let mut t = Table::new(&["bench", "measures"]);
