@@ -5,8 +5,9 @@
 //! predictions then change with it although the data cannot say how. [`select_dims`] drops such
 //! dimensions the way a constant one is dropped (scale 0: out of the trend and out of the distances).
 //!
-//! The rule (forward selection). For a set of dimensions `D`, fit the kriging on `D` (each fit
-//! chooses its own variogram, as [`Kriging::fit`] does) and take its leave-one-out errors
+//! The rule (forward selection). For a set of dimensions `D`, fit the kriging on `D` (with the
+//! variogram the caller's choice gives on every dimension: one search, not one per trial; the
+//! dimensions finally kept are refitted with their own search) and take its leave-one-out errors
 //! ([`Kriging::loo_errors`]) over the scored value columns: `e_i(D)^2` per sample and `E(D)` their root
 //! mean. Start with the single dimension that predicts best (kriging needs one). Adding a dimension `k`
 //! lowers the squared error of sample `i` by `r_i = e_i(D)^2 - e_i(D + k)^2`; its significance is the
@@ -20,7 +21,7 @@
 use faer::MatRef;
 use serde::{Deserialize, Serialize};
 
-use crate::config::KrigingConfig;
+use crate::config::{KrigingConfig, ModelChoice};
 use crate::error::KrigingError;
 use crate::kriging::Kriging;
 use crate::scaling::{ParamScaling, ScalingChoice};
@@ -155,15 +156,23 @@ pub fn select_dims(
         }
     }
     let base = ParamScaling::from_choice(&config.scaling, params)?;
-    let fit = |scaling: &ParamScaling| -> Result<Fitted, KrigingError> {
+    // `model`: the variogram choice of the fit (the caller's for the fits that are kept, the one
+    // chosen on every dimension for the trials).
+    let fit_with = |scaling: &ParamScaling, model: &ModelChoice| -> Result<Fitted, KrigingError> {
         let cfg = KrigingConfig {
             scaling: ScalingChoice::Given(scaling.clone()),
+            model: model.clone(),
             ..config.clone()
         };
         let k = Kriging::fit(params, values, &cfg)?;
         let e = sample_errors(&k, scored)?;
         Ok((k, e))
     };
+    // One variogram search on every dimension; the trials reuse its variogram, so that each costs one
+    // kriging solve instead of a search over every candidate.
+    let all_dims = fit_with(&base, &config.model)?;
+    let trial_model = ModelChoice::Given(*all_dims.0.variogram());
+    let fit = |scaling: &ParamScaling| fit_with(scaling, &trial_model);
     let d = base.dims();
     let mut decisions: Vec<Option<DimDecision>> = (0..d)
         .map(|k| (base.scale[k] == 0.0).then_some(DimDecision::Constant))
@@ -233,11 +242,15 @@ pub fn select_dims(
             }
         }
     }
+    let varying = (0..d).filter(|&k| base.scale[k] != 0.0).count();
     let (current, current_err) = match current {
-        Some(c) => c,
+        // Every varying dimension kept: the search on all of them is the fit.
+        Some(_) if chosen.len() == varying => all_dims,
+        // The kept dimensions get their own variogram search.
+        Some(_) => fit_with(&only(&chosen), &config.model)?,
         // No dimension could be fitted alone: fall back to every non-constant one.
         None => {
-            let (kr, e) = fit(&base)?;
+            let (kr, e) = all_dims;
             for (k, dec) in decisions.iter_mut().enumerate() {
                 if base.scale[k] != 0.0 {
                     *dec = Some(DimDecision::Kept {
