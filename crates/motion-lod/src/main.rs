@@ -26,7 +26,7 @@ enum Command {
     Eval(cli::eval::EvalArgs),
     /// Motion quality (pop, foot skate, floor, facing, cadence) of walks over the data's controls.
     Quality(cli::quality::QualityArgs),
-    /// Synthesize a walk for given controls and write it as a BVH file.
+    /// Synthesize a walk for given controls and write it as BVH or glTF (`.glb`).
     Synth(cli::synth::SynthArgs),
     /// Animate a crowd with the model's level of detail; time it, render it, compare with naive.
     Crowd(cli::crowd::CrowdArgs),

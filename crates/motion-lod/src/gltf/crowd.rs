@@ -1,0 +1,296 @@
+//! A crowd clip as a `.glb`: the crowd runs as `motion-lod crowd` runs it, and a subset of its
+//! walkers, spread over their distance from the camera, is recorded frame by frame as skinned
+//! characters coloured by their level of detail.
+
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+
+use crowd_sim::{
+    Camera, CameraPath, ClipSource, ControlBounds, Controls, Crowd, CrowdConfig, Detail,
+    DetailPolicy, LevelTable, RootMotion,
+};
+use glam::{Quat, Vec3};
+use lod_policy::Detail as ModelDetail;
+use motion_io::PoseLayout;
+use motion_io::expmap::quat_to_exp;
+use serde_json::json;
+
+use super::character::{Character, Rest};
+use super::glb::Scene;
+use super::{GltfError, level_color, level_label};
+use crate::model::MotionModel;
+use crate::synth::WalkRequest;
+
+/// What to record.
+#[derive(Debug, Clone)]
+pub struct CrowdClip {
+    /// The crowd (walkers, field, seed, frame rate).
+    pub config: CrowdConfig,
+    /// The camera's lens; its position follows [`CameraPath::inside_crowd`] as in `motion-lod crowd`.
+    pub lens: Camera,
+    /// Seconds recorded from the start.
+    pub seconds: f32,
+    /// Walkers written to the file (at most the crowd's), chosen evenly over their distance from
+    /// the camera at the start so that every level present shows.
+    pub exported: usize,
+}
+
+/// What was recorded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CrowdClipSummary {
+    /// Walkers written.
+    pub walkers: usize,
+    /// Frames per walker.
+    pub frames: usize,
+    /// Walkers per colour (level histogram bin: accuracy levels, then root only), by the level
+    /// each walker showed most often.
+    pub level_counts: Vec<usize>,
+}
+
+/// A clip source that passes everything to `inner` and keeps, per clip buffer, the last pose the
+/// crowd placed with it, stamped with the step it came from.
+struct Recorder<'a, S: ClipSource> {
+    inner: &'a S,
+    next_id: AtomicUsize,
+    step: AtomicU64,
+    slots: Vec<Mutex<(u64, Vec<f32>)>>,
+}
+
+impl<S: ClipSource> ClipSource for Recorder<'_, S> {
+    type Clip = (usize, S::Clip);
+
+    fn levels(&self) -> LevelTable {
+        self.inner.levels()
+    }
+    fn control_bounds(&self) -> ControlBounds {
+        self.inner.control_bounds()
+    }
+    fn new_clip(&self) -> Self::Clip {
+        (
+            self.next_id.fetch_add(1, Ordering::SeqCst),
+            self.inner.new_clip(),
+        )
+    }
+    fn build_clip(&self, controls: &Controls, detail: Detail, clip: &mut Self::Clip) {
+        self.inner.build_clip(controls, detail, &mut clip.1);
+    }
+    fn clip_duration(&self, clip: &Self::Clip) -> f32 {
+        self.inner.clip_duration(&clip.1)
+    }
+    fn clip_root_motion(&self, clip: &Self::Clip) -> RootMotion {
+        self.inner.clip_root_motion(&clip.1)
+    }
+    fn pose(&self, clip: &Self::Clip, t_seconds: f32, out: &mut [f32]) -> usize {
+        self.inner.pose(&clip.1, t_seconds, out)
+    }
+    fn joints(&self, clip: &Self::Clip, pose: &[f32], out: &mut [Vec3]) -> usize {
+        if let Some(slot) = self.slots.get(clip.0) {
+            let mut s = slot.lock().unwrap_or_else(|e| e.into_inner());
+            s.0 = self.step.load(Ordering::SeqCst);
+            s.1.clear();
+            s.1.extend_from_slice(pose);
+        }
+        self.inner.joints(&clip.1, pose, out)
+    }
+    fn bones(&self) -> &[(usize, usize)] {
+        self.inner.bones()
+    }
+}
+
+/// The walkers to export: `n` of them, evenly spaced in the order of their distance from `eye`.
+fn pick_walkers<C>(crowd: &Crowd<C>, eye: Vec3, n: usize) -> Vec<usize> {
+    let mut by_distance: Vec<(f32, usize)> = (0..crowd.len())
+        .map(|i| (crowd.root_position(i).distance(eye), i))
+        .collect();
+    by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let n = n.clamp(1, crowd.len());
+    let mut picked: Vec<usize> = (0..n)
+        .map(|k| by_distance[(k * crowd.len()) / n].1)
+        .collect();
+    picked.sort_unstable();
+    picked.dedup();
+    picked
+}
+
+/// A full pose vector (f64, `layout.dof()` rows) in the world frame from a crowd pose in the
+/// walker's cycle frame (`rows` rows written; the joints beyond them are at the rest rotation, as
+/// the crowd's forward kinematics places them), the cycle frame's origin `base` (x, z) and heading.
+fn world_pose(
+    layout: &PoseLayout,
+    rest_rows: &[f64],
+    pose: &[f32],
+    base: glam::Vec2,
+    heading: f32,
+) -> Vec<f64> {
+    let mut out = rest_rows.to_vec();
+    for (o, &v) in out.iter_mut().zip(pose) {
+        *o = f64::from(v);
+    }
+    let (sh, ch) = heading.sin_cos();
+    let (x, z) = (pose[0], pose[2]);
+    out[0] = f64::from(base.x + x * ch + z * sh);
+    out[2] = f64::from(base.y - x * sh + z * ch);
+    let q = motion_io::expmap::exp_to_quat_f32(Vec3::new(pose[3], pose[4], pose[5]));
+    let world = (Quat::from_rotation_y(heading) * q).normalize();
+    let e = quat_to_exp(world.as_dquat());
+    out[3..6].copy_from_slice(&e.to_array());
+    debug_assert_eq!(out.len(), layout.dof());
+    out
+}
+
+/// Runs the crowd of `clip` with the model's clip source under `policy` and returns the scene of the
+/// exported walkers: one character per walker (`walker NNN`), its body coloured by the level it
+/// showed most often (the crowd renderer's colours), its node's extras holding the level bin of
+/// every frame (`motion_lod.levels`), and the scene's extras the legend.
+pub fn export_crowd<P: DetailPolicy>(
+    model: &MotionModel,
+    policy: &P,
+    clip: &CrowdClip,
+) -> Result<(Scene, CrowdClipSummary), GltfError> {
+    if !(clip.seconds.is_finite() && clip.seconds > 0.0) {
+        return Err(GltfError::Poses(format!(
+            "clip length {} s is not a positive number",
+            clip.seconds
+        )));
+    }
+    let source = crate::LodSource::new(model);
+    let walkers = clip.config.walkers;
+    let recorder = Recorder {
+        inner: &source,
+        next_id: AtomicUsize::new(0),
+        step: AtomicU64::new(0),
+        slots: (0..2 * walkers)
+            .map(|_| Mutex::new((u64::MAX, Vec::new())))
+            .collect(),
+    };
+    // Built on one thread, the crowd asks for its clip buffers in walker order (current, then
+    // previous, for walker 0, 1, ...): buffers 2i and 2i + 1 are walker i's for the whole run
+    // (a walker only swaps its own two). Checked below at every frame against the crowd's roots.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map_err(|e| GltfError::Recording(format!("thread pool: {e}")))?;
+    let mut crowd = pool.install(|| Crowd::new(&recorder, clip.config))?;
+    let path = CameraPath::inside_crowd(clip.config.field_size_m);
+    let fps = clip.config.fps;
+    let frames = ((clip.seconds * fps).round() as usize).max(2);
+    let dt = 1.0 / fps;
+    let picked = pick_walkers(
+        &crowd,
+        path.camera_at(0.0, &clip.lens).position,
+        clip.exported,
+    );
+    let layout = &model.layout;
+    let rest_rows = layout.rest_pose();
+    let mut poses: Vec<Vec<f64>> = vec![Vec::with_capacity(frames * layout.dof()); picked.len()];
+    let mut bins: Vec<Vec<usize>> = vec![Vec::with_capacity(frames); picked.len()];
+    let mut stats = crowd_sim::FrameStats::default();
+    for f in 0..frames {
+        let camera = path.camera_at(f as f32 * dt, &clip.lens);
+        recorder.step.store(f as u64, Ordering::SeqCst);
+        crowd.step_into(&recorder, policy, &camera, dt, &mut stats)?;
+        for (k, &i) in picked.iter().enumerate() {
+            let pose = [2 * i, 2 * i + 1]
+                .iter()
+                .find_map(|&s| {
+                    let slot = recorder.slots[s].lock().unwrap_or_else(|e| e.into_inner());
+                    (slot.0 == f as u64).then(|| slot.1.clone())
+                })
+                .ok_or_else(|| {
+                    GltfError::Recording(format!("walker {i} was not placed at frame {f}"))
+                })?;
+            if pose.len() < 6 {
+                return Err(GltfError::Recording(format!(
+                    "walker {i}: a pose of {} rows at frame {f}",
+                    pose.len()
+                )));
+            }
+            let (base, heading) = crowd.cycle_frame(i);
+            let world = world_pose(layout, &rest_rows, &pose, base, heading);
+            let root = crowd.root_position(i);
+            let drift = Vec3::new(world[0] as f32, world[1] as f32, world[2] as f32).distance(root);
+            if drift > 1e-3 {
+                return Err(GltfError::Recording(format!(
+                    "walker {i} at frame {f}: the recorded root is {drift:.4} m from the crowd's"
+                )));
+            }
+            poses[k].extend_from_slice(&world);
+            bins[k].push(crowd.level_bin(i));
+        }
+    }
+    // One rest pose for all: the model's straight walk at the middle of its controls, its first
+    // frame, facing +Z; every walker shares it and so the body mesh.
+    let rest = Arc::new(reference_rest(model)?);
+    let levels = model.lod.levels().len();
+    let mut scene = Scene::new();
+    let mut material_of_bin: Vec<Option<usize>> = vec![None; levels + 1];
+    let mut level_counts = vec![0usize; levels + 1];
+    for (k, &i) in picked.iter().enumerate() {
+        let name = format!("walker {i:03}");
+        let character = Character::from_poses(layout, &rest, &poses[k], f64::from(dt), &name)?;
+        let bin = most_frequent(&bins[k], levels + 1);
+        level_counts[bin] += 1;
+        let material = match material_of_bin[bin] {
+            Some(m) => m,
+            None => {
+                let m = scene.add_material(&level_label(bin, levels), level_color(bin, levels));
+                material_of_bin[bin] = Some(m);
+                m
+            }
+        };
+        scene.add_character(
+            character,
+            material,
+            json!({ "motion_lod": { "walker": i, "levels": bins[k] } }),
+        );
+    }
+    let legend: Vec<_> = (0..=levels)
+        .map(|b| json!({ "label": level_label(b, levels), "color": level_color(b, levels) }))
+        .collect();
+    scene.set_extras(json!({
+        "motion_lod": {
+            "kind": "crowd",
+            "legend": legend,
+            "frame_time": dt,
+            "walkers": clip.config.walkers,
+            "field_size_m": clip.config.field_size_m,
+        }
+    }));
+    Ok((
+        scene,
+        CrowdClipSummary {
+            walkers: picked.len(),
+            frames,
+            level_counts,
+        },
+    ))
+}
+
+/// The most frequent value of `bins` (each below `n`; ties go to the finer level).
+fn most_frequent(bins: &[usize], n: usize) -> usize {
+    let mut count = vec![0usize; n];
+    for &b in bins {
+        count[b.min(n - 1)] += 1;
+    }
+    let best = count.iter().copied().max().unwrap_or(0);
+    count.iter().position(|&c| c == best).unwrap_or(0)
+}
+
+/// The rest pose every crowd character shares: the first frame of a one-cycle straight walk at the
+/// middle of the model's controls, facing its direction of travel.
+fn reference_rest(model: &MotionModel) -> Result<Rest, GltfError> {
+    let range = model.control_range();
+    let mid = |k: usize| 0.5 * (range[k].0 + range[k].1);
+    let req = WalkRequest {
+        controls: [mid(0), mid(1), 0.0f32.clamp(range[2].0, range[2].1), mid(3)],
+        detail: ModelDetail::full(),
+        cycles: 1,
+        fps: 30.0,
+        blend: false,
+        plant_feet: false,
+    };
+    let walk = model
+        .synthesize_walk(&req)
+        .map_err(|e| GltfError::Poses(format!("reference walk: {e}")))?;
+    super::walk_rest(&model.layout, &walk)
+}
