@@ -30,6 +30,8 @@ enum Command {
     Synth(cli::synth::SynthArgs),
     /// Animate a crowd with the model's level of detail; time it, render it, compare with naive.
     Crowd(cli::crowd::CrowdArgs),
+    /// Serve the web viewer and a .glb on localhost and print the address to open.
+    View(cli::view::ViewArgs),
     /// The main job on the embedded data: build, run 1,000 walkers for 10 s, render, report.
     Demo(cli::demo::DemoArgs),
 }
@@ -45,5 +47,6 @@ fn main() -> anyhow::Result<()> {
         Command::Quality(args) => cli::quality::run(args),
         Command::Crowd(args) => cli::crowd::run(args),
         Command::Demo(args) => cli::demo::run(args),
+        Command::View(args) => cli::view::run(args),
     }
 }

@@ -31,7 +31,8 @@ pub struct CrowdClip {
     /// Seconds recorded from the start.
     pub seconds: f32,
     /// Walkers written to the file (at most the crowd's), chosen evenly over their distance from
-    /// the camera at the start so that every level present shows.
+    /// the camera among the walkers in view at the start (then among the others), so that the
+    /// levels the camera's view shows appear.
     pub exported: usize,
 }
 
@@ -97,16 +98,32 @@ impl<S: ClipSource> ClipSource for Recorder<'_, S> {
     }
 }
 
-/// The walkers to export: `n` of them, evenly spaced in the order of their distance from `eye`.
+/// The walkers to export: `n` of them, evenly spaced in the order of their distance from `eye`,
+/// taken from the walkers in view first (those the camera sees, whose levels the policy chose by
+/// distance), then from the others.
 fn pick_walkers<C>(crowd: &Crowd<C>, eye: Vec3, n: usize) -> Vec<usize> {
-    let mut by_distance: Vec<(f32, usize)> = (0..crowd.len())
-        .map(|i| (crowd.root_position(i).distance(eye), i))
-        .collect();
-    by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let n = n.clamp(1, crowd.len());
-    let mut picked: Vec<usize> = (0..n)
-        .map(|k| by_distance[(k * crowd.len()) / n].1)
+    let mut by_distance: Vec<(bool, f32, usize)> = (0..crowd.len())
+        .map(|i| {
+            (
+                !crowd.is_visible(i),
+                crowd.root_position(i).distance(eye),
+                i,
+            )
+        })
         .collect();
+    by_distance.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let visible = by_distance.iter().filter(|w| !w.0).count();
+    let mut picked: Vec<usize> = if visible >= n {
+        (0..n).map(|k| by_distance[(k * visible) / n].2).collect()
+    } else {
+        let rest = crowd.len() - visible;
+        let more = n - visible;
+        (0..visible)
+            .map(|k| by_distance[k].2)
+            .chain((0..more).map(|k| by_distance[visible + (k * rest) / more].2))
+            .collect()
+    };
     picked.sort_unstable();
     picked.dedup();
     picked
@@ -175,20 +192,21 @@ pub fn export_crowd<P: DetailPolicy>(
     let fps = clip.config.fps;
     let frames = ((clip.seconds * fps).round() as usize).max(2);
     let dt = 1.0 / fps;
-    let picked = pick_walkers(
-        &crowd,
-        path.camera_at(0.0, &clip.lens).position,
-        clip.exported,
-    );
+    let start_camera = path.camera_at(0.0, &clip.lens);
+    let mut picked = Vec::new();
     let layout = &model.layout;
     let rest_rows = layout.rest_pose();
-    let mut poses: Vec<Vec<f64>> = vec![Vec::with_capacity(frames * layout.dof()); picked.len()];
-    let mut bins: Vec<Vec<usize>> = vec![Vec::with_capacity(frames); picked.len()];
+    let exported = clip.exported.clamp(1, walkers);
+    let mut poses: Vec<Vec<f64>> = vec![Vec::with_capacity(frames * layout.dof()); exported];
+    let mut bins: Vec<Vec<usize>> = vec![Vec::with_capacity(frames); exported];
     let mut stats = crowd_sim::FrameStats::default();
     for f in 0..frames {
         let camera = path.camera_at(f as f32 * dt, &clip.lens);
         recorder.step.store(f as u64, Ordering::SeqCst);
         crowd.step_into(&recorder, policy, &camera, dt, &mut stats)?;
+        if f == 0 {
+            picked = pick_walkers(&crowd, start_camera.position, clip.exported);
+        }
         for (k, &i) in picked.iter().enumerate() {
             let pose = [2 * i, 2 * i + 1]
                 .iter()
@@ -254,6 +272,11 @@ pub fn export_crowd<P: DetailPolicy>(
             "frame_time": dt,
             "walkers": clip.config.walkers,
             "field_size_m": clip.config.field_size_m,
+            "camera": {
+                "position": start_camera.position.to_array(),
+                "target": start_camera.target.to_array(),
+                "fov_y_deg": start_camera.fov_y.to_degrees(),
+            },
         }
     }));
     Ok((
