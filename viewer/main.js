@@ -36,6 +36,8 @@ sunBox.left = sunBox.bottom = -6;
 sunBox.right = sunBox.top = 6;
 sunBox.near = 0.5;
 sunBox.far = 40;
+sun.shadow.bias = -0.0005;
+sun.shadow.normalBias = 0.02;
 scene.add(sun, sun.target);
 
 const ground = new THREE.Mesh(
@@ -48,7 +50,7 @@ scene.add(ground);
 let grid = null;
 function setGrid(size, cells) {
   if (grid) scene.remove(grid);
-  grid = new THREE.GridHelper(size, cells, 0x7d7b74, 0x9c9a92);
+  grid = new THREE.GridHelper(size, cells, 0x6a6862, 0x8c8a82);
   grid.position.y = 0.002;
   scene.add(grid);
 }
@@ -312,7 +314,9 @@ const params = new URLSearchParams(location.search);
 const initial = params.get('file') ?? 'model.glb';
 fetch(initial, { method: 'HEAD' })
   .then((r) => {
-    if (r.ok) load(initial, params.get('name') ?? decodeURIComponent(initial.split('/').pop()));
+    // `motion-lod view` names the file it serves as model.glb in Content-Disposition.
+    const served = /filename="([^"]+)"/.exec(r.headers.get('content-disposition') ?? '')?.[1];
+    if (r.ok) load(initial, params.get('name') ?? served ?? decodeURIComponent(initial.split('/').pop()));
     else say('open a .glb (walk or crowd clip from motion-lod)');
   })
   .catch(() => say('open a .glb (walk or crowd clip from motion-lod)'));

@@ -160,6 +160,19 @@ fn serve(stream: TcpStream, file: &Path, dir: &Path) -> std::io::Result<()> {
     }
     let found = resolve(target, file, dir).and_then(|p| std::fs::read(&p).ok().map(|b| (p, b)));
     match found {
+        Some((p, body)) if p == file => {
+            // The viewer shows the file's own name.
+            let name: String = file
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+                .chars()
+                .filter(|c| !c.is_control() && *c != '"')
+                .collect();
+            let kind =
+                format!("model/gltf-binary\r\nContent-Disposition: inline; filename=\"{name}\"");
+            respond(&mut out, "200 OK", &kind, &body, method == "GET")
+        }
         Some((p, body)) => respond(&mut out, "200 OK", content_type(&p), &body, method == "GET"),
         None => respond(
             &mut out,
