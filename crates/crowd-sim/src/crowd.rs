@@ -498,6 +498,13 @@ impl<C> Crowd<C> {
         (self.walkers[i].base, self.walkers[i].heading)
     }
 
+    /// Pose vector of walker `i` from the last step, in its cycle frame ([`Crowd::cycle_frame`]):
+    /// the rows its clip wrote (the runtime's row layout, `ClipSource`), seam transition applied.
+    pub fn pose(&self, i: usize) -> &[f32] {
+        let pl = self.params.levels.pose_len;
+        &self.poses[i * pl..i * pl + self.walkers[i].rows.min(pl)]
+    }
+
     /// Whether walker `i` is inside a seam transition.
     pub fn in_transition(&self, i: usize) -> bool {
         self.walkers[i].seam.is_active()

@@ -161,7 +161,7 @@ pub fn select_dims(
     let fit_with = |scaling: &ParamScaling, model: &ModelChoice| -> Result<Fitted, KrigingError> {
         let cfg = KrigingConfig {
             scaling: ScalingChoice::Given(scaling.clone()),
-            model: model.clone(),
+            model: *model,
             ..config.clone()
         };
         let k = Kriging::fit(params, values, &cfg)?;

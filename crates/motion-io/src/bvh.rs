@@ -736,3 +736,53 @@ pub fn write_bvh(motion: &Motion, path: impl AsRef<Path>) -> Result<(), BvhError
         io(e)
     })
 }
+
+/// The same motion with the rest pose of its motion root moved over the origin: the OFFSET of the
+/// motion root ([`crate::motion_root`]) is replaced, in the components it has position channels
+/// for, so that with every rotation at zero (the BVH rest pose, what Blender shows as the rest
+/// pose) the root stands at `(0, h, 0)`, `h` being the root's mean height over the frames. Every
+/// other OFFSET, and every frame, is kept as it is.
+///
+/// Position channels replace the OFFSET components they name (the convention of this reader, of
+/// Blender and of three.js), so the animation is unchanged: only the rest pose moves. Data sets
+/// whose files carry the capture volume's position in the root's OFFSET (the Bandai files put the
+/// hips 4.3 m from the origin) otherwise leave every synthesized walk's rest pose there.
+///
+/// A motion without frames or without a root position channel is returned unchanged.
+pub fn with_rest_at_origin(motion: &Motion) -> Motion {
+    let mut out = motion.clone();
+    let sk = &motion.skeleton;
+    if motion.frame_count() == 0 || sk.validate().is_err() {
+        return out;
+    }
+    let root = crate::units::motion_root(motion);
+    let joint = &sk.joints[root];
+    if !joint.channels.iter().any(|c| c.is_position()) {
+        return out;
+    }
+    // World position of the root's parent in the rest pose: the sum of its ancestors' OFFSETs
+    // (rest rotations are zero).
+    let mut above = DVec3::ZERO;
+    let mut a = joint.parent;
+    while let Some(p) = a {
+        above += sk.joints[p].offset;
+        a = sk.joints[p].parent;
+    }
+    let mut t = vec![crate::skeleton::Transform::IDENTITY; sk.joints.len()];
+    let n = motion.frame_count();
+    let mean_height = (0..n)
+        .map(|f| {
+            sk.forward_kinematics(motion.frame(f), &mut t);
+            t[root].position.y
+        })
+        .sum::<f64>()
+        / n as f64;
+    let target = DVec3::new(0.0, mean_height, 0.0) - above;
+    let offset = &mut out.skeleton.joints[root].offset;
+    for c in &joint.channels {
+        if c.is_position() {
+            offset[c.axis()] = target[c.axis()];
+        }
+    }
+    out
+}

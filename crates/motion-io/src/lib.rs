@@ -44,7 +44,9 @@ mod skeleton;
 pub mod test_data;
 pub mod units;
 
-pub use bvh::{BvhError, BvhErrorKind, parse_bvh, read_bvh, to_bvh_string, write_bvh};
+pub use bvh::{
+    BvhError, BvhErrorKind, parse_bvh, read_bvh, to_bvh_string, with_rest_at_origin, write_bvh,
+};
 pub use contacts::{
     CycleError, Feet, FootNames, find_feet, mirrored_names, side_of, standing_height,
 };

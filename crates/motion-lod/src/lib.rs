@@ -64,6 +64,7 @@ pub mod crowd;
 pub mod dataset;
 pub mod eval;
 pub mod footlock;
+pub mod gltf;
 pub mod importance;
 pub mod info;
 pub mod metrics;

@@ -26,10 +26,12 @@ enum Command {
     Eval(cli::eval::EvalArgs),
     /// Motion quality (pop, foot skate, floor, facing, cadence) of walks over the data's controls.
     Quality(cli::quality::QualityArgs),
-    /// Synthesize a walk for given controls and write it as a BVH file.
+    /// Synthesize a walk for given controls and write it as BVH or glTF (`.glb`).
     Synth(cli::synth::SynthArgs),
     /// Animate a crowd with the model's level of detail; time it, render it, compare with naive.
     Crowd(cli::crowd::CrowdArgs),
+    /// Serve the web viewer and a .glb on localhost and print the address to open.
+    View(cli::view::ViewArgs),
     /// The main job on the embedded data: build, run 1,000 walkers for 10 s, render, report.
     Demo(cli::demo::DemoArgs),
 }
@@ -45,5 +47,6 @@ fn main() -> anyhow::Result<()> {
         Command::Quality(args) => cli::quality::run(args),
         Command::Crowd(args) => cli::crowd::run(args),
         Command::Demo(args) => cli::demo::run(args),
+        Command::View(args) => cli::view::run(args),
     }
 }

@@ -11,6 +11,7 @@ use motion_lod::build::Analysis;
 use motion_lod::crowd::{
     CrowdOutcome, CrowdRun, FullDetail, ModelPolicy, check_render_dir, run_crowd,
 };
+use motion_lod::gltf::crowd::{CrowdClip, export_crowd};
 use motion_lod::progress::NoProgress;
 use motion_lod::{LodSource, MotionModel, NaiveSource, PcaSource};
 use serde::Serialize;
@@ -75,6 +76,29 @@ pub struct CrowdArgs {
     /// Print one JSON line instead of the report.
     #[arg(long)]
     pub json: bool,
+    /// Also write a short clip of this crowd as glTF 2.0 binary (`.glb`): one skinned character per
+    /// exported walker, coloured by its level of detail (view it with `motion-lod view FILE`).
+    #[arg(long, value_name = "FILE.glb")]
+    pub export: Option<PathBuf>,
+    /// Walkers written by `--export`, spread evenly over their distance from the camera (1..=1000).
+    #[arg(long, default_value_t = 24, value_parser = super::ranges::count((1, 1000)))]
+    pub export_walkers: usize,
+    /// Seconds recorded by `--export` (0 < s <= 60).
+    #[arg(long, default_value_t = 3.0, value_parser = export_seconds)]
+    pub export_seconds: f32,
+}
+
+/// `--export-seconds`: in `(0, 60]`.
+fn export_seconds(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .trim()
+        .parse()
+        .map_err(|e| format!("`{s}` is not a number ({e})"))?;
+    if v.is_finite() && v > 0.0 && v <= 60.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s} is not in (0, 60]"))
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -153,6 +177,17 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     if args.pca_rank == 0 {
         bail!("--pca-rank must be at least 1");
     }
+    if let Some(path) = &args.export {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        if ext.as_deref() != Some("glb") {
+            bail!(
+                "--export {}: the clip is written as glTF binary; use a name ending in .glb",
+                path.display()
+            );
+        }
+    }
     let need_analysis = args.naive || args.compare_naive || args.pca || args.compare_pca;
     let (model, analysis) = model_and_analysis(args.model.as_ref(), need_analysis, args.json)?;
     let run = CrowdRun {
@@ -214,6 +249,10 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     } else {
         None
     };
+    let exported = match &args.export {
+        Some(path) => Some(export_clip(&model, &args, &run, path)?),
+        None => None,
+    };
     let ratio_to = |other: &CrowdOutcome| main.report.fps_mean / other.report.fps_mean.max(1e-12);
     let ratio = naive.as_ref().map(ratio_to);
     let pca_ratio = pca.as_ref().map(ratio_to);
@@ -229,6 +268,9 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             levels: main.last.level_histogram.clone(),
         };
         println!("{}", serde_json::to_string(&summary)?);
+        if let Some(msg) = exported {
+            eprintln!("{msg}");
+        }
         return Ok(());
     }
     let (source_name, short) = if args.naive {
@@ -257,6 +299,9 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         println!("{}", n.report);
         println!("{short} / PCA mean frame rate: {r:.2}x");
     }
+    if let Some(msg) = exported {
+        println!("{msg}");
+    }
     if let Some(dir) = &args.render {
         println!(
             "rendered {} frames into {} (frame_*.png, map_*.png){}",
@@ -268,6 +313,58 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Records `--export-seconds` of the crowd of `run` (the model's source, the chosen policy) and
+/// writes `--export-walkers` of its walkers to `path`; returns the line to print.
+fn export_clip(
+    model: &MotionModel,
+    args: &CrowdArgs,
+    run: &CrowdRun,
+    path: &std::path::Path,
+) -> anyhow::Result<String> {
+    let clip = CrowdClip {
+        config: run.config,
+        lens: run.lens,
+        seconds: args.export_seconds,
+        exported: args.export_walkers,
+    };
+    let lod = &model.lod;
+    let (scene, summary) = match args.policy {
+        PolicyArg::Distance => export_crowd(
+            model,
+            &ModelPolicy::new(DistancePolicy::for_model(lod), lod),
+            &clip,
+        ),
+        PolicyArg::Screen => export_crowd(
+            model,
+            &ModelPolicy::new(
+                ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
+                lod,
+            ),
+            &clip,
+        ),
+    }
+    .context("recording the crowd clip")?;
+    scene
+        .write(path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    let levels = lod.levels().len();
+    let per_level: Vec<String> = summary
+        .level_counts
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| **c > 0)
+        .map(|(b, c)| format!("{c} at {}", motion_lod::gltf::level_label(b, levels)))
+        .collect();
+    Ok(format!(
+        "wrote {}: {} walkers x {} frames ({}); view it with `motion-lod view {}`",
+        path.display(),
+        summary.walkers,
+        summary.frames,
+        per_level.join(", "),
+        path.display()
+    ))
 }
 
 /// The PCA baseline over the model's training samples.

@@ -11,3 +11,4 @@ pub mod info;
 pub mod quality;
 pub mod ranges;
 pub mod synth;
+pub mod view;

@@ -1,4 +1,5 @@
-//! `motion-lod synth model.mlod --dx --dz --turn [--height] -o walk.bvh`: a walk as a BVH file.
+//! `motion-lod synth model.mlod --dx --dz --turn [--height] -o walk.bvh|walk.glb`: a walk as a BVH
+//! file, or as glTF 2.0 binary when the output ends in `.glb` (format by extension).
 
 use std::path::PathBuf;
 
@@ -47,13 +48,25 @@ pub struct SynthArgs {
     /// Refuse controls outside the data's range instead of clamping them.
     #[arg(long)]
     pub strict: bool,
-    /// The BVH file to write (atomically).
+    /// The file to write (atomically): `.glb` for glTF 2.0 binary (skinned body and animation, for
+    /// engines and browsers), anything else for BVH.
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
 }
 
 /// Runs the subcommand.
 pub fn run(args: SynthArgs) -> anyhow::Result<()> {
+    let ext = args
+        .output
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if ext.as_deref() == Some("gltf") {
+        bail!(
+            "{}: glTF is written as binary .glb only; use a name ending in .glb",
+            args.output.display()
+        );
+    }
+    let glb = ext.as_deref() == Some("glb");
     let model = MotionModel::load(&args.model)
         .with_context(|| format!("reading {}", args.model.display()))?;
     let range = model.control_range();
@@ -118,7 +131,31 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     let walk = model
         .synthesize_walk(&req)
         .context("synthesizing the walk")?;
-    let motion = model.walk_motion(&walk).context("converting to BVH")?;
+    if glb {
+        let name = args
+            .output
+            .file_stem()
+            .map_or_else(|| "walk".into(), |s| s.to_string_lossy().into_owned());
+        let scene = motion_lod::gltf::export_walk(&model, &walk, args.level, &name)
+            .context("converting to glTF")?;
+        scene
+            .write(&args.output)
+            .with_context(|| format!("writing {}", args.output.display()))?;
+        let frames = walk.poses.len() / model.layout.dof();
+        println!(
+            "wrote {}: {} cycles of {:.3} s, {frames} frames at {} fps (glTF 2.0; view it with \
+             `motion-lod view {}`)",
+            args.output.display(),
+            args.cycles,
+            walk.cycle_seconds,
+            args.fps,
+            args.output.display()
+        );
+        return Ok(());
+    }
+    // The skeleton's own OFFSETs, with the rest pose's hips over the origin.
+    let motion =
+        motion_io::with_rest_at_origin(&model.walk_motion(&walk).context("converting to BVH")?);
     motion_io::write_bvh(&motion, &args.output)
         .with_context(|| format!("writing {}", args.output.display()))?;
     println!(
