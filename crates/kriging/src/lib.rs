@@ -83,7 +83,7 @@ pub use linalg::{PINV_RTOL, sym_pinv};
 pub use projected::ProjectedQuery;
 pub use rbf::{RBF_SMOOTHING_GRID, Rbf, RbfConfig, RbfKernel, RbfSmoothing, SmoothingCandidate};
 pub use scaling::{ParamScaling, ScalingChoice};
-pub use select::{DimDecision, DimSelection, SelectRule, select_dims};
+pub use select::{DimDecision, DimSelection, SelectRule, TRIAL_SEARCH_MAX_SAMPLES, select_dims};
 pub use variogram::{Variogram, VariogramModel, shape};
 
 /// Fails with [`KrigingError::NonFinite`] at the first NaN or infinity of `m` (column by column).

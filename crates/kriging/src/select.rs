@@ -5,9 +5,10 @@
 //! predictions then change with it although the data cannot say how. [`select_dims`] drops such
 //! dimensions the way a constant one is dropped (scale 0: out of the trend and out of the distances).
 //!
-//! The rule (forward selection). For a set of dimensions `D`, fit the kriging on `D` (with the
-//! variogram the caller's choice gives on every dimension: one search, not one per trial; the
-//! dimensions finally kept are refitted with their own search) and take its leave-one-out errors
+//! The rule (forward selection). For a set of dimensions `D`, fit the kriging on `D` (each fit
+//! chooses its own variogram as [`Kriging::fit`] does; above [`TRIAL_SEARCH_MAX_SAMPLES`] samples
+//! the trials reuse the variogram chosen on every dimension, and the dimensions finally kept get their
+//! own search) and take its leave-one-out errors
 //! ([`Kriging::loo_errors`]) over the scored value columns: `e_i(D)^2` per sample and `E(D)` their root
 //! mean. Start with the single dimension that predicts best (kriging needs one). Adding a dimension `k`
 //! lowers the squared error of sample `i` by `r_i = e_i(D)^2 - e_i(D + k)^2`; its significance is the
@@ -79,6 +80,11 @@ pub struct DimSelection {
     /// Leave-one-out RMSE of `kriging` (over the scored columns).
     pub loo_rmse: f64,
 }
+
+/// Up to this many samples every trial of [`select_dims`] chooses its own variogram; above, the
+/// trials reuse the one chosen on every dimension (at 800 samples a search per trial made the
+/// selection 70 s of a motion model's build).
+pub const TRIAL_SEARCH_MAX_SAMPLES: usize = 256;
 
 /// A fitted kriging with its per-sample squared leave-one-out errors.
 type Fitted = (Kriging, Vec<f64>);
@@ -168,10 +174,15 @@ pub fn select_dims(
         let e = sample_errors(&k, scored)?;
         Ok((k, e))
     };
-    // One variogram search on every dimension; the trials reuse its variogram, so that each costs one
-    // kriging solve instead of a search over every candidate.
+    // One variogram search on every dimension. With many samples the trials reuse its variogram, so
+    // that each costs one kriging solve instead of a search over every candidate; with few, each
+    // trial searches its own (cheap there, and closer to the fit that will be kept).
     let all_dims = fit_with(&base, &config.model)?;
-    let trial_model = ModelChoice::Given(*all_dims.0.variogram());
+    let trial_model = if params.nrows() > TRIAL_SEARCH_MAX_SAMPLES {
+        ModelChoice::Given(*all_dims.0.variogram())
+    } else {
+        config.model
+    };
     let fit = |scaling: &ParamScaling| fit_with(scaling, &trial_model);
     let d = base.dims();
     let mut decisions: Vec<Option<DimDecision>> = (0..d)
