@@ -1,5 +1,5 @@
-//! Smoke test of the `cargo xtask tables` pipeline on a tiny configuration: every section and both
-//! figures are written, and the measured numbers are finite.
+//! Smoke test of the `cargo xtask tables` pipeline on a tiny configuration: every section and all
+//! three figures are written, and the measured numbers are finite.
 
 use xtask::tables::{TablesConfig, run};
 
@@ -19,10 +19,12 @@ fn tables_pipeline_writes_every_section_and_figure() {
         "## 4. Crowd frame rates",
         "## 5. Accuracy",
         "## 6. The paper's plain tensor",
-        "## 7. Criterion benchmarks",
+        "## 7. Motion quality per accuracy level",
+        "## 8. Criterion benchmarks",
         "paper (published)",
         "](figures/figure4.svg)",
         "](figures/figure5.svg)",
+        "](figures/quality.svg)",
     ] {
         assert!(doc.contains(heading), "missing {heading:?} in:\n{doc}");
     }
@@ -34,7 +36,7 @@ fn tables_pipeline_writes_every_section_and_figure() {
             && doc.contains("| 200 | pca |"),
         "{doc}"
     );
-    for f in ["figure4.svg", "figure5.svg"] {
+    for f in ["figure4.svg", "figure5.svg", "quality.svg"] {
         let svg = std::fs::read_to_string(figures.join(f)).expect("figure written");
         assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{f}");
     }
