@@ -114,6 +114,8 @@ pub struct Crowd<C> {
     params: StageParams,
     walkers: Vec<Walker<C>>,
     poses: Vec<f32>,
+    /// Scratch of the seam transitions started in the kernel stage, one per `CHUNK` walkers.
+    seam_scratch: Vec<SeamScratch>,
     joints: Vec<Vec3>,
     bounds: Vec<Bounds>,
     visible: Vec<bool>,
@@ -213,6 +215,9 @@ impl<C: Send> Crowd<C> {
             params,
             walkers,
             poses: vec![0.0; n * levels.pose_len],
+            seam_scratch: (0..n.div_ceil(CHUNK))
+                .map(|_| SeamScratch::new(levels.pose_len))
+                .collect(),
             joints: vec![Vec3::ZERO; n * npos],
             bounds: vec![
                 Bounds {
@@ -300,22 +305,27 @@ impl<C: Send> Crowd<C> {
         let t1 = Instant::now();
         let params = self.params;
         let eye = camera.position;
+        // One seam scratch per chunk of walkers, allocated by `new`: nothing is allocated here.
         let fault = self
             .walkers
-            .par_iter_mut()
-            .zip(self.visible.par_iter())
+            .par_chunks_mut(CHUNK)
+            .zip(self.visible.par_chunks(CHUNK))
+            .zip(self.seam_scratch.par_iter_mut())
             .enumerate()
-            .with_min_len(CHUNK)
-            .map_init(
-                || SeamScratch::new(params.levels.pose_len),
-                |scratch, (i, (w, &vis))| {
+            .map(|(c, ((walkers, visible), scratch))| {
+                let mut built = 0;
+                let mut fault = None;
+                for (k, (w, &vis)) in walkers.iter_mut().zip(visible).enumerate() {
                     let d = policy.detail(w.root.distance(eye), vis, camera);
                     match w.advance(source, &params, d, dt, scratch) {
-                        Ok(n) => (n, None),
-                        Err(e) => (0, Some((i, e))),
+                        Ok(n) => built += n,
+                        Err(e) => {
+                            fault.get_or_insert((c * CHUNK + k, e));
+                        }
                     }
-                },
-            )
+                }
+                (built, fault)
+            })
             .reduce(
                 || (0, None),
                 |a, b| {

@@ -24,11 +24,8 @@ pub fn heading_of(d: Vec2) -> f32 {
     d.x.atan2(d.y)
 }
 
-/// Wraps an angle into `(-pi, pi]`.
-pub fn wrap_angle(a: f32) -> f32 {
-    let w = (a + PI).rem_euclid(TAU) - PI;
-    if w <= -PI { w + TAU } else { w }
-}
+/// Wraps an angle into `(-pi, pi]`: the runtime's [`lod_policy::chain::wrap_angle`].
+pub use lod_policy::chain::wrap_angle;
 
 /// A closed elliptic path `p(s) = c + R(rot) (a cos s, b sin s)`, travelled with increasing `s`
 /// when `dir = 1` and decreasing `s` when `dir = -1`.

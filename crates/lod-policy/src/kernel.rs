@@ -394,17 +394,7 @@ impl LodModel {
             self.pose_rows(out, phase, e)?;
         }
         let [start, end] = ends;
-        let turn = match controls.get(TURN_CONTROL) {
-            Some(_) if d > TURN_CONTROL => cs.implied(TURN_CONTROL, controls),
-            _ => {
-                crate::chain::wrap_angle(yaw_of_exp_map(&end[3..6]) - yaw_of_exp_map(&start[3..6]))
-            }
-        };
-        out.root_motion = RootMotion {
-            dx: end[0] - start[0],
-            dz: end[2] - start[2],
-            turn,
-        };
+        out.root_motion = cs.root_motion(controls, &start, &end);
         Ok(())
     }
 

@@ -9,6 +9,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::chain::RootMotion;
+
 use crate::error::ModelError;
 
 pub use kriging::{Variogram, VariogramModel};
@@ -120,6 +122,25 @@ pub struct ControlSpace {
 }
 
 impl ControlSpace {
+    /// Root motion of a clip built for `controls` (raw, length `d`) whose first and last poses are
+    /// `start` and `end` (rows 0-5: root position and exponential map): the root's ground
+    /// displacement, and the travel turn, the turn control as [`ControlSpace::implied`] reads it
+    /// (the pelvis's yaw change for a control space without a turn dimension). The one rule every
+    /// clip source chains by ([`crate::chain`]).
+    pub fn root_motion(&self, controls: &[f32], start: &[f32], end: &[f32]) -> RootMotion {
+        use crate::kernel::{TURN_CONTROL, yaw_of_exp_map};
+        let turn = if self.scale.len() > TURN_CONTROL && controls.len() > TURN_CONTROL {
+            self.implied(TURN_CONTROL, controls)
+        } else {
+            crate::chain::wrap_angle(yaw_of_exp_map(&end[3..6]) - yaw_of_exp_map(&start[3..6]))
+        };
+        RootMotion {
+            dx: end[0] - start[0],
+            dz: end[2] - start[2],
+            turn,
+        }
+    }
+
     /// The value of dimension `k` that the controls `c` (raw, length `d`, each clamped to the data's
     /// range here) imply: `c_k` itself for a kept dimension, else the least-squares prediction from
     /// the kept ones ([`ControlSpace::implied`] field), clamped to the data's range of `c_k`.

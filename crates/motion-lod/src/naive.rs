@@ -168,10 +168,8 @@ impl ClipSource for NaiveSource<'_> {
     }
 }
 
-/// Root motion of a clip built for `controls` from its first and last pose (rows 0..6): the root's
-/// ground displacement and the travel turn the model's control space gives for them (the clamped
-/// turn control, or what the data imply when the model ignores turn: `ControlSpace::implied`), the
-/// rule of the model's own clips (`lod_policy::ClipKernel::root_motion`).
+/// Root motion of a clip built for `controls` from its first and last pose: the model's one rule
+/// ([`lod_policy::ControlSpace::root_motion`]).
 pub(crate) fn root_motion_between(
     model: &MotionModel,
     controls: &Controls,
@@ -179,9 +177,5 @@ pub(crate) fn root_motion_between(
     end: &[f32],
 ) -> RootMotion {
     let c = [controls.dx, controls.dz, controls.turn, controls.height];
-    RootMotion {
-        dx: end[0] - start[0],
-        dz: end[2] - start[2],
-        turn: model.lod.controls().implied(lod_policy::TURN_CONTROL, &c),
-    }
+    model.lod.controls().root_motion(&c, start, end)
 }

@@ -55,17 +55,12 @@ pub fn median_ns(budget: Budget, mut f: impl FnMut()) -> f64 {
     median(&mut per_call)
 }
 
-/// Median of `v` (mean of the two middle values for an even length; NaN when empty).
+/// Median of `v` ([`motion_lod::quality::median`]), NaN when empty. Reorders `v`.
 pub fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
+        f64::NAN
     } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
+        motion_lod::quality::median(v)
     }
 }
 
