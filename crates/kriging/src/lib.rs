@@ -59,24 +59,39 @@
 
 #![warn(missing_docs)]
 
+mod anisotropy;
 mod config;
 mod empirical;
 mod error;
 mod fit;
+pub mod geo;
+mod kdtree;
 mod kriging;
 mod linalg;
+mod nested;
 mod projected;
 mod rbf;
 mod scaling;
 pub mod search;
+mod special;
 mod variogram;
 
+/// The linear-algebra crate whose matrix types ([`faer::MatRef`], [`faer::Mat`]) this crate takes
+/// and returns, re-exported so that users need not depend on the same version themselves.
+pub use faer;
+
+pub use anisotropy::Anisotropy;
 pub use config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoice, Selection};
-pub use empirical::EmpiricalVariogram;
+pub use empirical::{Binning, EmpiricalVariogram, MaxLag};
 pub use error::KrigingError;
-pub use fit::{FitOptions, FitWeights, FittedVariogram, fit_variogram};
+pub use fit::{FitOptions, FitWeights, FittedVariogram, MATERN_NUS, fit_variogram};
+pub use geo::{
+    Drift, Krige, KrigeModel, LooStats, Neighbourhood, Prediction, Predictions, VariogramChoice,
+    VariogramFitReport,
+};
 pub use kriging::{Kriging, augmented_params};
 pub use linalg::{PINV_RTOL, sym_pinv};
+pub use nested::{NestedVariogram, Structure};
 pub use projected::ProjectedQuery;
 pub use rbf::{RBF_SMOOTHING_GRID, Rbf, RbfConfig, RbfKernel, RbfSmoothing, SmoothingCandidate};
 pub use scaling::{ParamScaling, ScalingChoice};
