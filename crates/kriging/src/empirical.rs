@@ -313,15 +313,19 @@ impl EmpiricalVariogram {
             return Err(KrigingError::NoSpread { samples: s });
         }
         let dh = max_lag / bins as f64;
+        let max2 = max_lag * max_lag;
         let row_bins = |i: usize| {
             let mut sums = vec![0.0; bins];
             let mut counts = vec![0usize; bins];
             let xi = &vals[i * dv..(i + 1) * dv];
-            for j in i + 1..s {
-                let h = pair(i, j);
-                if h > max_lag {
+            let pi = &pts[i * d..(i + 1) * d];
+            for (j, pj) in pts.chunks_exact(d).enumerate().skip(i + 1) {
+                // Squared distance first: most pairs of a large set lie beyond the maximum lag.
+                let h2: f64 = pi.iter().zip(pj).map(|(a, b)| (a - b) * (a - b)).sum();
+                if h2 > max2 {
                     continue;
                 }
+                let h = h2.sqrt();
                 let xj = &vals[j * dv..(j + 1) * dv];
                 let sq: f64 = xi.iter().zip(xj).map(|(a, b)| (a - b) * (a - b)).sum();
                 let u = ((h / dh) as usize).min(bins - 1);
