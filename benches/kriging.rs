@@ -39,7 +39,7 @@ fn data() -> (Mat<f64>, Mat<f64>) {
 fn bench(c: &mut Criterion) {
     let (params, values) = data();
     let fixed = KrigingConfig {
-        method: Method::Universal,
+        method: Method::Regression,
         model: ModelChoice::Fixed(VariogramModel::Exponential),
         ..KrigingConfig::default()
     };

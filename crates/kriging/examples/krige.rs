@@ -132,7 +132,7 @@ fn run() -> Result<String, Error> {
         (r.kernel().name().to_string(), r.leave_one_out()?.rmse)
     } else {
         let method = match args.method.as_str() {
-            "universal" => Method::Universal,
+            "universal" => Method::Regression,
             "ordinary" => Method::Ordinary,
             m => return Err(format!("unknown method {m}\n{USAGE}").into()),
         };

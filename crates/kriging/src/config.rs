@@ -11,10 +11,26 @@ use crate::variogram::{Variogram, VariogramModel};
 pub enum Method {
     /// Ordinary kriging of the values (appendix A system with the Lagrange multiplier).
     Ordinary,
-    /// The paper's universal kriging (eq. 8): least-squares trend hyperplane `F = K C^+` over
-    /// `[c; 1]`, ordinary kriging of the residuals.
+    /// Regression kriging, the paper's "universal kriging" (eq. 8): an ordinary least-squares trend
+    /// hyperplane `F = K C^+` over `[c; 1]`, then ordinary kriging of the residuals; the prediction
+    /// is `F [c; 1] + sum_i b_i(c) r_i`. It is not the textbook universal kriging predictor (the
+    /// best linear unbiased predictor with drift terms inside the kriging system, which estimates
+    /// the trend by generalised least squares): for that, and for kriging variances, see
+    /// [`crate::Krige`] with [`crate::Drift::Linear`]. Serialised as `"Regression"` (older
+    /// `"Universal"` is read as this).
     #[default]
-    Universal,
+    #[serde(alias = "Universal")]
+    Regression,
+}
+
+#[allow(non_upper_case_globals)]
+impl Method {
+    /// The old name of [`Method::Regression`] (the paper calls it universal kriging).
+    #[deprecated(
+        note = "this is regression kriging (OLS trend plus ordinary kriging of the residuals): use \
+                Method::Regression, or kriging::Krige with a Drift for textbook universal kriging"
+    )]
+    pub const Universal: Method = Method::Regression;
 }
 
 /// How automatic model choice ranks the candidate variogram models.
@@ -50,7 +66,7 @@ impl Default for ModelChoice {
 /// Everything [`crate::Kriging::fit`] needs besides the data.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KrigingConfig {
-    /// Ordinary or universal kriging.
+    /// Ordinary or regression kriging.
     pub method: Method,
     /// Variogram model choice.
     pub model: ModelChoice,
@@ -64,12 +80,21 @@ pub struct KrigingConfig {
     pub fit_weights: FitWeights,
 }
 
+impl KrigingConfig {
+    /// The preset of the motion model (Mukai and Kuriyama): the paper's regression kriging over
+    /// standardised controls with the variogram chosen by leave-one-out search. The same as
+    /// [`KrigingConfig::default`], named for what it is for; for maps see [`crate::Krige`].
+    pub fn motion() -> Self {
+        KrigingConfig::default()
+    }
+}
+
 impl Default for KrigingConfig {
-    /// Universal kriging, model chosen by leave-one-out error, 20 intervals, standardised
+    /// Regression kriging (the paper's), model chosen by leave-one-out error, 20 intervals, standardised
     /// parameters, nugget fitted, pair-count weights.
     fn default() -> Self {
         KrigingConfig {
-            method: Method::Universal,
+            method: Method::Regression,
             model: ModelChoice::default(),
             bins: 20,
             scaling: ScalingChoice::Standardise,

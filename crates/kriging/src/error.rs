@@ -99,4 +99,30 @@ pub enum KrigingError {
     /// Automatic model selection found no usable model.
     #[error("no variogram model could be used: {0}")]
     NoModel(String),
+    /// The drift (trend) system of universal kriging is singular or too ill-conditioned: the drift
+    /// terms are (nearly) linearly dependent over the samples, for example a linear drift on
+    /// collinear samples or a quadratic drift on points along a curve.
+    #[error(
+        "the drift system ({terms} terms over {samples} samples) is ill-conditioned \
+         (eigenvalue ratio {ratio:.3e}): the drift terms are (nearly) dependent over the samples; \
+         use a lower-order drift"
+    )]
+    IllConditionedDrift {
+        /// Number of drift terms.
+        terms: usize,
+        /// Number of samples in the system.
+        samples: usize,
+        /// Smallest over largest eigenvalue of `F^t C^-1 F`.
+        ratio: f64,
+    },
+    /// A query point of a moving neighbourhood has too few samples within reach.
+    #[error("query point {point} has {got} samples in its neighbourhood, needs at least {needed}")]
+    QueryNeighbourhood {
+        /// Index of the query point.
+        point: usize,
+        /// Samples needed (drift terms plus one).
+        needed: usize,
+        /// Samples found.
+        got: usize,
+    },
 }

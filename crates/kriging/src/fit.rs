@@ -44,6 +44,9 @@ pub struct FittedVariogram {
     pub wsse: f64,
 }
 
+/// Smoothness values `nu` a Matérn fit chooses from.
+pub const MATERN_NUS: [f64; 6] = [0.25, 0.5, 1.0, 1.5, 2.5, 5.0];
+
 /// Grid size of the bounded 1-D search over the range or the exponent.
 const GRID: usize = 48;
 /// Golden-section refinement steps after the grid.
@@ -57,7 +60,8 @@ struct Points {
 
 /// Fits `model` to `emp` by weighted least squares: `min sum_u w_u (n + s f(h_u; theta) - gamma_u)^2`
 /// over nugget `n >= 0`, sill `s > 0` and the shape parameter `theta` (range for bounded models,
-/// exponent in (0, 2) for the power model, none for the linear model). For each `theta`, `n` and
+/// exponent in (0, 2) for the power model, none for the linear model; the Matérn smoothness `nu`
+/// is the best of [`MATERN_NUS`]). For each `theta`, `n` and
 /// `s` enter linearly and are solved in closed form with the bounds enforced; `theta` is found by a
 /// log-spaced grid followed by golden-section refinement, both deterministic.
 ///
@@ -107,23 +111,40 @@ pub fn fit_variogram(
     }
     let hmax = emp.bin_width * emp.counts.len() as f64;
     let mut f = vec![0.0; p.h.len()];
-    let mut objective = |theta: f64| -> (f64, f64, f64) {
-        let (range, exponent) = match model {
-            VariogramModel::Power => (0.0, theta),
-            _ => (theta, 1.0),
+    let mut fit_shape = |exp_fixed: f64| {
+        let mut objective = |theta: f64| -> (f64, f64, f64) {
+            let (range, exponent) = match model {
+                VariogramModel::Power => (0.0, theta),
+                _ => (theta, exp_fixed),
+            };
+            for (fu, &h) in f.iter_mut().zip(&p.h) {
+                *fu = shape(model, h, range, exponent);
+            }
+            linear_fit(&f, &p, opts.nugget)
         };
-        for (fu, &h) in f.iter_mut().zip(&p.h) {
-            *fu = shape(model, h, range, exponent);
+        match model {
+            VariogramModel::Linear => (1.0, objective(1.0)),
+            VariogramModel::Power => search(&mut objective, 0.02, 1.98, false),
+            _ => {
+                let lo = p.h[0] * 0.25;
+                search(&mut objective, lo, 5.0 * hmax, true)
+            }
         }
-        linear_fit(&f, &p, opts.nugget)
     };
-    let (theta, (n, s, wsse)) = match model {
-        VariogramModel::Linear => (1.0, objective(1.0)),
-        VariogramModel::Power => search(&mut objective, 0.02, 1.98, false),
-        _ => {
-            let lo = p.h[0] * 0.25;
-            search(&mut objective, lo, 5.0 * hmax, true)
+    // The Matérn smoothness is chosen from a fixed set (the best fit over it); other models have
+    // no second shape parameter.
+    let (nu, (theta, (n, s, wsse))) = if model == VariogramModel::Matern {
+        type Fit = (f64, (f64, (f64, f64, f64)));
+        let mut best: Option<Fit> = None;
+        for nu in MATERN_NUS {
+            let r = fit_shape(nu);
+            if best.is_none_or(|b| r.1.2 < b.1.1.2) {
+                best = Some((nu, r));
+            }
         }
+        best.expect("MATERN_NUS is not empty")
+    } else {
+        (1.0, fit_shape(1.0))
     };
     if !s.is_finite() || s <= 0.0 {
         return Err(fail(
@@ -133,7 +154,7 @@ pub fn fit_variogram(
     let variogram = match model {
         VariogramModel::Linear => Variogram::new(model, n, s, 0.0, 1.0)?,
         VariogramModel::Power => Variogram::new(model, n, s, 0.0, theta)?,
-        _ => Variogram::new(model, n, s, theta, 1.0)?,
+        _ => Variogram::new(model, n, s, theta, nu)?,
     };
     Ok(FittedVariogram { variogram, wsse })
 }

@@ -30,8 +30,10 @@ pub struct Kriging {
     scaled_rows: Vec<f64>,
     /// S x D residuals (values for ordinary kriging).
     residuals: Mat<f64>,
-    /// D x (d+1) trend F (universal only).
+    /// D x (d+1) trend F (regression kriging only).
     trend: Option<Mat<f64>>,
+    /// Numerical rank of `C C^t` (regression kriging only).
+    trend_rank: Option<usize>,
     /// (d+1) x (d+1) Gram matrix C C^t and (d+1) x D product C X (universal only, for the LOO).
     gram: Option<Mat<f64>>,
     cx: Option<Mat<f64>>,
@@ -78,6 +80,29 @@ pub(crate) fn check_inputs(
 pub fn augmented_params(scaled: MatRef<'_, f64>) -> Mat<f64> {
     let (s, d) = scaled.shape();
     Mat::from_fn(d + 1, s, |k, i| if k < d { scaled[(i, k)] } else { 1.0 })
+}
+
+/// Centres the scaled parameters for the trend when they are far from the origin: for every kept
+/// dimension whose scaled mean `m_k` exceeds ten times its scaled standard deviation in magnitude
+/// (raw map coordinates such as 1.8e5 with a spread of 1e3), the offset moves by `m_k / scale_k` so that the
+/// scaled dimension has mean about 0. A translation leaves every distance, hence the variogram and
+/// the kriging weights, unchanged; it keeps the Gram matrix `C C^t` of the trend well conditioned
+/// (otherwise its pseudo-inverse, with relative tolerance [`PINV_RTOL`](crate::PINV_RTOL), silently
+/// drops a direction). Standardised parameters have mean 0 and are left exactly as they are.
+fn centre_for_trend(scaling: &mut ParamScaling, params: MatRef<'_, f64>) {
+    let s = params.nrows();
+    for k in 0..params.ncols() {
+        let sc = scaling.scale[k];
+        if sc == 0.0 || s == 0 {
+            continue;
+        }
+        let col = |i: usize| (params[(i, k)] - scaling.offset[k]) * sc;
+        let mean = (0..s).map(col).sum::<f64>() / s as f64;
+        let sd = ((0..s).map(|i| (col(i) - mean).powi(2)).sum::<f64>() / s as f64).sqrt();
+        if mean.abs() > 10.0 * sd {
+            scaling.offset[k] += mean / sc;
+        }
+    }
 }
 
 /// Least-squares trend of eq. 8: returns `(F, R, G, C X)` with `F = X^t C^+` (D x (d+1)) computed
@@ -174,7 +199,9 @@ pub(crate) fn dual_coefficients(ainv: MatRef<'_, f64>, residuals: MatRef<'_, f64
 impl Kriging {
     /// Fits a kriging model to `params` (S x d, one sample per row) and `values` (S x D).
     ///
-    /// Steps: scale the parameters; for [`Method::Universal`] fit the trend `F = K C^+` (pseudo-
+    /// Steps: scale the parameters (for [`Method::Regression`], parameters far from the origin
+    /// relative to their spread are also centred, which changes no distance: see
+    /// [`Kriging::scaling`]); for [`Method::Regression`] fit the trend `F = K C^+` (pseudo-
     /// inverse with a relative eigenvalue tolerance of 1e-12 on `C C^t`, so constant or collinear
     /// dimensions are handled) and take residuals; bin the empirical variogram of the residuals;
     /// fit or take the variogram; factorise the kriging system.
@@ -191,18 +218,21 @@ impl Kriging {
     ) -> Result<Kriging, KrigingError> {
         check_inputs(params, values)?;
         let s = params.nrows();
-        let scaling = ParamScaling::from_choice(&config.scaling, params)?;
+        let mut scaling = ParamScaling::from_choice(&config.scaling, params)?;
+        if config.method == Method::Regression {
+            centre_for_trend(&mut scaling, params);
+        }
         let dropped = scaling.dropped();
         let d_eff = params.ncols() - dropped.len();
         let needed = match config.method {
             Method::Ordinary => 2,
-            Method::Universal => d_eff + 2,
+            Method::Regression => d_eff + 2,
         };
         if s < needed {
             return Err(KrigingError::TooFewSamples {
                 what: match config.method {
                     Method::Ordinary => "ordinary kriging",
-                    Method::Universal => "universal kriging (trend over [c; 1] plus residuals)",
+                    Method::Regression => "regression kriging (trend over [c; 1] plus residuals)",
                 },
                 needed,
                 got: s,
@@ -211,11 +241,12 @@ impl Kriging {
         let scaled = scaling.apply_rows(params);
         let (trend, residuals, gram, cx) = match config.method {
             Method::Ordinary => (None, values.to_owned(), None, None),
-            Method::Universal => {
+            Method::Regression => {
                 let (f, r, g, cx) = fit_trend(scaled.as_ref(), values);
                 (Some(f), r, Some(g), Some(cx))
             }
         };
+        let trend_rank = gram.as_ref().map(|g| sym_pinv(g.as_ref()).1);
         let dist = PairDistances::new(scaled.as_ref());
         if dist.max().is_nan() || dist.max() <= 0.0 {
             return Err(KrigingError::NoSpread { samples: s });
@@ -241,6 +272,7 @@ impl Kriging {
             scaled_rows,
             residuals,
             trend,
+            trend_rank,
             gram,
             cx,
             ainv: Mat::zeros(0, 0),
@@ -419,7 +451,8 @@ impl Kriging {
         &self.variogram
     }
 
-    /// The parameter scaling applied before any distance.
+    /// The parameter scaling applied before any distance (as chosen, except that regression kriging
+    /// centres dimensions whose mean exceeds their spread, so that the trend is well conditioned).
     pub fn scaling(&self) -> &ParamScaling {
         &self.scaling
     }
@@ -448,6 +481,13 @@ impl Kriging {
         let g = matmul(c.as_ref(), c.transpose());
         let (gp, _) = sym_pinv(g.as_ref());
         matmul(c.transpose(), gp.as_ref())
+    }
+
+    /// The numerical rank of the trend's Gram matrix `C C^t` (regression kriging; `None` for ordinary
+    /// kriging). Full rank is `d' + 1` with `d'` the non-dropped dimensions; less means collinear
+    /// parameter dimensions, which the pseudo-inverse handles by fitting the trend in their span.
+    pub fn trend_rank(&self) -> Option<usize> {
+        self.trend_rank
     }
 
     /// The trend `F` (D x (d+1)) of eq. 8, acting on `[scaled c; 1]`; `None` for ordinary kriging.

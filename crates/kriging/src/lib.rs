@@ -1,14 +1,37 @@
-//! Geostatistical interpolation of vector-valued samples over a parameter space.
+//! Geostatistical interpolation: variograms and kriging of scattered samples, for maps and for any
+//! parameter space.
 //!
-//! This crate is for: empirical and theoretical variograms, ordinary and universal kriging (Mukai and
-//! Kuriyama eq. 8 and appendix A), leave-one-out cross validation and an RBF baseline, for any values,
-//! not only motion. It is not for: tensors or motion data themselves.
+//! This crate is for: fitting variograms (binned empirical variogram with a maximum lag, weighted
+//! least squares, seven shapes and nested sums); ordinary, universal (linear or quadratic drift inside
+//! the kriging system) and external-drift kriging of a scalar field over 1-3-D coordinates with
+//! kriging variances, leave-one-out diagnostics, geometric anisotropy and a moving neighbourhood
+//! ([`Krige`], module [`geo`]; checked against PyKrige and GSTools on the Meuse data); and the
+//! vector-valued regression kriging of Mukai and Kuriyama's motion model ([`Kriging`], eq. 8 and
+//! appendix A) with its precomputed hot-path projection and an RBF baseline. It is not for: space-time
+//! or multivariate (co-)kriging, indicator or disjunctive kriging, simulation, block kriging,
+//! geographic (lat/lon) distances, or sparse/approximate methods for millions of points; nor for
+//! tensors or motion data themselves.
+//!
+//! Two front ends:
+//! - [`Krige`] (builder) -> [`KrigeModel`]: maps and other geostatistics. Defaults suit maps:
+//!   ordinary kriging, a variogram fitted by Cressie's weighted least squares on 15 bins up to a
+//!   third of the bounding-box diagonal, every result in the input's units (coordinates are centred
+//!   and scaled inside for conditioning only). Batch prediction runs in parallel (rayon) with the
+//!   same bits for any thread count; the fitted model serialises with serde.
+//! - [`Kriging`] with [`KrigingConfig`]: vector values over a parameter space, per-axis scaling, the
+//!   paper's regression kriging ([`Method::Regression`]: an ordinary least-squares trend plus
+//!   ordinary kriging of its residuals; *not* textbook universal kriging) and a variogram chosen by
+//!   leave-one-out search; [`KrigingConfig::motion`] is the motion model's preset.
 //!
 //! Pieces:
-//! - [`EmpiricalVariogram`]: the binned semi-variance of appendix A;
-//! - [`Variogram`] / [`VariogramModel`]: linear, power, spherical, exponential and gaussian models
-//!   with nugget, sill and range, fitted by weighted least squares ([`fit_variogram`]);
-//! - [`Kriging`]: ordinary kriging and the paper's universal kriging (trend `F = K C^+` over
+//! - [`EmpiricalVariogram`]: the binned semi-variance of appendix A ([`EmpiricalVariogram::compute`],
+//!   bins up to the largest distance) or with a chosen maximum lag ([`Binning`], [`MaxLag`]);
+//! - [`Variogram`] / [`VariogramModel`]: linear, power, spherical, exponential, gaussian, Matérn and
+//!   hole-effect models with nugget, partial sill and range, fitted by weighted least squares
+//!   ([`fit_variogram`], pair-count or Cressie weights); [`NestedVariogram`]: sums of them;
+//! - [`Krige`] / [`KrigeModel`]: ordinary, universal and external-drift kriging with variances,
+//!   [`Anisotropy`], [`Neighbourhood`], [`LooStats`] (see [`geo`] for the formulas);
+//! - [`Kriging`]: ordinary kriging and the paper's regression kriging (trend `F = K C^+` over
 //!   `[c; 1]`, kriging of the residuals), with automatic model choice by fit or leave-one-out error,
 //!   by default over the fitted models and a grid of ranges and nuggets ([`search`]: the nugget smooths
 //!   noisy samples instead of interpolating them), closed-form leave-one-out
@@ -20,7 +43,7 @@
 //! - [`Rbf`]: the radial-basis baseline of Rose et al. with the same `fit/weights/predict/loo` shape,
 //!   exact or with a smoothing term chosen by leave-one-out error ([`RbfSmoothing`]).
 //!
-//! Degenerate input: NaN/inf, wrong shapes, too few samples (universal kriging needs `d' + 2`
+//! Degenerate input: NaN/inf, wrong shapes, too few samples (regression kriging needs `d' + 2`
 //! with `d'` the non-constant dimensions), all-equal parameters and values that do not vary are
 //! errors ([`KrigingError`]). Duplicate parameter points are an error naming both samples unless the
 //! variogram has a nugget, which then regularises the system (it acts as independent noise between
@@ -61,25 +84,40 @@
 
 #![warn(missing_docs)]
 
+mod anisotropy;
 mod config;
 mod empirical;
 mod error;
 mod fit;
+pub mod geo;
+mod kdtree;
 mod kriging;
 mod linalg;
+mod nested;
 mod projected;
 mod rbf;
 mod scaling;
 pub mod search;
 mod select;
+mod special;
 mod variogram;
 
+/// The linear-algebra crate whose matrix types ([`faer::MatRef`], [`faer::Mat`]) this crate takes
+/// and returns, re-exported so that users need not depend on the same version themselves.
+pub use faer;
+
+pub use anisotropy::Anisotropy;
 pub use config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoice, Selection};
-pub use empirical::EmpiricalVariogram;
+pub use empirical::{Binning, EmpiricalVariogram, MaxLag};
 pub use error::KrigingError;
-pub use fit::{FitOptions, FitWeights, FittedVariogram, fit_variogram};
+pub use fit::{FitOptions, FitWeights, FittedVariogram, MATERN_NUS, fit_variogram};
+pub use geo::{
+    Drift, Krige, KrigeModel, LooStats, Neighbourhood, Prediction, Predictions, VariogramChoice,
+    VariogramFitReport,
+};
 pub use kriging::{Kriging, augmented_params};
 pub use linalg::{PINV_RTOL, sym_pinv};
+pub use nested::{NestedVariogram, Structure};
 pub use projected::ProjectedQuery;
 pub use rbf::{RBF_SMOOTHING_GRID, Rbf, RbfConfig, RbfKernel, RbfSmoothing, SmoothingCandidate};
 pub use scaling::{ParamScaling, ScalingChoice};

@@ -11,7 +11,15 @@ use crate::error::KrigingError;
 /// - `Power`: `n + s h^e`, `0 < e < 2` (no range),
 /// - `Spherical`: `n + s (3h/(2a) - h^3/(2a^3))` for `h < a`, `n + s` beyond,
 /// - `Exponential`: `n + s (1 - exp(-3h/a))` (`a` is the practical range, 95 % of the sill),
-/// - `Gaussian`: `n + s (1 - exp(-3h^2/a^2))` (practical range).
+/// - `Gaussian`: `n + s (1 - exp(-3h^2/a^2))` (practical range),
+/// - `Matern`: `n + s (1 - 2^(1-nu)/Gamma(nu) t^nu K_nu(t))`, `t = h/a`, smoothness `nu = e > 0`
+///   (`a` is the *scale* parameter, as in gstat's `"Mat"`: `nu = 1/2` gives `n + s (1 - exp(-h/a))`,
+///   `nu -> infinity` tends to a gaussian shape; the practical range grows with `nu`, about `3a` at
+///   `nu = 1/2`, `4.7a` at `nu = 3/2`),
+/// - `HoleEffect`: `n + s (1 - sin(t)/t)`, `t = h/a` (cardinal sine; valid in up to three
+///   dimensions; the variogram overshoots the sill first at `h = 4.49 a` and oscillates around it).
+///
+/// New variants are appended at the end so that serialised variograms keep their meaning.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum VariogramModel {
     /// Unbounded, proportional to the distance.
@@ -24,16 +32,34 @@ pub enum VariogramModel {
     Exponential,
     /// Bounded asymptotically, smooth (parabolic) at the origin.
     Gaussian,
+    /// Bounded asymptotically, smoothness set by the exponent `nu` (Matérn class).
+    Matern,
+    /// Bounded, periodic oscillation around the sill (cardinal sine).
+    HoleEffect,
 }
 
 impl VariogramModel {
-    /// Every model, in the order automatic selection tries them (ties go to the earlier one).
+    /// The models automatic selection of [`crate::Kriging`] tries, in order (ties go to the earlier
+    /// one). Kept to the paper's five so that the motion model's choice does not change; see
+    /// [`VariogramModel::EVERY`] for every model.
     pub const ALL: [VariogramModel; 5] = [
         VariogramModel::Linear,
         VariogramModel::Power,
         VariogramModel::Spherical,
         VariogramModel::Exponential,
         VariogramModel::Gaussian,
+    ];
+
+    /// Every model, including the [`VariogramModel::Matern`] and [`VariogramModel::HoleEffect`]
+    /// shapes that automatic selection does not try.
+    pub const EVERY: [VariogramModel; 7] = [
+        VariogramModel::Linear,
+        VariogramModel::Power,
+        VariogramModel::Spherical,
+        VariogramModel::Exponential,
+        VariogramModel::Gaussian,
+        VariogramModel::Matern,
+        VariogramModel::HoleEffect,
     ];
 
     /// Lower-case name (`"linear"`, `"power"`, `"spherical"`, `"exponential"`, `"gaussian"`).
@@ -44,22 +70,27 @@ impl VariogramModel {
             VariogramModel::Spherical => "spherical",
             VariogramModel::Exponential => "exponential",
             VariogramModel::Gaussian => "gaussian",
+            VariogramModel::Matern => "matern",
+            VariogramModel::HoleEffect => "hole-effect",
         }
     }
 
     /// Parses a name as printed by [`VariogramModel::name`] (case-insensitive).
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL
+        Self::EVERY
             .into_iter()
             .find(|m| m.name().eq_ignore_ascii_case(name))
     }
 
-    /// Whether the model has a range parameter (`Spherical`, `Exponential`, `Gaussian`).
+    /// Whether the model has a range parameter (every model but `Linear` and `Power`); these are
+    /// also the bounded models (a finite sill).
     pub fn has_range(self) -> bool {
-        matches!(
-            self,
-            VariogramModel::Spherical | VariogramModel::Exponential | VariogramModel::Gaussian
-        )
+        !matches!(self, VariogramModel::Linear | VariogramModel::Power)
+    }
+
+    /// Whether the model uses [`Variogram::exponent`] (`Power`: the exponent; `Matern`: `nu`).
+    pub fn has_exponent(self) -> bool {
+        matches!(self, VariogramModel::Power | VariogramModel::Matern)
     }
 }
 
@@ -67,7 +98,8 @@ impl VariogramModel {
 ///
 /// `gamma(0) = 0`; the nugget applies for `h > 0`. `sill` is the partial sill (the total sill of a
 /// bounded model is `nugget + sill`); for `Linear` and `Power` it is the coefficient of `h` or `h^e`.
-/// `range` is unused (0) for `Linear` and `Power`; `exponent` is used by `Power` only (1 otherwise).
+/// `range` is unused (0) for `Linear` and `Power`; `exponent` is used by `Power` (the exponent) and
+/// `Matern` (the smoothness `nu`) only (1 otherwise).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Variogram {
     /// The model shape.
@@ -78,13 +110,14 @@ pub struct Variogram {
     pub sill: f64,
     /// Practical range of bounded models, `> 0` for them.
     pub range: f64,
-    /// Exponent of the power model, in `(0, 2)`.
+    /// Exponent of the power model, in `(0, 2)`; smoothness `nu` of the Matérn model, in
+    /// `[0.05, 50]`.
     pub exponent: f64,
 }
 
 impl Variogram {
     /// A validated variogram; `range` is ignored (stored as 0) for unbounded models and `exponent`
-    /// is ignored (stored as 1) for every model but `Power`.
+    /// is ignored (stored as 1) for every model but `Power` and `Matern`.
     pub fn new(
         model: VariogramModel,
         nugget: f64,
@@ -97,11 +130,7 @@ impl Variogram {
             nugget,
             sill,
             range: if model.has_range() { range } else { 0.0 },
-            exponent: if model == VariogramModel::Power {
-                exponent
-            } else {
-                1.0
-            },
+            exponent: if model.has_exponent() { exponent } else { 1.0 },
         };
         v.validate()?;
         Ok(v)
@@ -127,6 +156,13 @@ impl Variogram {
         }
         if self.model == VariogramModel::Power && !(self.exponent > 0.0 && self.exponent < 2.0) {
             return Err(bad(format!("exponent {} must be in (0, 2)", self.exponent)));
+        }
+        if self.model == VariogramModel::Matern && !(self.exponent >= 0.05 && self.exponent <= 50.0)
+        {
+            return Err(bad(format!(
+                "smoothness nu = {} must be in [0.05, 50]",
+                self.exponent
+            )));
         }
         Ok(())
     }
@@ -178,6 +214,16 @@ pub fn shape(model: VariogramModel, h: f64, range: f64, exponent: f64) -> f64 {
         VariogramModel::Gaussian => {
             let t = h / range;
             1.0 - (-3.0 * t * t).exp()
+        }
+        VariogramModel::Matern => 1.0 - crate::special::matern_correlation(h / range, exponent),
+        VariogramModel::HoleEffect => {
+            let t = h / range;
+            if t < 1e-4 {
+                // 1 - sin(t)/t = t^2/6 - t^4/120 + ...
+                t * t / 6.0 - t * t * t * t / 120.0
+            } else {
+                1.0 - t.sin() / t
+            }
         }
     }
 }

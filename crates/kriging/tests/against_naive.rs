@@ -93,7 +93,7 @@ fn weights_and_predictions_match_naive_for_every_model() {
     for model in VariogramModel::ALL {
         for nugget in [0.0, 0.2] {
             let v = var(model, nugget);
-            for (method, universal) in [(Method::Ordinary, false), (Method::Universal, true)] {
+            for (method, universal) in [(Method::Ordinary, false), (Method::Regression, true)] {
                 let k = Kriging::fit(
                     pm.as_ref(),
                     xm.as_ref(),
@@ -129,7 +129,7 @@ fn trend_matches_naive_normal_equations() {
     let k = Kriging::fit(
         to_mat(&p).as_ref(),
         to_mat(&x).as_ref(),
-        &cfg(Method::Universal, ModelChoice::Given(linear())),
+        &cfg(Method::Regression, ModelChoice::Given(linear())),
     )
     .unwrap();
     let f = k.trend().unwrap();
@@ -170,7 +170,7 @@ fn closed_form_loo_matches_refitting_s_times() {
     ] {
         for nugget in [0.0, 0.3] {
             let v = var(model, nugget);
-            for (method, universal) in [(Method::Ordinary, false), (Method::Universal, true)] {
+            for (method, universal) in [(Method::Ordinary, false), (Method::Regression, true)] {
                 let k = Kriging::fit(
                     pm.as_ref(),
                     xm.as_ref(),

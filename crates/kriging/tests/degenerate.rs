@@ -27,7 +27,7 @@ fn duplicate_points_without_nugget_name_both_samples() {
     let (mut p, x) = data(8, 2, 1);
     p[5] = p[2].clone();
     let v = var(VariogramModel::Exponential, 0.0);
-    for method in [Method::Ordinary, Method::Universal] {
+    for method in [Method::Ordinary, Method::Regression] {
         let e =
             Kriging::fit(to_mat(&p).as_ref(), to_mat(&x).as_ref(), &given(v, method)).unwrap_err();
         assert_eq!(
@@ -105,13 +105,13 @@ fn too_few_samples_for_the_trend() {
     let e = Kriging::fit(
         to_mat(&p).as_ref(),
         to_mat(&x).as_ref(),
-        &given(var(VariogramModel::Linear, 0.0), Method::Universal),
+        &given(var(VariogramModel::Linear, 0.0), Method::Regression),
     )
     .unwrap_err();
     assert_eq!(
         e,
         KrigingError::TooFewSamples {
-            what: "universal kriging (trend over [c; 1] plus residuals)",
+            what: "regression kriging (trend over [c; 1] plus residuals)",
             needed: 5,
             got: 4
         }
@@ -142,7 +142,7 @@ fn collinear_parameters_use_the_pseudo_inverse() {
     let k = Kriging::fit(
         to_mat(&p).as_ref(),
         to_mat(&x).as_ref(),
-        &given(v, Method::Universal),
+        &given(v, Method::Regression),
     )
     .unwrap();
     let f = k.trend().unwrap();

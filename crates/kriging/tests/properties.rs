@@ -27,7 +27,7 @@ proptest! {
     fn weights_sum_to_one_and_predict_is_weighted_sum(seed in 1u64..10_000, q0 in -0.5f64..1.5, q1 in -0.5f64..1.5) {
         let (p, x) = data(12, 2, seed);
         let v = var(VariogramModel::Exponential, 0.05);
-        for method in [Method::Ordinary, Method::Universal] {
+        for method in [Method::Ordinary, Method::Regression] {
             let cfg = KrigingConfig { method, model: ModelChoice::Given(v), ..KrigingConfig::default() };
             let k = Kriging::fit(to_mat(&p).as_ref(), to_mat(&x).as_ref(), &cfg).unwrap();
             let mut b = vec![0.0; 12];
@@ -53,7 +53,7 @@ proptest! {
 #[test]
 fn fitted_models_interpolate_exactly_at_the_samples() {
     let (p, x) = data(20, 3, 42);
-    for method in [Method::Ordinary, Method::Universal] {
+    for method in [Method::Ordinary, Method::Regression] {
         for sel in [Selection::BestFit, Selection::BestLoo] {
             for nugget in [false, true] {
                 let cfg = KrigingConfig {
@@ -92,7 +92,7 @@ fn best_loo_selection_picks_the_smallest_loo_error() {
     let k = Kriging::fit(
         to_mat(&p).as_ref(),
         to_mat(&x).as_ref(),
-        &auto(Method::Universal, Selection::BestLoo),
+        &auto(Method::Regression, Selection::BestLoo),
     )
     .unwrap();
     let best = k
@@ -106,7 +106,7 @@ fn best_loo_selection_picks_the_smallest_loo_error() {
     let kf = Kriging::fit(
         to_mat(&p).as_ref(),
         to_mat(&x).as_ref(),
-        &auto(Method::Universal, Selection::BestFit),
+        &auto(Method::Regression, Selection::BestFit),
     )
     .unwrap();
     let bestfit = kf
@@ -125,7 +125,7 @@ fn invariant_to_sample_order() {
     let pp: Vec<Vec<f64>> = perm.iter().map(|&i| p[i].clone()).collect();
     let xp: Vec<Vec<f64>> = perm.iter().map(|&i| x[i].clone()).collect();
     for cfg in [
-        auto(Method::Universal, Selection::BestLoo),
+        auto(Method::Regression, Selection::BestLoo),
         auto(Method::Ordinary, Selection::BestFit),
     ] {
         let a = Kriging::fit(to_mat(&p).as_ref(), to_mat(&x).as_ref(), &cfg).unwrap();
@@ -173,7 +173,7 @@ fn bit_identical_across_runs_and_thread_counts() {
                 let k = Kriging::fit(
                     to_mat(&p).as_ref(),
                     to_mat(&x).as_ref(),
-                    &auto(Method::Universal, Selection::BestLoo),
+                    &auto(Method::Regression, Selection::BestLoo),
                 )
                 .unwrap();
                 let mut b = vec![0.0; 40];
@@ -212,7 +212,7 @@ fn projected_query_equals_l_times_weights() {
     let k = Kriging::fit(
         to_mat(&p).as_ref(),
         to_mat(&x).as_ref(),
-        &auto(Method::Universal, Selection::BestLoo),
+        &auto(Method::Regression, Selection::BestLoo),
     )
     .unwrap();
     let mut r = Rng(99);

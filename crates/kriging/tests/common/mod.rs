@@ -28,6 +28,10 @@ pub fn gamma_pair(v: &Variogram, h: f64) -> f64 {
         }
         VariogramModel::Exponential => 1.0 - (-3.0 * h / a).exp(),
         VariogramModel::Gaussian => 1.0 - (-3.0 * (h / a).powi(2)).exp(),
+        // Only the half-integer closed forms (the crate's general-nu path is unit tested).
+        VariogramModel::Matern if v.exponent == 1.5 => 1.0 - (1.0 + h / a) * (-h / a).exp(),
+        VariogramModel::Matern => panic!("naive Matern only for nu = 3/2"),
+        VariogramModel::HoleEffect => 1.0 - (h / a).sin() / (h / a),
     };
     v.nugget + v.sill * f
 }

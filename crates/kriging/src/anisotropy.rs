@@ -1,0 +1,105 @@
+//! Geometric anisotropy: the variogram's range depends on the direction.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::KrigingError;
+
+/// Geometric anisotropy of the variogram, applied as a linear map of the coordinates before
+/// distances are taken: rotate into the frame of the anisotropy ellipse (ellipsoid), then stretch the
+/// minor axes by `1 / ratio`. Ranges of the variogram are then the ranges along the major axis, in
+/// the coordinates' units.
+///
+/// 2-D: `angle` is the direction of the major axis in degrees, counter-clockwise from the x axis;
+/// `ratio = minor range / major range` in `(0, 1]`. The map is
+/// `u = [cos a, sin a; -sin a / r, cos a / r] (x - centre)`.
+///
+/// 3-D: `angles = [azimuth, dip, roll]` in degrees: the major axis is the x axis rotated by
+/// `azimuth` about z (counter-clockwise seen from +z), then tilted by `dip` about the new y axis
+/// (positive dip points the major axis down, towards -z), then the frame is rolled by `roll` about
+/// the major axis; `ratios = [r1, r2]` are the second and third axes' ranges over the major range.
+/// The frame is `R = Rz(azimuth) Ry(dip) Rx(roll)` and `u = diag(1, 1/r1, 1/r2) R^t (x - centre)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub enum Anisotropy {
+    /// The same range in every direction.
+    #[default]
+    Isotropic,
+    /// Two dimensions: major-axis direction (degrees) and minor/major range ratio.
+    TwoD {
+        /// Direction of the major axis, degrees counter-clockwise from +x.
+        angle: f64,
+        /// Minor range over major range, in `(0, 1]`.
+        ratio: f64,
+    },
+    /// Three dimensions: azimuth, dip, roll (degrees) and two range ratios.
+    ThreeD {
+        /// `[azimuth, dip, roll]` in degrees.
+        angles: [f64; 3],
+        /// `[second, third]` axis range over the major range, each in `(0, 1]`.
+        ratios: [f64; 2],
+    },
+}
+
+impl Anisotropy {
+    /// The `d x d` matrix (row-major) that maps centred coordinates to isotropic ones; fails when the
+    /// anisotropy does not fit `d` dimensions or a parameter is out of its domain.
+    pub fn matrix(&self, d: usize) -> Result<Vec<f64>, KrigingError> {
+        let bad = |m: String| Err(KrigingError::InvalidConfig(format!("anisotropy: {m}")));
+        let ok_ratio = |r: f64| r.is_finite() && r > 0.0 && r <= 1.0;
+        match *self {
+            Anisotropy::Isotropic => {
+                let mut m = vec![0.0; d * d];
+                for k in 0..d {
+                    m[k * d + k] = 1.0;
+                }
+                Ok(m)
+            }
+            Anisotropy::TwoD { angle, ratio } => {
+                if d != 2 {
+                    return bad(format!("a 2-D anisotropy for {d}-D coordinates"));
+                }
+                if !angle.is_finite() || !ok_ratio(ratio) {
+                    return bad(format!(
+                        "angle {angle} must be finite and ratio {ratio} in (0, 1]"
+                    ));
+                }
+                let (s, c) = angle.to_radians().sin_cos();
+                Ok(vec![c, s, -s / ratio, c / ratio])
+            }
+            Anisotropy::ThreeD { angles, ratios } => {
+                if d != 3 {
+                    return bad(format!("a 3-D anisotropy for {d}-D coordinates"));
+                }
+                if angles.iter().any(|a| !a.is_finite()) || !ratios.iter().all(|&r| ok_ratio(r)) {
+                    return bad(format!(
+                        "angles {angles:?} must be finite and ratios {ratios:?} in (0, 1]"
+                    ));
+                }
+                let (sa, ca) = angles[0].to_radians().sin_cos();
+                let (sd, cd) = angles[1].to_radians().sin_cos();
+                let (sr, cr) = angles[2].to_radians().sin_cos();
+                let rz = [[ca, -sa, 0.0], [sa, ca, 0.0], [0.0, 0.0, 1.0]];
+                let ry = [[cd, 0.0, sd], [0.0, 1.0, 0.0], [-sd, 0.0, cd]];
+                let rx = [[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]];
+                let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| {
+                    let mut o = [[0.0; 3]; 3];
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            o[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+                        }
+                    }
+                    o
+                };
+                let r = mul(mul(rz, ry), rx);
+                let stretch = [1.0, 1.0 / ratios[0], 1.0 / ratios[1]];
+                // u_i = stretch_i * sum_j R_ji x_j (R^t).
+                let mut m = vec![0.0; 9];
+                for i in 0..3 {
+                    for j in 0..3 {
+                        m[i * 3 + j] = stretch[i] * r[j][i];
+                    }
+                }
+                Ok(m)
+            }
+        }
+    }
+}

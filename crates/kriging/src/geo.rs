@@ -1,0 +1,1323 @@
+//! Geostatistics front end: ordinary, universal and external-drift kriging of a scalar field over
+//! 1-, 2- or 3-D coordinates, with kriging variances, leave-one-out diagnostics, geometric anisotropy
+//! and an optional moving neighbourhood.
+//!
+//! # The estimator
+//!
+//! With covariance `C(h) = K - gamma(h)` (`K` the total sill of a bounded variogram; for unbounded
+//! variograms any `K` large enough for a positive definite sample matrix, which leaves the predictor
+//! and its variance unchanged because the weights sum to one), drift basis `f(x)` (p terms: the
+//! constant, then the coordinates for a linear drift, their products for a quadratic drift, then the
+//! external variables), sample covariances `C` (n x n), drift matrix `F` (n x p) and data `z`, the
+//! universal kriging weights `lambda` and Lagrange multipliers `mu` at `x` solve
+//!
+//! ```text
+//! [ C   F ] [lambda]   [c(x)]
+//! [ F^t 0 ] [  mu  ] = [f(x)]      (c_i(x) = C(|x - x_i|), C(0) = K: exact at the samples)
+//! ```
+//!
+//! which gives the prediction `z*(x) = f(x)^t beta + c(x)^t alpha` with the generalised
+//! least-squares drift `beta = (F^t C^-1 F)^-1 F^t C^-1 z` and `alpha = C^-1 (z - F beta)`, and the
+//! kriging variance
+//!
+//! ```text
+//! sigma^2(x) = K - c^t C^-1 c + (f - F^t C^-1 c)^t (F^t C^-1 F)^-1 (f - F^t C^-1 c)
+//!            = sum_i lambda_i gamma(x, x_i) + sum_k mu_k f_k(x)      (semivariogram form)
+//! ```
+//!
+//! Ordinary kriging is the case `f = 1`. This is the textbook best linear unbiased predictor (the
+//! drift is estimated jointly with the weights), not the regression kriging of [`crate::Kriging`]
+//! (an ordinary least-squares trend, then ordinary kriging of its residuals).
+//!
+//! Numerics: `C = L L^t` (Cholesky), `F_w = L^-1 F`, `F^t C^-1 F = F_w^t F_w = R R^t`; a query costs
+//! one triangular solve `v = L^-1 c(x)` (n^2 multiply-adds) for the variance and `O(n p)` for the
+//! prediction. Coordinates are centred on their mean and the drift terms are built from coordinates
+//! divided by their largest extent (and external variables standardised), so that the drift system
+//! is well conditioned whatever the units; the variogram and every result stay in the user's units.
+//! An ill-conditioned drift system (for example a quadratic drift on collinear samples) is an error
+//! ([`KrigingError::IllConditionedDrift`]); a merely poor one is reported in
+//! [`KrigeModel::warnings`].
+
+use faer::{Mat, MatRef, Par};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::anisotropy::Anisotropy;
+use crate::config::CandidateReport;
+use crate::empirical::{Binning, EmpiricalVariogram};
+use crate::error::KrigingError;
+use crate::fit::{FitOptions, FitWeights, fit_variogram};
+use crate::kdtree::KdTree;
+use crate::linalg::{matmul, sym_eigen, sym_pinv};
+use crate::nested::NestedVariogram;
+use crate::variogram::VariogramModel;
+
+/// Points per block of a batch prediction: blocks are fixed by position, so the results do not
+/// depend on the number of threads.
+const BLOCK: usize = 64;
+/// Smallest eigenvalue ratio of the drift system `F^t C^-1 F` accepted.
+const DRIFT_RATIO_MIN: f64 = 1e-12;
+/// Below this eigenvalue ratio a warning is recorded.
+const DRIFT_RATIO_WARN: f64 = 1e-8;
+/// Smallest `(min L_kk / max L_kk)^2` of the covariance Cholesky factor accepted.
+const PIVOT_RATIO_MIN: f64 = 1e-14;
+/// Largest global system built without a neighbourhood (bytes of the n x n covariance factor).
+const GLOBAL_MAX_BYTES: usize = 4 << 30;
+
+/// The deterministic part of the model (the drift) of universal kriging; external drift variables
+/// come on top through [`Krige::fit_with_external`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum Drift {
+    /// An unknown constant mean: ordinary kriging.
+    #[default]
+    Constant,
+    /// `1, x_1, ..., x_d`: universal kriging with a linear drift.
+    Linear,
+    /// `1, x_k, x_k x_l (k <= l)`: universal kriging with a quadratic drift.
+    Quadratic,
+}
+
+impl Drift {
+    /// Number of drift terms in `d` dimensions (without external variables).
+    pub fn n_terms(self, d: usize) -> usize {
+        match self {
+            Drift::Constant => 1,
+            Drift::Linear => 1 + d,
+            Drift::Quadratic => 1 + d + d * (d + 1) / 2,
+        }
+    }
+}
+
+/// Which samples enter the kriging system of a query.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub enum Neighbourhood {
+    /// Every sample: one system factorised at fit time (memory `8 n^2` bytes).
+    #[default]
+    Global,
+    /// The `k` samples nearest to the query (after anisotropy), found with a k-d tree; a small
+    /// system is solved per query (memory `O(n)` plus `O(k^2)` per thread).
+    Nearest {
+        /// Number of neighbours, at least the number of drift terms plus one.
+        k: usize,
+    },
+    /// The samples within `radius` of the query, at most `max` of them (the nearest); a query with
+    /// fewer neighbours than drift terms plus one is an error.
+    Radius {
+        /// Search radius in the coordinates' units (along the major axis under anisotropy).
+        radius: f64,
+        /// Largest number of neighbours used.
+        max: usize,
+    },
+}
+
+/// Where the variogram of [`Krige::fit`] comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum VariogramChoice {
+    /// Use this variogram (no fit).
+    Given(NestedVariogram),
+    /// Fit this model to the empirical variogram (of the ordinary least-squares drift residuals for
+    /// universal kriging).
+    Fit(VariogramModel),
+    /// Fit each of these models and keep the one with the smallest weighted squared error.
+    BestFit(Vec<VariogramModel>),
+}
+
+/// The settings of a geostatistical kriging model, as a builder; [`Krige::fit`] makes the model.
+///
+/// Defaults suit maps: ordinary kriging, isotropic, global neighbourhood, the best of a spherical,
+/// exponential and gaussian fit (nugget fitted) by weighted least squares with Cressie's weights on
+/// 15 bins up to a third of the bounding-box diagonal. For the motion model of Mukai and Kuriyama
+/// use [`crate::KrigingConfig::motion`] with [`crate::Kriging`] instead.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{Drift, Krige, NestedVariogram, VariogramModel};
+///
+/// // A few samples of a field over 2-D map coordinates (metres).
+/// let xy = [[0.0, 0.0], [100.0, 0.0], [0.0, 100.0], [100.0, 100.0], [40.0, 70.0], [70.0, 20.0]];
+/// let z = [1.0, 2.0, 1.5, 3.0, 2.0, 2.2];
+/// let coords = Mat::from_fn(6, 2, |i, k| xy[i][k]);
+/// let v = NestedVariogram::single(VariogramModel::Spherical, 0.01, 0.5, 150.0)?;
+/// let model = Krige::new().drift(Drift::Linear).variogram(v).fit(coords.as_ref(), &z)?;
+/// let p = model.predict(&[50.0, 50.0])?;
+/// assert!(p.variance > 0.0);
+/// let at_sample = model.predict(&[100.0, 0.0])?; // exact at the samples
+/// assert!((at_sample.value - 2.0).abs() < 1e-9 && at_sample.variance.abs() < 1e-9);
+/// let loo = model.leave_one_out()?;
+/// assert_eq!(loo.errors.len(), 6);
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Krige {
+    /// The drift (default: constant, i.e. ordinary kriging).
+    pub drift: Drift,
+    /// The variogram, given or fitted.
+    pub variogram: VariogramChoice,
+    /// Geometric anisotropy (default: isotropic).
+    pub anisotropy: Anisotropy,
+    /// Which samples each query uses (default: all).
+    pub neighbourhood: Neighbourhood,
+    /// Binning of the empirical variogram (fit only).
+    pub binning: Binning,
+    /// Weights of the variogram fit (fit only).
+    pub fit_weights: FitWeights,
+    /// Whether the fit estimates a nugget (otherwise 0).
+    pub fit_nugget: bool,
+}
+
+impl Default for Krige {
+    fn default() -> Self {
+        Krige {
+            drift: Drift::Constant,
+            variogram: VariogramChoice::BestFit(vec![
+                VariogramModel::Spherical,
+                VariogramModel::Exponential,
+                VariogramModel::Gaussian,
+            ]),
+            anisotropy: Anisotropy::Isotropic,
+            neighbourhood: Neighbourhood::Global,
+            binning: Binning::default(),
+            fit_weights: FitWeights::Cressie,
+            fit_nugget: true,
+        }
+    }
+}
+
+/// A prediction and its kriging variance `sigma^2` (see the [module docs](crate::geo)).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Prediction {
+    /// `z*(x)`.
+    pub value: f64,
+    /// `sigma^2(x) >= 0` (0 at a sample).
+    pub variance: f64,
+}
+
+/// Predictions at many points, in the order of the points.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Predictions {
+    /// `z*(x_q)` per point.
+    pub values: Vec<f64>,
+    /// `sigma^2(x_q)` per point (empty when variances were not requested).
+    pub variances: Vec<f64>,
+}
+
+/// Leave-one-out cross validation of a [`KrigeModel`] (variogram fixed, drift re-estimated).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LooStats {
+    /// `e_k = z_k - z*_{-k}(x_k)` per sample.
+    pub errors: Vec<f64>,
+    /// Kriging variance `sigma^2_{-k}(x_k)` of each held-out prediction.
+    pub variances: Vec<f64>,
+    /// Standardised errors `e_k / sigma_{-k}(x_k)` (about N(0, 1) if the model is right).
+    pub standardised: Vec<f64>,
+    /// Root mean squared error.
+    pub rmse: f64,
+    /// Mean error (bias).
+    pub mean_error: f64,
+    /// Mean squared standardised error (about 1 if the variances are right).
+    pub msse: f64,
+}
+
+/// How the variogram of a [`KrigeModel`] was obtained by fitting.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VariogramFitReport {
+    /// The empirical variogram (lags in the coordinates' units, along the major axis).
+    pub empirical: EmpiricalVariogram,
+    /// Every model tried, with its fit or the reason it failed.
+    pub candidates: Vec<CandidateReport>,
+}
+
+/// What a fitted model is made of (what it serialises to).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct ModelData {
+    dim: usize,
+    /// Row-major n x dim, as given.
+    coords: Vec<f64>,
+    values: Vec<f64>,
+    n_ext: usize,
+    /// Row-major n x n_ext.
+    external: Vec<f64>,
+    variogram: NestedVariogram,
+    drift: Drift,
+    anisotropy: Anisotropy,
+    neighbourhood: Neighbourhood,
+    fit: Option<VariogramFitReport>,
+}
+
+/// A kriging system over a set of samples (all of them, or one query's neighbours).
+#[derive(Debug, Clone)]
+struct System {
+    idx: Vec<usize>,
+    /// Lower Cholesky factor of the covariance matrix (upper part unused).
+    l: Mat<f64>,
+    /// `L^-1 F` (n x p).
+    fw: Mat<f64>,
+    /// Lower Cholesky factor of `F_w^t F_w` (p x p).
+    r: Mat<f64>,
+    beta: Vec<f64>,
+    alpha: Vec<f64>,
+}
+
+/// Derived state, rebuilt from [`ModelData`].
+#[derive(Debug, Clone)]
+struct State {
+    centre: Vec<f64>,
+    /// Row-major d x d anisotropy map.
+    amat: Vec<f64>,
+    /// Largest extent of the transformed samples (drift terms use coordinates over it).
+    scale: f64,
+    /// Row-major n x d transformed sample coordinates (user units, centred, anisotropy applied).
+    pts: Vec<f64>,
+    ext_mean: Vec<f64>,
+    ext_sd: Vec<f64>,
+    /// Row-major n x p drift basis at the samples.
+    fmat: Vec<f64>,
+    p: usize,
+    /// Covariance shift `K`.
+    shift: f64,
+    tree: Option<KdTree>,
+    global: Option<System>,
+    warnings: Vec<String>,
+}
+
+/// A fitted geostatistical kriging model (see [`Krige`]). Serialises to its data and settings
+/// (serde); deserialising refactorises the system, which gives the same bits as the original.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(try_from = "ModelData", into = "ModelData")]
+pub struct KrigeModel {
+    data: ModelData,
+    st: State,
+}
+
+impl From<KrigeModel> for ModelData {
+    fn from(m: KrigeModel) -> Self {
+        m.data
+    }
+}
+
+impl TryFrom<ModelData> for KrigeModel {
+    type Error = KrigingError;
+    fn try_from(data: ModelData) -> Result<Self, KrigingError> {
+        KrigeModel::build(data)
+    }
+}
+
+impl Krige {
+    /// The map defaults (see [`Krige`]).
+    pub fn new() -> Self {
+        Krige::default()
+    }
+
+    /// Sets the drift ([`Drift::Constant`] is ordinary kriging).
+    pub fn drift(mut self, drift: Drift) -> Self {
+        self.drift = drift;
+        self
+    }
+
+    /// Uses this variogram as given (a [`crate::Variogram`] or a [`NestedVariogram`]).
+    pub fn variogram(mut self, v: impl Into<NestedVariogram>) -> Self {
+        self.variogram = VariogramChoice::Given(v.into());
+        self
+    }
+
+    /// Fits this variogram model.
+    pub fn fit_model(mut self, model: VariogramModel) -> Self {
+        self.variogram = VariogramChoice::Fit(model);
+        self
+    }
+
+    /// Sets the geometric anisotropy.
+    pub fn anisotropy(mut self, a: Anisotropy) -> Self {
+        self.anisotropy = a;
+        self
+    }
+
+    /// Sets the neighbourhood.
+    pub fn neighbourhood(mut self, n: Neighbourhood) -> Self {
+        self.neighbourhood = n;
+        self
+    }
+
+    /// Sets the binning of the empirical variogram.
+    pub fn binning(mut self, b: Binning) -> Self {
+        self.binning = b;
+        self
+    }
+
+    /// Sets the weights of the variogram fit.
+    pub fn fit_weights(mut self, w: FitWeights) -> Self {
+        self.fit_weights = w;
+        self
+    }
+
+    /// Fits the model to `coords` (n x d, one sample per row, d = 1, 2 or 3 with anisotropy, any d
+    /// otherwise) and `values` (n).
+    ///
+    /// Errors: shapes, NaN or infinity (naming row and column), fewer samples than drift terms plus
+    /// one, coinciding samples without a nugget ([`KrigingError::DuplicateParams`] with both
+    /// indices), a variogram that cannot be fitted, a covariance matrix that is not positive
+    /// definite, an ill-conditioned drift system, a global system above 4 GiB (use a
+    /// [`Neighbourhood`]).
+    pub fn fit(&self, coords: MatRef<'_, f64>, values: &[f64]) -> Result<KrigeModel, KrigingError> {
+        self.fit_inner(coords, values, None)
+    }
+
+    /// As [`Krige::fit`] with external drift variables (n x m: one row per sample, one column per
+    /// variable): kriging with external drift. Queries then need the m variables too
+    /// ([`KrigeModel::predict_external`], [`KrigeModel::predict_many_with`]).
+    pub fn fit_with_external(
+        &self,
+        coords: MatRef<'_, f64>,
+        values: &[f64],
+        external: MatRef<'_, f64>,
+    ) -> Result<KrigeModel, KrigingError> {
+        self.fit_inner(coords, values, Some(external))
+    }
+
+    fn fit_inner(
+        &self,
+        coords: MatRef<'_, f64>,
+        values: &[f64],
+        external: Option<MatRef<'_, f64>>,
+    ) -> Result<KrigeModel, KrigingError> {
+        let (n, d) = coords.shape();
+        if values.len() != n {
+            return Err(KrigingError::ShapeMismatch {
+                what: "values length vs coordinate rows",
+                expected: n,
+                got: values.len(),
+            });
+        }
+        if d == 0 {
+            return Err(KrigingError::ShapeMismatch {
+                what: "coordinate dimensions (need at least one)",
+                expected: 1,
+                got: 0,
+            });
+        }
+        crate::check_finite("coordinates", coords)?;
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(KrigingError::NonFinite {
+                what: "values",
+                row: i,
+                col: 0,
+            });
+        }
+        let (n_ext, ext_rows) = match external {
+            None => (0, Vec::new()),
+            Some(e) => {
+                if e.nrows() != n {
+                    return Err(KrigingError::ShapeMismatch {
+                        what: "external drift rows vs coordinate rows",
+                        expected: n,
+                        got: e.nrows(),
+                    });
+                }
+                crate::check_finite("external drift", e)?;
+                (e.ncols(), rows_of(e))
+            }
+        };
+        let mut data = ModelData {
+            dim: d,
+            coords: rows_of(coords),
+            values: values.to_vec(),
+            n_ext,
+            external: ext_rows,
+            variogram: NestedVariogram {
+                nugget: 0.0,
+                structures: Vec::new(),
+            },
+            drift: self.drift,
+            anisotropy: self.anisotropy,
+            neighbourhood: self.neighbourhood,
+            fit: None,
+        };
+        match &self.variogram {
+            VariogramChoice::Given(v) => {
+                v.validate()?;
+                data.variogram = v.clone();
+            }
+            VariogramChoice::Fit(m) => self.fit_variogram(&mut data, &[*m])?,
+            VariogramChoice::BestFit(ms) => self.fit_variogram(&mut data, ms)?,
+        }
+        KrigeModel::build(data)
+    }
+
+    /// Fits the variogram to the residuals of an ordinary least-squares fit of the drift.
+    fn fit_variogram(
+        &self,
+        data: &mut ModelData,
+        models: &[VariogramModel],
+    ) -> Result<(), KrigingError> {
+        if models.is_empty() {
+            return Err(KrigingError::InvalidConfig(
+                "no variogram model to fit".into(),
+            ));
+        }
+        let geom = Geometry::new(data)?;
+        let n = data.values.len();
+        let p = geom.p;
+        let fmat = geom.drift_rows(data);
+        // OLS residuals: beta = (F^t F)^+ F^t z.
+        let f = Mat::from_fn(n, p, |i, k| fmat[i * p + k]);
+        let z = Mat::from_fn(n, 1, |i, _| data.values[i]);
+        let (gp, _) = sym_pinv(matmul(f.transpose(), f.as_ref()).as_ref());
+        let beta = matmul(gp.as_ref(), matmul(f.transpose(), z.as_ref()).as_ref());
+        let fitted = matmul(f.as_ref(), beta.as_ref());
+        let resid = Mat::from_fn(n, 1, |i, _| data.values[i] - fitted[(i, 0)]);
+        let pts = Mat::from_fn(n, data.dim, |i, k| geom.pts[i * data.dim + k]);
+        let emp = EmpiricalVariogram::compute_binned(pts.as_ref(), resid.as_ref(), &self.binning)?;
+        let opts = FitOptions {
+            nugget: self.fit_nugget,
+            weights: self.fit_weights,
+        };
+        let mut candidates = Vec::new();
+        let mut best: Option<(f64, crate::Variogram)> = None;
+        for &m in models {
+            let mut rep = CandidateReport {
+                model: m,
+                variogram: None,
+                wsse: None,
+                loo_rmse: None,
+                error: None,
+            };
+            match fit_variogram(&emp, m, &opts) {
+                Ok(fv) => {
+                    rep.variogram = Some(fv.variogram);
+                    rep.wsse = Some(fv.wsse);
+                    if best.is_none_or(|b| fv.wsse < b.0) {
+                        best = Some((fv.wsse, fv.variogram));
+                    }
+                }
+                Err(e) => rep.error = Some(e.to_string()),
+            }
+            candidates.push(rep);
+        }
+        let Some((_, v)) = best else {
+            let why = candidates
+                .iter()
+                .map(|r| format!("{}: {}", r.model.name(), r.error.as_deref().unwrap_or("?")))
+                .collect::<Vec<_>>()
+                .join("; ");
+            return Err(KrigingError::NoModel(why));
+        };
+        data.variogram = v.into();
+        data.fit = Some(VariogramFitReport {
+            empirical: emp,
+            candidates,
+        });
+        Ok(())
+    }
+}
+
+/// Row-major copy of a matrix.
+fn rows_of(m: MatRef<'_, f64>) -> Vec<f64> {
+    let (r, c) = m.shape();
+    let mut out = Vec::with_capacity(r * c);
+    for i in 0..r {
+        for k in 0..c {
+            out.push(m[(i, k)]);
+        }
+    }
+    out
+}
+
+/// Coordinate transform and drift basis of a model.
+struct Geometry {
+    centre: Vec<f64>,
+    amat: Vec<f64>,
+    scale: f64,
+    pts: Vec<f64>,
+    ext_mean: Vec<f64>,
+    ext_sd: Vec<f64>,
+    p: usize,
+}
+
+impl Geometry {
+    fn new(data: &ModelData) -> Result<Self, KrigingError> {
+        let d = data.dim;
+        let n = data.values.len();
+        let p = data.drift.n_terms(d) + data.n_ext;
+        if n < p + 1 || n < 2 {
+            return Err(KrigingError::TooFewSamples {
+                what: "kriging with this drift (drift terms plus one)",
+                needed: (p + 1).max(2),
+                got: n,
+            });
+        }
+        let amat = data.anisotropy.matrix(d)?;
+        let mut centre = vec![0.0; d];
+        for (k, c) in centre.iter_mut().enumerate() {
+            *c = (0..n).map(|i| data.coords[i * d + k]).sum::<f64>() / n as f64;
+        }
+        let mut pts = vec![0.0; n * d];
+        let mut scale = 0.0f64;
+        for i in 0..n {
+            transform(
+                &amat,
+                &centre,
+                &data.coords[i * d..(i + 1) * d],
+                &mut pts[i * d..(i + 1) * d],
+            );
+            for &u in &pts[i * d..(i + 1) * d] {
+                scale = scale.max(u.abs());
+            }
+        }
+        if scale.is_nan() || scale <= 0.0 {
+            return Err(KrigingError::NoSpread { samples: n });
+        }
+        let m = data.n_ext;
+        let mut ext_mean = vec![0.0; m];
+        let mut ext_sd = vec![1.0; m];
+        for k in 0..m {
+            let mean = (0..n).map(|i| data.external[i * m + k]).sum::<f64>() / n as f64;
+            let var = (0..n)
+                .map(|i| (data.external[i * m + k] - mean).powi(2))
+                .sum::<f64>()
+                / n as f64;
+            ext_mean[k] = mean;
+            ext_sd[k] = if var > 0.0 { var.sqrt() } else { 1.0 };
+        }
+        Ok(Geometry {
+            centre,
+            amat,
+            scale,
+            pts,
+            ext_mean,
+            ext_sd,
+            p,
+        })
+    }
+
+    /// Row-major n x p drift basis at the samples.
+    fn drift_rows(&self, data: &ModelData) -> Vec<f64> {
+        let (d, n, m) = (data.dim, data.values.len(), data.n_ext);
+        let mut out = vec![0.0; n * self.p];
+        for i in 0..n {
+            drift_terms(
+                data.drift,
+                &self.pts[i * d..(i + 1) * d],
+                self.scale,
+                &data.external[i * m..(i + 1) * m],
+                &self.ext_mean,
+                &self.ext_sd,
+                &mut out[i * self.p..(i + 1) * self.p],
+            );
+        }
+        out
+    }
+}
+
+/// `u = A (x - centre)`.
+#[inline]
+fn transform(amat: &[f64], centre: &[f64], x: &[f64], u: &mut [f64]) {
+    let d = centre.len();
+    for (r, ur) in u.iter_mut().enumerate() {
+        let mut s = 0.0;
+        for k in 0..d {
+            s += amat[r * d + k] * (x[k] - centre[k]);
+        }
+        *ur = s;
+    }
+}
+
+/// The drift basis at transformed point `u`: `1`, `u_k / scale`, `(u_k / scale)(u_l / scale)`,
+/// standardised external variables.
+#[inline]
+fn drift_terms(
+    drift: Drift,
+    u: &[f64],
+    scale: f64,
+    ext: &[f64],
+    ext_mean: &[f64],
+    ext_sd: &[f64],
+    out: &mut [f64],
+) {
+    let d = u.len();
+    out[0] = 1.0;
+    let mut j = 1;
+    if drift != Drift::Constant {
+        for &uk in u {
+            out[j] = uk / scale;
+            j += 1;
+        }
+    }
+    if drift == Drift::Quadratic {
+        for k in 0..d {
+            for l in k..d {
+                out[j] = (u[k] / scale) * (u[l] / scale);
+                j += 1;
+            }
+        }
+    }
+    for (k, &e) in ext.iter().enumerate() {
+        out[j] = (e - ext_mean[k]) / ext_sd[k];
+        j += 1;
+    }
+}
+
+#[inline]
+fn dist(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Lower Cholesky factor in place (single-threaded); `Err(index)` at a non-positive pivot.
+fn cholesky(a: &mut Mat<f64>) -> Result<(), usize> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::cholesky::llt::factor;
+    let n = a.nrows();
+    let mut mem = MemBuffer::new(factor::cholesky_in_place_scratch::<f64>(
+        n,
+        Par::Seq,
+        Default::default(),
+    ));
+    factor::cholesky_in_place(
+        a.as_mut(),
+        Default::default(),
+        Par::Seq,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )
+    .map(|_| ())
+    .map_err(|e| match e {
+        factor::LltError::NonPositivePivot { index } => index,
+    })
+}
+
+fn solve_lower(l: MatRef<'_, f64>, rhs: faer::MatMut<'_, f64>) {
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(l, rhs, Par::Seq);
+}
+
+fn solve_lower_t(l: MatRef<'_, f64>, rhs: faer::MatMut<'_, f64>) {
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(l.transpose(), rhs, Par::Seq);
+}
+
+impl KrigeModel {
+    fn build(data: ModelData) -> Result<Self, KrigingError> {
+        data.variogram.validate()?;
+        let d = data.dim;
+        let n = data.values.len();
+        if data.coords.len() != n * d || data.external.len() != n * data.n_ext {
+            return Err(KrigingError::ShapeMismatch {
+                what: "stored model coordinates",
+                expected: n * d,
+                got: data.coords.len(),
+            });
+        }
+        let geom = Geometry::new(&data)?;
+        let fmat = geom.drift_rows(&data);
+        let v = &data.variogram;
+        let shift = if v.is_bounded() {
+            v.total_sill()
+        } else {
+            // Any constant large enough: the diameter of the samples is at most 2 sqrt(d) scale.
+            let diam = 2.0 * (d as f64).sqrt() * geom.scale;
+            v.nugget + v.structured(4.0 * diam)
+        };
+        let p = geom.p;
+        match data.neighbourhood {
+            Neighbourhood::Global => {
+                if n.saturating_mul(n).saturating_mul(8) > GLOBAL_MAX_BYTES {
+                    return Err(KrigingError::InvalidConfig(format!(
+                        "a global kriging system over {n} samples needs {:.1} GiB; use a moving \
+                         neighbourhood (Neighbourhood::Nearest)",
+                        (n * n * 8) as f64 / (1u64 << 30) as f64
+                    )));
+                }
+            }
+            Neighbourhood::Nearest { k } => {
+                if k < p + 1 {
+                    return Err(KrigingError::InvalidConfig(format!(
+                        "a moving neighbourhood of {k} samples is too small for {p} drift terms \
+                         (need at least {})",
+                        p + 1
+                    )));
+                }
+            }
+            Neighbourhood::Radius { radius, max } => {
+                if !(radius.is_finite() && radius > 0.0) || max < p + 1 {
+                    return Err(KrigingError::InvalidConfig(format!(
+                        "neighbourhood radius {radius} must be finite and > 0 and at most {max} \
+                         neighbours at least {} (drift terms plus one)",
+                        p + 1
+                    )));
+                }
+            }
+        }
+        let tree = KdTree::new(&geom.pts, d);
+        // Coinciding samples: singular without a nugget.
+        if v.nugget == 0.0 {
+            let tol = 1e-12 * geom.scale;
+            let mut nb = Vec::new();
+            for i in 0..n {
+                tree.nearest(
+                    &geom.pts,
+                    &geom.pts[i * d..(i + 1) * d],
+                    1,
+                    tol * tol,
+                    Some(i),
+                    &mut nb,
+                );
+                if let Some(&(_, j)) = nb.first() {
+                    return Err(KrigingError::DuplicateParams {
+                        what: "kriging",
+                        first: i.min(j),
+                        second: i.max(j),
+                    });
+                }
+            }
+        }
+        let mut st = State {
+            centre: geom.centre,
+            amat: geom.amat,
+            scale: geom.scale,
+            pts: geom.pts,
+            ext_mean: geom.ext_mean,
+            ext_sd: geom.ext_sd,
+            fmat,
+            p,
+            shift,
+            tree: None,
+            global: None,
+            warnings: Vec::new(),
+        };
+        let mut model = KrigeModel {
+            data,
+            st: st.clone(),
+        };
+        if model.data.neighbourhood == Neighbourhood::Global {
+            let (sys, warn) = model.system((0..n).collect(), "the global kriging system")?;
+            st.global = Some(sys);
+            st.warnings.extend(warn);
+        } else {
+            st.tree = Some(tree);
+        }
+        model.st = st;
+        Ok(model)
+    }
+
+    /// Builds and factorises the system over the samples `idx`.
+    fn system(
+        &self,
+        idx: Vec<usize>,
+        what: &'static str,
+    ) -> Result<(System, Option<String>), KrigingError> {
+        let st = &self.st;
+        let d = self.data.dim;
+        let n = idx.len();
+        let p = st.p;
+        let v = &self.data.variogram;
+        let mut c = Mat::from_fn(n, n, |i, j| {
+            if i == j {
+                st.shift
+            } else if i > j {
+                let (a, b) = (idx[i], idx[j]);
+                // Distinct samples: the nugget applies even at distance 0 (duplicates), as
+                // independent noise, which keeps the matrix regular.
+                let h = dist(&st.pts[a * d..(a + 1) * d], &st.pts[b * d..(b + 1) * d]);
+                st.shift - (v.nugget + v.structured(h))
+            } else {
+                0.0
+            }
+        });
+        let not_pd = |pivot_ratio: f64| KrigingError::Singular {
+            what,
+            size: n,
+            pivot_ratio,
+            residual: f64::NAN,
+        };
+        if cholesky(&mut c).is_err() {
+            return Err(not_pd(0.0));
+        }
+        let (mut lmin, mut lmax) = (f64::INFINITY, 0.0f64);
+        for k in 0..n {
+            lmin = lmin.min(c[(k, k)]);
+            lmax = lmax.max(c[(k, k)]);
+        }
+        let ratio = (lmin / lmax).powi(2);
+        if ratio.is_nan() || ratio < PIVOT_RATIO_MIN {
+            return Err(not_pd(ratio));
+        }
+        let mut fw = Mat::from_fn(n, p, |i, k| st.fmat[idx[i] * p + k]);
+        solve_lower(c.as_ref(), fw.as_mut());
+        let m = matmul(fw.transpose(), fw.as_ref());
+        let (eig, _) = sym_eigen(m.as_ref());
+        let emax = eig.iter().fold(0.0f64, |a, &b| a.max(b));
+        let emin = eig.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        let dratio = emin / emax;
+        let mut warning = None;
+        if dratio.is_nan() || dratio < DRIFT_RATIO_MIN {
+            return Err(KrigingError::IllConditionedDrift {
+                terms: p,
+                samples: n,
+                ratio: dratio,
+            });
+        }
+        if dratio < DRIFT_RATIO_WARN {
+            warning = Some(format!(
+                "{what}: the drift system is poorly conditioned (eigenvalue ratio {dratio:.2e}); \
+                 the drift coefficients are uncertain"
+            ));
+        }
+        let mut r = m;
+        if cholesky(&mut r).is_err() {
+            return Err(KrigingError::IllConditionedDrift {
+                terms: p,
+                samples: n,
+                ratio: dratio,
+            });
+        }
+        let mut zw = Mat::from_fn(n, 1, |i, _| self.data.values[idx[i]]);
+        solve_lower(c.as_ref(), zw.as_mut());
+        // beta = M^-1 F_w^t z_w
+        let mut beta = matmul(fw.transpose(), zw.as_ref());
+        solve_lower(r.as_ref(), beta.as_mut());
+        solve_lower_t(r.as_ref(), beta.as_mut());
+        let fb = matmul(fw.as_ref(), beta.as_ref());
+        let mut alpha = Mat::from_fn(n, 1, |i, _| zw[(i, 0)] - fb[(i, 0)]);
+        solve_lower_t(c.as_ref(), alpha.as_mut());
+        Ok((
+            System {
+                idx,
+                l: c,
+                fw,
+                r,
+                beta: (0..p).map(|k| beta[(k, 0)]).collect(),
+                alpha: (0..n).map(|i| alpha[(i, 0)]).collect(),
+            },
+            warning,
+        ))
+    }
+
+    /// Predictions (and variances into `var` when it is not empty) of `sys` at transformed points
+    /// `q` (row-major B x d) with drift rows `fq` (row-major B x p).
+    fn solve_block(&self, sys: &System, q: &[f64], fq: &[f64], val: &mut [f64], var: &mut [f64]) {
+        let st = &self.st;
+        let d = self.data.dim;
+        let p = st.p;
+        let b = val.len();
+        let n = sys.idx.len();
+        let v = &self.data.variogram;
+        let mut cq = Mat::from_fn(n, b, |i, j| {
+            let a = sys.idx[i];
+            st.shift - v.eval(dist(&st.pts[a * d..(a + 1) * d], &q[j * d..(j + 1) * d]))
+        });
+        for j in 0..b {
+            let mut s = 0.0;
+            for k in 0..p {
+                s += sys.beta[k] * fq[j * p + k];
+            }
+            let col = cq.col_as_slice(j);
+            for (a, c) in sys.alpha.iter().zip(col) {
+                s += a * c;
+            }
+            val[j] = s;
+        }
+        if var.is_empty() {
+            return;
+        }
+        solve_lower(sys.l.as_ref(), cq.as_mut());
+        let ftv = matmul(sys.fw.transpose(), cq.as_ref()); // p x B
+        let mut w = Mat::from_fn(p, b, |k, j| fq[j * p + k] - ftv[(k, j)]);
+        solve_lower(sys.r.as_ref(), w.as_mut());
+        for (j, vj) in var.iter_mut().enumerate() {
+            let vv: f64 = cq.col_as_slice(j).iter().map(|x| x * x).sum();
+            let ww: f64 = w.col_as_slice(j).iter().map(|x| x * x).sum();
+            *vj = (st.shift - vv + ww).max(0.0);
+        }
+    }
+
+    /// The neighbours of transformed point `u` (sorted by index), excluding `exclude`.
+    fn neighbours(
+        &self,
+        u: &[f64],
+        exclude: Option<usize>,
+        buf: &mut Vec<(f64, usize)>,
+    ) -> Result<Vec<usize>, KrigingError> {
+        let tree = self.st.tree.as_ref().expect("local models have a tree");
+        let (k, r2) = match self.data.neighbourhood {
+            Neighbourhood::Nearest { k } => (k, f64::INFINITY),
+            Neighbourhood::Radius { radius, max } => (max, radius * radius),
+            Neighbourhood::Global => unreachable!("global models have no tree"),
+        };
+        tree.nearest(&self.st.pts, u, k, r2, exclude, buf);
+        if buf.len() < self.st.p + 1 {
+            return Err(KrigingError::TooFewSamples {
+                what: "the moving neighbourhood of a query point",
+                needed: self.st.p + 1,
+                got: buf.len(),
+            });
+        }
+        let mut idx: Vec<usize> = buf.iter().map(|e| e.1).collect();
+        idx.sort_unstable();
+        Ok(idx)
+    }
+
+    /// Checks a query point and its external variables; returns the transformed point and drift row.
+    fn prepare(
+        &self,
+        x: &[f64],
+        ext: &[f64],
+        u: &mut [f64],
+        f: &mut [f64],
+    ) -> Result<(), KrigingError> {
+        let d = self.data.dim;
+        if x.len() != d {
+            return Err(KrigingError::ShapeMismatch {
+                what: "query point length",
+                expected: d,
+                got: x.len(),
+            });
+        }
+        if ext.len() != self.data.n_ext {
+            return Err(KrigingError::ShapeMismatch {
+                what: "external drift variables of a query",
+                expected: self.data.n_ext,
+                got: ext.len(),
+            });
+        }
+        if let Some(k) = x.iter().position(|v| !v.is_finite()) {
+            return Err(KrigingError::NonFinite {
+                what: "query point",
+                row: 0,
+                col: k,
+            });
+        }
+        if let Some(k) = ext.iter().position(|v| !v.is_finite()) {
+            return Err(KrigingError::NonFinite {
+                what: "query external drift",
+                row: 0,
+                col: k,
+            });
+        }
+        let st = &self.st;
+        transform(&st.amat, &st.centre, x, u);
+        drift_terms(
+            self.data.drift,
+            u,
+            st.scale,
+            ext,
+            &st.ext_mean,
+            &st.ext_sd,
+            f,
+        );
+        Ok(())
+    }
+
+    /// The prediction and kriging variance at `x` (a model without external drift).
+    pub fn predict(&self, x: &[f64]) -> Result<Prediction, KrigingError> {
+        self.predict_external(x, &[])
+    }
+
+    /// The prediction and kriging variance at `x` with the external drift variables `ext` there.
+    pub fn predict_external(&self, x: &[f64], ext: &[f64]) -> Result<Prediction, KrigingError> {
+        let mut u = vec![0.0; self.data.dim];
+        let mut f = vec![0.0; self.st.p];
+        self.prepare(x, ext, &mut u, &mut f)?;
+        let (mut val, mut var) = ([0.0], [0.0]);
+        match &self.st.global {
+            Some(sys) => self.solve_block(sys, &u, &f, &mut val, &mut var),
+            None => {
+                let idx = self.neighbours(&u, None, &mut Vec::new())?;
+                let (sys, _) = self.system(idx, "a moving-neighbourhood kriging system")?;
+                self.solve_block(&sys, &u, &f, &mut val, &mut var);
+            }
+        }
+        Ok(Prediction {
+            value: val[0],
+            variance: var[0],
+        })
+    }
+
+    /// Predictions and variances at every row of `points` (m x d), in parallel (rayon) over fixed
+    /// blocks of 64 points: the same bits whatever the number of threads.
+    pub fn predict_many(&self, points: MatRef<'_, f64>) -> Result<Predictions, KrigingError> {
+        self.predict_many_with(points, None, true)
+    }
+
+    /// As [`KrigeModel::predict_many`], with the external drift variables at the points (m x
+    /// n_ext) and the choice of computing variances (predictions alone cost `O(n)` per point in a
+    /// global model, variances `O(n^2)`).
+    pub fn predict_many_with(
+        &self,
+        points: MatRef<'_, f64>,
+        external: Option<MatRef<'_, f64>>,
+        variance: bool,
+    ) -> Result<Predictions, KrigingError> {
+        let (m, d) = points.shape();
+        if d != self.data.dim {
+            return Err(KrigingError::ShapeMismatch {
+                what: "query point columns",
+                expected: self.data.dim,
+                got: d,
+            });
+        }
+        let n_ext = self.data.n_ext;
+        match external {
+            Some(e) if e.nrows() != m || e.ncols() != n_ext => {
+                return Err(KrigingError::ShapeMismatch {
+                    what: "external drift at the query points (rows x columns)",
+                    expected: m * n_ext,
+                    got: e.nrows() * e.ncols(),
+                });
+            }
+            None if n_ext > 0 => {
+                return Err(KrigingError::ShapeMismatch {
+                    what: "external drift columns at the query points",
+                    expected: n_ext,
+                    got: 0,
+                });
+            }
+            _ => {}
+        }
+        let x = rows_of(points);
+        let e = external.map(rows_of).unwrap_or_default();
+        self.predict_rows(&x, &e, m, variance)
+    }
+
+    /// Predictions and variances on the grid `xs` x `ys` (2-D models), row-major with `x`
+    /// fastest: entry `j * xs.len() + i` is at `(xs[i], ys[j])` (PyKrige's `"grid"` layout).
+    pub fn predict_grid(&self, xs: &[f64], ys: &[f64]) -> Result<Predictions, KrigingError> {
+        if self.data.dim != 2 {
+            return Err(KrigingError::ShapeMismatch {
+                what: "grid prediction needs 2-D coordinates",
+                expected: 2,
+                got: self.data.dim,
+            });
+        }
+        let m = xs.len() * ys.len();
+        let mut x = Vec::with_capacity(2 * m);
+        for &y in ys {
+            for &xv in xs {
+                x.push(xv);
+                x.push(y);
+            }
+        }
+        self.predict_rows(&x, &[], m, true)
+    }
+
+    fn predict_rows(
+        &self,
+        x: &[f64],
+        e: &[f64],
+        m: usize,
+        variance: bool,
+    ) -> Result<Predictions, KrigingError> {
+        let d = self.data.dim;
+        let p = self.st.p;
+        let n_ext = self.data.n_ext;
+        let mut values = vec![0.0; m];
+        let mut variances = if variance { vec![0.0; m] } else { Vec::new() };
+        let nblocks = m.div_ceil(BLOCK);
+        let results: Vec<Result<(), KrigingError>> = values
+            .par_chunks_mut(BLOCK)
+            .zip(if variance {
+                variances
+                    .par_chunks_mut(BLOCK)
+                    .map(Some)
+                    .collect::<Vec<_>>()
+            } else {
+                (0..nblocks).map(|_| None).collect::<Vec<_>>()
+            })
+            .enumerate()
+            .map(|(blk, (val, var))| {
+                let start = blk * BLOCK;
+                let b = val.len();
+                let mut u = vec![0.0; b * d];
+                let mut f = vec![0.0; b * p];
+                for j in 0..b {
+                    let q = start + j;
+                    self.prepare(
+                        &x[q * d..(q + 1) * d],
+                        &e[q * n_ext..(q + 1) * n_ext],
+                        &mut u[j * d..(j + 1) * d],
+                        &mut f[j * p..(j + 1) * p],
+                    )
+                    .map_err(|err| at_point(err, q))?;
+                }
+                let mut empty: [f64; 0] = [];
+                let var: &mut [f64] = var.unwrap_or(&mut empty);
+                match &self.st.global {
+                    Some(sys) => self.solve_block(sys, &u, &f, val, var),
+                    None => {
+                        let mut buf = Vec::new();
+                        for j in 0..b {
+                            let uj = &u[j * d..(j + 1) * d];
+                            let idx = self
+                                .neighbours(uj, None, &mut buf)
+                                .map_err(|err| at_point(err, start + j))?;
+                            let (sys, _) = self
+                                .system(idx, "a moving-neighbourhood kriging system")
+                                .map_err(|err| at_point(err, start + j))?;
+                            let vj: &mut [f64] = if var.is_empty() {
+                                &mut []
+                            } else {
+                                &mut var[j..j + 1]
+                            };
+                            self.solve_block(
+                                &sys,
+                                uj,
+                                &f[j * p..(j + 1) * p],
+                                &mut val[j..j + 1],
+                                vj,
+                            );
+                        }
+                    }
+                }
+                Ok(())
+            })
+            .collect();
+        for r in results {
+            r?;
+        }
+        Ok(Predictions { values, variances })
+    }
+
+    /// Leave-one-out cross validation with the variogram fixed and the drift re-estimated.
+    ///
+    /// Global neighbourhood, closed form (Dubrule 1983) from the inverse of the kriging matrix
+    /// `A = [C F; F^t 0]`: with `B = A^-1`, `e_k = (B [z; 0])_k / B_kk` and
+    /// `sigma^2_{-k}(x_k) = 1 / B_kk`, where `B_kk = (C^-1)_kk - g_k^t (F^t C^-1 F)^-1 g_k`,
+    /// `g_k = (F^t C^-1)_{:, k}` (cost: one `L^-1`, `n^3 / 3`). Moving neighbourhood: each sample is
+    /// predicted from its own neighbours without it.
+    pub fn leave_one_out(&self) -> Result<LooStats, KrigingError> {
+        let n = self.data.values.len();
+        let d = self.data.dim;
+        let p = self.st.p;
+        let mut errors = vec![0.0; n];
+        let mut variances = vec![0.0; n];
+        if let Some(sys) = &self.st.global {
+            // L^-1, then G = C^-1 F = L^-t F_w.
+            let mut linv = Mat::<f64>::identity(n, n);
+            solve_lower(sys.l.as_ref(), linv.as_mut());
+            let mut g = sys.fw.clone();
+            solve_lower_t(sys.l.as_ref(), g.as_mut());
+            let mut gt = g.transpose().to_owned(); // p x n
+            solve_lower(sys.r.as_ref(), gt.as_mut());
+            for k in 0..n {
+                let cinv_kk: f64 = (k..n).map(|i| linv[(i, k)] * linv[(i, k)]).sum();
+                let corr: f64 = gt.col_as_slice(k).iter().map(|x| x * x).sum();
+                let bkk = cinv_kk - corr;
+                if !(bkk > 0.0 && bkk.is_finite()) {
+                    return Err(KrigingError::Singular {
+                        what: "leave-one-out",
+                        size: n,
+                        pivot_ratio: 0.0,
+                        residual: bkk,
+                    });
+                }
+                errors[k] = sys.alpha[k] / bkk;
+                variances[k] = 1.0 / bkk;
+            }
+        } else {
+            let per: Vec<Result<(f64, f64), KrigingError>> = (0..n)
+                .into_par_iter()
+                .map(|k| {
+                    let u = &self.st.pts[k * d..(k + 1) * d];
+                    let idx = self
+                        .neighbours(u, Some(k), &mut Vec::new())
+                        .map_err(|e| at_point(e, k))?;
+                    let (sys, _) = self.system(idx, "a leave-one-out neighbourhood system")?;
+                    let (mut val, mut var) = ([0.0], [0.0]);
+                    self.solve_block(
+                        &sys,
+                        u,
+                        &self.st.fmat[k * p..(k + 1) * p],
+                        &mut val,
+                        &mut var,
+                    );
+                    Ok((self.data.values[k] - val[0], var[0]))
+                })
+                .collect();
+            for (k, r) in per.into_iter().enumerate() {
+                let (e, v) = r?;
+                errors[k] = e;
+                variances[k] = v;
+            }
+        }
+        let standardised: Vec<f64> = errors
+            .iter()
+            .zip(&variances)
+            .map(|(e, v)| if *v > 0.0 { e / v.sqrt() } else { f64::NAN })
+            .collect();
+        let nf = n as f64;
+        Ok(LooStats {
+            rmse: (errors.iter().map(|e| e * e).sum::<f64>() / nf).sqrt(),
+            mean_error: errors.iter().sum::<f64>() / nf,
+            msse: standardised.iter().map(|s| s * s).sum::<f64>() / nf,
+            errors,
+            variances,
+            standardised,
+        })
+    }
+
+    /// The variogram used (fitted or given), in the coordinates' units (ranges along the major
+    /// axis under anisotropy).
+    pub fn variogram(&self) -> &NestedVariogram {
+        &self.data.variogram
+    }
+
+    /// The empirical variogram and candidate fits, when the variogram was fitted.
+    pub fn fit_report(&self) -> Option<&VariogramFitReport> {
+        self.data.fit.as_ref()
+    }
+
+    /// The drift.
+    pub fn drift(&self) -> Drift {
+        self.data.drift
+    }
+
+    /// The neighbourhood.
+    pub fn neighbourhood(&self) -> Neighbourhood {
+        self.data.neighbourhood
+    }
+
+    /// The anisotropy.
+    pub fn anisotropy(&self) -> Anisotropy {
+        self.data.anisotropy
+    }
+
+    /// Number of samples.
+    pub fn n_samples(&self) -> usize {
+        self.data.values.len()
+    }
+
+    /// Coordinate dimensions.
+    pub fn dim(&self) -> usize {
+        self.data.dim
+    }
+
+    /// Number of external drift variables.
+    pub fn n_external(&self) -> usize {
+        self.data.n_ext
+    }
+
+    /// Generalised least-squares drift coefficients of a global model, on the internal basis
+    /// (`1`, centred coordinates over their largest extent, their products, standardised external
+    /// variables); `None` for a moving neighbourhood (each query has its own).
+    pub fn drift_coefficients(&self) -> Option<&[f64]> {
+        self.st.global.as_ref().map(|s| s.beta.as_slice())
+    }
+
+    /// Conditioning warnings recorded at fit time (empty when all is well).
+    pub fn warnings(&self) -> &[String] {
+        &self.st.warnings
+    }
+}
+
+/// Adds the query index to an error about a query point.
+fn at_point(err: KrigingError, q: usize) -> KrigingError {
+    match err {
+        KrigingError::NonFinite { what, col, .. } => KrigingError::NonFinite { what, row: q, col },
+        KrigingError::TooFewSamples { needed, got, .. } => KrigingError::QueryNeighbourhood {
+            point: q,
+            needed,
+            got,
+        },
+        other => other,
+    }
+}
