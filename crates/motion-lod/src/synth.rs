@@ -14,6 +14,10 @@ use motion_io::Motion;
 
 use crate::model::{Evaluator, MotionModel, TIME_ROW};
 
+/// The most frames one synthesized walk holds: about 4.6 hours at 60 fps, `8 P` MB of f64 pose
+/// vectors (0.8 GB for `P = 100` rows). Longer requests are refused before allocating.
+pub const MAX_WALK_FRAMES: usize = 1_000_000;
+
 /// What to synthesize.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WalkRequest {
@@ -89,9 +93,24 @@ impl MotionModel {
             Ok(())
         };
 
+        if !(duration.is_finite() && duration > 0.0) {
+            return Err(SynthError::Request(format!(
+                "the model gives a cycle of {duration} s for controls {:?} (a model file with a \
+                 broken time table?)",
+                req.controls
+            )));
+        }
         let frame_time = 1.0 / req.fps;
         let total = duration * req.cycles as f64;
-        let frames = (total / frame_time).floor() as usize + 1;
+        let frames_f = (total / frame_time).floor() + 1.0;
+        if frames_f > MAX_WALK_FRAMES as f64 {
+            return Err(SynthError::Request(format!(
+                "{} cycles of {duration:.3} s at {} fps are {frames_f} frames; at most \
+                 {MAX_WALK_FRAMES} are written",
+                req.cycles, req.fps
+            )));
+        }
+        let frames = frames_f as usize;
         let mut poses = Vec::with_capacity(frames * p);
         let mut transition = SeamTransition::new(p, chain::DEFAULT_HALFLIFE_S);
         let mut seam = SeamScratch::new(p);

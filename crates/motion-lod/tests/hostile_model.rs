@@ -9,6 +9,12 @@ use motion_lod::model_file::{
 };
 use serde::{Deserialize, Serialize};
 
+#[path = "../fuzz/seed_model.rs"]
+mod seed_model;
+
+#[path = "../fuzz/mutate_model.rs"]
+mod mutate_model;
+
 const FIXTURES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -224,35 +230,14 @@ fn random_payloads_behind_a_valid_frame_never_panic() {
     }
 }
 
-/// A real (small) model built from `fixtures/`: truncations, flips, a future version.
-/// A small real model built from `fixtures/` (8 cycles, 2 key levels), or `None` with the skip
-/// message when the fixtures are missing.
+/// The small real model of the fuzz targets (`fuzz/seed_model.rs`: 8 cycles, 2 key levels), or
+/// `None` with the skip message when the fixtures are missing.
 fn small_model() -> Option<motion_lod::MotionModel> {
-    use motion_lod::dataset::DataSpec;
-    use motion_lod::progress::NoProgress;
-    use motion_lod::{BuildConfig, MotionModel};
-
     if !Path::new(FIXTURES).join("walk_p160_t01.bvh").exists() {
         motion_io::test_data::missing("fixtures/ not found");
         return None;
     }
-    let spec = DataSpec {
-        dirs: vec![FIXTURES.into()],
-        frames: Some(16),
-        samples: Some(8),
-        ..DataSpec::default()
-    };
-    let data = spec.load(&|_, _| {}).unwrap();
-    let config = BuildConfig {
-        key_levels: 2,
-        accuracy_levels: 3,
-        max_ranks: [8, 8, 6],
-        min_ranks: [3, 3, 3],
-        importance_poses: 200,
-        error_samples: 4,
-        ..BuildConfig::default()
-    };
-    Some(MotionModel::build(&data.training, &config, &NoProgress).unwrap())
+    Some(seed_model::build_small_model(Path::new(FIXTURES)).unwrap())
 }
 
 #[test]
@@ -386,4 +371,58 @@ fn valid_checksum_broken_models_are_refused_by_every_command() {
         }
         std::fs::remove_dir_all(&dir).ok();
     }
+}
+
+/// The `model_mutated` fuzz target's harness on 400 pseudo-random edit lists: every edited model
+/// is refused or loads and runs through info, a crowd and a synthesized walk without panicking
+/// (a panic fails the test). The counts show that the edits reach each stage.
+#[test]
+fn mutated_models_never_panic() {
+    use mutate_model::Outcome;
+
+    let Some(model) = small_model() else {
+        return;
+    };
+    let seed = mutate_model::Seed::new(&model);
+    // The unedited seed loads and runs everywhere.
+    assert_eq!(
+        mutate_model::run(&seed, &[]),
+        Outcome::Loaded {
+            crowd_failed: false,
+            synth_failed: false
+        }
+    );
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let (mut not_parts, mut refused, mut loaded, mut failed_later) = (0, 0, 0, 0);
+    for _ in 0..400 {
+        let len = 6 + (next() % 24) as usize;
+        let data: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+        match mutate_model::run(&seed, &data) {
+            Outcome::NotParts => not_parts += 1,
+            Outcome::Refused => refused += 1,
+            Outcome::Loaded {
+                crowd_failed,
+                synth_failed,
+            } => {
+                loaded += 1;
+                if crowd_failed || synth_failed {
+                    failed_later += 1;
+                }
+            }
+        }
+    }
+    println!(
+        "400 edit lists: {not_parts} not the parts' layout, {refused} refused on load, \
+         {loaded} loaded ({failed_later} of them refused by the crowd or synthesis)"
+    );
+    assert!(
+        refused > 0 && loaded > 0,
+        "the edits must reach validation and the consumers"
+    );
 }

@@ -3,19 +3,19 @@
 //! - `bvh`: the BVH files of `fixtures/`, plus CRLF, tab and 1-frame variants of the first one;
 //! - `npy`: small arrays written by `tensor_ops::npy` (f8/f4, C/Fortran order, 0-d to 3-d,
 //!   format 2.0, big-endian);
-//! - `model_file` / `model_payload`: a small real `MotionModel` built from `fixtures/` (the whole
-//!   file, and its payload after the 24-byte header).
+//! - `model_file` / `model_payload`: the small real `MotionModel` of `seed_model.rs` (the whole
+//!   file, and its payload after the 24-byte header); `model_mutated`: a few edit lists.
 //!
 //! Run: `cargo run --release --manifest-path crates/motion-lod/fuzz/Cargo.toml --example seed_corpus`
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use motion_lod::dataset::DataSpec;
 use motion_lod::model_file::{HEADER_LEN, encode};
-use motion_lod::progress::NoProgress;
-use motion_lod::{BuildConfig, MotionModel};
 use tensor_ops::npy::{NpyArray, NpyDtype, to_npy_bytes};
+
+#[path = "../seed_model.rs"]
+mod seed_model;
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
@@ -25,7 +25,7 @@ fn main() -> Result<()> {
     let corpus = here.join("corpus");
     seed_bvh(&fixtures, &corpus.join("bvh"))?;
     seed_npy(&corpus.join("npy"))?;
-    seed_model(&fixtures, &corpus)?;
+    seed_models(&fixtures, &corpus)?;
     Ok(())
 }
 
@@ -119,24 +119,8 @@ fn seed_npy(out: &Path) -> Result<()> {
     Ok(())
 }
 
-fn seed_model(fixtures: &Path, corpus: &Path) -> Result<()> {
-    let spec = DataSpec {
-        dirs: vec![fixtures.to_path_buf()],
-        frames: Some(16),
-        samples: Some(8),
-        ..DataSpec::default()
-    };
-    let data = spec.load(&|_, _| {})?;
-    let config = BuildConfig {
-        key_levels: 2,
-        accuracy_levels: 3,
-        max_ranks: [8, 8, 6],
-        min_ranks: [3, 3, 3],
-        importance_poses: 200,
-        error_samples: 4,
-        ..BuildConfig::default()
-    };
-    let model = MotionModel::build(&data.training, &config, &NoProgress)?;
+fn seed_models(fixtures: &Path, corpus: &Path) -> Result<()> {
+    let model = seed_model::build_small_model(fixtures)?;
     let bytes = encode(&model, Path::new("seed.mlod"))?;
     fs::write(dir(&corpus.join("model_file"))?.join("small.mlod"), &bytes)?;
     fs::write(
@@ -144,5 +128,19 @@ fn seed_model(fixtures: &Path, corpus: &Path) -> Result<()> {
         &bytes[HEADER_LEN..],
     )?;
     println!("model: {} bytes", bytes.len());
+    // Edit lists for `model_mutated` (see `mutate_model.rs`): an op byte, then its operands.
+    let mutated = corpus.join("model_mutated");
+    dir(&mutated)?;
+    let edits: [&[u8]; 6] = [
+        &[],
+        &[0, 0, 0, 0, 3, 7],          // small integer into the 4th number
+        &[2, 0, 0, 1, 0],             // NaN into the 257th number
+        &[5, 0, 0, 0, 1, 0, 0, 0, 0], // remove an element of the 2nd array
+        &[6, 0, 0, 0, 9, 0, 0, 0, 2], // duplicate an element
+        &[8, 0, 0, 0, 3, 0, 0, 0, 1], // truncate an array
+    ];
+    for (i, e) in edits.iter().enumerate() {
+        fs::write(mutated.join(format!("edits{i}")), e)?;
+    }
     Ok(())
 }
