@@ -54,7 +54,7 @@ pub use model::{
     Precision, ROWS_PER_JOINT, Ranks, TIME_ROW, Variogram, VariogramModel,
 };
 pub use policy::{
-    DistanceConfig, DistancePolicy, ErrorMetric, LevelPolicy, PolicyError, ScreenConfig,
-    ScreenSpacePolicy, ViewParams,
+    DistanceConfig, DistancePolicy, ERROR_MARGIN, ErrorMetric, LevelPolicy, PolicyError,
+    ScreenConfig, ScreenSpacePolicy, ViewParams,
 };
 pub use projection::KeyFactors;

@@ -166,13 +166,32 @@ impl ControlSpace {
     }
 }
 
-/// Measured error of one accuracy level (or of one joint count), filled by the model builder.
+/// Measured error of one accuracy level (or of one joint count) against full detail at the same
+/// controls, filled by the model builder.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct LevelError {
     /// Mean joint position error after forward kinematics, in centimetres.
     pub mean_joint_cm: f32,
     /// Shell error: largest displacement of virtual vertices 3 cm from each joint, in centimetres.
     pub shell_cm: f32,
+    /// Foot slide: how far a planted foot slides over one stance beyond what full detail slides
+    /// (largest over the measured walks, no foot lock), in centimetres; 0 when the model's feet are
+    /// unknown. The slide of a walk is `skate x contact share x cycle duration` of the motion-quality
+    /// meter (`motion_lod::quality`), the distance a foot travels while on the floor per cycle.
+    pub slide_cm: f32,
+}
+
+impl LevelError {
+    /// The larger of the chosen pose error and the foot slide, in metres: what a policy projects to
+    /// the screen (both must stay under its pixel budget).
+    pub fn visible_m(&self, shell: bool) -> f32 {
+        let pose = if shell {
+            self.shell_cm
+        } else {
+            self.mean_joint_cm
+        };
+        0.01 * pose.max(self.slide_cm)
+    }
 }
 
 /// Storage precision for [`LodModel::bytes`].
@@ -487,7 +506,7 @@ impl LodModel {
             )));
         }
         for (i, e) in table.iter().enumerate() {
-            for v in [e.mean_joint_cm, e.shell_cm] {
+            for v in [e.mean_joint_cm, e.shell_cm, e.slide_cm] {
                 if !v.is_finite() || v < 0.0 {
                     return Err(ModelError::ErrorTable(format!(
                         "{what}: entry {i} holds {v} (must be finite and >= 0)"

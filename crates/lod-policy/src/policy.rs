@@ -34,6 +34,13 @@ impl ViewParams {
     }
 }
 
+/// Factor on the measured errors in both policies' screen checks. The error tables hold maxima over
+/// the controls the build measured (48 training samples and the quality grid); controls between
+/// them can do worse, the foot slide most (a threshold measure: up to 1.23x the stored maximum at
+/// midpoints between training samples in `motion-lod`'s `tests/quality.rs` on Bandai, 1.04x on the
+/// embedded data), so a detail must fit the budget with this much to spare.
+pub const ERROR_MARGIN: f32 = 1.5;
+
 /// A rule that maps a character's distance and visibility to a level of detail.
 pub trait LevelPolicy {
     /// Detail for a character `distance_m` metres from the camera; `visible` is false outside
@@ -70,6 +77,13 @@ pub struct DistanceConfig {
     pub joint_step_m: f32,
     /// Joints dropped per joint step (1 joint = 3 DOF).
     pub joints_per_step: usize,
+    /// The screen check (beyond the paper; default 1 px): where the schedule's level and joint
+    /// count would show more than this many pixels of pose error or foot slide (the model's
+    /// measured [`LevelError`](crate::model::LevelError)s, shell metric, projected at the
+    /// character's distance with the frame's [`ViewParams`]), the policy takes the finest detail
+    /// below it that stays within budget instead. `None`: the paper's schedule as published. A
+    /// model without error tables is not checked.
+    pub screen_budget_px: Option<f32>,
 }
 
 impl Default for DistanceConfig {
@@ -79,6 +93,7 @@ impl Default for DistanceConfig {
             key_step_m: 50.0,
             joint_step_m: 10.0,
             joints_per_step: 1,
+            screen_budget_px: Some(1.0),
         }
     }
 }
@@ -91,6 +106,14 @@ impl Default for DistanceConfig {
 /// `x = g + i / n_g`), so one more key level is reached every `key_step` metres. Past the last
 /// group (`x >= number of groups`) or outside the view: root only. Joints: all below `near`, then
 /// `joints_per_step` fewer every `joint_step` metres (never below zero).
+///
+/// With the screen check ([`DistanceConfig::screen_budget_px`]), the scheduled `(level, joints)` must
+/// satisfy `m (e_l + e_J(joints)) / metres_per_pixel(distance) <= budget`, where `m` is
+/// [`ERROR_MARGIN`] and `e_l` and `e_J` are the measured
+/// [visible errors](crate::model::LevelError::visible_m) of the level and the joint count
+/// (`e_J` made non-increasing in the joint count, as in [`ScreenSpacePolicy`]). Otherwise the
+/// policy keeps the joint count and takes the coarsest finer level that fits; if even level 0 does
+/// not, it keeps level 0 and the fewest joints that fit (all joints at worst).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DistancePolicy {
     config: DistanceConfig,
@@ -98,6 +121,10 @@ pub struct DistancePolicy {
     positions: Vec<f32>,
     groups: usize,
     joints: usize,
+    /// Visible error (m) per accuracy level; empty without an error table or a screen check.
+    level_err_m: Vec<f32>,
+    /// Non-increasing visible error (m) per active joint count `0..=J` (empty likewise).
+    joint_err_m: Vec<f32>,
 }
 
 impl DistancePolicy {
@@ -128,6 +155,9 @@ impl DistancePolicy {
         check("near_m", config.near_m, true)?;
         check("key_step_m", config.key_step_m, false)?;
         check("joint_step_m", config.joint_step_m, false)?;
+        if let Some(b) = config.screen_budget_px {
+            check("screen_budget_px", b, false)?;
+        }
         Ok(Self::build(model, config))
     }
 
@@ -146,12 +176,60 @@ impl DistancePolicy {
             group += 1;
             start = end;
         }
+        let joints = model.joints();
+        let checked = config.screen_budget_px.is_some()
+            && model.level_errors().len() == levels.len()
+            && model.joint_errors().len() == joints + 1;
+        let (level_err_m, joint_err_m) = if checked {
+            (
+                model
+                    .level_errors()
+                    .iter()
+                    .map(|e| ERROR_MARGIN * e.visible_m(true))
+                    .collect(),
+                non_increasing(
+                    model
+                        .joint_errors()
+                        .iter()
+                        .map(|e| ERROR_MARGIN * e.visible_m(true)),
+                ),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
         DistancePolicy {
             config,
             positions,
             groups: group,
-            joints: model.joints(),
+            joints,
+            level_err_m,
+            joint_err_m,
         }
+    }
+
+    /// The scheduled `detail` made to fit the screen budget at `distance_m` (see the type's docs).
+    fn fit_screen(&self, detail: Detail, distance_m: f32, view: &ViewParams) -> Detail {
+        let (Some(budget_px), false) = (self.config.screen_budget_px, self.level_err_m.is_empty())
+        else {
+            return detail;
+        };
+        let mpp = view.metres_per_pixel(distance_m.max(0.0));
+        if !(mpp.is_finite() && mpp > 0.0) {
+            return Detail::new(0, self.joints);
+        }
+        let budget_m = budget_px * mpp;
+        let joints = detail.active_joints.min(self.joints);
+        let ej = self.joint_err_m[joints];
+        let level = detail.accuracy.min(self.level_err_m.len() - 1);
+        if let Some(l) = (0..=level)
+            .rev()
+            .find(|&l| self.level_err_m[l] + ej <= budget_m)
+        {
+            return Detail::new(l, joints);
+        }
+        let rest = budget_m - self.level_err_m[0];
+        let fewest = self.joint_err_m.partition_point(|&e| e > rest);
+        Detail::new(0, fewest.clamp(joints, self.joints))
     }
 
     /// The configuration in use.
@@ -161,7 +239,7 @@ impl DistancePolicy {
 }
 
 impl LevelPolicy for DistancePolicy {
-    fn detail(&self, distance_m: f32, visible: bool, _view: &ViewParams) -> Detail {
+    fn detail(&self, distance_m: f32, visible: bool, view: &ViewParams) -> Detail {
         if !visible || distance_m.is_nan() {
             return Detail::root_only();
         }
@@ -184,8 +262,18 @@ impl LevelPolicy for DistancePolicy {
                 .saturating_mul(c.joints_per_step)
                 .min(self.joints)
         };
-        Detail::new(level, self.joints - dropped)
+        self.fit_screen(Detail::new(level, self.joints - dropped), distance_m, view)
     }
+}
+
+/// `v` made non-increasing by a running maximum from the end (an error that never decreases as
+/// joints are dropped).
+fn non_increasing(v: impl Iterator<Item = f32>) -> Vec<f32> {
+    let mut v: Vec<f32> = v.collect();
+    for j in (0..v.len().saturating_sub(1)).rev() {
+        v[j] = v[j].max(v[j + 1]);
+    }
+    v
 }
 
 /// Which measured error the [`ScreenSpacePolicy`] projects.
@@ -219,10 +307,11 @@ impl Default for ScreenConfig {
 /// budget (beyond the paper).
 ///
 /// The error of level `l` with `j` active joints is estimated as `e_l + e_J(j)` metres, where `e_l`
-/// is the level's measured error (all joints) and `e_J(j)` the measured error of evaluating only
-/// `j` joints (made non-increasing in `j` by a running maximum, so it is never underestimated
+/// is the level's measured [visible error](crate::model::LevelError::visible_m) (the larger of its
+/// pose error and its foot slide, all joints) and `e_J(j)` the same for evaluating only `j` joints (made non-increasing in `j` by a running maximum, so it is never underestimated
 /// against a larger joint count); its projection is
-/// `err_px = err_m * image_height / (2 distance tan(fov_y / 2))`. Among all `(l, j)` with
+/// `err_px = m err_m * image_height / (2 distance tan(fov_y / 2))` with the margin `m` =
+/// [`ERROR_MARGIN`]. Among all `(l, j)` with
 /// `err_px <= budget_px` it returns the one with the smallest cost
 /// `kernel_cost(l, P') + T pose_cost(l, P')` (a cycle's kernel and poses, [`LodModel::kernel_cost`]);
 /// if none qualifies, full detail. When the model has no joint error table, every joint is kept.
@@ -259,10 +348,9 @@ impl ScreenSpacePolicy {
         if model.level_errors().len() != model.levels().len() {
             return Err(PolicyError::NoErrorTable);
         }
-        let pick = |e: &crate::model::LevelError| match config.metric {
-            ErrorMetric::MeanJoint => e.mean_joint_cm,
-            ErrorMetric::Shell => e.shell_cm,
-        } * 0.01;
+        let pick = |e: &crate::model::LevelError| {
+            ERROR_MARGIN * e.visible_m(config.metric == ErrorMetric::Shell)
+        };
         let level_err_m = model.level_errors().iter().map(pick).collect();
         let t = model.t() as u64;
         let mut level_base_cost = Vec::new();
@@ -282,11 +370,7 @@ impl ScreenSpacePolicy {
             v[joints] = 0.0;
             v
         } else {
-            let mut v: Vec<f32> = model.joint_errors().iter().map(pick).collect();
-            for j in (0..joints).rev() {
-                v[j] = v[j].max(v[j + 1]);
-            }
-            v
+            non_increasing(model.joint_errors().iter().map(pick))
         };
         Ok(ScreenSpacePolicy {
             config,

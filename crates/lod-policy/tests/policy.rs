@@ -18,7 +18,11 @@ fn model() -> LodModel {
 #[test]
 fn distance_policy_follows_the_paper_schedule() {
     let m = model();
-    let pol = DistancePolicy::for_model(&m);
+    let published = DistanceConfig {
+        screen_budget_px: None,
+        ..DistanceConfig::default()
+    };
+    let pol = DistancePolicy::new(&m, published).unwrap();
     let v = ViewParams::default();
     let at = |d: f32| pol.detail(d, true, &v);
     assert_eq!(at(0.0), Detail::new(0, JOINTS));
@@ -49,6 +53,7 @@ fn distance_policy_is_configurable_and_validated() {
         key_step_m: 20.0,
         joint_step_m: 5.0,
         joints_per_step: 2,
+        screen_budget_px: None,
     };
     let pol = DistancePolicy::new(&m, cfg).unwrap();
     let v = ViewParams::default();
@@ -76,6 +81,84 @@ fn distance_policy_is_configurable_and_validated() {
 
 fn detail_rank(m: &LodModel, d: Detail) -> (usize, usize) {
     (d.level_in(m).unwrap(), d.active_joints.min(m.joints()))
+}
+
+/// The screen check: wherever the schedule's detail would show more than the budget (pose error or
+/// foot slide, projected), the policy picks a finer one that fits; where the schedule fits, it is
+/// unchanged.
+#[test]
+fn distance_policy_screen_check_keeps_visible_error_under_the_budget() {
+    let mut parts = model().into_parts();
+    // Level 3 slides 40 cm per stance (its pose error is 7 cm): usable only beyond ~374 m at 1 px.
+    parts.level_errors[3].slide_cm = 40.0;
+    let m = LodModel::new(parts).unwrap();
+    let v = ViewParams::default();
+    let published = DistancePolicy::new(
+        &m,
+        DistanceConfig {
+            screen_budget_px: None,
+            ..DistanceConfig::default()
+        },
+    )
+    .unwrap();
+    for budget in [0.5f32, 1.0, 3.0] {
+        let checked = DistancePolicy::new(
+            &m,
+            DistanceConfig {
+                screen_budget_px: Some(budget),
+                ..DistanceConfig::default()
+            },
+        )
+        .unwrap();
+        let (mut changed, mut kept) = (0, 0);
+        for i in 0..1400 {
+            let dist = i as f32 * 0.1;
+            let d = checked.detail(dist, true, &v);
+            let s = published.detail(dist, true, &v);
+            if s == Detail::root_only() {
+                assert_eq!(d, s, "root only stays root only");
+                continue;
+            }
+            let (l, j) = detail_rank(&m, d);
+            let err_m = lod_policy::ERROR_MARGIN * m.level_errors()[l].visible_m(true)
+                + lod_policy::ERROR_MARGIN
+                    * (j..=JOINTS)
+                        .map(|k| m.joint_errors()[k].visible_m(true))
+                        .fold(0.0, f32::max);
+            let px = err_m / v.metres_per_pixel(dist);
+            let (sl, sj) = detail_rank(&m, s);
+            // Never coarser than the schedule.
+            assert!(l <= sl && j >= sj, "at {dist} m: {d:?} coarser than {s:?}");
+            if (l, j) == (sl, sj) {
+                kept += 1;
+            } else {
+                changed += 1;
+                // Changed only to fit the budget, and then it fits (or is full detail).
+                assert!(
+                    px <= budget * 1.0001 || (l, j) == (0, JOINTS),
+                    "at {dist} m: {px} px with {d:?}"
+                );
+            }
+            if (l, j) != (0, JOINTS) {
+                assert!(px <= budget * 1.0001, "at {dist} m: {px} px with {d:?}");
+            }
+        }
+        assert!(
+            changed > 0 && kept > 0,
+            "budget {budget}: {changed} changed, {kept} kept"
+        );
+    }
+    let bad = DistanceConfig {
+        screen_budget_px: Some(0.0),
+        ..DistanceConfig::default()
+    };
+    assert!(matches!(
+        DistancePolicy::new(&m, bad),
+        Err(PolicyError::Config {
+            name: "screen_budget_px",
+            ..
+        })
+    ));
 }
 
 #[test]
@@ -179,10 +262,11 @@ fn screen_policy_without_joint_table_keeps_every_joint() {
     for dist in [1.0f32, 50.0, 500.0, 5000.0] {
         assert_eq!(pol.detail(dist, true, &v).active_joints, JOINTS);
     }
-    // The mean-joint metric uses the smaller errors: level 3 (4 cm) fits at 1 px when
-    // 0.04 m <= 2 d tan(30 deg) / 1080, i.e. d >= 37.4 m.
-    assert_eq!(pol.detail(38.0, true, &v).accuracy, 3);
-    assert_eq!(pol.detail(36.0, true, &v).accuracy, 2);
+    // The mean-joint metric uses the smaller errors: level 3 (4 cm, times the margin 1.5) fits at
+    // 1 px when 1.5 x 0.04 m <= 2 d tan(30 deg) / 1080, i.e. d >= 56.1 m.
+    assert_eq!(lod_policy::ERROR_MARGIN, 1.5);
+    assert_eq!(pol.detail(56.2, true, &v).accuracy, 3);
+    assert_eq!(pol.detail(55.9, true, &v).accuracy, 2);
 }
 
 proptest! {
@@ -195,8 +279,8 @@ proptest! {
         budget in 0.2f32..4.0,
     ) {
         let mut parts = model().into_parts();
-        parts.level_errors = level_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e }).collect();
-        parts.joint_errors = joint_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e }).collect();
+        parts.level_errors = level_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e, slide_cm: 0.0 }).collect();
+        parts.joint_errors = joint_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e, slide_cm: 0.0 }).collect();
         let m = LodModel::new(parts).unwrap();
         let pol = ScreenSpacePolicy::new(&m, ScreenConfig { budget_px: budget, metric: ErrorMetric::Shell }).unwrap();
         let v = ViewParams::default();

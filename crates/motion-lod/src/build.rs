@@ -668,7 +668,8 @@ impl MotionModel {
     }
 
     /// Error of every accuracy level (all joints) and of every joint count (level 0) relative to the
-    /// full-detail synthesis at the same controls, over up to `max_samples` training controls.
+    /// full-detail synthesis at the same controls: pose errors over up to `max_samples` training
+    /// controls, foot slide ([`foot_slide_cm`]) over those and the walks of the quality grid.
     fn measure_lod_errors(
         &self,
         controls: &[[f64; 4]],
@@ -687,6 +688,22 @@ impl MotionModel {
             .iter()
             .map(|c| self.synthesize_aligned(c, full))
             .collect::<Result<_, _>>()?;
+        // Foot slide needs the feet (the quality reference); without them it is 0. Measured over
+        // the quality grid (the hull's corners, turns, sidesteps, slow and fast) and the picked
+        // training controls: the largest over both.
+        let grid: Vec<[f32; 4]> = crate::quality::walk_grid(self)
+            .into_iter()
+            .map(|w| w.controls)
+            .chain(picked.iter().copied())
+            .collect();
+        let slides_full: Option<Vec<f64>> = match &self.report.quality {
+            Some(_) => Some(
+                grid.iter()
+                    .map(|&c| foot_slide_cm(self, c, full))
+                    .collect::<Result<_, _>>()?,
+            ),
+            None => None,
+        };
         let measure = |detail: Detail| -> Result<LevelError, BuildError> {
             let mut meter = ErrorMeter::new(&self.layout);
             for (c, r) in picked.iter().zip(&reference) {
@@ -694,9 +711,20 @@ impl MotionModel {
                 meter.compare_sequences(r, &poses);
             }
             let e = meter.total();
+            let slide_cm = match &slides_full {
+                Some(full) => {
+                    let mut worst = 0.0f64;
+                    for (&c, full) in grid.iter().zip(full) {
+                        worst = worst.max(foot_slide_cm(self, c, detail)? - full);
+                    }
+                    worst as f32
+                }
+                None => 0.0,
+            };
             Ok(LevelError {
                 mean_joint_cm: e.mean_joint_cm as f32,
                 shell_cm: e.shell_cm as f32,
+                slide_cm,
             })
         };
         debug_assert!(p > 0 && t > 0);
@@ -708,6 +736,33 @@ impl MotionModel {
             .collect::<Result<Vec<_>, _>>()?;
         Ok((levels, joints))
     }
+}
+
+/// Cycles of the walks [`foot_slide_cm`] measures.
+pub const SLIDE_WALK_CYCLES: usize = 3;
+
+/// How far a planted foot slides over one stance in a walk of [`SLIDE_WALK_CYCLES`] cycles at 30 fps
+/// for `controls` at `detail` (cycles blended, no foot lock), in centimetres: the motion-quality
+/// meter's `skate x contact share x cycle duration` (the distance the feet travel while on the
+/// floor, per foot and cycle). Needs the model's quality reference.
+pub fn foot_slide_cm(
+    model: &MotionModel,
+    controls: [f32; 4],
+    detail: Detail,
+) -> Result<f64, BuildError> {
+    let walk = model
+        .synthesize_walk(&crate::synth::WalkRequest {
+            controls,
+            detail,
+            cycles: SLIDE_WALK_CYCLES,
+            fps: crate::quality::REFERENCE_FPS,
+            blend: true,
+            plant_feet: false,
+        })
+        .map_err(|e| BuildError::Data(format!("foot slide of {controls:?} at {detail:?}: {e}")))?;
+    let q = crate::quality::measure_walk(model, &walk)
+        .map_err(|e| BuildError::Data(format!("foot slide of {controls:?} at {detail:?}: {e}")))?;
+    Ok(q.skate_cm_s * q.contact_share * walk.cycle_seconds)
 }
 
 /// `W X`: every DOF row of `x` times its weight.

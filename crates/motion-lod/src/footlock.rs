@@ -15,8 +15,11 @@
 //!    it is lifted to that height, the lift eased over [`CLEARANCE_S`] each side.
 //! 3. **Two-bone IK**: the ankle is moved by the correction with the hip fixed: the knee stays in the
 //!    leg's current bend plane, the thigh and shin keep their lengths, and the foot keeps its world
-//!    orientation (so the toe moves with the ankle). Targets out of reach stretch the leg to 99.9% of
-//!    its length.
+//!    orientation (so the toe moves with the ankle). Near full extension the reach is softened
+//!    ("soft IK"): beyond [`SOFT_REACH`] of the leg's length the ankle approaches the target along
+//!    `d_s + (L - d_s)(1 - exp(-(r - d_s) / (L - d_s)))`, so a target at or past full length bends
+//!    the knee a little less each frame instead of snapping it straight (a planted foot may slide
+//!    by the shortfall, a few millimetres, rather than the knee popping).
 //!
 //! Only the rotations of the thigh, knee and ankle joints change; the root does not move.
 
@@ -36,6 +39,8 @@ pub const MIN_RUN_S: f64 = 0.1;
 pub const CLEARANCE_S: f64 = 0.1;
 /// Longest ease of the correction before and after a contact run (s).
 pub const BLEND_S: f64 = 0.2;
+/// Share of the leg's length (thigh plus shin) beyond which the IK reach is softened.
+pub const SOFT_REACH: f64 = 0.97;
 
 /// One leg: hip (thigh) joint, knee, ankle, and the foot's points (ankle first).
 struct Leg {
@@ -212,6 +217,22 @@ fn correction(world: &[Transform], nj: usize, points: &[usize], floor: f64, dt: 
     d
 }
 
+/// The reach the IK uses for a target `reach` away from the hip with a leg of length `len`: itself up
+/// to [`SOFT_REACH`]` len`, then easing toward `len` (C1 at the joint), at most `0.9999 len`.
+fn soft_reach(reach: f64, len: f64) -> f64 {
+    let start = SOFT_REACH * len;
+    if reach <= start {
+        return reach;
+    }
+    let span = len - start;
+    // Capped just short of full length, where the slope is already below 0.004, so that far
+    // targets never straighten the leg exactly (a degenerate knee plane).
+    (start + span * (1.0 - (-(reach - start) / span).exp())).min(MAX_REACH * len)
+}
+
+/// The IK never straightens the leg beyond this share of its length.
+const MAX_REACH: f64 = 0.9999;
+
 /// Two-bone IK with the hip fixed: the world rotations to apply to the thigh (`r_hip`, about the hip)
 /// and then to the shin (`r_knee`, about the moved knee) so that the ankle reaches `target`, the knee
 /// staying on the side it bends to now.
@@ -222,7 +243,7 @@ fn two_bone(hip: DVec3, knee: DVec3, ankle: DVec3, target: DVec3) -> (DQuat, DQu
     if l1 < 1e-6 || l2 < 1e-6 || reach < 1e-6 {
         return (DQuat::IDENTITY, DQuat::IDENTITY);
     }
-    let d = reach.clamp((l1 - l2).abs() + 1e-4, 0.999 * (l1 + l2));
+    let d = soft_reach(reach, l1 + l2).max((l1 - l2).abs() + 1e-4);
     let u = to_target / reach;
     // The bend direction: the current knee's offset from the hip-target line.
     let kh = knee - hip;
@@ -249,7 +270,8 @@ mod tests {
         let hip = DVec3::new(0.1, 0.9, 0.0);
         let knee = DVec3::new(0.1, 0.5, 0.05);
         let ankle = DVec3::new(0.1, 0.1, 0.0);
-        let target = ankle + DVec3::new(0.0, 0.0, -0.08);
+        // Within the unsoftened reach (0.94 of the leg's length).
+        let target = ankle + DVec3::new(0.0, 0.05, -0.08);
         let (r_hip, r_knee) = two_bone(hip, knee, ankle, target);
         let new_knee = hip + r_hip * (knee - hip);
         let new_ankle = new_knee + r_knee * (r_hip * (ankle - knee));
@@ -257,5 +279,51 @@ mod tests {
         assert!(((new_knee - hip).length() - (knee - hip).length()).abs() < 1e-9);
         // The knee still bends forward (+z).
         assert!(new_knee.z > hip.z.min(target.z));
+    }
+
+    #[test]
+    fn soft_reach_is_smooth_and_below_full_length() {
+        let len = 0.9;
+        let mut prev = (0.0, 1.0);
+        for i in 0..=2000 {
+            let r = i as f64 * 0.001;
+            let s = soft_reach(r, len);
+            assert!(s < len, "{r}: {s}");
+            assert!(s <= r + 1e-15, "{r}: {s} beyond the target");
+            let slope = (s - prev.0) / 0.001;
+            // Non-decreasing reach, and the slope never jumps (continuous derivative: it changes
+            // by at most step / (len - SOFT_REACH len) = 0.037 per 1 mm step; a hard clamp at the
+            // target's reach would jump by 1).
+            assert!(
+                slope >= 0.0 && (i <= 1 || (slope - prev.1).abs() < 0.04),
+                "{r}: {slope}"
+            );
+            prev = (s, slope);
+        }
+        assert_eq!(soft_reach(0.5, len), 0.5);
+    }
+
+    #[test]
+    fn a_target_past_full_length_bends_the_knee_less_without_snapping() {
+        let hip = DVec3::new(0.0, 0.9, 0.0);
+        let knee = DVec3::new(0.0, 0.5, 0.05);
+        let ankle = DVec3::new(0.0, 0.1, 0.0);
+        let len = (knee - hip).length() + (ankle - knee).length();
+        // Targets moving back past full length, 2 mm a frame: the knee moves a little each frame.
+        let mut prev: Option<DVec3> = None;
+        for i in 0..60 {
+            let target = ankle + DVec3::new(0.0, 0.0, -0.002 * i as f64);
+            let (r_hip, _) = two_bone(hip, knee, ankle, target);
+            let new_knee = hip + r_hip * (knee - hip);
+            assert!((target - hip).length() < len || i > 20);
+            if let Some(p) = prev {
+                assert!(
+                    new_knee.distance(p) < 0.01,
+                    "frame {i}: knee jumps {}",
+                    new_knee.distance(p)
+                );
+            }
+            prev = Some(new_knee);
+        }
     }
 }

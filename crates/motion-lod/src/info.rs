@@ -20,6 +20,12 @@ pub struct LevelSummary {
     pub error_cm: f32,
     /// Shell error against full detail (cm).
     pub shell_cm: f32,
+    /// Foot slide per stance beyond full detail's (cm).
+    pub slide_cm: f32,
+    /// The nearest distance (m) at which the larger of the shell error and the foot slide covers at
+    /// most one pixel (1920 x 1080, 60 degree vertical field of view): the distance policy's screen
+    /// check uses the level no nearer.
+    pub one_pixel_from_m: f32,
 }
 
 /// The JSON summary of a model.
@@ -44,6 +50,14 @@ pub struct Summary {
     pub storage: Storage,
 }
 
+/// The nearest distance (m) at which `e`'s visible error (the larger of shell error and foot slide,
+/// with the policies' [`lod_policy::ERROR_MARGIN`]) covers at most one pixel of the default view
+/// ([`lod_policy::ViewParams::default`]): where the policies' screen check admits the level.
+pub fn one_pixel_from_m(e: &lod_policy::LevelError) -> f32 {
+    lod_policy::ERROR_MARGIN * e.visible_m(true)
+        / lod_policy::ViewParams::default().metres_per_pixel(1.0)
+}
+
 /// The JSON summary of `model`.
 pub fn summary(model: &MotionModel) -> Summary {
     let lod = &model.lod;
@@ -63,6 +77,8 @@ pub fn summary(model: &MotionModel) -> Summary {
                 ranks: [lv.ranks.p, lv.ranks.t, lv.ranks.s],
                 error_cm: errors.get(l).map_or(f32::NAN, |e| e.mean_joint_cm),
                 shell_cm: errors.get(l).map_or(f32::NAN, |e| e.shell_cm),
+                slide_cm: errors.get(l).map_or(f32::NAN, |e| e.slide_cm),
+                one_pixel_from_m: errors.get(l).map_or(f32::NAN, one_pixel_from_m),
             })
             .collect(),
         storage: Storage::of(model),
@@ -154,19 +170,26 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
     }
     writeln!(
         out,
-        "accuracy levels (error against full detail at the training controls):"
+        "accuracy levels (error against full detail: pose at the training controls, foot slide per \
+         stance over the quality walks; 1 px from: the nearest distance where both, with the policies' \
+         margin, cover one pixel at 1080p, 60 deg):"
     )?;
-    writeln!(out, "  level  key  ranks          joint error  shell error")?;
+    writeln!(
+        out,
+        "  level  key  ranks          joint error  shell error  foot slide  1 px from"
+    )?;
     let errors = lod.level_errors();
     for (l, lv) in lod.levels().iter().enumerate() {
         let e = errors.get(l).copied().unwrap_or_default();
         writeln!(
             out,
-            "  {l:>5}  {:>3}  {:<13}  {:>8.3} cm  {:>8.3} cm",
+            "  {l:>5}  {:>3}  {:<13}  {:>8.3} cm  {:>8.3} cm  {:>7.2} cm  {:>6.1} m",
             lv.key,
             format!("[{}, {}, {}]", lv.ranks.p, lv.ranks.t, lv.ranks.s),
             e.mean_joint_cm,
-            e.shell_cm
+            e.shell_cm,
+            e.slide_cm,
+            one_pixel_from_m(&e)
         )?;
     }
     let st = Storage::of(model);

@@ -319,8 +319,14 @@ fn check_crowd(what: &str, model: &MotionModel) {
         seconds: 2.0,
         exported: 12,
     };
+    // The paper's schedule as published (no screen check), so that a 300 m field shows several
+    // levels; with the screen check the coarse levels start beyond 100 m on these models.
+    let published = lod_policy::DistanceConfig {
+        screen_budget_px: None,
+        ..lod_policy::DistanceConfig::default()
+    };
     let policy = motion_lod::crowd::ModelPolicy::new(
-        lod_policy::DistancePolicy::for_model(&model.lod),
+        lod_policy::DistancePolicy::new(&model.lod, published).unwrap(),
         &model.lod,
     );
     let (scene, summary) = export_crowd(model, &policy, &clip).expect("crowd export");

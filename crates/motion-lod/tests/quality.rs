@@ -5,16 +5,25 @@
 //! absent, failed under `MOTION_LOD_REQUIRE_DATA`), every walk of the quality grid (straight, turns of 30 degrees both ways, sidesteps, slow,
 //! fast and the corners of the control hull), 4 cycles at full detail: largest joint acceleration at
 //! most 1.25x the data's median, foot skate at most 1.5x, floor offset within 1 cm, facing against
-//! travel within the data's range. On the embedded data (always present): the foot lock measurably
+//! travel within the data's range; the same on CMU (33 cycles, its control ranges). On the embedded
+//! data (always present): the foot lock measurably
 //! beats the sliding feet. (Seam continuity itself is tested in `lod_policy::chain`.)
+//!
+//! The screen check, on both: every detail the distance and screen-space policies use, measured
+//! anew at controls the build did not measure (midpoints between training samples), shows at most
+//! one pixel of pose error (shell) and of foot slide at the nearest distance it is used.
 
 mod common;
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
-use lod_policy::Detail;
+use lod_policy::{Detail, DistancePolicy, LevelPolicy, ScreenSpacePolicy, ViewParams};
 use motion_lod::MotionModel;
+use motion_lod::build::foot_slide_cm;
 use motion_lod::dataset::DataSpec;
+use motion_lod::metrics::ErrorMeter;
 use motion_lod::progress::NoProgress;
 use motion_lod::quality::{self, MotionQuality};
 use motion_lod::synth::WalkRequest;
@@ -38,24 +47,117 @@ fn walk(model: &MotionModel, controls: [f32; 4], blend: bool, plant_feet: bool) 
     quality::measure_walk(model, &w).expect("walk measures")
 }
 
+/// The Bandai model (all 800 cycles, default settings) and its training controls, built once per
+/// test binary; `None` (skipped) without the data.
+fn bandai() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
+    static MODEL: OnceLock<Option<(MotionModel, Vec<[f64; 4]>)>> = OnceLock::new();
+    MODEL
+        .get_or_init(|| {
+            let dir = mocap("bandai-namco-2-walk")?;
+            let spec = DataSpec {
+                dirs: vec![dir],
+                ..DataSpec::default()
+            };
+            let loaded = spec.load(&|_, _| {}).expect("data loads");
+            let model = MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
+                .expect("model builds");
+            Some((model, loaded.training.controls.clone()))
+        })
+        .as_ref()
+}
+
+/// Every detail the two policies use (1080p, 60 degrees, 0 to 1000 m), measured at midpoints between
+/// training samples: shell error against full detail and foot slide beyond full detail's, projected at
+/// the nearest distance the detail is used, at most one pixel.
+fn details_stay_under_a_pixel(model: &MotionModel, controls: &[[f64; 4]]) {
+    let lod = &model.lod;
+    let joints = lod.joints();
+    let view = ViewParams::default();
+    let distance = DistancePolicy::for_model(lod);
+    let screen = ScreenSpacePolicy::for_model(lod).expect("the model has error tables");
+    let policies: [&dyn LevelPolicy; 2] = [&distance, &screen];
+    let mut nearest: BTreeMap<(usize, usize), f32> = BTreeMap::new();
+    for i in 0..=2000 {
+        let d = i as f32 * 0.5;
+        for policy in policies {
+            let detail = policy.detail(d, true, &view);
+            if detail == Detail::root_only() {
+                continue;
+            }
+            let key = (
+                detail.level_in(lod).expect("a level of the model"),
+                detail.active_joints.min(joints),
+            );
+            nearest.entry(key).or_insert(d);
+        }
+    }
+    assert!(
+        nearest.len() > 3,
+        "the policies use {} details",
+        nearest.len()
+    );
+    let stride = controls.len().div_ceil(6).max(1);
+    let probes: Vec<[f32; 4]> = (0..controls.len() - 1)
+        .step_by(stride)
+        .map(|i| std::array::from_fn(|k| (0.5 * (controls[i][k] + controls[i + 1][k])) as f32))
+        .collect();
+    let full = Detail::full();
+    let full_slides: Vec<f64> = probes
+        .iter()
+        .map(|&c| foot_slide_cm(model, c, full).expect("full-detail slide"))
+        .collect();
+    for (&(level, active), &d) in &nearest {
+        if (level, active) == (0, joints) {
+            continue;
+        }
+        let detail = Detail::new(level, active);
+        let mut meter = ErrorMeter::new(&model.layout);
+        let mut slide = 0.0f64;
+        for (c, full_slide) in probes.iter().zip(&full_slides) {
+            let reference = model.synthesize_aligned(c, full).expect("synthesizes");
+            let poses = model.synthesize_aligned(c, detail).expect("synthesizes");
+            meter.compare_sequences(&reference, &poses);
+            slide = slide.max(foot_slide_cm(model, *c, detail).expect("slide") - full_slide);
+        }
+        let shell = meter.total().shell_cm;
+        let px = |cm: f64| cm / 100.0 / f64::from(view.metres_per_pixel(d));
+        assert!(
+            px(shell) <= 1.0 && px(slide) <= 1.0,
+            "level {level} with {active} joints, used from {d} m: shell {shell:.2} cm = {:.2} px, \
+             foot slide {slide:.2} cm = {:.2} px",
+            px(shell),
+            px(slide)
+        );
+    }
+}
+
 #[test]
-fn bandai_walks_look_like_the_data() {
-    let Some(dir) = mocap("bandai-namco-2-walk") else {
+fn embedded_policies_keep_pose_error_and_foot_slide_under_a_pixel() {
+    let (model, analysis) = common::built();
+    details_stay_under_a_pixel(model, &analysis.controls);
+}
+
+#[test]
+fn bandai_policies_keep_pose_error_and_foot_slide_under_a_pixel() {
+    let Some((model, controls)) = bandai() else {
         return;
     };
-    let spec = DataSpec {
-        dirs: vec![dir],
-        ..DataSpec::default()
-    };
-    let loaded = spec.load(&|_, _| {}).expect("data loads");
-    let model = MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
-        .expect("model builds");
+    details_stay_under_a_pixel(model, controls);
+}
+
+/// Every walk of the quality grid, 4 cycles at full detail with the foot lock: pop at most 1.25x the
+/// data's median, skate at most 1.5x, floor within 1 cm, facing inside the data's range.
+fn walks_look_like_the_data(what: &str, model: &MotionModel, min_takes: usize) {
     let reference = model.report.quality.clone().expect("the feet are found");
     let data = reference.median;
-    assert!(reference.takes >= 100, "{} takes measured", reference.takes);
-    for g in quality::walk_grid(&model) {
-        let q = walk(&model, g.controls, true, true);
-        let name = &g.name;
+    assert!(
+        reference.takes >= min_takes,
+        "{what}: {} takes measured",
+        reference.takes
+    );
+    for g in quality::walk_grid(model) {
+        let q = walk(model, g.controls, true, true);
+        let name = format!("{what} {}", g.name);
         assert!(
             q.pop_cm <= 1.25 * data.pop_cm,
             "{name}: pop {:.2} cm/frame^2 > 1.25 x the data's {:.2}",
@@ -80,6 +182,33 @@ fn bandai_walks_look_like_the_data() {
             q.facing_deg
         );
     }
+}
+
+#[test]
+fn bandai_walks_look_like_the_data() {
+    let Some((model, _)) = bandai() else {
+        return;
+    };
+    walks_look_like_the_data("bandai", model, 100);
+}
+
+/// CMU (the cgspeed conversion of subjects 7 and 8, 33 cycles, `Preset::Cmu`): the same thresholds
+/// within its control ranges (its dx and turn carry no signal and are dropped, so the turn and
+/// sidestep walks of the grid walk straight).
+#[test]
+fn cmu_walks_look_like_the_data() {
+    let Some(dir) = mocap("cmu-daz-walk-s07-s08") else {
+        return;
+    };
+    let spec = DataSpec {
+        dirs: vec![dir],
+        preset: motion_lod::dataset::Preset::Cmu,
+        ..DataSpec::default()
+    };
+    let loaded = spec.load(&|_, _| {}).expect("data loads");
+    let model = MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
+        .expect("model builds");
+    walks_look_like_the_data("cmu", &model, 10);
 }
 
 #[test]

@@ -279,18 +279,22 @@ pub fn build_model(truth: &Truth) -> LodModel {
             LevelError {
                 mean_joint_cm: 0.1,
                 shell_cm: 0.2,
+                slide_cm: 0.0,
             },
             LevelError {
                 mean_joint_cm: 0.5,
                 shell_cm: 0.9,
+                slide_cm: 0.0,
             },
             LevelError {
                 mean_joint_cm: 1.5,
                 shell_cm: 2.5,
+                slide_cm: 0.0,
             },
             LevelError {
                 mean_joint_cm: 4.0,
                 shell_cm: 7.0,
+                slide_cm: 0.0,
             },
         ],
         joint_errors: (0..=JOINTS)
@@ -299,6 +303,7 @@ pub fn build_model(truth: &Truth) -> LodModel {
                 LevelError {
                     mean_joint_cm: e,
                     shell_cm: 1.5 * e,
+                    slide_cm: 0.0,
                 }
             })
             .collect(),

@@ -104,7 +104,17 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
                 },
                 report.fold_sizes
             );
-            print(&report.pooled);
+            let first_training = report.pooled.samples - report.fold_sizes[0];
+            println!(
+                "{} held-out cycles of {} samples, each predicted by the model of its fold (trained on \
+                 the other folds); ranks and bytes are the first fold's model's ({first_training} \
+                 training cycles): raw {} bytes (f64), hybrid model {} bytes (f64)",
+                report.pooled.evaluated,
+                report.pooled.samples,
+                report.pooled.raw_bytes,
+                report.pooled.model_bytes
+            );
+            print_methods(&report.pooled);
         }
         return Ok(());
     }
@@ -190,6 +200,11 @@ fn print(r: &EvalReport) {
         "{} cycles evaluated against {} training samples; raw samples {} bytes (f64), hybrid model {} bytes (f64)",
         r.evaluated, r.samples, r.raw_bytes, r.model_bytes
     );
+    print_methods(r);
+}
+
+/// The per-method table of `r`.
+fn print_methods(r: &EvalReport) {
     println!("  method          level  ranks           joint error   shell error   bytes (f64)");
     for m in &r.methods {
         println!(
