@@ -207,7 +207,7 @@ impl SeamTransition {
         }
     }
 
-    /// Whether a transition is running (until [`SeamTransition::finish`] or [`SeamTransition::clear`]).
+    /// Whether a transition is running (until [`SeamTransition::finish_after`] or [`SeamTransition::clear`]).
     pub fn is_active(&self) -> bool {
         self.active
     }

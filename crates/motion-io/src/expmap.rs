@@ -1,4 +1,4 @@
-//! Exponential maps of rotations (Grassia 1998, the paper's reference [13]) and their branch
+//! Exponential maps of rotations (Grassia 1998, the paper's reference \[13\]) and their branch
 //! handling.
 //!
 //! A rotation by angle `theta` about unit axis `a` has exponential map `v = theta a`. The same
