@@ -47,23 +47,41 @@ fn walk(model: &MotionModel, controls: [f32; 4], blend: bool, plant_feet: bool) 
     quality::measure_walk(model, &w).expect("walk measures")
 }
 
-/// The Bandai model (all 800 cycles, default settings) and its training controls, built once per
-/// test binary; `None` (skipped) without the data.
+/// What the Bandai model is built from (all 800 cycles); `None` (skipped) without the data.
+fn bandai_spec() -> Option<DataSpec> {
+    Some(DataSpec {
+        dirs: vec![mocap("bandai-namco-2-walk")?],
+        ..DataSpec::default()
+    })
+}
+
+/// What the CMU model is built from (`Preset::Cmu`); `None` (skipped) without the data.
+fn cmu_spec() -> Option<DataSpec> {
+    Some(DataSpec {
+        dirs: vec![mocap("cmu-daz-walk-s07-s08")?],
+        preset: motion_lod::dataset::Preset::Cmu,
+        ..DataSpec::default()
+    })
+}
+
+/// The model of `spec` with the default settings, and its training controls.
+fn build(spec: &DataSpec) -> (MotionModel, Vec<[f64; 4]>) {
+    let loaded = spec.load(&|_, _| {}).expect("data loads");
+    let model = MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
+        .expect("model builds");
+    (model, loaded.training.controls.clone())
+}
+
+/// The Bandai model and its training controls, built once per test binary.
 fn bandai() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
     static MODEL: OnceLock<Option<(MotionModel, Vec<[f64; 4]>)>> = OnceLock::new();
-    MODEL
-        .get_or_init(|| {
-            let dir = mocap("bandai-namco-2-walk")?;
-            let spec = DataSpec {
-                dirs: vec![dir],
-                ..DataSpec::default()
-            };
-            let loaded = spec.load(&|_, _| {}).expect("data loads");
-            let model = MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
-                .expect("model builds");
-            Some((model, loaded.training.controls.clone()))
-        })
-        .as_ref()
+    MODEL.get_or_init(|| Some(build(&bandai_spec()?))).as_ref()
+}
+
+/// The CMU model and its training controls, built once per test binary.
+fn cmu() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
+    static MODEL: OnceLock<Option<(MotionModel, Vec<[f64; 4]>)>> = OnceLock::new();
+    MODEL.get_or_init(|| Some(build(&cmu_spec()?))).as_ref()
 }
 
 /// Every detail the two policies use (1080p, 60 degrees, 0 to 1000 m), measured at midpoints between
@@ -197,18 +215,40 @@ fn bandai_walks_look_like_the_data() {
 /// sidestep walks of the grid walk straight).
 #[test]
 fn cmu_walks_look_like_the_data() {
-    let Some(dir) = mocap("cmu-daz-walk-s07-s08") else {
+    let Some((model, _)) = cmu() else {
         return;
     };
-    let spec = DataSpec {
-        dirs: vec![dir],
-        preset: motion_lod::dataset::Preset::Cmu,
-        ..DataSpec::default()
-    };
-    let loaded = spec.load(&|_, _| {}).expect("data loads");
-    let model = MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
-        .expect("model builds");
-    walks_look_like_the_data("cmu", &model, 10);
+    walks_look_like_the_data("cmu", model, 10);
+}
+
+/// Issue 17's reproducibility on the shared data: a second build of each set, on one thread (the
+/// first used the default pool), writes the same model file bytes.
+#[test]
+fn shared_data_sets_build_to_the_same_bytes_on_one_thread() {
+    let sets = [
+        ("bandai", bandai().map(|(m, _)| m), bandai_spec()),
+        ("cmu", cmu().map(|(m, _)| m), cmu_spec()),
+    ];
+    for (what, model, spec) in sets {
+        let (Some(model), Some(spec)) = (model, spec) else {
+            continue;
+        };
+        let reference = motion_lod::model_file::encode(model, std::path::Path::new("m")).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let again = pool.install(|| {
+            let loaded = spec.load(&|_, _| {}).expect("data loads");
+            MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
+                .expect("model builds")
+        });
+        let bytes = motion_lod::model_file::encode(&again, std::path::Path::new("m")).unwrap();
+        assert!(
+            bytes == reference,
+            "{what}: a one-thread build writes other bytes"
+        );
+    }
 }
 
 #[test]
