@@ -36,8 +36,36 @@ enum Command {
     Demo(cli::demo::DemoArgs),
 }
 
-fn main() -> anyhow::Result<()> {
+/// Runs the command; a user error (anything returned as `Err`) is printed by [`report`] and exits
+/// with status 1. Bugs panic and keep Rust's panic message (and backtrace with `RUST_BACKTRACE`).
+fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprint!("{}", report(&e));
+            std::process::ExitCode::from(1)
+        }
+    }
+}
+
+/// A user error as the user reads it: `error: ` and what failed (with where), then each cause once,
+/// a cause whose text the line before already holds left out; never a backtrace, whatever
+/// `RUST_BACKTRACE` says (user errors are not bugs).
+fn report(e: &anyhow::Error) -> String {
+    let mut out = format!("error: {e}\n");
+    let mut last = e.to_string();
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !last.contains(&text) {
+            out.push_str(&format!("  caused by: {text}\n"));
+        }
+        last = text;
+    }
+    out
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Cycles(args) => cli::cycles::run(args),
         Command::Build(args) => cli::build::run(args),
@@ -48,5 +76,22 @@ fn main() -> anyhow::Result<()> {
         Command::Crowd(args) => cli::crowd::run(args),
         Command::Demo(args) => cli::demo::run(args),
         Command::View(args) => cli::view::run(args),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::report;
+
+    #[test]
+    fn causes_print_once_and_without_a_backtrace() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory");
+        let e = anyhow::Error::new(io)
+            .context("cannot list folder /x: No such file or directory")
+            .context("loading /x");
+        assert_eq!(
+            report(&e),
+            "error: loading /x\n  caused by: cannot list folder /x: No such file or directory\n"
+        );
     }
 }

@@ -324,3 +324,42 @@ fn bad_inputs_are_clear_errors() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("nonexistent"));
 }
+
+/// A user error (a missing folder) prints `error: ` with what and where and each cause once, and no
+/// backtrace even when `RUST_BACKTRACE` asks for one (issue 19); the exit status is 1.
+#[test]
+fn user_errors_print_each_cause_once_and_no_backtrace() {
+    let model = std::env::temp_dir().join(format!("motion-lod-no-{}.mlod", std::process::id()));
+    let model = model.to_str().unwrap();
+    for args in [
+        vec!["cycles", "/nonexistent/motion-lod-folder"],
+        vec!["build", "/nonexistent/motion-lod-folder", "-o", model],
+    ] {
+        let command = args[0];
+        let out = Command::new(env!("CARGO_BIN_EXE_motion-lod"))
+            .args(&args)
+            .env("RUST_BACKTRACE", "1")
+            .env("RUST_LIB_BACKTRACE", "1")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{command}: {stderr}");
+        assert!(stderr.starts_with("error: "), "{command}: {stderr}");
+        assert!(
+            stderr.contains("/nonexistent/motion-lod-folder"),
+            "{command}: {stderr}"
+        );
+        assert!(
+            !stderr.to_lowercase().contains("backtrace"),
+            "{command}: {stderr}"
+        );
+        let lines: Vec<&str> = stderr.lines().collect();
+        for (i, a) in lines.iter().enumerate() {
+            let cause = a.trim_start_matches("  caused by: ");
+            assert!(
+                !lines[..i].iter().any(|b| b.contains(cause)),
+                "{command}: {cause:?} repeats an earlier line:\n{stderr}"
+            );
+        }
+    }
+}
