@@ -3,7 +3,7 @@
 
 mod cli;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Multilinear motion synthesis with level-of-detail controls.
 #[derive(Debug, Parser)]
@@ -39,7 +39,15 @@ enum Command {
 /// Runs the command; a user error (anything returned as `Err`) is printed by [`report`] and exits
 /// with status 1. Bugs panic and keep Rust's panic message (and backtrace with `RUST_BACKTRACE`).
 fn main() -> std::process::ExitCode {
-    let cli = Cli::parse();
+    // Negative numbers are values, not flags, in every subcommand (`--turn -30`, `--fps -30`, which
+    // the range check then refuses with its own message).
+    let matches = Cli::command()
+        .mut_subcommands(|c| c.allow_negative_numbers(true))
+        .get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     match run(cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {

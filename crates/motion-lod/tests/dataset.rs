@@ -363,3 +363,22 @@ fn user_errors_print_each_cause_once_and_no_backtrace() {
         }
     }
 }
+
+/// Negative numbers are values in every subcommand (issue 19): `--fps -30` reaches the range check
+/// instead of being read as a flag `-3`.
+#[test]
+fn negative_numbers_parse_as_values() {
+    let out = Command::new(env!("CARGO_BIN_EXE_motion-lod"))
+        .args([
+            "synth", "m.mlod", "--dx", "-0.3", "--dz", "1.2", "--turn", "-30",
+        ])
+        .args(["--fps", "-30", "-o", "walk.bvh"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("-30 is not in (0, 1000]") && !stderr.contains("unexpected argument"),
+        "{stderr}"
+    );
+}
