@@ -2,7 +2,9 @@
 //! when it is absent.
 //!
 //! Locally a test that needs `../shared/mocap` (or the generated `fixtures/`) prints
-//! `skipped: ... not found` and passes. Under `MOTION_LOD_REQUIRE_DATA=1` (set by `.ci/run`,
+//! `skipped: <test>: ... not found` and passes. The line goes straight to the process's standard
+//! error, past the test harness's output capture, so that `cargo test` shows it (and `.ci/run`
+//! counts such lines in its summary). Under `MOTION_LOD_REQUIRE_DATA=1` (set by `.ci/run`,
 //! because CI always has the data) a missing folder fails the test instead, so that a broken path
 //! in CI cannot turn the acceptance tests into silent passes.
 
@@ -33,7 +35,12 @@ pub fn missing(message: &str) {
     if data_required() {
         panic!("{message}, and {REQUIRE_DATA_VAR} is set: the data must be present");
     }
-    println!("skipped: {message}");
+    use std::io::Write as _;
+    let test = std::thread::current()
+        .name()
+        .map_or(String::new(), |n| format!("{n}: "));
+    // Not `eprintln!`: the test harness captures that and shows it only for failing tests.
+    let _ = writeln!(std::io::stderr(), "skipped: {test}{message}");
 }
 
 /// [`require_dir`] for `../shared/mocap/{name}` seen from a crate's manifest folder

@@ -11,7 +11,7 @@
 //! Legs and arms are identified here independently of the build: legs are the joints below each hip
 //! that `motion_io::find_feet` finds, arms the other joints whose name has a side.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use glam::DVec3;
 use kriging::DimDecision;
@@ -23,17 +23,10 @@ use motion_lod::importance::{STATIC_RMS_DEG, static_joints};
 use motion_lod::progress::NoProgress;
 use motion_lod::{BuildConfig, MotionModel};
 
-const MOCAP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/mocap");
-
-/// The data folder `name` under `../shared/mocap`, or `None` (with the skip message) when absent.
+/// The data folder `name` under `../shared/mocap`, or `None` (with the skip message) when absent; a
+/// failure instead under `MOTION_LOD_REQUIRE_DATA` (CI).
 fn mocap(name: &str) -> Option<PathBuf> {
-    let dir = Path::new(MOCAP).join(name);
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: ../shared/mocap not found ({name})");
-        None
-    }
+    motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), name)
 }
 
 fn bandai(samples: Option<usize>) -> Option<DataSpec> {
