@@ -614,8 +614,11 @@ impl LodModel {
     }
 
     /// Bytes needed to store the model at `precision`: every key tensor (core, `U_P`, `U_T`,
-    /// projection, trend), the control space (samples, offset, scale, bounds) and the mean pose.
-    /// Accuracy levels and error tables are a few integers each and are counted too.
+    /// projection, trend), the control space (samples, offset, scale, bounds, kriging rows, implied
+    /// controls) and the mean pose. Accuracy levels and error tables are a few numbers each and are
+    /// counted too, the error tables at the size a built model holds (3 values per accuracy level and
+    /// per joint count) whether or not they are measured yet, so that a model counts the same before
+    /// and after its errors are measured (`eval` and `info` agree).
     pub fn bytes(&self, precision: Precision) -> usize {
         let b = precision.value_bytes();
         let keys: usize = (0..self.parts.keys.len())
@@ -627,10 +630,11 @@ impl LodModel {
             + c.scale.len()
             + c.min.len()
             + c.max.len()
-            + c.projection.len())
+            + c.projection.len()
+            + c.implied.len())
             * b;
         let tables = self.parts.levels.len() * 4 * std::mem::size_of::<u32>()
-            + (self.parts.level_errors.len() + self.parts.joint_errors.len()) * 2 * b;
+            + (self.parts.levels.len() + self.joints() + 1) * 3 * b;
         keys + controls + self.parts.mean_pose.len() * b + tables
     }
 
