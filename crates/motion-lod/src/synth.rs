@@ -18,6 +18,10 @@ use crate::model::{Evaluator, MotionModel, TIME_ROW};
 /// vectors (0.8 GB for `P = 100` rows). Longer requests are refused before allocating.
 pub const MAX_WALK_FRAMES: usize = 1_000_000;
 
+/// The longest gait cycle a walk may have (s); a model that gives a longer one is broken (found by
+/// the `model_mutated` fuzz target: a mutated time table gave cycles of 3 hours).
+pub const MAX_CYCLE_S: f64 = 60.0;
+
 /// What to synthesize.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WalkRequest {
@@ -93,10 +97,10 @@ impl MotionModel {
             Ok(())
         };
 
-        if !(duration.is_finite() && duration > 0.0) {
+        if !(duration.is_finite() && duration > 0.0 && duration <= MAX_CYCLE_S) {
             return Err(SynthError::Request(format!(
-                "the model gives a cycle of {duration} s for controls {:?} (a model file with a \
-                 broken time table?)",
+                "the model gives a cycle of {duration} s for controls {:?}, not a walk's (0 to \
+                 {MAX_CYCLE_S} s; a model file with a broken time table?)",
                 req.controls
             )));
         }
