@@ -128,6 +128,7 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
         },
         seconds: 2.0,
         lens: Camera::default(),
+        scene: crowd_sim::Scene::Ground,
         render: None,
     };
     let lod = &model.lod;

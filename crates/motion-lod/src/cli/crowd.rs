@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context as _, bail};
 use clap::{Args, ValueEnum};
-use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport};
+use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport, Scene};
 use lod_policy::{DistancePolicy, LodModel, ScreenSpacePolicy};
 use motion_lod::build::Analysis;
 use motion_lod::crowd::{
@@ -25,6 +25,24 @@ pub enum PolicyArg {
     Distance,
     /// The cheapest level whose measured error projects under the pixel budget.
     Screen,
+}
+
+/// Where the camera is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CameraArg {
+    /// Walking at eye height inside the crowd (most walkers culled or root only).
+    Ground,
+    /// Circling above the field's edge, most of the crowd in view at every level.
+    Overview,
+}
+
+impl From<CameraArg> for Scene {
+    fn from(c: CameraArg) -> Scene {
+        match c {
+            CameraArg::Ground => Scene::Ground,
+            CameraArg::Overview => Scene::Overview,
+        }
+    }
 }
 
 /// Arguments of `motion-lod crowd`.
@@ -51,6 +69,9 @@ pub struct CrowdArgs {
     /// Level-of-detail policy.
     #[arg(long, value_enum, default_value_t = PolicyArg::Distance)]
     pub policy: PolicyArg,
+    /// Camera: `ground` walks inside the crowd, `overview` circles above it.
+    #[arg(long, value_enum, default_value_t = CameraArg::Ground)]
+    pub camera: CameraArg,
     /// Animate with naive interpolation instead of the model (no level of detail).
     #[arg(long, conflicts_with_all = ["compare_naive", "pca"])]
     pub naive: bool,
@@ -203,6 +224,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             aspect: 960.0 / 540.0,
             ..Camera::default()
         },
+        scene: args.camera.into(),
         render: args.render.clone().map(|d| (d, args.render_every)),
     };
     let lod = &model.lod;

@@ -35,6 +35,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         fps: 30.0,
         seed: 1,
         policy: PolicyArg::Distance,
+        camera: super::crowd::CameraArg::Ground,
         naive: false,
         compare_naive: true,
         pca: false,
