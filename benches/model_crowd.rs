@@ -144,7 +144,7 @@ fn crowd_frame(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
         })
     });
 
-    let naive = NaiveSource::new(model, analysis);
+    let naive = NaiveSource::new(model, analysis).expect("naive source of the fixtures");
     let mut crowd = Crowd::new(&naive, config).unwrap();
     for f in 0..45 {
         let cam = path.camera_at(f as f32 * dt, &lens);

@@ -171,15 +171,16 @@ impl CameraPath {
         }
     }
 
-    /// A slow orbit above the field's edge looking at its centre: radius `0.6 field_size_m`, height
-    /// `0.12 field_size_m`, one turn per 600 s. With the default 60-degree lens (16:9) it sees
-    /// about four fifths of a crowd spread over the field, from `0.15 field_size_m` away to beyond
-    /// the far corner; use [`Scene::lens`] for a far plane that reaches it.
+    /// A slow orbit 40 m up and 80 m outside the field's edge, looking at its centre (radius
+    /// `0.5 field_size_m + 80`), one turn per 600 s. With the default 60-degree lens (16:9) it sees
+    /// most of a crowd spread over the field (about four fifths of a large one), from the near
+    /// edge, at the first levels of detail, to the far corner, beyond the last; use
+    /// [`Scene::lens`] for a far plane that reaches it.
     pub fn overview(field_size_m: f32) -> Self {
         CameraPath::Orbit {
             centre: Vec3::ZERO,
-            radius: 0.6 * field_size_m,
-            height: 0.12 * field_size_m,
+            radius: 0.5 * field_size_m + 80.0,
+            height: 40.0,
             period_s: 600.0,
         }
     }
@@ -240,13 +241,13 @@ impl Scene {
         }
     }
 
-    /// `lens` adapted to the scene: the overview's far plane is pushed to `3 field_size_m` (at
-    /// least the lens's own) so that the whole field can be seen.
+    /// `lens` adapted to the scene: the overview's far plane is pushed to `2 field_size_m + 200`
+    /// (at least the lens's own) so that the whole field can be seen.
     pub fn lens(self, lens: Camera, field_size_m: f32) -> Camera {
         match self {
             Scene::Ground => lens,
             Scene::Overview => Camera {
-                far: lens.far.max(3.0 * field_size_m),
+                far: lens.far.max(2.0 * field_size_m + 200.0),
                 ..lens
             },
         }

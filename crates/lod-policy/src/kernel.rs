@@ -699,3 +699,67 @@ impl LodModel {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn branch_free_variogram_equals_eval_bitwise() {
+        let h2: Vec<f64> = (0..400)
+            .map(|i| {
+                let x = i as f64 * 0.037;
+                x * x
+            })
+            .chain([0.0, 1e-300, 8.187 * 8.187, 1e6])
+            .collect();
+        for model in [
+            VariogramModel::Spherical,
+            VariogramModel::Linear,
+            VariogramModel::Exponential,
+            VariogramModel::Gaussian,
+            VariogramModel::Power,
+        ] {
+            let v = Variogram::new(model, 0.0347, 0.3472, 8.187, 1.3).unwrap();
+            let mut got = h2.clone();
+            variogram_of_squared(&v, &mut got);
+            for (&g, &x) in got.iter().zip(&h2) {
+                let want = v.eval(x.sqrt());
+                assert_eq!(
+                    g.to_bits(),
+                    want.to_bits(),
+                    "{model:?} at h^2 = {x}: {g} vs {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn blocked_columns_equal_the_plain_column_loop_bitwise() {
+        let (stride, n, cols) = (11, 9, 803);
+        let m: Vec<f32> = (0..stride * cols)
+            .map(|i| ((i * 7919) % 1000) as f32 / 300.0 - 1.6)
+            .collect();
+        let x: Vec<f64> = (0..cols)
+            .map(|j| ((j * 31) % 97) as f64 / 13.0 - 3.0)
+            .collect();
+        let mut blocked = vec![0.5f64; n];
+        accumulate_columns(&mut blocked, &m, stride, &x);
+        let mut plain = vec![0.5f64; n];
+        for (j, &xj) in x.iter().enumerate() {
+            for (l, y) in plain.iter_mut().enumerate() {
+                *y += f64::from(m[stride * j + l]) * xj;
+            }
+        }
+        assert_eq!(blocked, plain);
+        // The dot product agrees to rounding.
+        for l in 0..n {
+            let row: Vec<f32> = (0..cols).map(|j| m[stride * j + l]).collect();
+            let d = dot(&row, &x);
+            assert!(
+                (d - (plain[l] - 0.5)).abs() <= 1e-12 * (1.0 + d.abs()),
+                "{d}"
+            );
+        }
+    }
+}

@@ -55,8 +55,9 @@ pub struct LodClip {
 /// ([`ClipKernel::compact`]), so a root-only clip holds `7 r_T` floats, and `pose` writes only the
 /// rows the clip evaluates (a root-only walker: the 7 root rows, `7 r_T` multiply-adds, and no
 /// forward kinematics beyond copying the root). [`LodSource::reference`] keeps the straightforward
-/// path (kernels sized for the largest level, poses completed with the mean pose) to check against:
-/// both give bitwise the same rows.
+/// path to check against: kernels sized for the largest level and built with the kriging projections
+/// summed column by column ([`lod_policy::LodModel::build_kernel_reference`]), poses completed with the
+/// mean pose. The two differ by rounding in the kriging sums only.
 #[derive(Debug)]
 pub struct LodSource<'m> {
     model: &'m MotionModel,
@@ -80,9 +81,10 @@ impl<'m> LodSource<'m> {
         }
     }
 
-    /// The reference source over `model`: every kernel preallocated for the largest level and every
-    /// pose completed with the mean pose beyond the evaluated rows. Same rows, bitwise, as
-    /// [`LodSource::new`]; slower and about `4 P max R_T` bytes per walker.
+    /// The reference source over `model`: every kernel preallocated for the largest level, built with
+    /// the straightforward column-order kriging sums, and every pose completed with the mean pose
+    /// beyond the evaluated rows. The same rows as [`LodSource::new`] up to rounding; slower and
+    /// about `4 P max R_T` bytes per walker.
     pub fn reference(model: &'m MotionModel) -> LodSource<'m> {
         LodSource {
             compact: false,
@@ -189,8 +191,13 @@ impl ClipSource for LodSource<'_> {
     fn build_clip(&self, controls: &Controls, detail: CrowdDetail, clip: &mut LodClip) {
         let c = [controls.dx, controls.dz, controls.turn, controls.height];
         let lod = &self.model.lod;
-        let built =
-            self.with_scratch(|s| lod.build_kernel(&c, model_detail(detail), s, &mut clip.kernel));
+        let built = self.with_scratch(|s| {
+            if self.compact {
+                lod.build_kernel(&c, model_detail(detail), s, &mut clip.kernel)
+            } else {
+                lod.build_kernel_reference(&c, model_detail(detail), s, &mut clip.kernel)
+            }
+        });
         if built.is_err() {
             // The crowd clamps controls and levels into the ranges this source reports, so this is
             // unreachable for well-formed crowds; fall back to the root-only clip at the same

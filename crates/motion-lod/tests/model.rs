@@ -172,7 +172,7 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
         rm.dz
     );
     assert!(dz > 0.3, "a walk travels forward: dz = {dz}");
-    let naive = NaiveSource::new(model, analysis);
+    let naive = NaiveSource::new(model, analysis).unwrap();
     let n = run_crowd(
         &naive,
         &FullDetail {

@@ -234,7 +234,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     };
     let main = if args.naive {
         let analysis = analysis.as_ref().context("naive source")?;
-        let source = NaiveSource::new(&model, analysis);
+        let source = NaiveSource::new(&model, analysis).context("naive source")?;
         run_crowd(
             &source,
             &FullDetail {
@@ -254,7 +254,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     };
     let naive = match &analysis {
         Some(a) if args.compare_naive && !args.naive => {
-            let source = NaiveSource::new(&model, a);
+            let source = NaiveSource::new(&model, a).context("naive source")?;
             Some(run_crowd(
                 &source,
                 &FullDetail {
