@@ -69,13 +69,17 @@ pub struct CrowdArgs {
     /// Level-of-detail policy.
     #[arg(long, value_enum, default_value_t = PolicyArg::Distance)]
     pub policy: PolicyArg,
+    /// Every walker at full detail, visible or not, with every source: no level of detail at all.
+    #[arg(long)]
+    pub no_lod: bool,
     /// Camera: `ground` walks inside the crowd, `overview` circles above it.
     #[arg(long, value_enum, default_value_t = CameraArg::Ground)]
     pub camera: CameraArg,
-    /// Animate with naive interpolation instead of the model (no level of detail).
+    /// Animate with naive interpolation instead of the model (the same culling, root-only walkers and
+    /// joint counts; no cheaper accuracy level).
     #[arg(long, conflicts_with_all = ["compare_naive", "pca"])]
     pub naive: bool,
-    /// Also run the naive source on the same crowd and print the speed ratio.
+    /// Also run the naive source on the same crowd (same policy) and print the speed ratio.
     #[arg(long)]
     pub compare_naive: bool,
     /// Animate with the PCA baseline instead of the model (its components reduced per accuracy level
@@ -232,34 +236,30 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         render: None,
         ..run.clone()
     };
+    let full = args.no_lod;
     let main = if args.naive {
         let analysis = analysis.as_ref().context("naive source")?;
         let source = NaiveSource::new(&model, analysis).context("naive source")?;
-        run_crowd(
-            &source,
-            &FullDetail {
-                joints: lod.joints(),
-            },
-            &run,
-        )?
+        run_with_policy(&source, args.policy, full, lod, &run)?
     } else if args.pca {
         run_with_policy(
             &pca_source(&model, analysis.as_ref(), args.pca_rank)?,
             args.policy,
+            full,
             lod,
             &run,
         )?
     } else {
-        run_with_policy(&LodSource::new(&model), args.policy, lod, &run)?
+        run_with_policy(&LodSource::new(&model), args.policy, full, lod, &run)?
     };
     let naive = match &analysis {
         Some(a) if args.compare_naive && !args.naive => {
             let source = NaiveSource::new(&model, a).context("naive source")?;
-            Some(run_crowd(
+            Some(run_with_policy(
                 &source,
-                &FullDetail {
-                    joints: lod.joints(),
-                },
+                args.policy,
+                full,
+                lod,
                 &compare_run,
             )?)
         }
@@ -267,7 +267,13 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     };
     let pca = if args.compare_pca && !args.pca {
         let source = pca_source(&model, analysis.as_ref(), args.pca_rank)?;
-        Some(run_with_policy(&source, args.policy, lod, &compare_run)?)
+        Some(run_with_policy(
+            &source,
+            args.policy,
+            full,
+            lod,
+            &compare_run,
+        )?)
     } else {
         None
     };
@@ -312,7 +318,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         main.last.level_histogram
     );
     if let (Some(n), Some(r)) = (&naive, ratio) {
-        println!("naive interpolation on the same crowd:");
+        println!("naive interpolation on the same crowd (same policy):");
         println!("{}", n.report);
         println!("{short} / naive mean frame rate: {r:.2}x");
     }
@@ -399,14 +405,25 @@ fn pca_source<'m>(
     PcaSource::new(model, analysis, rank).context("building the PCA baseline")
 }
 
-/// Runs `source` under the chosen level-of-detail policy of the model `lod` (the model's and the PCA
-/// source share its accuracy levels and joints).
+/// Runs `source` under the chosen level-of-detail policy of the model `lod` (every source shares its
+/// accuracy levels and joints, so the same culling, root-only walkers and joint counts), or with every
+/// walker at full detail when `full_detail` is set.
 fn run_with_policy<S: ClipSource>(
     source: &S,
     policy: PolicyArg,
+    full_detail: bool,
     lod: &LodModel,
     run: &CrowdRun,
 ) -> anyhow::Result<CrowdOutcome> {
+    if full_detail {
+        return Ok(run_crowd(
+            source,
+            &FullDetail {
+                joints: lod.joints(),
+            },
+            run,
+        )?);
+    }
     Ok(match policy {
         PolicyArg::Distance => run_crowd(
             source,
