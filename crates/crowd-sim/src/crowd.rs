@@ -145,8 +145,11 @@ impl CrowdConfig {
 
 /// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
 ///
-/// All per-frame buffers are allocated by `new`; `step_into` allocates nothing except when the
-/// BVH is rebuilt (every `bvh_rebuild_interval` frames).
+/// All per-frame buffers are allocated by `new`; `step_into` allocates only when the BVH is
+/// rebuilt (every `bvh_rebuild_interval` frames), when a walker starts its first inertialized seam
+/// (its seam buffers, `2 P` floats, are allocated then, so far and culled walkers never hold them),
+/// and when a source sizes a clip for its level (the model's source does, see
+/// `lod_policy::ClipKernel::compact`).
 pub struct Crowd<C> {
     config: CrowdConfig,
     params: StageParams,
@@ -327,8 +330,10 @@ impl<C: Send> Crowd<C> {
     /// Stages: (1) cull: boxes from last frame's roots, BVH refit (or rebuild), frustum query;
     /// (2) kernels: per walker, detail from `policy` (distance from the camera to the root,
     /// visibility), cycle scheduling and clip builds; (3) poses with the running seam transitions;
-    /// (4) forward kinematics into world positions. Stages 2-4 run in parallel over walkers and
-    /// give the same bytes for any thread count.
+    /// (4) forward kinematics into world positions. Stages 2-4 run as one parallel pass over chunks
+    /// of walkers (each chunk runs the three in turn while its walkers are in cache; the pass's wall
+    /// time is split between them in proportion to their summed times) and give the same bytes for
+    /// any thread count.
     pub fn step_into<S, P>(
         &mut self,
         source: &S,
