@@ -1,13 +1,16 @@
 //! Benchmarks with the REAL model built from the embedded fixtures (paper defaults): clip kernels and
 //! per-frame poses at the first and last accuracy levels, forward kinematics of the model's skeleton,
-//! and one crowd frame (cull + kernels + poses + FK) of 1k walkers with the model's `LodSource` under
-//! the paper's distance policy, with the PCA baseline (40 components, fewer per level) under the same
-//! policy, and with the naive source at full detail.
+//! and one crowd frame (cull + kernels + poses + FK) of 1k walkers in both scenes (ground and
+//! overview cameras) with the model's `LodSource` under the paper's distance policy, with the PCA
+//! baseline (40 components, fewer per level) and the naive source under the same policy (the fair
+//! comparison), and with the naive source at full detail (no level of detail).
 
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use crowd_sim::{Camera, CameraPath, Crowd, CrowdConfig, Detail as CrowdDetail, FrameStats};
+use crowd_sim::{
+    Camera, ClipSource, Crowd, CrowdConfig, Detail as CrowdDetail, DetailPolicy, FrameStats, Scene,
+};
 use glam::Vec3;
 use lod_policy::{ClipKernel, Detail, DistancePolicy, KernelScratch, LevelPolicy, ViewParams};
 use motion_lod::dataset::DataSpec;
@@ -101,67 +104,50 @@ fn crowd_frame(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
         seed: 7,
         ..CrowdConfig::with_density(walkers, DENSITY)
     };
-    let path = CameraPath::inside_crowd(config.field_size_m);
-    let lens = Camera::default();
-    let dt = 1.0 / config.fps;
     let mut g = c.benchmark_group("model_crowd_frame");
     g.sample_size(20);
-
     let source = LodSource::new(model);
-    let mut crowd = Crowd::new(&source, config).unwrap();
+    let pca = PcaSource::new(model, analysis, 40).expect("PCA basis of the fixtures");
+    let naive = NaiveSource::new(model, analysis).expect("naive source of the fixtures");
+    for scene in Scene::ALL {
+        let id = |name: &str| BenchmarkId::new(format!("{}/{name}", scene.name()), walkers);
+        frame(&mut g, id("lod"), &source, &lod_policy, scene, config);
+        frame(&mut g, id("pca"), &pca, &lod_policy, scene, config);
+        frame(&mut g, id("naive"), &naive, &lod_policy, scene, config);
+        frame(&mut g, id("naive_no_lod"), &naive, &full, scene, config);
+    }
+    g.finish();
+}
+
+/// One crowd frame of `source` under `policy` in `scene`, after a 1.5 s warm-up.
+fn frame<S: ClipSource, P: DetailPolicy>(
+    g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    id: BenchmarkId,
+    source: &S,
+    policy: &P,
+    scene: Scene,
+    config: CrowdConfig,
+) {
+    let path = scene.path(config.field_size_m);
+    let lens = scene.lens(Camera::default(), config.field_size_m);
+    let dt = 1.0 / config.fps;
+    let mut crowd = Crowd::new(source, config).unwrap();
     for f in 0..45 {
         let cam = path.camera_at(f as f32 * dt, &lens);
-        crowd.step(&source, &lod_policy, &cam, dt).unwrap();
+        crowd.step(source, policy, &cam, dt).unwrap();
     }
     let mut f = 45u32;
     let mut stats = FrameStats::default();
-    g.bench_function(BenchmarkId::new("lod", walkers), |b| {
+    g.bench_function(id, |b| {
         b.iter(|| {
             let cam = path.camera_at(f as f32 * dt, &lens);
             crowd
-                .step_into(&source, &lod_policy, &cam, dt, &mut stats)
+                .step_into(source, policy, &cam, dt, &mut stats)
                 .unwrap();
             f += 1;
             black_box(stats.visible)
         })
     });
-
-    let pca = PcaSource::new(model, analysis, 40).expect("PCA basis of the fixtures");
-    let mut crowd = Crowd::new(&pca, config).unwrap();
-    for f in 0..45 {
-        let cam = path.camera_at(f as f32 * dt, &lens);
-        crowd.step(&pca, &lod_policy, &cam, dt).unwrap();
-    }
-    let mut f = 45u32;
-    g.bench_function(BenchmarkId::new("pca", walkers), |b| {
-        b.iter(|| {
-            let cam = path.camera_at(f as f32 * dt, &lens);
-            crowd
-                .step_into(&pca, &lod_policy, &cam, dt, &mut stats)
-                .unwrap();
-            f += 1;
-            black_box(stats.visible)
-        })
-    });
-
-    let naive = NaiveSource::new(model, analysis);
-    let mut crowd = Crowd::new(&naive, config).unwrap();
-    for f in 0..45 {
-        let cam = path.camera_at(f as f32 * dt, &lens);
-        crowd.step(&naive, &full, &cam, dt).unwrap();
-    }
-    let mut f = 45u32;
-    g.bench_function(BenchmarkId::new("naive", walkers), |b| {
-        b.iter(|| {
-            let cam = path.camera_at(f as f32 * dt, &lens);
-            crowd
-                .step_into(&naive, &full, &cam, dt, &mut stats)
-                .unwrap();
-            f += 1;
-            black_box(stats.visible)
-        })
-    });
-    g.finish();
 }
 
 fn bench(c: &mut Criterion) {

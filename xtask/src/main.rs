@@ -45,6 +45,9 @@ struct TablesArgs {
     /// No progress display.
     #[arg(long)]
     quiet: bool,
+    /// Thread counts of the crowd scaling rows (default 1,2), e.g. `1,2,4,8,16` on a bigger machine.
+    #[arg(long, value_name = "N,N,...", value_delimiter = ',', value_parser = clap::value_parser!(u16).range(1..=1024))]
+    crowd_threads: Vec<u16>,
 }
 
 /// Options of `xtask fixtures`.
@@ -89,7 +92,14 @@ fn run_tables(args: &TablesArgs) -> Result<()> {
     if let Some(f) = &args.figures {
         command.push_str(&format!(" --figures {}", f.display()));
     }
+    if !args.crowd_threads.is_empty() {
+        let list: Vec<String> = args.crowd_threads.iter().map(u16::to_string).collect();
+        command.push_str(&format!(" --crowd-threads {}", list.join(",")));
+    }
     let mut config = tables::TablesConfig::full(args.data.clone(), out, figures);
+    if !args.crowd_threads.is_empty() {
+        config.crowd_threads = args.crowd_threads.iter().map(|&t| usize::from(t)).collect();
+    }
     config.samples = args.samples;
     config.show_progress = !args.quiet;
     config.command = command;

@@ -32,11 +32,16 @@ fn tables_pipeline_writes_every_section_and_figure() {
         assert!(doc.contains(heading), "missing {heading:?} in:\n{doc}");
     }
     assert!(!doc.contains("NaN"), "a measured value is NaN:\n{doc}");
-    // The quick crowds are 50 and 200 walkers, each with LOD, naive and PCA rows.
+    // The quick crowds are 50 and 200 walkers in both scenes, each with LOD, naive and PCA rows under
+    // the LOD policy and at full detail, and the model on one and two threads.
     assert!(
-        doc.contains("| 50 | lod |")
-            && doc.contains("| 200 | naive |")
-            && doc.contains("| 200 | pca |"),
+        doc.contains("### ground camera")
+            && doc.contains("### overview camera")
+            && doc.contains("| ground | 50 | lod | LOD |")
+            && doc.contains("| ground | 200 | naive | LOD |")
+            && doc.contains("| overview | 200 | pca | no LOD |")
+            && doc.contains("| overview | 200 | 1 |")
+            && doc.contains("| overview | 200 | 2 |"),
         "{doc}"
     );
     for f in ["figure4.svg", "figure5.svg", "quality.svg"] {

@@ -171,6 +171,20 @@ impl CameraPath {
         }
     }
 
+    /// A slow orbit 40 m up and 80 m outside the field's edge, looking at its centre (radius
+    /// `0.5 field_size_m + 80`), one turn per 600 s. With the default 60-degree lens (16:9) it sees
+    /// most of a crowd spread over the field (about four fifths of a large one), from the near
+    /// edge, at the first levels of detail, to the far corner, beyond the last; use
+    /// [`Scene::lens`] for a far plane that reaches it.
+    pub fn overview(field_size_m: f32) -> Self {
+        CameraPath::Orbit {
+            centre: Vec3::ZERO,
+            radius: 0.5 * field_size_m + 80.0,
+            height: 40.0,
+            period_s: 600.0,
+        }
+    }
+
     /// The camera at time `t` seconds: `lens` supplies everything but position and target.
     pub fn camera_at(&self, t: f32, lens: &Camera) -> Camera {
         let mut cam = *lens;
@@ -198,6 +212,53 @@ impl CameraPath {
             }
         }
         cam
+    }
+}
+
+/// The scenes a crowd is measured in: where the camera is, hence how many walkers it sees and at
+/// which levels of detail.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Scene {
+    /// The camera walks at eye height inside the crowd ([`CameraPath::inside_crowd`]): most walkers
+    /// are culled or beyond the last level, so they need only root motion.
+    #[default]
+    Ground,
+    /// The camera circles above the field's edge looking at its centre ([`CameraPath::overview`]):
+    /// most of the crowd is in view, from near to far, so the levels between full detail and root
+    /// only are all in use.
+    Overview,
+}
+
+impl Scene {
+    /// Both scenes, ground first.
+    pub const ALL: [Scene; 2] = [Scene::Ground, Scene::Overview];
+
+    /// The scene's camera path over a field of side `field_size_m`.
+    pub fn path(self, field_size_m: f32) -> CameraPath {
+        match self {
+            Scene::Ground => CameraPath::inside_crowd(field_size_m),
+            Scene::Overview => CameraPath::overview(field_size_m),
+        }
+    }
+
+    /// `lens` adapted to the scene: the overview's far plane is pushed to `2 field_size_m + 200`
+    /// (at least the lens's own) so that the whole field can be seen.
+    pub fn lens(self, lens: Camera, field_size_m: f32) -> Camera {
+        match self {
+            Scene::Ground => lens,
+            Scene::Overview => Camera {
+                far: lens.far.max(2.0 * field_size_m + 200.0),
+                ..lens
+            },
+        }
+    }
+
+    /// Lower-case name (`ground`, `overview`), as the command line spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scene::Ground => "ground",
+            Scene::Overview => "overview",
+        }
     }
 }
 

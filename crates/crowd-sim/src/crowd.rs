@@ -13,12 +13,44 @@ use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
 use glam::{Vec2, Vec3};
 use lod_policy::chain::{SeamScratch, SeamTransition};
 use rayon::prelude::*;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// Walkers per rayon task: large enough to amortise scheduling, small enough to balance.
 const CHUNK: usize = 64;
+/// Walkers ahead whose clips are prefetched ([`ClipSource::prefetch`]) in the pose stage.
+const PREFETCH: usize = 12;
 /// Largest accepted time step (s).
 const MAX_DT: f32 = 10.0;
+
+/// What one chunk of walkers reports from the fused kernel, pose and FK pass.
+#[derive(Debug, Default)]
+struct ChunkOutcome {
+    built: usize,
+    in_transition: usize,
+    /// The first failing walker (lowest index) and its fault.
+    fault: Option<(usize, WalkerFault)>,
+    /// Time spent in the kernel, pose and FK stages, summed over chunks.
+    cpu: [Duration; 3],
+}
+
+impl ChunkOutcome {
+    fn merge(a: ChunkOutcome, b: ChunkOutcome) -> ChunkOutcome {
+        let fault = match (a.fault, b.fault) {
+            (Some(x), Some(y)) => Some(if x.0 <= y.0 { x } else { y }),
+            (x, y) => x.or(y),
+        };
+        ChunkOutcome {
+            built: a.built + b.built,
+            in_transition: a.in_transition + b.in_transition,
+            fault,
+            cpu: [
+                a.cpu[0] + b.cpu[0],
+                a.cpu[1] + b.cpu[1],
+                a.cpu[2] + b.cpu[2],
+            ],
+        }
+    }
+}
 
 /// How to populate and run a crowd.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,6 +76,11 @@ pub struct CrowdConfig {
     /// Rebuild the BVH every this many frames; refit it in between (1 = rebuild every frame).
     /// Default 240: a rebuild costs ~20 refits at 10k walkers, and walkers move little per frame.
     pub bvh_rebuild_interval: u32,
+    /// Spread the clip builds of the first frames over the first cycle: a new walker that the
+    /// policy wants finer than its starting root-only clip waits a seeded fraction of that clip
+    /// (uniform in `[0, duration)`) before it rebuilds mid-cycle, instead of every such walker
+    /// building in the first frame. Later refinements are immediate. Default on.
+    pub spread_first_builds: bool,
 }
 
 impl Default for CrowdConfig {
@@ -58,6 +95,7 @@ impl Default for CrowdConfig {
             border_m: 2.0,
             cull_margin_m: 0.25,
             bvh_rebuild_interval: 240,
+            spread_first_builds: true,
         }
     }
 }
@@ -107,13 +145,18 @@ impl CrowdConfig {
 
 /// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
 ///
-/// All per-frame buffers are allocated by `new`; `step_into` allocates nothing except when the
-/// BVH is rebuilt (every `bvh_rebuild_interval` frames).
+/// All per-frame buffers are allocated by `new`; `step_into` allocates only when the BVH is
+/// rebuilt (every `bvh_rebuild_interval` frames), when a walker starts its first inertialized seam
+/// (its seam buffers, `2 P` floats, are allocated then, so far and culled walkers never hold them),
+/// and when a source sizes a clip for its level (the model's source does, see
+/// `lod_policy::ClipKernel::compact`).
 pub struct Crowd<C> {
     config: CrowdConfig,
     params: StageParams,
     walkers: Vec<Walker<C>>,
     poses: Vec<f32>,
+    /// Level histogram bin of every walker's clip after the last step.
+    bins: Vec<u32>,
     /// Scratch of the seam transitions started in the kernel stage, one per `CHUNK` walkers.
     seam_scratch: Vec<SeamScratch>,
     joints: Vec<Vec3>,
@@ -148,6 +191,7 @@ impl<C: Send> Crowd<C> {
             levels,
             bounds,
             seam_levels: config.seam_levels,
+            seam_halflife_s: config.seam_halflife_s,
         };
         // Preferred strides and the tightest curvature they can follow with half the turn range.
         let dz_lo = bounds.min.dz.max(0.2 * bounds.max.dz);
@@ -183,6 +227,12 @@ impl<C: Send> Crowd<C> {
                 });
             }
             let cur_motion = source.clip_root_motion(&cur);
+            // Drawn last, so that the paths, phases and strides do not depend on the option.
+            let hold_s = if config.spread_first_builds {
+                g.next_f32() * dur
+            } else {
+                0.0
+            };
             Ok(Walker {
                 path,
                 s,
@@ -190,13 +240,16 @@ impl<C: Send> Crowd<C> {
                 height,
                 base,
                 heading,
+                heading_sc: heading.sin_cos(),
                 t: phase * dur,
                 controls,
                 cur,
                 cur_detail: root_only,
                 cur_dur: dur,
                 cur_motion,
-                seam: SeamTransition::new(levels.pose_len, config.seam_halflife_s),
+                seam: SeamTransition::new(0, config.seam_halflife_s),
+                seam_sized: false,
+                hold_s,
                 seam_start: 0.0,
                 rows: 0,
                 n_joints: 0,
@@ -215,6 +268,7 @@ impl<C: Send> Crowd<C> {
             params,
             walkers,
             poses: vec![0.0; n * levels.pose_len],
+            bins: vec![0; n],
             seam_scratch: (0..n.div_ceil(CHUNK))
                 .map(|_| SeamScratch::new(levels.pose_len))
                 .collect(),
@@ -241,12 +295,16 @@ impl<C: Send> Crowd<C> {
     /// `[-margin, 1.1 height + margin]` vertically.
     fn update_bounds(&mut self) {
         let m = self.config.cull_margin_m;
-        // Sequential: clips need only be `Send`, so walkers cannot be shared across threads.
-        for (b, w) in self.bounds.iter_mut().zip(&self.walkers) {
-            let r = 0.4 * w.height + m;
-            b.min = Vec3::new(w.root.x - r, -m, w.root.z - r);
-            b.max = Vec3::new(w.root.x + r, 1.1 * w.height + m, w.root.z + r);
-        }
+        // Walkers are borrowed mutably (clips need only be `Send`, not `Sync`).
+        self.bounds
+            .par_iter_mut()
+            .zip(self.walkers.par_iter_mut())
+            .with_min_len(4 * CHUNK)
+            .for_each(|(b, w)| {
+                let r = 0.4 * w.height + m;
+                b.min = Vec3::new(w.root.x - r, -m, w.root.z - r);
+                b.max = Vec3::new(w.root.x + r, 1.1 * w.height + m, w.root.z + r);
+            });
     }
 
     /// Advances the crowd by `dt` seconds seen from `camera` and returns the frame's statistics.
@@ -272,8 +330,10 @@ impl<C: Send> Crowd<C> {
     /// Stages: (1) cull: boxes from last frame's roots, BVH refit (or rebuild), frustum query;
     /// (2) kernels: per walker, detail from `policy` (distance from the camera to the root,
     /// visibility), cycle scheduling and clip builds; (3) poses with the running seam transitions;
-    /// (4) forward kinematics into world positions. Stages 2-4 run in parallel over walkers and
-    /// give the same bytes for any thread count.
+    /// (4) forward kinematics into world positions. Stages 2-4 run as one parallel pass over chunks
+    /// of walkers (each chunk runs the three in turn while its walkers are in cache; the pass's wall
+    /// time is split between them in proportion to their summed times) and give the same bytes for
+    /// any thread count.
     pub fn step_into<S, P>(
         &mut self,
         source: &S,
@@ -301,42 +361,68 @@ impl<C: Send> Crowd<C> {
         }
         let visible = self.bvh.query(&frustum, &mut self.visible);
 
-        // (2) Kernels.
+        // (2)-(4) Kernels, poses, forward kinematics: one parallel pass over chunks of walkers, each
+        // chunk running the three stages in turn while its walkers are in cache. Every chunk's
+        // stage times are summed over threads and the pass's wall time is split in proportion.
         let t1 = Instant::now();
         let params = self.params;
         let eye = camera.position;
+        let pl = params.levels.pose_len;
+        let npos = params.levels.joints + 1;
         // One seam scratch per chunk of walkers, allocated by `new`: nothing is allocated here.
-        let fault = self
+        let pass = self
             .walkers
             .par_chunks_mut(CHUNK)
             .zip(self.visible.par_chunks(CHUNK))
             .zip(self.seam_scratch.par_iter_mut())
+            .zip(self.poses.par_chunks_mut(CHUNK * pl))
+            .zip(self.joints.par_chunks_mut(CHUNK * npos))
+            .zip(self.bins.par_chunks_mut(CHUNK))
             .enumerate()
-            .map(|(c, ((walkers, visible), scratch))| {
-                let mut built = 0;
-                let mut fault = None;
-                for (k, (w, &vis)) in walkers.iter_mut().zip(visible).enumerate() {
-                    let d = policy.detail(w.root.distance(eye), vis, camera);
-                    match w.advance(source, &params, d, dt, scratch) {
-                        Ok(n) => built += n,
-                        Err(e) => {
-                            fault.get_or_insert((c * CHUNK + k, e));
+            .map(
+                |(c, (((((walkers, visible), scratch), poses), joints), bins))| {
+                    let mut out = ChunkOutcome::default();
+                    let ta = Instant::now();
+                    for (k, (w, &vis)) in walkers.iter_mut().zip(visible).enumerate() {
+                        let d = policy.detail(w.root.distance(eye), vis, camera);
+                        match w.advance(source, &params, d, dt, scratch) {
+                            Ok(n) => out.built += n,
+                            Err(e) => {
+                                out.fault.get_or_insert((c * CHUNK + k, e));
+                            }
                         }
                     }
-                }
-                (built, fault)
-            })
-            .reduce(
-                || (0, None),
-                |a, b| {
-                    let f = match (a.1, b.1) {
-                        (Some(x), Some(y)) => Some(if x.0 <= y.0 { x } else { y }),
-                        (x, y) => x.or(y),
-                    };
-                    (a.0 + b.0, f)
+                    let tb = Instant::now();
+                    if out.fault.is_none() {
+                        // Touch the clip `PREFETCH` walkers ahead so that its memory is on the
+                        // way while this walker's pose is computed.
+                        for k in 0..walkers.len() {
+                            if let Some(ahead) = walkers.get(k + PREFETCH) {
+                                source.prefetch(&ahead.cur, ahead.t);
+                            }
+                            walkers[k].pose(source, &mut poses[k * pl..(k + 1) * pl]);
+                        }
+                    }
+                    let tc = Instant::now();
+                    if out.fault.is_none() {
+                        for (((w, pose), joints), bin) in walkers
+                            .iter_mut()
+                            .zip(poses.chunks(pl))
+                            .zip(joints.chunks_mut(npos))
+                            .zip(bins.iter_mut())
+                        {
+                            w.place(source, pose, joints);
+                            *bin = params.levels.bin(&w.cur_detail) as u32;
+                            out.in_transition += usize::from(w.seam.is_active());
+                        }
+                    }
+                    let td = Instant::now();
+                    out.cpu = [tb - ta, tc - tb, td - tc];
+                    out
                 },
-            );
-        if let Some((walker, e)) = fault.1 {
+            )
+            .reduce(ChunkOutcome::default, ChunkOutcome::merge);
+        if let Some((walker, e)) = pass.fault {
             return Err(match e {
                 WalkerFault::Duration(duration) => CrowdError::BadClipDuration { walker, duration },
                 WalkerFault::Level(level) => CrowdError::BadLevel {
@@ -346,44 +432,34 @@ impl<C: Send> Crowd<C> {
                 },
             });
         }
-
-        // (3) Poses.
-        let t2 = Instant::now();
-        let pl = params.levels.pose_len;
-        self.walkers
-            .par_iter_mut()
-            .zip(self.poses.par_chunks_mut(pl))
-            .with_min_len(CHUNK)
-            .for_each(|(w, pose)| w.pose(source, pose));
-
-        // (4) Forward kinematics.
-        let t3 = Instant::now();
-        let npos = params.levels.joints + 1;
-        self.walkers
-            .par_iter_mut()
-            .zip(self.poses.par_chunks(pl))
-            .zip(self.joints.par_chunks_mut(npos))
-            .with_min_len(CHUNK)
-            .for_each(|((w, pose), out)| w.place(source, pose, out));
         let t4 = Instant::now();
+        let wall = t4 - t1;
+        let cpu: Duration = pass.cpu.iter().sum();
+        let share = |d: Duration| {
+            if cpu.is_zero() {
+                wall / 3
+            } else {
+                wall.mul_f64(d.as_secs_f64() / cpu.as_secs_f64())
+            }
+        };
+        let (kernels, poses) = (share(pass.cpu[0]), share(pass.cpu[1]));
 
         stats.timings = StageTimings {
             cull: t1 - t0,
-            kernels: t2 - t1,
-            poses: t3 - t2,
-            fk: t4 - t3,
+            kernels,
+            poses,
+            fk: wall.saturating_sub(kernels + poses),
         };
         stats.level_histogram.clear();
         stats
             .level_histogram
             .resize(params.levels.histogram_bins(), 0);
-        stats.in_transition = 0;
-        for w in &self.walkers {
-            stats.level_histogram[params.levels.bin(&w.cur_detail)] += 1;
-            stats.in_transition += usize::from(w.seam.is_active());
+        for &b in &self.bins {
+            stats.level_histogram[b as usize] += 1;
         }
+        stats.in_transition = pass.in_transition;
         stats.visible = visible;
-        stats.kernels_built = fault.0;
+        stats.kernels_built = pass.built;
         self.frame += 1;
         self.time_s += f64::from(dt);
         Ok(())

@@ -48,7 +48,7 @@ pub mod stats;
 pub mod testing;
 mod walker;
 
-pub use camera::{Bounds, Camera, CameraPath, Frustum};
+pub use camera::{Bounds, Camera, CameraPath, Frustum, Scene};
 pub use controls::{ControlBounds, Controls, Detail, LevelTable, RootMotion};
 pub use crowd::{Crowd, CrowdConfig};
 pub use error::{CrowdError, RenderError};

@@ -49,6 +49,13 @@ pub trait ClipSource: Sync {
     /// clip's detail are not written).
     fn pose(&self, clip: &Self::Clip, t_seconds: f32, out: &mut [f32]) -> usize;
 
+    /// A hint that `pose(clip, t_seconds, ..)` follows soon: an implementation may read the
+    /// parts of the clip that call will read, so that they are in cache by then (the crowd calls
+    /// it a few walkers ahead). Must not change anything observable. Does nothing by default.
+    fn prefetch(&self, clip: &Self::Clip, t_seconds: f32) {
+        let _ = (clip, t_seconds);
+    }
+
     /// Forward kinematics of `pose` (as written by `pose` for this clip) into cycle-frame joint
     /// positions in metres, root first; `out.len() >= 1 + levels().joints`. Returns how many
     /// positions were written (1 for a root-only clip).

@@ -133,6 +133,11 @@ impl std::fmt::Display for CrowdReport {
             m.fk,
             self.mean_visible()
         )?;
+        writeln!(
+            f,
+            "clip kernels built per frame: {:.0}",
+            self.kernels_built as f64 / self.frames.max(1) as f64
+        )?;
         write!(
             f,
             "level histogram (walker-frames, last = root only): {:?}",

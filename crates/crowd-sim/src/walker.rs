@@ -14,6 +14,8 @@ pub(crate) struct StageParams {
     pub levels: LevelTable,
     pub bounds: ControlBounds,
     pub seam_levels: usize,
+    /// Half-life of a seam's offset (s), for transitions allocated on a walker's first seam.
+    pub seam_halflife_s: f32,
 }
 
 /// One walker: its path, cycle base frame, current clip and the seam transition into it.
@@ -29,6 +31,8 @@ pub(crate) struct Walker<C> {
     pub base: Vec2,
     /// Heading of the current cycle frame.
     pub heading: f32,
+    /// `heading.sin_cos()`, kept with it (the FK stage places every walker every frame).
+    pub heading_sc: (f32, f32),
     /// Seconds into the current cycle.
     pub t: f32,
     pub controls: Controls,
@@ -37,7 +41,14 @@ pub(crate) struct Walker<C> {
     pub cur_dur: f32,
     pub cur_motion: RootMotion,
     /// The inertialized seam into the current clip (`lod_policy::chain`), inactive when none runs.
+    /// Empty (no heap) until the walker's first inertialized seam: far and culled walkers never
+    /// need its `2 P` floats.
     pub seam: SeamTransition,
+    /// Whether `seam` has been sized for the pose vector.
+    pub seam_sized: bool,
+    /// Seconds left before a mid-cycle refinement is allowed: spreads the clip builds of a new
+    /// crowd's first frames over its first cycle (0 once the walker has switched clips).
+    pub hold_s: f32,
     /// Clip time at which the running seam started (its clock is `t - seam_start`).
     pub seam_start: f32,
     /// Rows of the pose vector written this frame.
@@ -97,13 +108,17 @@ impl<C> Walker<C> {
         &mut self,
         src: &S,
         d: Detail,
-        seam: Option<&mut SeamScratch>,
+        seam: Option<(&mut SeamScratch, &StageParams)>,
         t_out: f32,
         motion: Option<&RootMotion>,
         phase: f32,
     ) -> Result<(), WalkerFault> {
         match seam {
-            Some(scratch) => {
+            Some((scratch, p)) => {
+                if !self.seam_sized {
+                    self.seam = SeamTransition::new(p.levels.pose_len, p.seam_halflife_s);
+                    self.seam_sized = true;
+                }
                 let (dur_out, this) = (self.cur_dur, &*self);
                 let captured = scratch.capture(t_out, dur_out, motion, |t, out| {
                     Ok::<usize, std::convert::Infallible>(this.displayed(src, t, out))
@@ -133,7 +148,8 @@ impl<C> Walker<C> {
     /// Kernel stage: advance time by `dt`; at each cycle end move the cycle frame by the clip's
     /// root motion, pick controls from the path ahead and build the next clip at `d`, with an
     /// inertialized seam at the first `seam_levels` levels; mid-cycle, rebuild at once when `d` is
-    /// finer than the clip held (inertialized likewise). `scratch` is the thread's seam scratch.
+    /// finer than the clip held (inertialized likewise), except while `hold_s` (a new crowd's
+    /// spread of first builds) runs. `scratch` is the thread's seam scratch.
     /// Returns the number of kernels built.
     pub fn advance<S: ClipSource<Clip = C>>(
         &mut self,
@@ -158,6 +174,7 @@ impl<C> Walker<C> {
             self.t -= end;
             self.base += left(self.heading) * m.dx + forward(self.heading) * m.dz;
             self.heading = wrap_angle(self.heading + m.turn);
+            self.heading_sc = self.heading.sin_cos();
             self.s = self.path.closest_param_near(self.base, self.s);
             self.controls = path_controls(
                 &self.path,
@@ -168,13 +185,18 @@ impl<C> Walker<C> {
                 self.height,
                 &p.bounds,
             );
-            let seam = Self::seams(p, &d, &self.cur_detail).then_some(&mut *scratch);
+            let seam = Self::seams(p, &d, &self.cur_detail).then_some((&mut *scratch, p));
             self.switch(src, d, seam, end, Some(&m), 0.0)?;
+            self.hold_s = 0.0;
             built += 1;
         }
-        if built == 0 && d.is_finer_than(&self.cur_detail) {
+        if self.hold_s > 0.0 {
+            self.hold_s -= dt;
+        }
+        if built == 0 && self.hold_s <= 0.0 && d.is_finer_than(&self.cur_detail) {
+            self.hold_s = 0.0;
             let u = self.t / self.cur_dur;
-            let seam = Self::seams(p, &d, &self.cur_detail).then_some(&mut *scratch);
+            let seam = Self::seams(p, &d, &self.cur_detail).then_some((&mut *scratch, p));
             let t_out = self.t;
             self.switch(src, d, seam, t_out, None, u)?;
             built += 1;
@@ -196,7 +218,7 @@ impl<C> Walker<C> {
         let n = src
             .joints(&self.cur, &pose[..self.rows], out)
             .min(out.len());
-        let (sh, ch) = self.heading.sin_cos();
+        let (sh, ch) = self.heading_sc;
         for q in &mut out[..n] {
             *q = Vec3::new(
                 self.base.x + q.x * ch + q.z * sh,

@@ -410,3 +410,44 @@ fn results_are_identical_for_one_and_four_threads() {
     assert_eq!(va, vb);
     assert_eq!(ha, hb);
 }
+
+#[test]
+fn first_clip_builds_are_spread_over_the_first_cycle() {
+    let source = ProceduralSource::new();
+    // Every walker wants full detail: without spreading, all of them rebuild in the first frame.
+    let full = |_d: f32, _v: bool, _c: &Camera| Detail {
+        accuracy: 0,
+        active_joints: source.levels().joints,
+    };
+    let built = |spread: bool| -> Vec<usize> {
+        let cfg = CrowdConfig {
+            spread_first_builds: spread,
+            ..config(400, 60.0)
+        };
+        let mut crowd = Crowd::new(&source, cfg).unwrap();
+        (0..60)
+            .map(|_| {
+                crowd
+                    .step(&source, &full, &Camera::default(), DT)
+                    .unwrap()
+                    .kernels_built
+            })
+            .collect()
+    };
+    let at_once = built(false);
+    let spread = built(true);
+    assert_eq!(at_once[0], 400, "{at_once:?}");
+    let most = *spread.iter().max().unwrap();
+    assert!(most < 400 / 4, "largest frame built {most}: {spread:?}");
+    // By the end of the first cycle every walker holds full detail either way.
+    let cfg = CrowdConfig {
+        spread_first_builds: true,
+        ..config(400, 60.0)
+    };
+    let mut crowd = Crowd::new(&source, cfg).unwrap();
+    let mut last = None;
+    for _ in 0..60 {
+        last = Some(crowd.step(&source, &full, &Camera::default(), DT).unwrap());
+    }
+    assert_eq!(last.unwrap().level_histogram[0], 400);
+}

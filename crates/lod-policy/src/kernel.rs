@@ -20,7 +20,7 @@ use crate::error::KernelError;
 use timewarp::TimeTable;
 
 use crate::chain::{RootMotion, exp_map_to_quat};
-use crate::model::{LodModel, Ranks, TIME_ROW};
+use crate::model::{LodModel, Ranks, TIME_ROW, Variogram, VariogramModel};
 
 /// Index of the control that is a clip's travel turn (radians, + = left): the heading of the
 /// direction of travel changes by it over one cycle (the data's definition; the pelvis may turn by more
@@ -115,6 +115,12 @@ impl KernelScratch {
         }
     }
 
+    /// Whether this scratch can serve [`LodModel::build_kernel`] for `model` (it holds nothing
+    /// between builds, so any scratch of the right sizes will do).
+    pub fn fits_model(&self, model: &LodModel) -> bool {
+        self.fits(model).is_ok()
+    }
+
     fn fits(&self, model: &LodModel) -> Result<(), KernelError> {
         let r = model.max_ranks();
         let ok = self.x.len() == model.s() + 1
@@ -151,7 +157,10 @@ pub struct ClipKernel {
     ranks: Ranks,
     rows: usize,
     clamped: bool,
-    /// `G(c)`, `rows x r_T` column-major (capacity `P x max R_T`).
+    /// Sized for the clip's own level ([`ClipKernel::compact`]) rather than the largest.
+    compact: bool,
+    /// `G(c)`, `rows x r_T` column-major (capacity `P x max R_T`, or exactly `rows x r_T` when
+    /// compact).
     g: Vec<f32>,
     /// Playback times of the `T` aligned frames (incremental inverse timewarp).
     times: TimeTable,
@@ -173,10 +182,47 @@ impl ClipKernel {
             ranks: model.levels()[last].ranks,
             rows: model.always_rows(),
             clamped: false,
+            compact: false,
             g: vec![0.0; model.p() * r.t],
             times: TimeTable::with_capacity(model.t()),
             root_motion: RootMotion::default(),
         }
+    }
+
+    /// A kernel whose `G(c)` buffer is sized for the level it is built at, not the largest: it
+    /// starts at the root-only size (`7 x r_T` of the smallest level) and
+    /// [`LodModel::build_kernel`] resizes it to `P' x r_T` of each build (allocating when a build
+    /// needs more than the buffer holds, releasing memory when it needs less than half). A crowd
+    /// of mostly far or culled walkers then holds a few hundred bytes per walker instead of
+    /// `4 P max R_T`. Until it is built it reads as [`ClipKernel::new`]'s does.
+    pub fn compact(model: &LodModel) -> ClipKernel {
+        let last = model.levels().len() - 1;
+        let ranks = model.levels()[last].ranks;
+        let rows = model.always_rows();
+        ClipKernel {
+            compact: true,
+            g: vec![0.0; rows * ranks.t],
+            times: TimeTable::with_capacity(model.t()),
+            p: model.p(),
+            t: model.t(),
+            detail: Detail::root_only(),
+            level: last,
+            ranks,
+            rows,
+            clamped: false,
+            root_motion: RootMotion::default(),
+        }
+    }
+
+    /// Whether the kernel is sized per level ([`ClipKernel::compact`]).
+    pub fn is_compact(&self) -> bool {
+        self.compact
+    }
+
+    /// Bytes held on the heap by this kernel (its `G(c)` buffer and the entries of its time table).
+    pub fn heap_bytes(&self) -> usize {
+        self.g.capacity() * std::mem::size_of::<f32>()
+            + self.times.len() * std::mem::size_of::<f64>()
     }
 
     /// The detail this kernel was built with (as requested).
@@ -223,11 +269,134 @@ impl ClipKernel {
     pub fn duration(&self) -> f64 {
         self.times.duration()
     }
+    /// Reads the first value of `G(c)` and the time-table entry near `seconds`, the memory
+    /// [`ClipKernel::phase_at`] and [`LodModel::pose_rows`] read first, so that a caller can
+    /// start those cache misses early (a crowd touches the walkers a few ahead). No effect on any
+    /// result.
+    pub fn prefetch(&self, seconds: f64) {
+        let times = self.times.times();
+        if let (Some(&g), Some(&last)) = (self.g.first(), times.last()) {
+            let guess = (seconds.max(0.0).min(last) / last * (times.len() - 1) as f64) as usize;
+            let near = times.get(guess).copied().unwrap_or(last);
+            std::hint::black_box((g, near));
+        }
+    }
+
     /// Phase (fractional aligned frame in `[0, T - 1]`) at playback time `seconds` (clamped to
     /// `[0, duration]`, NaN gives 0), by inverting the piecewise linear time table: with
     /// `t_j <= seconds < t_{j+1}`, `phase = j + (seconds - t_j) / (t_{j+1} - t_j)`.
     pub fn phase_at(&self, seconds: f64) -> f32 {
-        self.times.phase_at(seconds) as f32
+        // `TimeTable::phase_at`'s result (the same interval and arithmetic), with the interval
+        // found from a guess by uniform spacing and a short walk instead of a binary search: one
+        // or two cache lines of the table instead of four to six dependent reads.
+        let times = self.times.times();
+        let n = times.len();
+        if n < 2 {
+            return 0.0;
+        }
+        let duration = times[n - 1];
+        let t = seconds.max(0.0).min(duration);
+        let guess = (t / duration * (n - 1) as f64) as usize;
+        // The last k <= n - 2 with times[k] <= t (or 0), as the binary search finds it.
+        let mut k = guess.min(n - 2);
+        while k > 0 && times[k] > t {
+            k -= 1;
+        }
+        while k + 2 < n && times[k + 1] <= t {
+            k += 1;
+        }
+        let (t0, t1) = (times[k], times[k + 1]);
+        let f = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+        (k as f64 + f) as f32
+    }
+}
+
+/// `x_i <- gamma(sqrt(x_i))` for squared distances `x` ([`Variogram::eval`] of each distance). The
+/// spherical and linear models, the ones the data choose, run branch-free so that the loop
+/// vectorises, with the same operations as `eval` (bitwise the same values); other models call
+/// `eval`.
+fn variogram_of_squared(v: &Variogram, x: &mut [f64]) {
+    let (nugget, sill, range) = (v.nugget, v.sill, v.range);
+    match v.model {
+        VariogramModel::Spherical if range > 0.0 => {
+            for g in x.iter_mut() {
+                let h = g.sqrt();
+                // h >= range gives t = 1 and 1.5 - 0.5 = 1 exactly, as `eval`'s branch does.
+                let t = (h / range).min(1.0);
+                let y = nugget + sill * (1.5 * t - 0.5 * t * t * t);
+                *g = if h > 0.0 { y } else { 0.0 };
+            }
+        }
+        VariogramModel::Linear => {
+            for g in x.iter_mut() {
+                let h = g.sqrt();
+                let y = nugget + sill * h;
+                *g = if h > 0.0 { y } else { 0.0 };
+            }
+        }
+        _ => {
+            for g in x.iter_mut() {
+                *g = v.eval(g.sqrt());
+            }
+        }
+    }
+}
+
+/// `h2_i += (c - samples_i)^2` over contiguous samples.
+fn add_squared_differences(h2: &mut [f64], c: f64, samples: &[f32]) {
+    for (h, &si) in h2.iter_mut().zip(samples) {
+        let diff = c - f64::from(si);
+        *h += diff * diff;
+    }
+}
+
+/// `a . x` in f64 with eight partial sums (vectorised; a fixed order, so deterministic).
+#[inline]
+fn dot(a: &[f32], x: &[f64]) -> f64 {
+    debug_assert_eq!(a.len(), x.len());
+    let mut acc = [0.0f64; 8];
+    let (ca, cx) = (a.chunks_exact(8), x.chunks_exact(8));
+    let mut tail = 0.0;
+    for (&p, &q) in ca.remainder().iter().zip(cx.remainder()) {
+        tail += f64::from(p) * q;
+    }
+    for (p, q) in ca.zip(cx) {
+        for i in 0..8 {
+            acc[i] += f64::from(p[i]) * q[i];
+        }
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
+}
+
+/// `y += M[:y.len(), :] x` for `M` column-major with column stride `stride` (f32, one column per
+/// entry of `x`), accumulating in f64. Four columns per pass (fewer loop trips, loads in flight);
+/// each `y_l` still adds its terms one column at a time in column order, so the result is bitwise
+/// that of the plain column loop.
+fn accumulate_columns(y: &mut [f64], m: &[f32], stride: usize, x: &[f64]) {
+    let n = y.len();
+    debug_assert!(n <= stride && m.len() >= stride * x.len());
+    let mut blocks = m.chunks_exact(4 * stride);
+    let mut xs = x.chunks_exact(4);
+    for (block, xb) in blocks.by_ref().zip(xs.by_ref()) {
+        let (c0, rest) = block.split_at(stride);
+        let (c1, rest) = rest.split_at(stride);
+        let (c2, c3) = rest.split_at(stride);
+        let (c0, c1, c2, c3) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n]);
+        for l in 0..n {
+            let mut a = y[l];
+            a += f64::from(c0[l]) * xb[0];
+            a += f64::from(c1[l]) * xb[1];
+            a += f64::from(c2[l]) * xb[2];
+            a += f64::from(c3[l]) * xb[3];
+            y[l] = a;
+        }
+    }
+    let done = x.len() - xs.remainder().len();
+    for (j, &xj) in x.iter().enumerate().skip(done) {
+        let col = &m[stride * j..][..n];
+        for (yl, &q) in y.iter_mut().zip(col) {
+            *yl += f64::from(q) * xj;
+        }
     }
 }
 
@@ -235,7 +404,8 @@ impl LodModel {
     fn check_kernel(&self, kernel: &ClipKernel) -> Result<(), KernelError> {
         if kernel.p != self.p()
             || kernel.t != self.t()
-            || kernel.g.len() < self.p() * self.max_ranks().t
+            || (!kernel.compact && kernel.g.len() < self.p() * self.max_ranks().t)
+            || kernel.g.len() < kernel.rows * kernel.ranks.t
             || kernel.level >= self.levels().len()
         {
             return Err(KernelError::Capacity {
@@ -265,6 +435,32 @@ impl LodModel {
         detail: Detail,
         scratch: &mut KernelScratch,
         out: &mut ClipKernel,
+    ) -> Result<(), KernelError> {
+        self.build_kernel_in(controls, detail, scratch, out, false)
+    }
+
+    /// [`LodModel::build_kernel`] with the kriging projections accumulated column by column, in
+    /// the order they are stored (one multiply-add per sample and row, summed in sample order),
+    /// instead of as row-major dot products with several partial sums. The two differ by rounding
+    /// only (relative `1e-15` in the weights); this straightforward form is the reference the
+    /// fast path is tested against.
+    pub fn build_kernel_reference(
+        &self,
+        controls: &[f32],
+        detail: Detail,
+        scratch: &mut KernelScratch,
+        out: &mut ClipKernel,
+    ) -> Result<(), KernelError> {
+        self.build_kernel_in(controls, detail, scratch, out, true)
+    }
+
+    fn build_kernel_in(
+        &self,
+        controls: &[f32],
+        detail: Detail,
+        scratch: &mut KernelScratch,
+        out: &mut ClipKernel,
+        column_order: bool,
     ) -> Result<(), KernelError> {
         let (p, t, s, d) = (self.p(), self.t(), self.s(), self.d());
         if controls.len() != d {
@@ -303,15 +499,51 @@ impl LodModel {
         }
         scratch.c[d] = 1.0;
 
-        // 2. x = [gamma(c) ; 1], gamma_i = variogram(|c' - c_i|).
-        for i in 0..s {
-            let mut h2 = 0.0f64;
-            for k in 0..d {
-                let diff = scratch.c[k] - f64::from(cs.samples[i + s * k]);
-                h2 += diff * diff;
+        // 2. x = [gamma(c) ; 1], gamma_i = variogram(|c' - c_i|). The squared distances are summed
+        //    one control at a time over contiguous samples (vectorised; the same additions in the
+        //    same order as summing per sample), then the variogram is applied.
+        //    A control with scale 0 (constant over the data) adds exactly +0 and is skipped.
+        let x = &mut scratch.x[..s];
+        x.fill(0.0);
+        let mut used = [0usize; 4];
+        let mut n_used = 0;
+        for k in (0..d).filter(|&k| cs.scale[k] != 0.0) {
+            if n_used < used.len() {
+                used[n_used] = k;
             }
-            scratch.x[i] = cs.variogram.eval(h2.sqrt());
+            n_used += 1;
         }
+        // Three or four used controls in one pass (in control order, so the sums are the same).
+        let col = |k: usize| &cs.samples[s * k..s * (k + 1)];
+        let cv = |k: usize| scratch.c[k];
+        match n_used {
+            4 => {
+                let [a, b, e, f] = used;
+                let (ca, cb, ce, cf) = (cv(a), cv(b), cv(e), cv(f));
+                let it = col(a).iter().zip(col(b)).zip(col(e)).zip(col(f));
+                for (h2, (((&sa, &sb), &se), &sf)) in x.iter_mut().zip(it) {
+                    let (da, db) = (ca - f64::from(sa), cb - f64::from(sb));
+                    let (de, df) = (ce - f64::from(se), cf - f64::from(sf));
+                    *h2 = (((*h2 + da * da) + db * db) + de * de) + df * df;
+                }
+            }
+            3 => {
+                let [a, b, e, _] = used;
+                let (ca, cb, ce) = (cv(a), cv(b), cv(e));
+                let it = col(a).iter().zip(col(b)).zip(col(e));
+                for (h2, ((&sa, &sb), &se)) in x.iter_mut().zip(it) {
+                    let (da, db) = (ca - f64::from(sa), cb - f64::from(sb));
+                    let de = ce - f64::from(se);
+                    *h2 = ((*h2 + da * da) + db * db) + de * de;
+                }
+            }
+            _ => {
+                for k in (0..d).filter(|&k| cs.scale[k] != 0.0) {
+                    add_squared_differences(x, cv(k), col(k));
+                }
+            }
+        }
+        variogram_of_squared(&cs.variogram, x);
         scratch.x[s] = 1.0;
 
         // 3. y = [U_S^T b (first r_S rows) ; C b] = [Q x ; P_C x], Q column-major R_S x (S + 1) (the
@@ -319,16 +551,17 @@ impl LodModel {
         let y = &mut scratch.y[..r.s + d + 1];
         y.fill(0.0);
         let (y_top, y_c) = y.split_at_mut(r.s);
-        for (j, col) in key.projection.chunks_exact(big.s).enumerate() {
-            let xj = scratch.x[j];
-            for (yl, &q) in y_top.iter_mut().zip(&col[..r.s]) {
-                *yl += f64::from(q) * xj;
+        if column_order {
+            accumulate_columns(y_top, &key.projection, big.s, &scratch.x);
+            accumulate_columns(y_c, &cs.projection, d + 1, &scratch.x);
+        } else {
+            let rm = self.row_major();
+            let x = &scratch.x[..=s];
+            for (yl, row) in y_top.iter_mut().zip(rm.q[lv.key].chunks_exact(s + 1)) {
+                *yl = dot(row, x);
             }
-        }
-        for (j, col) in cs.projection.chunks_exact(d + 1).enumerate() {
-            let xj = scratch.x[j];
-            for (ym, &q) in y_c.iter_mut().zip(col) {
-                *ym += f64::from(q) * xj;
+            for (ym, row) in y_c.iter_mut().zip(rm.pc.chunks_exact(s + 1)) {
+                *ym = dot(row, x);
             }
         }
 
@@ -355,6 +588,13 @@ impl LodModel {
         }
 
         // 6. G(c) = U_P[:rows, :r_P] K(c), rows x r_T column-major.
+        if out.compact {
+            let need = rows * r.t;
+            if out.g.capacity() < need || out.g.capacity() > 2 * need {
+                out.g = Vec::with_capacity(need);
+            }
+            out.g.resize(need, 0.0);
+        }
         let g = &mut out.g[..rows * r.t];
         g.fill(0.0);
         for b in 0..r.t {
@@ -457,5 +697,69 @@ impl LodModel {
         let n = tail.len();
         tail.copy_from_slice(&self.mean_pose()[used..used + n]);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn branch_free_variogram_equals_eval_bitwise() {
+        let h2: Vec<f64> = (0..400)
+            .map(|i| {
+                let x = i as f64 * 0.037;
+                x * x
+            })
+            .chain([0.0, 1e-300, 8.187 * 8.187, 1e6])
+            .collect();
+        for model in [
+            VariogramModel::Spherical,
+            VariogramModel::Linear,
+            VariogramModel::Exponential,
+            VariogramModel::Gaussian,
+            VariogramModel::Power,
+        ] {
+            let v = Variogram::new(model, 0.0347, 0.3472, 8.187, 1.3).unwrap();
+            let mut got = h2.clone();
+            variogram_of_squared(&v, &mut got);
+            for (&g, &x) in got.iter().zip(&h2) {
+                let want = v.eval(x.sqrt());
+                assert_eq!(
+                    g.to_bits(),
+                    want.to_bits(),
+                    "{model:?} at h^2 = {x}: {g} vs {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn blocked_columns_equal_the_plain_column_loop_bitwise() {
+        let (stride, n, cols) = (11, 9, 803);
+        let m: Vec<f32> = (0..stride * cols)
+            .map(|i| ((i * 7919) % 1000) as f32 / 300.0 - 1.6)
+            .collect();
+        let x: Vec<f64> = (0..cols)
+            .map(|j| ((j * 31) % 97) as f64 / 13.0 - 3.0)
+            .collect();
+        let mut blocked = vec![0.5f64; n];
+        accumulate_columns(&mut blocked, &m, stride, &x);
+        let mut plain = vec![0.5f64; n];
+        for (j, &xj) in x.iter().enumerate() {
+            for (l, y) in plain.iter_mut().enumerate() {
+                *y += f64::from(m[stride * j + l]) * xj;
+            }
+        }
+        assert_eq!(blocked, plain);
+        // The dot product agrees to rounding.
+        for l in 0..n {
+            let row: Vec<f32> = (0..cols).map(|j| m[stride * j + l]).collect();
+            let d = dot(&row, &x);
+            assert!(
+                (d - (plain[l] - 0.5)).abs() <= 1e-12 * (1.0 + d.abs()),
+                "{d}"
+            );
+        }
     }
 }

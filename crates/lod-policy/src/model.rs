@@ -257,6 +257,29 @@ pub struct LodModel {
     parts: ModelParts,
     /// Largest ranks over all keys, per mode (for preallocation).
     max_ranks: Ranks,
+    /// The kriging projections again, row-major, for the kernels' dot products (derived from
+    /// `parts` by [`LodModel::new`]; not stored in the model file).
+    rows: RowMajorProjections,
+}
+
+/// Row-major copies of the kriging projections: row `l` of key `k`'s `Q` is
+/// `q[k][l (S + 1)..(l + 1) (S + 1)]`, row `m` of the controls' `C A^{-1}[:S, :]` is
+/// `pc[m (S + 1)..]`. A kernel reads each used row as one contiguous run (a dot product over the
+/// samples) instead of striding across columns.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct RowMajorProjections {
+    pub q: Vec<Vec<f32>>,
+    pub pc: Vec<f32>,
+}
+
+fn transpose(col_major: &[f32], rows: usize, cols: usize) -> Vec<f32> {
+    let mut out = vec![0.0; rows * cols];
+    for (j, col) in col_major.chunks_exact(rows).enumerate().take(cols) {
+        for (i, &v) in col.iter().enumerate() {
+            out[i * cols + j] = v;
+        }
+    }
+    out
 }
 
 impl TryFrom<ModelParts> for LodModel {
@@ -440,7 +463,19 @@ impl LodModel {
         let joints = (p - always_rows) / rows_per_joint;
         Self::check_errors("level_errors", &parts.level_errors, parts.levels.len())?;
         Self::check_errors("joint_errors", &parts.joint_errors, joints + 1)?;
-        Ok(LodModel { parts, max_ranks })
+        let rows = RowMajorProjections {
+            q: parts
+                .keys
+                .iter()
+                .map(|k| transpose(&k.projection, k.ranks.s, s + 1))
+                .collect(),
+            pc: transpose(&parts.controls.projection, d + 1, s + 1),
+        };
+        Ok(LodModel {
+            parts,
+            max_ranks,
+            rows,
+        })
     }
 
     fn check_controls(c: &ControlSpace, s: usize, d: usize) -> Result<(), ModelError> {
@@ -593,7 +628,12 @@ impl LodModel {
         self.parts.joint_errors = joint_errors;
         Ok(())
     }
-    /// Largest rank per mode over all keys.
+    /// The kriging projections in row-major order (derived by [`LodModel::new`]).
+    pub(crate) fn row_major(&self) -> &RowMajorProjections {
+        &self.rows
+    }
+
+    /// Largest ranks over all keys, per mode.
     pub fn max_ranks(&self) -> Ranks {
         self.max_ranks
     }

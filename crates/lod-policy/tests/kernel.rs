@@ -341,3 +341,104 @@ fn pose_rows_equal_the_leading_rows_of_pose() {
         assert!(model.pose_rows(&kernel, 2.5, &mut too_long).is_err());
     }
 }
+
+#[test]
+fn compact_kernels_hold_their_level_and_give_the_same_bits() {
+    let truth = random_truth(21, 0.03);
+    let model = build_model(&truth);
+    let mut scratch = KernelScratch::new(&model);
+    let mut full = ClipKernel::new(&model);
+    let mut compact = ClipKernel::compact(&model);
+    assert!(compact.is_compact() && !full.is_compact());
+    assert!(compact.heap_bytes() < full.heap_bytes());
+    let mut rng = Rng::new(77);
+    let levels = model.levels().len();
+    // Coarse to fine and back: the compact buffer grows and shrinks.
+    let details = [
+        Detail::root_only(),
+        Detail::new(0, usize::MAX),
+        Detail::new(levels - 1, 1),
+        Detail::root_only(),
+        Detail::new(1.min(levels - 1), 2),
+    ];
+    for (i, &detail) in details.iter().enumerate() {
+        let c: Vec<f32> = (0..truth.d)
+            .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
+            .collect();
+        model
+            .build_kernel(&c, detail, &mut scratch, &mut full)
+            .unwrap();
+        model
+            .build_kernel(&c, detail, &mut scratch, &mut compact)
+            .unwrap();
+        assert_eq!(compact.g(), full.g(), "step {i}");
+        assert_eq!(compact.time_table(), full.time_table());
+        assert_eq!(compact.root_motion(), full.root_motion());
+        let r = compact.ranks();
+        assert!(
+            compact.heap_bytes() <= 2 * 4 * compact.rows() * r.t + 8 * model.t(),
+            "step {i}: {} bytes for {} x {}",
+            compact.heap_bytes(),
+            compact.rows(),
+            r.t
+        );
+        for phase in [0.0, 0.3, 1.0, 2.5, (model.t() - 1) as f32] {
+            let (mut a, mut b) = (vec![0.0; compact.rows()], vec![0.0; full.rows()]);
+            model.pose_rows(&compact, phase, &mut a).unwrap();
+            model.pose_rows(&full, phase, &mut b).unwrap();
+            assert_eq!(a, b);
+        }
+    }
+}
+
+#[test]
+fn fast_kernel_agrees_with_the_column_order_reference() {
+    for seed in [3u64, 4, 5] {
+        let truth = random_truth(seed, 0.02 * seed as f64);
+        let model = build_model(&truth);
+        let mut scratch = KernelScratch::new(&model);
+        let (mut fast, mut reference) = (ClipKernel::compact(&model), ClipKernel::new(&model));
+        let mut rng = Rng::new(seed + 9);
+        for detail in [Detail::full(), Detail::new(1, 3), Detail::root_only()] {
+            let c: Vec<f32> = (0..truth.d)
+                .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
+                .collect();
+            model
+                .build_kernel(&c, detail, &mut scratch, &mut fast)
+                .unwrap();
+            model
+                .build_kernel_reference(&c, detail, &mut scratch, &mut reference)
+                .unwrap();
+            assert_eq!(fast.rows(), reference.rows());
+            for (a, b) in fast.g().iter().zip(reference.g()) {
+                assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "{a} vs {b}");
+            }
+        }
+    }
+}
+
+#[test]
+fn kernel_phase_lookup_equals_the_time_table_bitwise() {
+    let truth = random_truth(8, 0.0);
+    let model = build_model(&truth);
+    let mut scratch = KernelScratch::new(&model);
+    let mut kernel = ClipKernel::compact(&model);
+    let mut rng = Rng::new(5);
+    for _ in 0..6 {
+        let c: Vec<f32> = (0..truth.d)
+            .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
+            .collect();
+        model
+            .build_kernel(&c, Detail::full(), &mut scratch, &mut kernel)
+            .unwrap();
+        let table: &TimeTable = kernel.time_table();
+        let d = kernel.duration();
+        let mut ts: Vec<f64> = (0..=500).map(|i| d * (i as f64 / 500.0)).collect();
+        ts.extend(table.times().iter().copied());
+        ts.extend([-1.0, d * 1.5, f64::NAN, f64::INFINITY, 1e-12]);
+        for t in ts {
+            let want = table.phase_at(t) as f32;
+            assert_eq!(kernel.phase_at(t).to_bits(), want.to_bits(), "t = {t}");
+        }
+    }
+}

@@ -5,8 +5,8 @@ use std::path::Path;
 
 use crowd_sim::render::{Recorder, RenderStyle};
 use crowd_sim::{
-    Camera, CameraPath, ClipSource, Crowd, CrowdConfig, CrowdError, CrowdReport,
-    Detail as CrowdDetail, DetailPolicy, FrameStats, RenderError,
+    Camera, ClipSource, Crowd, CrowdConfig, CrowdError, CrowdReport, Detail as CrowdDetail,
+    DetailPolicy, FrameStats, RenderError, Scene,
 };
 use lod_policy::{Detail, LevelPolicy, LodModel, ViewParams};
 
@@ -72,8 +72,11 @@ pub struct CrowdRun {
     pub config: CrowdConfig,
     /// Simulated seconds.
     pub seconds: f32,
-    /// The camera's lens (its position follows [`CameraPath::inside_crowd`]).
+    /// The camera's lens (its position follows the scene's camera path, [`Scene::path`]; its far
+    /// plane is the scene's, [`Scene::lens`]).
     pub lens: Camera,
+    /// Where the camera is: walking inside the crowd or circling above it.
+    pub scene: Scene,
     /// Render every n-th frame into this folder (PNG frames, maps, GIF), if set.
     pub render: Option<(std::path::PathBuf, usize)>,
 }
@@ -120,7 +123,9 @@ where
         return Err(CrowdRunError::Seconds(run.seconds));
     }
     let mut crowd = Crowd::new(source, run.config)?;
-    let path = CameraPath::inside_crowd(run.config.field_size_m);
+    let field = run.config.field_size_m;
+    let path = run.scene.path(field);
+    let lens = run.scene.lens(run.lens, field);
     let frames = ((run.seconds * run.config.fps).round() as usize).max(1);
     let dt = 1.0 / run.config.fps;
     let mut recorder = match &run.render {
@@ -131,7 +136,7 @@ where
     let mut last = FrameStats::default();
     let mut rendered = 0;
     for f in 0..frames {
-        let camera = path.camera_at(f as f32 * dt, &run.lens);
+        let camera = path.camera_at(f as f32 * dt, &lens);
         crowd.step_into(source, policy, &camera, dt, &mut last)?;
         report.add(&last);
         if let (Some(rec), Some((_, every))) = (recorder.as_mut(), &run.render)

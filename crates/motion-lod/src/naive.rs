@@ -1,33 +1,43 @@
 //! The naive baseline as a crowd clip source: the aligned samples blended directly with the kriging
-//! weights (paper eq. 1 with the universal kriging kernel of eq. 8), no tensor and no level of detail.
+//! weights (paper eq. 1 with the universal kriging kernel of eq. 8), no tensor and no accuracy levels.
 //!
-//! Per clip it computes the kriging weights `b(c)` from the full `(S+1) x (S+1)` system (`O(S^2)`), the
-//! equivalent sample weights of eq. 8, `l(c) = C^+ [c; 1] + (I - C^+ C) b(c)`, and the blended cycle
-//! `sum_i l_i M_i` (`O(P T S)`); per frame it interpolates two aligned frames (`O(P)`). This is what the
-//! paper compares its LOD against ("naive interpolation", 3.9 fps for 100 walkers).
+//! Per clip it evaluates universal kriging of the raw samples in its dual form
+//! ([`crate::sample_weights::DualBlend`]): `S` variogram values and `O(S D')` multiply-adds for the
+//! `D' = P' T` values of the clip's rows (`P'` the rows of its active joints, 7 for a root-only
+//! clip), the same result as computing the kriging weights `b(c)` (`O(S^2)`), the equivalent sample
+//! weights `l(c) = b + C^+ ([c'; 1] - C b)` and the blend `sum_i l_i M_i`, without the `O(S^2)` step.
+//! Per frame it interpolates two aligned frames of those rows (`O(P')`).
+//!
+//! It gets the same culling and root-only policy as the model ([`crate::LodSource`]): it reports the
+//! model's accuracy levels so that the crowd's policy applies unchanged, evaluates only the rows of the
+//! active joints (root only beyond the last level or outside the view) and runs forward kinematics of
+//! those joints only; it has no cheaper accuracy level, so every clip with joints blends the full
+//! samples. What the paper compares its LOD against ("naive interpolation", 3.9 fps for 100 walkers)
+//! is this source with every walker at full detail ([`crate::crowd::FullDetail`]).
 
 use crowd_sim::{
     ClipSource, ControlBounds, Controls, Detail as CrowdDetail, LevelTable, RootMotion,
 };
+use faer::Mat;
 use glam::Vec3;
-use kriging::Kriging;
 use timewarp::TimeTable;
 
-use crate::build::Analysis;
+use crate::build::{Analysis, BuildError};
 use crate::model::{MotionModel, TIME_ROW};
-use crate::sample_weights::SampleWeights;
+use crate::sample_weights::DualBlend;
 use crate::source::{bones_of, write_joints};
 
-/// One walker's naive clip: the blended aligned cycle and its time table.
+/// One walker's naive clip: the blended rows of its detail over the aligned frames, and its time
+/// table.
 #[derive(Debug, Clone)]
 pub struct NaiveClip {
-    /// `T x P` blended poses (row-major, time row in seconds).
-    poses: Vec<f32>,
+    /// `rows x T` blended values, row-major (row `r`'s frames at `r T`; time row in seconds).
+    values: Vec<f32>,
+    /// Pose rows held (`P'`).
+    rows: usize,
+    /// Joints after the root drawn by `joints`.
+    active_joints: usize,
     times: TimeTable,
-    /// Sample weights `b(c)` (scratch, length S).
-    b: Vec<f64>,
-    /// Equivalent sample weights `l(c)` (scratch, length S).
-    l: Vec<f64>,
     root_motion: RootMotion,
 }
 
@@ -36,47 +46,71 @@ impl NaiveClip {
     pub fn times(&self) -> &TimeTable {
         &self.times
     }
+
+    /// Pose rows this clip holds and writes (`P'`).
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
 }
 
 /// Naive kriging interpolation of the raw samples, as a crowd clip source.
 #[derive(Debug)]
 pub struct NaiveSource<'m> {
     model: &'m MotionModel,
-    kriging: &'m Kriging,
-    /// Samples, `S` blocks of `T x P` f32 (time row in seconds).
-    samples: Vec<f32>,
-    /// `C` and `C^+` of the kriging trend, for the sample weights of eq. 8.
-    weights: SampleWeights,
+    /// The samples' universal kriging in dual form, outputs ordered row by row (`r T + frame`).
+    blend: DualBlend,
     bones: Vec<(usize, usize)>,
 }
 
 impl<'m> NaiveSource<'m> {
     /// A naive source over the samples of `analysis` (the data `model` was built from).
-    pub fn new(model: &'m MotionModel, analysis: &'m Analysis) -> NaiveSource<'m> {
+    ///
+    /// Errors: [`BuildError::Data`] when the analysis's tensor does not have the model's `P x T x S`
+    /// shape; [`BuildError::Kriging`] when the dual form cannot be set up (non-finite samples).
+    pub fn new(
+        model: &'m MotionModel,
+        analysis: &'m Analysis,
+    ) -> Result<NaiveSource<'m>, BuildError> {
+        let lod = &model.lod;
         let [p, t, s] = analysis.tensor.dims();
+        if [p, t, s] != [lod.p(), lod.t(), lod.s()] || analysis.kriging.n_samples() != s {
+            return Err(BuildError::Data(format!(
+                "analysis tensor {:?} ({} kriging samples) does not match the model's P x T x S = {:?}",
+                [p, t, s],
+                analysis.kriging.n_samples(),
+                [lod.p(), lod.t(), lod.s()]
+            )));
+        }
         let inv_scale = 1.0 / analysis.time_scale;
-        let mut samples = Vec::with_capacity(p * t * s);
-        for pose in analysis.tensor.as_slice().chunks_exact(p) {
-            samples.extend(pose.iter().enumerate().map(|(r, &v)| {
-                if r == TIME_ROW {
-                    (v * inv_scale) as f32
-                } else {
-                    v as f32
-                }
-            }));
-        }
-        NaiveSource {
+        let x = analysis.tensor.as_slice();
+        // Sample i, pose row r, frame f at output r T + f (time row in seconds).
+        let values = Mat::from_fn(s, p * t, |i, o| {
+            let (r, f) = (o / t, o % t);
+            let v = x[(i * t + f) * p + r];
+            if r == TIME_ROW { v * inv_scale } else { v }
+        });
+        Ok(NaiveSource {
             model,
-            kriging: &analysis.kriging,
-            samples,
-            weights: SampleWeights::new(&analysis.kriging),
+            blend: DualBlend::new(&analysis.kriging, &values)?,
             bones: bones_of(&model.layout),
-        }
+        })
     }
 
-    fn dims(&self) -> (usize, usize, usize, usize) {
+    fn dims(&self) -> (usize, usize) {
         let lod = &self.model.lod;
-        (lod.p(), lod.t(), lod.s(), lod.d())
+        (lod.p(), lod.t())
+    }
+
+    /// Rows `0..out.len()` of the clip's pose at fractional aligned frame `phase`.
+    fn frame(&self, clip: &NaiveClip, phase: f64, out: &mut [f32]) {
+        let (_, t) = self.dims();
+        let phase = phase.clamp(0.0, (t - 1) as f64);
+        let i = (phase.floor() as usize).min(t.saturating_sub(2));
+        let i1 = (i + 1).min(t - 1);
+        let a = (phase - i as f64) as f32;
+        for (o, row) in out.iter_mut().zip(clip.values.chunks_exact(t)) {
+            *o = (1.0 - a) * row[i] + a * row[i1];
+        }
     }
 }
 
@@ -85,7 +119,7 @@ impl ClipSource for NaiveSource<'_> {
 
     fn levels(&self) -> LevelTable {
         LevelTable {
-            accuracy_levels: 1,
+            accuracy_levels: self.model.lod.levels().len(),
             joints: self.model.lod.joints(),
             pose_len: self.model.lod.p(),
         }
@@ -96,41 +130,39 @@ impl ClipSource for NaiveSource<'_> {
     }
 
     fn new_clip(&self) -> NaiveClip {
-        let (p, t, s, _) = self.dims();
+        let (_, t) = self.dims();
+        let rows = self.model.lod.always_rows();
         NaiveClip {
-            poses: vec![0.0; p * t],
+            values: vec![0.0; rows * t],
+            rows,
+            active_joints: 0,
             times: TimeTable::with_capacity(t),
-            b: vec![0.0; s],
-            l: vec![0.0; s],
             root_motion: RootMotion::default(),
         }
     }
 
-    fn build_clip(&self, controls: &Controls, _detail: CrowdDetail, clip: &mut NaiveClip) {
-        let (p, t, _, _) = self.dims();
-        let c = crate::sample_weights::control_vector(controls);
-        self.weights
-            .compute(self.kriging, &c, &mut clip.b, &mut clip.l);
-        clip.poses.fill(0.0);
-        let block = p * t;
-        for (i, &w) in clip.l.iter().enumerate() {
-            let w = w as f32;
-            for (o, &v) in clip
-                .poses
-                .iter_mut()
-                .zip(&self.samples[i * block..(i + 1) * block])
-            {
-                *o += w * v;
-            }
+    fn build_clip(&self, controls: &Controls, detail: CrowdDetail, clip: &mut NaiveClip) {
+        let (p, t) = self.dims();
+        let lod = &self.model.lod;
+        clip.active_joints = detail.active_joints.min(lod.joints());
+        clip.rows = lod.active_rows(clip.active_joints).min(p);
+        // Sized for the clip's rows (a root-only clip holds 7 T values).
+        let need = clip.rows * t;
+        if clip.values.capacity() < need || clip.values.capacity() > 2 * need {
+            clip.values = Vec::with_capacity(need);
         }
-        clip.times
-            .fill_from_iter((0..t).map(|k| f64::from(clip.poses[k * p + TIME_ROW])));
-        clip.root_motion = root_motion_between(
-            self.model,
-            controls,
-            &clip.poses[..p],
-            &clip.poses[(t - 1) * p..],
+        clip.values.resize(need, 0.0);
+        let c = crate::sample_weights::control_vector(controls);
+        self.blend.eval(&c, &mut clip.values);
+        clip.times.fill_from_iter(
+            clip.values[TIME_ROW * t..][..t]
+                .iter()
+                .map(|&v| f64::from(v)),
         );
+        let (mut start, mut end) = ([0.0f32; 6], [0.0f32; 6]);
+        self.frame(clip, 0.0, &mut start);
+        self.frame(clip, (t - 1) as f64, &mut end);
+        clip.root_motion = root_motion_between(self.model, controls, &start, &end);
     }
 
     fn clip_duration(&self, clip: &NaiveClip) -> f32 {
@@ -142,25 +174,14 @@ impl ClipSource for NaiveSource<'_> {
     }
 
     fn pose(&self, clip: &NaiveClip, t_seconds: f32, out: &mut [f32]) -> usize {
-        let (p, t, _, _) = self.dims();
-        let phase = clip
-            .times
-            .phase_at(f64::from(t_seconds))
-            .clamp(0.0, (t - 1) as f64);
-        let i = (phase.floor() as usize).min(t.saturating_sub(2));
-        let a = (phase - i as f64) as f32;
-        let (f0, f1) = (
-            &clip.poses[i * p..(i + 1) * p],
-            &clip.poses[(i + 1).min(t - 1) * p..][..p],
-        );
-        for ((o, &x), &y) in out[..p].iter_mut().zip(f0).zip(f1) {
-            *o = (1.0 - a) * x + a * y;
-        }
-        p
+        let phase = clip.times.phase_at(f64::from(t_seconds));
+        let rows = clip.rows.min(out.len());
+        self.frame(clip, phase, &mut out[..rows]);
+        rows
     }
 
-    fn joints(&self, _clip: &NaiveClip, pose: &[f32], out: &mut [Vec3]) -> usize {
-        write_joints(&self.model.layout, pose, usize::MAX, out)
+    fn joints(&self, clip: &NaiveClip, pose: &[f32], out: &mut [Vec3]) -> usize {
+        write_joints(&self.model.layout, pose, clip.active_joints, out)
     }
 
     fn bones(&self) -> &[(usize, usize)] {

@@ -15,10 +15,10 @@
 //! `r_l = R - round((R - R_P,last) l / (L - 1))`. A root-only walker uses the last level, as the
 //! model's [`crate::LodSource`] does.
 //!
-//! Per clip: the equivalent kriging sample weights `l(c)` of eq. 8 (`O(S^2)` for `b(c)` plus
-//! `O(S (d+1))` for the trend correction, shared with [`crate::NaiveSource`]), then
-//! `Y(c) = sum_i l_i(c) Y_i[:r_l, :]` (`O(S T r_l)`), the time table from the time row of `U Y(c)`
-//! (`O(T r_l)`) and the root motion from frames `0` and `T-1`. Per frame: `y = (1-a) y_k + a y_{k+1}`
+//! Per clip: `Y(c) = sum_i l_i(c) Y_i[:r_l, :]` with `l(c)` the equivalent kriging sample weights of
+//! eq. 8, evaluated in the dual form of universal kriging as [`crate::NaiveSource`] does
+//! (`S` variogram values and `O(S T r_l)` multiply-adds, no `O(S^2)` kriging weights), the time table
+//! from the time row of `U Y(c)` (`O(T r_l)`) and the root motion from frames `0` and `T-1`. Per frame: `y = (1-a) y_k + a y_{k+1}`
 //! from two frames of `Y(c)`, expanded as `U[:P', :r_l] y` into the caller's slice (`O(P' r_l)`, no
 //! allocation), with `P'` the rows of the active joints (the 7 root rows for a root-only walker).
 
@@ -27,7 +27,6 @@ use crowd_sim::{
 };
 use faer::Mat;
 use glam::Vec3;
-use kriging::Kriging;
 use lod_policy::Precision;
 use tensor_ops::Tensor3;
 use timewarp::TimeTable;
@@ -35,7 +34,7 @@ use timewarp::TimeTable;
 use crate::build::{Analysis, BuildError};
 use crate::model::{MotionModel, TIME_ROW};
 use crate::naive::root_motion_between;
-use crate::sample_weights::SampleWeights;
+use crate::sample_weights::DualBlend;
 use crate::source::{bones_of, write_joints};
 
 /// Components interpolated at once in [`ClipSource::pose`] (a stack buffer; any rank is handled in
@@ -62,7 +61,7 @@ pub fn pca_basis(x: &Tensor3, rank: usize) -> Result<Mat<f64>, BuildError> {
 /// One walker's PCA clip: the blended coefficients `Y(c)` of its level and its time table.
 #[derive(Debug, Clone)]
 pub struct PcaClip {
-    /// `T x rank` blended coefficients, frame-major (frame `k` at `k * rank`); capacity `T R`.
+    /// `rank x T` blended coefficients, component-major (component `j`'s frames at `j T`).
     coeffs: Vec<f32>,
     /// Components used by this clip (`r_l`).
     rank: usize,
@@ -71,10 +70,6 @@ pub struct PcaClip {
     /// Joints after the root drawn by `joints`.
     active_joints: usize,
     times: TimeTable,
-    /// Kriging weights `b(c)` (scratch, length S).
-    b: Vec<f64>,
-    /// Equivalent sample weights `l(c)` (scratch, length S).
-    l: Vec<f64>,
     root_motion: RootMotion,
 }
 
@@ -99,8 +94,9 @@ impl PcaClip {
 #[derive(Debug)]
 pub struct PcaSource<'m> {
     model: &'m MotionModel,
-    kriging: &'m Kriging,
-    weights: SampleWeights,
+    /// Universal kriging of the coefficients in dual form, outputs component by component
+    /// (`j T + frame`), so that the first `r_l` components are a prefix.
+    blend: DualBlend,
     /// `D^-1 U`, `P x R` row-major: `U` with its time row divided by `time_scale`, so that `D^-1 U y`
     /// holds seconds in the time row.
     basis: Vec<f32>,
@@ -176,10 +172,13 @@ impl<'m> PcaSource<'m> {
             }));
         }
         let r_last = lod.levels().last().map_or(r, |l| l.ranks.p);
+        let values = Mat::from_fn(s, r * t, |i, o| {
+            let (j, f) = (o / t, o % t);
+            f64::from(coeffs[(i * t + f) * r + j])
+        });
         Ok(PcaSource {
             model,
-            kriging: &analysis.kriging,
-            weights: SampleWeights::new(&analysis.kriging),
+            blend: DualBlend::new(&analysis.kriging, &values)?,
             basis,
             coeffs,
             rank: r,
@@ -216,12 +215,16 @@ impl<'m> PcaSource<'m> {
         (lod.p(), lod.t(), lod.s())
     }
 
-    /// Rows `0..out.len()` of `D^-1 U[:, :rank] y` into `out`, `y` of length `rank`.
-    fn expand(&self, y: &[f32], out: &mut [f32]) {
-        let rank = y.len();
+    /// Rows `0..out.len()` of `D^-1 U[:, :rank] y` into `out`, `y` frame `frame` of the
+    /// component-major coefficients `coeffs` (`rank x T`).
+    fn expand(&self, coeffs: &[f32], t: usize, rank: usize, frame: usize, out: &mut [f32]) {
         for (row, o) in out.iter_mut().enumerate() {
             let u = &self.basis[row * self.rank..][..rank];
-            *o = u.iter().zip(y).map(|(a, b)| a * b).sum();
+            *o = u
+                .iter()
+                .enumerate()
+                .map(|(j, a)| a * coeffs[j * t + frame])
+                .sum();
         }
     }
 }
@@ -242,21 +245,19 @@ impl ClipSource for PcaSource<'_> {
     }
 
     fn new_clip(&self) -> PcaClip {
-        let (p, t, s) = self.dims();
+        let (p, t, _) = self.dims();
         PcaClip {
             coeffs: vec![0.0; t * self.rank],
             rank: self.rank,
             rows: p,
             active_joints: self.model.lod.joints(),
             times: TimeTable::with_capacity(t),
-            b: vec![0.0; s],
-            l: vec![0.0; s],
             root_motion: RootMotion::default(),
         }
     }
 
     fn build_clip(&self, controls: &Controls, detail: CrowdDetail, clip: &mut PcaClip) {
-        let (p, t, s) = self.dims();
+        let (p, t, _) = self.dims();
         let lod = &self.model.lod;
         let last = self.level_ranks.len() - 1;
         let level = if detail.active_joints == 0 {
@@ -269,31 +270,24 @@ impl ClipSource for PcaSource<'_> {
         clip.active_joints = detail.active_joints.min(lod.joints());
         clip.rows = lod.active_rows(clip.active_joints).min(p);
         let c = crate::sample_weights::control_vector(controls);
-        self.weights
-            .compute(self.kriging, &c, &mut clip.b, &mut clip.l);
-        // Y(c) = sum_i l_i Y_i, first r components of every frame.
-        let coeffs = &mut clip.coeffs[..t * r];
-        coeffs.fill(0.0);
+        // Y(c): the first r components of every frame, component-major.
+        let coeffs = &mut clip.coeffs[..r * t];
+        self.blend.eval(&c, coeffs);
         let big_r = self.rank;
-        for (i, &w) in clip.l.iter().enumerate().take(s) {
-            let w = w as f32;
-            let sample = &self.coeffs[i * t * big_r..(i + 1) * t * big_r];
-            for (dst, src) in coeffs.chunks_exact_mut(r).zip(sample.chunks_exact(big_r)) {
-                for (o, &v) in dst.iter_mut().zip(&src[..r]) {
-                    *o += w * v;
-                }
-            }
-        }
         let time_basis = &self.basis[TIME_ROW * big_r..][..r];
-        clip.times.fill_from_iter(
-            coeffs
-                .chunks_exact(r)
-                .map(|y| f64::from(time_basis.iter().zip(y).map(|(a, b)| a * b).sum::<f32>())),
-        );
+        clip.times.fill_from_iter((0..t).map(|f| {
+            f64::from(
+                time_basis
+                    .iter()
+                    .enumerate()
+                    .map(|(j, a)| a * coeffs[j * t + f])
+                    .sum::<f32>(),
+            )
+        }));
         let root = ROOT_ROWS.min(p);
         let (mut start, mut end) = ([0.0f32; ROOT_ROWS], [0.0f32; ROOT_ROWS]);
-        self.expand(&coeffs[..r], &mut start[..root]);
-        self.expand(&coeffs[(t - 1) * r..], &mut end[..root]);
+        self.expand(coeffs, t, r, 0, &mut start[..root]);
+        self.expand(coeffs, t, r, t - 1, &mut end[..root]);
         clip.root_motion = root_motion_between(self.model, controls, &start, &end);
     }
 
@@ -312,21 +306,17 @@ impl ClipSource for PcaSource<'_> {
             .phase_at(f64::from(t_seconds))
             .clamp(0.0, (t - 1) as f64);
         let k = (phase.floor() as usize).min(t.saturating_sub(2));
+        let k1 = (k + 1).min(t - 1);
         let a = (phase - k as f64) as f32;
         let r = clip.rank;
-        let y0 = &clip.coeffs[k * r..][..r];
-        let y1 = &clip.coeffs[(k + 1).min(t - 1) * r..][..r];
         let out = &mut out[..clip.rows];
         out.fill(0.0);
         let mut y = [0.0f32; CHUNK];
         for first in (0..r).step_by(CHUNK) {
             let n = CHUNK.min(r - first);
-            for ((v, &a0), &a1) in y[..n]
-                .iter_mut()
-                .zip(&y0[first..first + n])
-                .zip(&y1[first..first + n])
-            {
-                *v = (1.0 - a) * a0 + a * a1;
+            for (j, v) in y[..n].iter_mut().enumerate() {
+                let comp = &clip.coeffs[(first + j) * t..][..t];
+                *v = (1.0 - a) * comp[k] + a * comp[k1];
             }
             for (row, o) in out.iter_mut().enumerate() {
                 let u = &self.basis[row * self.rank + first..][..n];

@@ -1,77 +1,17 @@
-//! Equivalent sample weights of universal kriging at new controls (paper eq. 8), shared by the baseline
-//! clip sources that blend per-sample data directly ([`crate::naive`], [`crate::pca`]).
+//! Universal kriging of per-sample values at new controls (paper eq. 8), shared by the baseline clip
+//! sources that blend per-sample data directly ([`crate::naive`], [`crate::pca`]).
 //!
 //! Universal kriging predicts `sum_i l_i(c) M_i` with `l(c) = b(c) + C^+ ([c'; 1] - C b(c))`, where
-//! `b(c)` are the kriging weights of the full `(S+1) x (S+1)` system, `C` the `(d+1) x S` matrix of the
-//! scaled sample controls with a row of ones, `C^+` its pseudo-inverse and `c'` the scaled controls.
-//! Cost per evaluation: `O(S^2)` for `b(c)`, `O(S (d+1))` for the trend correction.
+//! `b(c)` are the kriging weights of the full `(S+1) x (S+1)` system, `C` the `(d+1) x S` matrix of
+//! the scaled sample controls with a row of ones, `C^+` its pseudo-inverse and `c'` the scaled controls.
+//! [`DualBlend`] evaluates it in the dual form, `O(S D)` per query for `D` values per sample, without
+//! forming `b(c)` (`O(S^2)`).
 
 use faer::Mat;
 use kriging::Kriging;
 
 /// Largest control dimension handled (the project uses `d = 4`).
 const MAX_D: usize = 7;
-
-/// `C` and `C^+` of a kriging fit, row-major, ready for [`SampleWeights::compute`].
-#[derive(Debug, Clone)]
-pub(crate) struct SampleWeights {
-    /// `C^+`, `S x (d + 1)` row-major.
-    c_pinv: Vec<f64>,
-    /// `C`, `(d + 1) x S` row-major.
-    c: Vec<f64>,
-    s: usize,
-    d: usize,
-}
-
-fn row_major(m: &Mat<f64>) -> Vec<f64> {
-    (0..m.nrows())
-        .flat_map(|i| (0..m.ncols()).map(move |j| (i, j)))
-        .map(|(i, j)| m[(i, j)])
-        .collect()
-}
-
-impl SampleWeights {
-    /// The matrices of `kriging` (`S` samples, `d` control dimensions).
-    pub(crate) fn new(kriging: &Kriging) -> SampleWeights {
-        let c = kriging.augmented_params();
-        let cp = kriging.augmented_pinv();
-        debug_assert_eq!(c.nrows(), cp.ncols());
-        debug_assert_eq!(c.ncols(), cp.nrows());
-        SampleWeights {
-            s: c.ncols(),
-            d: c.nrows().saturating_sub(1),
-            c_pinv: row_major(&cp),
-            c: row_major(&c),
-        }
-    }
-
-    /// Writes `l(c) = b(c) + C^+ ([c'; 1] - C b(c))` (eq. 8) into `l`, using `b` (length `S`) as
-    /// scratch for the kriging weights. When the kriging system cannot be solved at `c` (non-finite
-    /// controls) `b` falls back to the uniform weights `1 / S`. Allocation-free.
-    pub(crate) fn compute(&self, kriging: &Kriging, c: &[f64; 4], b: &mut [f64], l: &mut [f64]) {
-        let (s, d) = (self.s, self.d);
-        debug_assert!(b.len() == s && l.len() == s && d <= MAX_D && d <= c.len());
-        if kriging.weights(c, b).is_err() {
-            b.fill(1.0 / s as f64);
-        }
-        // z = [c'; 1] - C b with c' the scaled controls; l = b + C^+ z.
-        let scaling = kriging.scaling();
-        let mut z = [0.0f64; MAX_D + 1];
-        for (k, zk) in z.iter_mut().enumerate().take(d + 1) {
-            let ck = if k < d {
-                (c[k] - scaling.offset[k]) * scaling.scale[k]
-            } else {
-                1.0
-            };
-            let cb: f64 = (0..s).map(|i| self.c[k * s + i] * b[i]).sum();
-            *zk = ck - cb;
-        }
-        for (i, li) in l.iter_mut().enumerate() {
-            let corr: f64 = (0..=d).map(|k| self.c_pinv[i * (d + 1) + k] * z[k]).sum();
-            *li = b[i] + corr;
-        }
-    }
-}
 
 /// A crowd's controls as the `(dx, dz, turn, height)` the kriging takes.
 pub(crate) fn control_vector(controls: &crowd_sim::Controls) -> [f64; 4] {
@@ -81,4 +21,117 @@ pub(crate) fn control_vector(controls: &crowd_sim::Controls) -> [f64; 4] {
         f64::from(controls.turn),
         f64::from(controls.height),
     ]
+}
+
+/// Universal kriging of per-sample values in its dual form (paper eq. 8 rearranged):
+/// `sum_i l_i(c) v_i = Q [gamma(c); 1] + F [c'; 1]`, with `F = V^T C^+` (the trend) and
+/// `Q = V^T (I - C^+ C) A^-1[:S, :]` (`D x (S + 1)`, precomputed by [`kriging::ProjectedQuery`]),
+/// `V` the `S x D` sample values. A query costs `S` variogram evaluations and `D' (S + d + 2)`
+/// multiply-adds for the first `D'` outputs: `O(S D)` instead of the `O(S^2)` kriging weights
+/// followed by the `O(S D)` blend. Outputs are ordered by the caller so that the values a
+/// cheaper detail needs are a prefix.
+#[derive(Debug, Clone)]
+pub(crate) struct DualBlend {
+    outputs: usize,
+    samples: usize,
+    /// `Q^T`, `(S + 1) x D` row-major (column `j` of `Q` contiguous), f32.
+    q_t: Vec<f32>,
+    /// `F`, `D x (d + 1)` row-major.
+    trend: Vec<f64>,
+    /// Scaled sample controls, `S x dims` row-major.
+    params: Vec<f64>,
+    offset: Vec<f64>,
+    scale: Vec<f64>,
+    variogram: kriging::Variogram,
+    /// `d`: trend dimensions (the last trend column multiplies 1).
+    d: usize,
+}
+
+thread_local! {
+    /// `[gamma(c); 1]` and the f64 accumulators of [`DualBlend::eval`], per thread.
+    static DUAL_SCRATCH: std::cell::RefCell<(Vec<f64>, Vec<f64>)> =
+        const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+}
+
+impl DualBlend {
+    /// The dual form of `kriging` for `values` (`S x D`, one row per sample).
+    pub(crate) fn new(
+        kriging: &Kriging,
+        values: &Mat<f64>,
+    ) -> Result<DualBlend, kriging::KrigingError> {
+        let s = kriging.n_samples();
+        let c = kriging.augmented_params();
+        let cp = kriging.augmented_pinv();
+        let vt = values.transpose().to_owned();
+        // F = V^T C^+ (D x (d+1)); R^T = V^T - F C (D x S).
+        let f = &vt * &cp;
+        let rt = &vt - &f * &c;
+        let pq = kriging::ProjectedQuery::new(kriging, rt.as_ref())?;
+        let outputs = values.ncols();
+        let m = pq.matrix();
+        let mut q_t = vec![0.0f32; (s + 1) * outputs];
+        for (o, row) in m.chunks_exact(s + 1).enumerate() {
+            for (j, &v) in row.iter().enumerate() {
+                q_t[j * outputs + o] = v as f32;
+            }
+        }
+        let d = c.nrows().saturating_sub(1);
+        let trend = (0..outputs)
+            .flat_map(|o| (0..=d).map(move |k| (o, k)))
+            .map(|(o, k)| f[(o, k)])
+            .collect();
+        let scaling = pq.scaling();
+        Ok(DualBlend {
+            outputs,
+            samples: s,
+            q_t,
+            trend,
+            params: pq.scaled_params().to_vec(),
+            offset: scaling.offset.clone(),
+            scale: scaling.scale.clone(),
+            variogram: *pq.variogram(),
+            d,
+        })
+    }
+
+    /// The first `out.len()` outputs (at most `D`) at raw controls `c`. Allocation-free once the
+    /// thread's scratch has grown.
+    pub(crate) fn eval(&self, c: &[f64; 4], out: &mut [f32]) {
+        let n = out.len().min(self.outputs);
+        let s = self.samples;
+        let dims = self.offset.len().min(c.len());
+        DUAL_SCRATCH.with(|cell| {
+            let mut guard = cell.borrow_mut();
+            let (x, acc) = &mut *guard;
+            x.resize(s + 1, 0.0);
+            acc.clear();
+            acc.resize(n, 0.0);
+            let mut z = [0.0f64; MAX_D + 1];
+            for k in 0..dims {
+                z[k] = (c[k] - self.offset[k]) * self.scale[k];
+            }
+            for (j, g) in x[..s].iter_mut().enumerate() {
+                let p = &self.params[j * dims..(j + 1) * dims];
+                let h2: f64 = (0..dims).map(|k| (z[k] - p[k]) * (z[k] - p[k])).sum();
+                *g = self.variogram.eval(h2.sqrt());
+            }
+            x[s] = 1.0;
+            for (j, &xj) in x.iter().enumerate() {
+                let col = &self.q_t[j * self.outputs..][..n];
+                for (a, &q) in acc.iter_mut().zip(col) {
+                    *a += f64::from(q) * xj;
+                }
+            }
+            // Trend: F [c'; 1] with c' the scaled controls of the kept dimensions.
+            let d = self.d.min(MAX_D);
+            let mut zt = [0.0f64; MAX_D + 1];
+            zt[..d].copy_from_slice(&z[..d]);
+            zt[d] = 1.0;
+            for (o, (v, a)) in out[..n].iter_mut().zip(acc.iter()).enumerate() {
+                let f = &self.trend[o * (self.d + 1)..][..=d];
+                let t: f64 = f.iter().zip(&zt[..=d]).map(|(fk, zk)| fk * zk).sum();
+                *v = (a + t) as f32;
+            }
+        });
+    }
 }

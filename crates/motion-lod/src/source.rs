@@ -11,7 +11,6 @@ use crowd_sim::{
 use glam::Vec3;
 use lod_policy::{ClipKernel, Detail, KernelScratch};
 use motion_io::PoseLayout;
-use std::sync::Mutex;
 
 use crate::model::MotionModel;
 
@@ -51,34 +50,59 @@ pub struct LodClip {
 }
 
 /// The multilinear model as a crowd clip source.
+///
+/// [`LodSource::new`] is the crowd's fast path: every clip's `G(c)` is sized for its own level
+/// ([`ClipKernel::compact`]), so a root-only clip holds `7 r_T` floats, and `pose` writes only the
+/// rows the clip evaluates (a root-only walker: the 7 root rows, `7 r_T` multiply-adds, and no
+/// forward kinematics beyond copying the root). [`LodSource::reference`] keeps the straightforward
+/// path to check against: kernels sized for the largest level and built with the kriging projections
+/// summed column by column ([`lod_policy::LodModel::build_kernel_reference`]), poses completed with the
+/// mean pose. The two differ by rounding in the kriging sums only.
 #[derive(Debug)]
 pub struct LodSource<'m> {
     model: &'m MotionModel,
     bones: Vec<(usize, usize)>,
-    /// Scratch for kernel builds, one per rayon worker would be ideal; kernels are built inside the
-    /// crowd's parallel loop, so each call takes a scratch from this pool.
-    scratch: Mutex<Vec<KernelScratch>>,
+    /// Kernels sized per level and poses limited to the evaluated rows.
+    compact: bool,
+}
+
+thread_local! {
+    /// Kernel-build scratch of this thread (kernels are built inside the crowd's parallel pass).
+    static SCRATCH: std::cell::RefCell<Option<KernelScratch>> = const { std::cell::RefCell::new(None) };
 }
 
 impl<'m> LodSource<'m> {
-    /// A source over `model`.
+    /// The crowd's fast source over `model` (kernels sized per level, poses of the evaluated rows).
     pub fn new(model: &'m MotionModel) -> LodSource<'m> {
         LodSource {
             model,
             bones: bones_of(&model.layout),
-            scratch: Mutex::new(Vec::new()),
+            compact: true,
+        }
+    }
+
+    /// The reference source over `model`: every kernel preallocated for the largest level, built with
+    /// the straightforward column-order kriging sums, and every pose completed with the mean pose
+    /// beyond the evaluated rows. The same rows as [`LodSource::new`] up to rounding; slower and
+    /// about `4 P max R_T` bytes per walker.
+    pub fn reference(model: &'m MotionModel) -> LodSource<'m> {
+        LodSource {
+            compact: false,
+            ..LodSource::new(model)
         }
     }
 
     fn with_scratch<R>(&self, f: impl FnOnce(&mut KernelScratch) -> R) -> R {
-        let taken = self.scratch.lock().unwrap_or_else(|e| e.into_inner()).pop();
-        let mut s = taken.unwrap_or_else(|| KernelScratch::new(&self.model.lod));
-        let r = f(&mut s);
-        self.scratch
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .push(s);
-        r
+        let lod = &self.model.lod;
+        SCRATCH.with(|cell| {
+            let mut slot = cell.borrow_mut();
+            let scratch = match slot.take() {
+                Some(s) if s.fits_model(lod) => s,
+                _ => KernelScratch::new(lod),
+            };
+            let s = slot.insert(scratch);
+            f(s)
+        })
     }
 }
 
@@ -154,7 +178,11 @@ impl ClipSource for LodSource<'_> {
 
     fn new_clip(&self) -> LodClip {
         LodClip {
-            kernel: ClipKernel::new(&self.model.lod),
+            kernel: if self.compact {
+                ClipKernel::compact(&self.model.lod)
+            } else {
+                ClipKernel::new(&self.model.lod)
+            },
             duration: 1.0,
             root_motion: RootMotion::default(),
         }
@@ -163,8 +191,13 @@ impl ClipSource for LodSource<'_> {
     fn build_clip(&self, controls: &Controls, detail: CrowdDetail, clip: &mut LodClip) {
         let c = [controls.dx, controls.dz, controls.turn, controls.height];
         let lod = &self.model.lod;
-        let built =
-            self.with_scratch(|s| lod.build_kernel(&c, model_detail(detail), s, &mut clip.kernel));
+        let built = self.with_scratch(|s| {
+            if self.compact {
+                lod.build_kernel(&c, model_detail(detail), s, &mut clip.kernel)
+            } else {
+                lod.build_kernel_reference(&c, model_detail(detail), s, &mut clip.kernel)
+            }
+        });
         if built.is_err() {
             // The crowd clamps controls and levels into the ranges this source reports, so this is
             // unreachable for well-formed crowds; fall back to the root-only clip at the same
@@ -196,11 +229,20 @@ impl ClipSource for LodSource<'_> {
     fn pose(&self, clip: &LodClip, t_seconds: f32, out: &mut [f32]) -> usize {
         let lod = &self.model.lod;
         let phase = clip.kernel.phase_at(f64::from(t_seconds));
-        let p = lod.p();
-        match lod.pose(&clip.kernel, phase, &mut out[..p]) {
-            Ok(()) => clip.kernel.rows(),
+        let rows = clip.kernel.rows();
+        let written = if self.compact {
+            lod.pose_rows(&clip.kernel, phase, &mut out[..rows])
+        } else {
+            lod.pose(&clip.kernel, phase, &mut out[..lod.p()])
+        };
+        match written {
+            Ok(()) => rows,
             Err(_) => 0,
         }
+    }
+
+    fn prefetch(&self, clip: &LodClip, t_seconds: f32) {
+        clip.kernel.prefetch(f64::from(t_seconds));
     }
 
     fn joints(&self, clip: &LodClip, pose: &[f32], out: &mut [Vec3]) -> usize {

@@ -128,6 +128,7 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
         },
         seconds: 2.0,
         lens: Camera::default(),
+        scene: crowd_sim::Scene::Ground,
         render: None,
     };
     let lod = &model.lod;
@@ -171,7 +172,7 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
         rm.dz
     );
     assert!(dz > 0.3, "a walk travels forward: dz = {dz}");
-    let naive = NaiveSource::new(model, analysis);
+    let naive = NaiveSource::new(model, analysis).unwrap();
     let n = run_crowd(
         &naive,
         &FullDetail {

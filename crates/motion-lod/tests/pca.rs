@@ -70,7 +70,7 @@ fn all_components_at_level_0_equal_the_naive_clip() {
     let pca = PcaSource::new(model, analysis, p).unwrap();
     assert_eq!(pca.rank(), p);
     assert_eq!(pca.level_ranks()[0], p);
-    let naive = NaiveSource::new(model, analysis);
+    let naive = NaiveSource::new(model, analysis).unwrap();
     let (mut pc, mut nc) = (pca.new_clip(), naive.new_clip());
     for controls in test_controls(analysis) {
         pca.build_clip(&controls, all_joints(model, 0), &mut pc);
@@ -113,7 +113,7 @@ fn fewer_components_give_the_projection_of_the_naive_pose() {
             assert!((dot - want).abs() < 1e-5, "U^T U [{i}, {j}] = {dot}");
         }
     }
-    let naive = NaiveSource::new(model, analysis);
+    let naive = NaiveSource::new(model, analysis).unwrap();
     let (mut pc, mut nc) = (pca.new_clip(), naive.new_clip());
     let mut worst = 0.0f64;
     for controls in test_controls(analysis) {
@@ -171,7 +171,7 @@ fn lower_levels_use_fewer_components_and_lose_accuracy() {
     );
     assert_eq!(pca.bytes(Precision::F64), 2 * pca.bytes(Precision::F32));
 
-    let naive = NaiveSource::new(model, analysis);
+    let naive = NaiveSource::new(model, analysis).unwrap();
     let (mut pc, mut nc) = (pca.new_clip(), naive.new_clip());
     let mut errors = Vec::new();
     for (level, &rank) in ranks.iter().enumerate() {

@@ -1,21 +1,28 @@
-//! Section 5.2: crowd frames per second (worst, mean, best) with the level-of-detail model and with
-//! naive interpolation, at 100 walkers as in the paper and at larger crowds.
+//! Section 5.2: crowd frame rates with the level-of-detail model and with the baselines, in two
+//! scenes, with and without level of detail, on one and two threads.
 //!
 //! Every crowd keeps the paper-scale density of the default crowd (100 walkers on a 100 m field,
-//! 0.01 walkers per m²), the camera walks inside it ([`CameraPath::inside_crowd`]) and each frame
-//! counts culling, clip kernels, poses and forward kinematics (`crowd_sim::StageTimings`), not
-//! rendering. The first frame builds a clip for every walker at once; it is run as a warm-up and not
-//! counted. The LOD crowd uses the paper's distance policy (section 5.1); the naive crowd blends the
-//! raw samples with the kriging weights at full detail for every walker
-//! ([`motion_lod::NaiveSource`]); the PCA crowd ([`motion_lod::PcaSource`], the paper's other
-//! comparison) blends per-sample DOF coefficients and drops components with the same distance policy.
+//! 0.01 walkers per m²) and each frame counts culling, clip kernels, poses and forward kinematics
+//! (`crowd_sim::StageTimings`), not rendering. Two scenes ([`Scene`]): the camera walking inside the
+//! crowd (*ground*: most walkers culled or beyond the last level) and circling above the field's edge
+//! (*overview*: most of the crowd in view, at every level). A new crowd spreads its first clip builds
+//! over its first cycle, so the first [`WARMUP_S`] seconds are a warm-up, timed apart (its slowest
+//! frame is reported).
+//!
+//! Sources, each under two policies:
+//! - *LOD policy* (fair): the paper's distance policy for all three sources, the same culling, the same
+//!   root-only walkers and the same joint counts; the model ([`motion_lod::LodSource`]) also drops to
+//!   smaller cores with distance, PCA ([`motion_lod::PcaSource`]) to fewer components, naive
+//!   ([`motion_lod::NaiveSource`]) blends the raw samples whatever the distance. Both baselines use the
+//!   `O(S D)` dual form of kriging.
+//! - *no level of detail*: every walker at full detail (all joints, finest level), visible or not.
 
 use std::time::Instant;
 
 use anyhow::{Context, Result};
 use crowd_sim::{
-    Camera, CameraPath, ClipSource, Crowd, CrowdConfig, CrowdReport, Detail as CrowdDetail,
-    DetailPolicy, FrameStats,
+    Camera, ClipSource, Crowd, CrowdConfig, CrowdReport, Detail as CrowdDetail, DetailPolicy,
+    FrameStats, Scene,
 };
 use lod_policy::{Detail, DistancePolicy, LevelPolicy, LodModel, ViewParams};
 use motion_lod::progress::Progress;
@@ -27,12 +34,16 @@ pub const PCA_RANK: usize = 40;
 /// Walkers per square metre of every crowd (the default crowd: 100 walkers on 100 m x 100 m).
 pub const DENSITY: f32 = 0.01;
 
+/// Seconds of warm-up before the timed frames: longer than any cycle, so that the first clip builds,
+/// spread over the first cycle, are done.
+pub const WARMUP_S: f32 = 1.5;
+
 /// One crowd size and how many frames to time at it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CrowdSize {
     /// Walkers.
     pub walkers: usize,
-    /// Timed frames (after the warm-up frame).
+    /// Timed frames (after the warm-up).
     pub frames: usize,
 }
 
@@ -49,28 +60,58 @@ pub fn full_sizes() -> Vec<CrowdSize> {
         },
         CrowdSize {
             walkers: 10_000,
-            frames: 30,
+            frames: 60,
         },
         CrowdSize {
             walkers: 100_000,
-            frames: 5,
+            frames: 20,
         },
     ]
+}
+
+/// Which detail policy a run used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PolicyKind {
+    /// The paper's distance policy (culling, root only beyond the last level, fewer joints).
+    Lod,
+    /// Every walker at full detail.
+    Full,
 }
 
 /// The measurement of one crowd.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CrowdRow {
+    /// Camera scene.
+    pub scene: Scene,
     /// Walkers.
     pub walkers: usize,
     /// `lod`, `naive` or `pca`.
     pub source: &'static str,
+    /// Detail policy.
+    pub policy: PolicyKind,
+    /// Rayon threads.
+    pub threads: usize,
     /// Frame rates and stage timings of the timed frames; `None` when the run was skipped.
     pub report: Option<CrowdReport>,
-    /// Seconds of the warm-up frame (every walker builds its first clip).
+    /// Seconds of the warm-up ([`WARMUP_S`] of simulated time).
     pub warmup_s: f64,
+    /// Slowest warm-up frame (s).
+    pub warmup_worst_s: f64,
     /// Why the run was skipped, if it was.
     pub skipped: Option<String>,
+}
+
+impl CrowdRow {
+    /// Mean frames per second, if run.
+    pub fn fps(&self) -> Option<f64> {
+        self.report.as_ref().map(|r| r.fps_mean)
+    }
+
+    /// Walkers animated per second per thread (walkers x mean fps / threads), if run.
+    pub fn walkers_per_thread_s(&self) -> Option<f64> {
+        self.fps()
+            .map(|f| self.walkers as f64 * f / self.threads.max(1) as f64)
+    }
 }
 
 /// The paper's distance policy over `model` as a crowd detail policy (root only: 0 active joints at the
@@ -99,80 +140,125 @@ pub fn lod_policy_for(
     }
 }
 
-/// Runs one crowd: a warm-up frame, then `frames` timed frames.
+/// Runs one crowd: [`WARMUP_S`] of warm-up frames, then `frames` timed frames. Returns the report,
+/// the warm-up's total and slowest frame (s).
 fn run_one<S: ClipSource, P: DetailPolicy>(
     source: &S,
     policy: &P,
+    scene: Scene,
     size: CrowdSize,
-) -> Result<(CrowdReport, f64)> {
+) -> Result<(CrowdReport, f64, f64)> {
     let config = CrowdConfig::with_density(size.walkers, DENSITY);
     let mut crowd = Crowd::new(source, config).context("creating the crowd")?;
-    let path = CameraPath::inside_crowd(config.field_size_m);
-    let lens = Camera::default();
+    let path = scene.path(config.field_size_m);
+    let lens = scene.lens(Camera::default(), config.field_size_m);
     let dt = 1.0 / config.fps;
+    let warmup = (WARMUP_S * config.fps).ceil() as usize;
     let mut stats = FrameStats::default();
-    let t0 = Instant::now();
-    crowd
-        .step_into(source, policy, &path.camera_at(0.0, &lens), dt, &mut stats)
-        .context("warm-up frame")?;
-    let warmup_s = t0.elapsed().as_secs_f64();
+    let (mut warmup_s, mut worst) = (0.0f64, 0.0f64);
+    for f in 0..warmup {
+        let t0 = Instant::now();
+        crowd
+            .step_into(
+                source,
+                policy,
+                &path.camera_at(f as f32 * dt, &lens),
+                dt,
+                &mut stats,
+            )
+            .context("warm-up frame")?;
+        let s = t0.elapsed().as_secs_f64();
+        warmup_s += s;
+        worst = worst.max(s);
+    }
     let mut report = CrowdReport::new();
-    for f in 1..=size.frames {
+    for f in warmup..warmup + size.frames {
         let cam = path.camera_at(f as f32 * dt, &lens);
         crowd
             .step_into(source, policy, &cam, dt, &mut stats)
             .with_context(|| format!("frame {f}"))?;
         report.add(&stats);
     }
-    Ok((report, warmup_s))
+    Ok((report, warmup_s, worst))
 }
 
-/// A run of `source` at `size`, or a skipped row when its warm-up frame is predicted (linearly in
-/// walkers from this source's previous size, kept in `warmup_per_walker`) to exceed `max_warmup_s`.
+/// What one run is: scene, source, policy, threads.
+#[derive(Debug, Clone, Copy)]
+struct RunSpec {
+    scene: Scene,
+    source: &'static str,
+    policy: PolicyKind,
+    threads: usize,
+}
+
+/// A run of `source` at `size`, or a skipped row when its warm-up is predicted (linearly in walkers
+/// from this run kind's previous size, kept in `warmup_per_walker`) to exceed `max_warmup_s`.
 fn timed_or_skipped<S: ClipSource, P: DetailPolicy>(
-    name: &'static str,
+    spec: RunSpec,
     source: &S,
     policy: &P,
     size: CrowdSize,
     max_warmup_s: f64,
     warmup_per_walker: &mut Option<f64>,
 ) -> Result<CrowdRow> {
+    let row = |report, warmup_s, warmup_worst_s, skipped| CrowdRow {
+        scene: spec.scene,
+        walkers: size.walkers,
+        source: spec.source,
+        policy: spec.policy,
+        threads: spec.threads,
+        report,
+        warmup_s,
+        warmup_worst_s,
+        skipped,
+    };
     let predicted = warmup_per_walker.map(|w| w * size.walkers as f64);
     if let Some(p) = predicted.filter(|&p| p > max_warmup_s) {
-        return Ok(CrowdRow {
-            walkers: size.walkers,
-            source: name,
-            report: None,
-            warmup_s: f64::NAN,
-            skipped: Some(format!(
-                "not run: its first frame would take about {p:.0} s (measured per walker at the previous size)"
+        return Ok(row(
+            None,
+            f64::NAN,
+            f64::NAN,
+            Some(format!(
+                "not run: its warm-up would take about {p:.0} s (measured per walker at the previous size)"
             )),
-        });
+        ));
     }
-    let (report, warmup_s) = run_one(source, policy, size)
-        .with_context(|| format!("{name} crowd of {} walkers", size.walkers))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(spec.threads)
+        .build()
+        .context("thread pool")?;
+    let (report, warmup_s, worst) = pool
+        .install(|| run_one(source, policy, spec.scene, size))
+        .with_context(|| {
+            format!(
+                "{} crowd of {} walkers ({}, {} threads)",
+                spec.source,
+                size.walkers,
+                spec.scene.name(),
+                spec.threads
+            )
+        })?;
     *warmup_per_walker = Some(warmup_s / size.walkers as f64);
-    Ok(CrowdRow {
-        walkers: size.walkers,
-        source: name,
-        report: Some(report),
-        warmup_s,
-        skipped: None,
-    })
+    Ok(row(Some(report), warmup_s, worst, None))
 }
 
-/// Measures every size with the LOD model, with naive interpolation (full detail) and with the PCA
-/// baseline (the same distance policy, fewer components with distance). A baseline run whose warm-up
-/// is predicted to exceed `max_warmup_s` is skipped and says so.
+/// Threads of the main runs (this machine's two cores).
+pub const MAIN_THREADS: usize = 2;
+
+/// Measures, in both scenes and at every size: the three sources under the LOD policy and at full
+/// detail on [`MAIN_THREADS`] threads, and the model under the LOD policy on each of `threads`
+/// (its walkers per second per thread). A baseline or full-detail run whose warm-up is predicted to
+/// exceed `max_warmup_s` is skipped and says so.
 pub fn measure(
     model: &MotionModel,
     analysis: &Analysis,
     sizes: &[CrowdSize],
+    threads: &[usize],
     max_warmup_s: f64,
     progress: &dyn Progress,
 ) -> Result<Vec<CrowdRow>> {
     let lod = LodSource::new(model);
-    let naive = NaiveSource::new(model, analysis);
+    let naive = NaiveSource::new(model, analysis).context("naive baseline")?;
     let pca = PcaSource::new(model, analysis, PCA_RANK).context("PCA baseline")?;
     let lod_policy = lod_policy_for(&model.lod);
     let joints = model.lod.joints();
@@ -180,37 +266,99 @@ pub fn measure(
         accuracy: 0,
         active_joints: joints,
     };
-    progress.stage("crowds (LOD, naive, PCA)", 3 * sizes.len() as u64);
+    let runs_per_size = 6 + threads.iter().filter(|&&t| t != MAIN_THREADS).count();
+    progress.stage(
+        "crowds (2 scenes; LOD, naive, PCA; LOD policy and full detail; threads)",
+        (Scene::ALL.len() * sizes.len() * runs_per_size) as u64,
+    );
     let mut rows = Vec::new();
-    let (mut lod_warmup, mut naive_warmup, mut pca_warmup) = (None, None, None);
-    for &size in sizes {
-        rows.push(timed_or_skipped(
-            "lod",
-            &lod,
-            &lod_policy,
-            size,
-            f64::INFINITY,
-            &mut lod_warmup,
-        )?);
-        progress.inc(1);
-        rows.push(timed_or_skipped(
-            "naive",
-            &naive,
-            &full,
-            size,
-            max_warmup_s,
-            &mut naive_warmup,
-        )?);
-        progress.inc(1);
-        rows.push(timed_or_skipped(
-            "pca",
-            &pca,
-            &lod_policy,
-            size,
-            max_warmup_s,
-            &mut pca_warmup,
-        )?);
-        progress.inc(1);
+    for scene in Scene::ALL {
+        // Warm-up per walker of each run kind, for skipping: [source][policy].
+        let mut warm = [[None; 2]; 3];
+        let mut warm_threads = vec![None; threads.len()];
+        for &size in sizes {
+            for (p, policy) in [PolicyKind::Lod, PolicyKind::Full].into_iter().enumerate() {
+                for (k, name) in ["lod", "pca", "naive"].into_iter().enumerate() {
+                    let spec = RunSpec {
+                        scene,
+                        source: name,
+                        policy,
+                        threads: MAIN_THREADS,
+                    };
+                    // The model under its own policy is always run (it is what the tables are about).
+                    let limit = if (k, p) == (0, 0) {
+                        f64::INFINITY
+                    } else {
+                        max_warmup_s
+                    };
+                    let w = &mut warm[k][p];
+                    let row = match (k, policy) {
+                        (0, PolicyKind::Lod) => {
+                            timed_or_skipped(spec, &lod, &lod_policy, size, limit, w)
+                        }
+                        (0, PolicyKind::Full) => {
+                            timed_or_skipped(spec, &lod, &full, size, limit, w)
+                        }
+                        (1, PolicyKind::Lod) => {
+                            timed_or_skipped(spec, &pca, &lod_policy, size, limit, w)
+                        }
+                        (1, PolicyKind::Full) => {
+                            timed_or_skipped(spec, &pca, &full, size, limit, w)
+                        }
+                        (_, PolicyKind::Lod) => {
+                            timed_or_skipped(spec, &naive, &lod_policy, size, limit, w)
+                        }
+                        (_, PolicyKind::Full) => {
+                            timed_or_skipped(spec, &naive, &full, size, limit, w)
+                        }
+                    }?;
+                    rows.push(row);
+                    progress.inc(1);
+                }
+            }
+            for (i, &t) in threads.iter().enumerate() {
+                if t == MAIN_THREADS {
+                    continue;
+                }
+                let spec = RunSpec {
+                    scene,
+                    source: "lod",
+                    policy: PolicyKind::Lod,
+                    threads: t,
+                };
+                rows.push(timed_or_skipped(
+                    spec,
+                    &lod,
+                    &lod_policy,
+                    size,
+                    max_warmup_s,
+                    &mut warm_threads[i],
+                )?);
+                progress.inc(1);
+            }
+        }
     }
     Ok(rows)
+}
+
+/// The row of `source` under `policy` on [`MAIN_THREADS`] threads for `scene` and `walkers`.
+pub fn find<'a>(
+    rows: &'a [CrowdRow],
+    scene: Scene,
+    walkers: usize,
+    source: &str,
+    policy: PolicyKind,
+) -> Option<&'a CrowdRow> {
+    rows.iter().find(|r| {
+        r.scene == scene
+            && r.walkers == walkers
+            && r.source == source
+            && r.policy == policy
+            && r.threads == MAIN_THREADS
+    })
+}
+
+/// Mean frame-time of `a` over that of `b` inverted: `fps(a) / fps(b)`, when both ran.
+pub fn ratio(a: Option<&CrowdRow>, b: Option<&CrowdRow>) -> Option<f64> {
+    Some(a?.fps()? / b?.fps()?)
 }

@@ -62,8 +62,11 @@ pub struct TablesConfig {
     pub distance_step_m: f32,
     /// Crowd sizes.
     pub crowds: Vec<crowd::CrowdSize>,
-    /// Skip a naive crowd whose first frame is predicted to take longer than this (s).
+    /// Skip a baseline or full-detail crowd whose warm-up is predicted to take longer than this (s).
     pub max_naive_warmup_s: f64,
+    /// Thread counts of the scaling rows (the model under its policy); the main runs use
+    /// [`crowd::MAIN_THREADS`].
+    pub crowd_threads: Vec<usize>,
     /// Held-out samples of the leave-one-out evaluation (`None`: all).
     pub loo_samples: Option<usize>,
     /// Folds of the cross-validation by refitting (by take when the data has that many takes).
@@ -88,6 +91,7 @@ impl TablesConfig {
             distance_step_m: 10.0,
             crowds: crowd::full_sizes(),
             max_naive_warmup_s: 60.0,
+            crowd_threads: vec![1, crowd::MAIN_THREADS],
             loo_samples: None,
             refit_folds: 5,
             show_progress: true,
@@ -128,6 +132,7 @@ impl TablesConfig {
                 },
             ],
             max_naive_warmup_s: 10.0,
+            crowd_threads: vec![1, crowd::MAIN_THREADS],
             loo_samples: Some(4),
             refit_folds: 2,
             show_progress: false,
@@ -302,6 +307,7 @@ pub fn run(config: &TablesConfig) -> Result<()> {
         &model,
         &analysis,
         &config.crowds,
+        &config.crowd_threads,
         config.max_naive_warmup_s,
         progress,
     )?;
@@ -597,71 +603,171 @@ fn write_figure5(doc: &mut String, pts: &[timing::DistancePoint], link: &str, mo
 const PAPER_FPS: (f64, f64, f64, f64) = (9.5, 12.0, 25.0, 3.9);
 
 fn write_crowd(doc: &mut String, rows: &[crowd::CrowdRow]) {
+    use crowd::PolicyKind::{Full, Lod};
+    use crowd_sim::Scene;
     let _ = writeln!(
         doc,
         "\n## 4. Crowd frame rates (paper section 5.2)\n\n\
-         Walkers at {} per m² (the field grows with the crowd), the camera walking inside the crowd, \
-         the paper's distance policy for *LOD* and *PCA* (the paper's PCA comparison: 40 DOF components \
-         at full detail, fewer with distance) and full detail for every walker for *naive* (kriging \
-         weights applied to the raw samples). A frame is culling, clip kernels, poses and forward \
-         kinematics on all available threads, without rendering; the first frame (every walker builds a \
-         clip) is a warm-up, reported apart. Frame rates are per timed frame: worst, mean (frames / total \
-         time) and best.\n",
-        crowd::DENSITY
+         Walkers at {} per m² (the field grows with the crowd). Two scenes: *ground*, the camera walking \
+         inside the crowd (most walkers culled or beyond the last level: root only), and *overview*, the \
+         camera circling above the field's edge (most of the crowd in view, at every level). A frame is \
+         culling, clip kernels, poses and forward kinematics on {} threads, without rendering; the first \
+         {} s (clip builds spread over the first cycle) are a warm-up, timed apart. Mean frames per \
+         second (frames / total time).\n\n\
+         *LOD policy* is the fair comparison: the paper's distance policy for every source, with the same \
+         culling, root-only walkers and joint counts; the model also uses smaller cores with distance, PCA \
+         (40 DOF components at full detail) fewer components, and naive (kriging of the raw samples) has \
+         no cheaper level. Both baselines use the O(S·D) dual form of kriging. *No level of detail* puts \
+         every walker, visible or not, at full detail with every source.\n",
+        crowd::DENSITY,
+        crowd::MAIN_THREADS,
+        crowd::WARMUP_S
+    );
+    let fps = |r: Option<&crowd::CrowdRow>| match r {
+        Some(r) => match (&r.report, &r.skipped) {
+            (Some(rep), _) => sig3(rep.fps_mean),
+            (None, Some(_)) => "not run".into(),
+            _ => "-".into(),
+        },
+        None => "-".into(),
+    };
+    let ratio = |a, b| crowd::ratio(a, b).map_or("-".into(), |v| format!("{:.1}x", v));
+    let mut sizes: Vec<usize> = rows.iter().map(|r| r.walkers).collect();
+    sizes.dedup();
+    sizes.sort_unstable();
+    sizes.dedup();
+    let mut skipped = Vec::new();
+    for scene in Scene::ALL {
+        let _ = writeln!(doc, "\n### {} camera\n", scene.name());
+        let mut tab = Table::new(&[
+            ">walkers",
+            ">visible",
+            ">LOD",
+            ">PCA",
+            ">naive",
+            ">LOD / naive (fair)",
+            ">LOD, no LOD",
+            ">PCA, no LOD",
+            ">naive, no LOD",
+            ">LOD / naive, no LOD",
+            ">LOD warm-up, slowest frame",
+        ]);
+        for &w in &sizes {
+            let get = |src, pol| crowd::find(rows, scene, w, src, pol);
+            let lod = get("lod", Lod);
+            if lod.is_none() {
+                continue;
+            }
+            let visible = lod
+                .and_then(|r| r.report.as_ref())
+                .map_or("-".into(), |r| format!("{:.0}", r.mean_visible()));
+            tab.row(&[
+                w.to_string(),
+                visible,
+                fps(lod),
+                fps(get("pca", Lod)),
+                fps(get("naive", Lod)),
+                ratio(lod, get("naive", Lod)),
+                fps(get("lod", Full)),
+                fps(get("pca", Full)),
+                fps(get("naive", Full)),
+                ratio(get("lod", Full), get("naive", Full)),
+                lod.map_or("-".into(), |r| duration_ns(r.warmup_worst_s * 1e9)),
+            ]);
+            for r in rows.iter().filter(|r| r.scene == scene && r.walkers == w) {
+                if let Some(why) = &r.skipped {
+                    let policy = if r.policy == Lod {
+                        "LOD policy"
+                    } else {
+                        "no LOD"
+                    };
+                    skipped.push(format!(
+                        "{} {} {policy}, {w} walkers: {why}",
+                        scene.name(),
+                        r.source
+                    ));
+                }
+            }
+        }
+        doc.push_str(&tab.render());
+    }
+    if !skipped.is_empty() {
+        let _ = writeln!(doc, "\nSkipped runs:\n");
+        for s in &skipped {
+            let _ = writeln!(doc, "- {s}");
+        }
+    }
+    let _ = writeln!(
+        doc,
+        "\nStage times of the model under the LOD policy (mean per frame, wall clock) and the same rows \
+         for every source and policy, with the paper's published rates for 100 walkers:\n"
     );
     let mut tab = Table::new(&[
+        "camera",
         ">walkers",
         "source",
-        ">frames",
+        "policy",
         ">fps worst",
         ">fps mean",
         ">fps best",
         ">kernels / frame",
         ">poses / frame",
         ">FK / frame",
-        ">warm-up frame",
+        ">clips built / frame",
         "paper (published)",
     ]);
-    for r in rows {
-        let paper = match (r.walkers, r.source) {
-            (100, "lod") => format!("{} / {} / {} fps", PAPER_FPS.0, PAPER_FPS.1, PAPER_FPS.2),
-            (100, "naive") => format!("mean {} fps", PAPER_FPS.3),
+    for r in rows.iter().filter(|r| r.threads == crowd::MAIN_THREADS) {
+        let Some(rep) = &r.report else { continue };
+        let paper = match (r.scene, r.walkers, r.source, r.policy) {
+            (Scene::Ground, 100, "lod", Lod) => {
+                format!("{} / {} / {} fps", PAPER_FPS.0, PAPER_FPS.1, PAPER_FPS.2)
+            }
+            (Scene::Ground, 100, "naive", Full) => format!("mean {} fps", PAPER_FPS.3),
             _ => "-".into(),
         };
-        match (&r.report, &r.skipped) {
-            (Some(rep), _) => {
-                let m = rep.mean_timings();
-                let ms = |d: std::time::Duration| duration_ns(d.as_nanos() as f64);
-                tab.row(&[
-                    r.walkers.to_string(),
-                    r.source.to_string(),
-                    rep.frames.to_string(),
-                    sig3(rep.fps_worst),
-                    sig3(rep.fps_mean),
-                    sig3(rep.fps_best),
-                    ms(m.kernels),
-                    ms(m.poses),
-                    ms(m.fk),
-                    duration_ns(r.warmup_s * 1e9),
-                    paper,
-                ]);
-            }
-            (None, skipped) => {
-                tab.row(&[
-                    r.walkers.to_string(),
-                    r.source.to_string(),
-                    "0".into(),
-                    "-".into(),
-                    "-".into(),
-                    "-".into(),
-                    "-".into(),
-                    "-".into(),
-                    "-".into(),
-                    skipped.clone().unwrap_or_default(),
-                    paper,
-                ]);
-            }
-        }
+        let m = rep.mean_timings();
+        let ms = |d: std::time::Duration| duration_ns(d.as_nanos() as f64);
+        tab.row(&[
+            r.scene.name().to_string(),
+            r.walkers.to_string(),
+            r.source.to_string(),
+            if r.policy == Lod { "LOD" } else { "no LOD" }.to_string(),
+            sig3(rep.fps_worst),
+            sig3(rep.fps_mean),
+            sig3(rep.fps_best),
+            ms(m.kernels),
+            ms(m.poses),
+            ms(m.fk),
+            format!("{:.0}", rep.kernels_built as f64 / rep.frames.max(1) as f64),
+            paper,
+        ]);
+    }
+    doc.push_str(&tab.render());
+    let _ = writeln!(
+        doc,
+        "\nScaling: the model under the LOD policy on each thread count, in walkers animated per second \
+         per thread (walkers x mean fps / threads). More threads on a bigger machine: \
+         `cargo xtask tables --crowd-threads 1,2,4,8,16`, or one crowd with \
+         `RAYON_NUM_THREADS=16 motion-lod crowd MODEL --walkers 100000 --density 0.01 --camera ground`.\n"
+    );
+    let mut tab = Table::new(&[
+        "camera",
+        ">walkers",
+        ">threads",
+        ">fps mean",
+        ">walkers / s / thread",
+    ]);
+    for r in rows
+        .iter()
+        .filter(|r| r.source == "lod" && r.policy == Lod && r.report.is_some())
+    {
+        tab.row(&[
+            r.scene.name().to_string(),
+            r.walkers.to_string(),
+            r.threads.to_string(),
+            fps(Some(r)),
+            r.walkers_per_thread_s().map_or("-".into(), sig3),
+        ]);
     }
     doc.push_str(&tab.render());
     let _ = writeln!(

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context as _, bail};
 use clap::{Args, ValueEnum};
-use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport};
+use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport, Scene};
 use lod_policy::{DistancePolicy, LodModel, ScreenSpacePolicy};
 use motion_lod::build::Analysis;
 use motion_lod::crowd::{
@@ -25,6 +25,24 @@ pub enum PolicyArg {
     Distance,
     /// The cheapest level whose measured error projects under the pixel budget.
     Screen,
+}
+
+/// Where the camera is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CameraArg {
+    /// Walking at eye height inside the crowd (most walkers culled or root only).
+    Ground,
+    /// Circling above the field's edge, most of the crowd in view at every level.
+    Overview,
+}
+
+impl From<CameraArg> for Scene {
+    fn from(c: CameraArg) -> Scene {
+        match c {
+            CameraArg::Ground => Scene::Ground,
+            CameraArg::Overview => Scene::Overview,
+        }
+    }
 }
 
 /// Arguments of `motion-lod crowd`.
@@ -51,10 +69,17 @@ pub struct CrowdArgs {
     /// Level-of-detail policy.
     #[arg(long, value_enum, default_value_t = PolicyArg::Distance)]
     pub policy: PolicyArg,
-    /// Animate with naive interpolation instead of the model (no level of detail).
+    /// Every walker at full detail, visible or not, with every source: no level of detail at all.
+    #[arg(long)]
+    pub no_lod: bool,
+    /// Camera: `ground` walks inside the crowd, `overview` circles above it.
+    #[arg(long, value_enum, default_value_t = CameraArg::Ground)]
+    pub camera: CameraArg,
+    /// Animate with naive interpolation instead of the model (the same culling, root-only walkers and
+    /// joint counts; no cheaper accuracy level).
     #[arg(long, conflicts_with_all = ["compare_naive", "pca"])]
     pub naive: bool,
-    /// Also run the naive source on the same crowd and print the speed ratio.
+    /// Also run the naive source on the same crowd (same policy) and print the speed ratio.
     #[arg(long)]
     pub compare_naive: bool,
     /// Animate with the PCA baseline instead of the model (its components reduced per accuracy level
@@ -203,6 +228,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             aspect: 960.0 / 540.0,
             ..Camera::default()
         },
+        scene: args.camera.into(),
         render: args.render.clone().map(|d| (d, args.render_every)),
     };
     let lod = &model.lod;
@@ -210,34 +236,30 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         render: None,
         ..run.clone()
     };
+    let full = args.no_lod;
     let main = if args.naive {
         let analysis = analysis.as_ref().context("naive source")?;
-        let source = NaiveSource::new(&model, analysis);
-        run_crowd(
-            &source,
-            &FullDetail {
-                joints: lod.joints(),
-            },
-            &run,
-        )?
+        let source = NaiveSource::new(&model, analysis).context("naive source")?;
+        run_with_policy(&source, args.policy, full, lod, &run)?
     } else if args.pca {
         run_with_policy(
             &pca_source(&model, analysis.as_ref(), args.pca_rank)?,
             args.policy,
+            full,
             lod,
             &run,
         )?
     } else {
-        run_with_policy(&LodSource::new(&model), args.policy, lod, &run)?
+        run_with_policy(&LodSource::new(&model), args.policy, full, lod, &run)?
     };
     let naive = match &analysis {
         Some(a) if args.compare_naive && !args.naive => {
-            let source = NaiveSource::new(&model, a);
-            Some(run_crowd(
+            let source = NaiveSource::new(&model, a).context("naive source")?;
+            Some(run_with_policy(
                 &source,
-                &FullDetail {
-                    joints: lod.joints(),
-                },
+                args.policy,
+                full,
+                lod,
                 &compare_run,
             )?)
         }
@@ -245,7 +267,13 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     };
     let pca = if args.compare_pca && !args.pca {
         let source = pca_source(&model, analysis.as_ref(), args.pca_rank)?;
-        Some(run_with_policy(&source, args.policy, lod, &compare_run)?)
+        Some(run_with_policy(
+            &source,
+            args.policy,
+            full,
+            lod,
+            &compare_run,
+        )?)
     } else {
         None
     };
@@ -290,7 +318,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         main.last.level_histogram
     );
     if let (Some(n), Some(r)) = (&naive, ratio) {
-        println!("naive interpolation on the same crowd:");
+        println!("naive interpolation on the same crowd (same policy):");
         println!("{}", n.report);
         println!("{short} / naive mean frame rate: {r:.2}x");
     }
@@ -377,14 +405,25 @@ fn pca_source<'m>(
     PcaSource::new(model, analysis, rank).context("building the PCA baseline")
 }
 
-/// Runs `source` under the chosen level-of-detail policy of the model `lod` (the model's and the PCA
-/// source share its accuracy levels and joints).
+/// Runs `source` under the chosen level-of-detail policy of the model `lod` (every source shares its
+/// accuracy levels and joints, so the same culling, root-only walkers and joint counts), or with every
+/// walker at full detail when `full_detail` is set.
 fn run_with_policy<S: ClipSource>(
     source: &S,
     policy: PolicyArg,
+    full_detail: bool,
     lod: &LodModel,
     run: &CrowdRun,
 ) -> anyhow::Result<CrowdOutcome> {
+    if full_detail {
+        return Ok(run_crowd(
+            source,
+            &FullDetail {
+                joints: lod.joints(),
+            },
+            run,
+        )?);
+    }
     Ok(match policy {
         PolicyArg::Distance => run_crowd(
             source,

@@ -35,6 +35,8 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         fps: 30.0,
         seed: 1,
         policy: PolicyArg::Distance,
+        camera: super::crowd::CameraArg::Ground,
+        no_lod: false,
         naive: false,
         compare_naive: true,
         pca: false,
