@@ -14,7 +14,7 @@
 use std::path::Path;
 
 use motion_lod::crowd::{CrowdRun, ModelPolicy, run_crowd};
-use motion_lod::crowd_sim::{Camera, CrowdConfig};
+use motion_lod::crowd_sim::{Camera, CrowdConfig, Scene};
 use motion_lod::lod_policy::{Detail, DistancePolicy};
 use motion_lod::model_file::{HEADER_LEN, encode};
 use motion_lod::synth::WalkRequest;
@@ -135,6 +135,7 @@ pub fn exercise(bytes: &[u8]) -> Outcome {
         },
         seconds: 0.1,
         lens: Camera::default(),
+        scene: Scene::Ground,
         render: None,
     };
     let source = LodSource::new(&model);

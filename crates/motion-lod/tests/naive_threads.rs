@@ -12,7 +12,7 @@ use common::built;
 #[test]
 fn naive_crowd_poses_are_bit_identical_for_1_2_and_8_threads() {
     let (model, analysis) = built();
-    let source = NaiveSource::new(model, analysis);
+    let source = NaiveSource::new(model, analysis).unwrap();
     let policy = FullDetail {
         joints: model.lod.joints(),
     };
