@@ -207,7 +207,8 @@ fn storage_accounting_counts_every_array() {
     let key_values = values;
     // Samples, offset/scale/min/max, the controls' kriging rows (stored once), mean pose.
     values += S * D + 4 * D + (D + 1) * (S + 1) + P;
-    values += 2 * (4 + JOINTS + 1); // error tables
+    values += model.controls().implied.len(); // implied controls of a dropped turn
+    values += 3 * (4 + JOINTS + 1); // error tables: 3 values per level and joint count
     let level_table = 4 * 4 * 4; // four u32 per level
     assert_eq!(model.bytes(Precision::F32), 4 * values + level_table);
     assert_eq!(model.bytes(Precision::F64), 8 * values + level_table);

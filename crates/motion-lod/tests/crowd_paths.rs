@@ -22,7 +22,14 @@ struct Frame {
 fn simulate<S: ClipSource>(source: &S, scene: Scene, frames: usize) -> Vec<Frame> {
     let (model, _) = built();
     let lod = &model.lod;
-    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    // The paper's schedule as published (no screen check): this test is about the arithmetic of the
+    // fast path at every kind of detail, and the published schedule uses root-only walkers in view
+    // and several levels in the 300-walker overview.
+    let published = lod_policy::DistanceConfig {
+        screen_budget_px: None,
+        ..lod_policy::DistanceConfig::default()
+    };
+    let policy = ModelPolicy::new(DistancePolicy::new(lod, published).unwrap(), lod);
     let config = CrowdConfig {
         seed: 11,
         ..CrowdConfig::with_density(300, 0.01)
