@@ -103,6 +103,11 @@ pub struct CrowdOutcome {
     pub rendered: usize,
     /// The animated GIF written at the end, if any.
     pub gif: Option<std::path::PathBuf>,
+    /// The field size used, metres.
+    pub field_m: f32,
+    /// The field size asked for, when the source's turn range needed a larger one
+    /// ([`Crowd::field_enlarged_from`]).
+    pub field_enlarged_from: Option<f32>,
 }
 
 /// Steps a crowd of `source` under `policy` for `run.seconds`, timing every frame; renders every n-th
@@ -120,7 +125,8 @@ where
         return Err(CrowdRunError::Seconds(run.seconds));
     }
     let mut crowd = Crowd::new(source, run.config)?;
-    let path = CameraPath::inside_crowd(run.config.field_size_m);
+    // The field the crowd uses (enlarged when the source's turn range needs larger paths).
+    let path = CameraPath::inside_crowd(crowd.config().field_size_m);
     let frames = ((run.seconds * run.config.fps).round() as usize).max(1);
     let dt = 1.0 / run.config.fps;
     let mut recorder = match &run.render {
@@ -150,6 +156,8 @@ where
         last,
         rendered,
         gif,
+        field_m: crowd.config().field_size_m,
+        field_enlarged_from: crowd.field_enlarged_from(),
     })
 }
 

@@ -24,7 +24,7 @@ use serde::de::DeserializeOwned;
 /// The eight bytes every model file starts with.
 pub const MAGIC: [u8; 8] = *b"MLOD\r\n\x1a\n";
 /// The format version this build writes and the newest it reads.
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 
 // Version history: 1 (first release); 2 (the build report records the DOF row weights and the build
 // settings their choice); 3 (the kriging rows of the controls, `C A^-1`, are stored once in the control
@@ -32,7 +32,8 @@ pub const FORMAT_VERSION: u32 = 4;
 // writes the same bytes; ALS convergence per key; the pose layout stores only what it is built from
 // and is validated on load; the motion-quality reference measured on the training takes; static
 // joints leave the pose vector, and the build report records them, the control selection and the
-// joint-order note). Files of an older version are refused with a request to rebuild: a model is
+// joint-order note); 5 (the recorded data folders are relative to the model file, and the data
+// specification records the units, up axis and joint map). Files of an older version are refused with a request to rebuild: a model is
 // rebuilt from its data in seconds, and a converter would carry guesses.
 /// Bytes before the payload: magic, version, length, checksum.
 pub const HEADER_LEN: usize = 24;
