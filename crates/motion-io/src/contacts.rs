@@ -56,6 +56,9 @@ pub struct Feet {
     pub pelvis: usize,
     /// Leg length in file units: the longer of the two bone chains pelvis -> foot.
     pub leg_length: f64,
+    /// The head: the joint the names override gives, else the shallowest joint below the pelvis
+    /// whose name contains `head`; `None` when there is none.
+    pub head: Option<usize>,
 }
 
 /// The words of a joint name, lower-case: the part after the last `:` (a namespace such as
@@ -222,6 +225,9 @@ pub struct FootNames {
     pub left_toe: Option<String>,
     /// Right toe joint name.
     pub right_toe: Option<String>,
+    /// Head joint name (for the standing height).
+    #[serde(default)]
+    pub head: Option<String>,
 }
 
 /// Finds the feet: ankles are the shallowest joints whose name contains `foot` or `ankle` with a
@@ -282,7 +288,20 @@ pub fn find_feet(sk: &Skeleton, names: &FootNames) -> Result<Feet, CycleError> {
     if !(leg_length.is_finite() && leg_length > 0.0) {
         return Err(CycleError::BadLegLength(leg_length));
     }
+    let head = match &names.head {
+        Some(n) => Some(lookup(sk, n)?),
+        None => sk
+            .joints
+            .iter()
+            .enumerate()
+            .filter(|(j, x)| {
+                x.name.to_ascii_lowercase().contains("head") && sk.is_ancestor_or_self(pelvis, *j)
+            })
+            .min_by_key(|(j, _)| depth(sk, *j))
+            .map(|(j, _)| j),
+    };
     Ok(Feet {
+        head,
         left_foot,
         right_foot,
         left_toe,
@@ -302,7 +321,8 @@ pub fn find_feet(sk: &Skeleton, names: &FootNames) -> Result<Feet, CycleError> {
 /// leg follows, from the pelvis down, the child whose subtree reaches lowest; the ankle is the first
 /// joint of that chain within 15% of the chain's lowest mean height (so the knee is above it and the
 /// toe, if any, below it: the toe is the ankle's next joint in the chain). Left and right: the left
-/// hip lies on the walker's left of the direction of travel (`up x forward`), on average.
+/// hip lies on the walker's left of the direction of travel (`up x forward`), on average. The head
+/// (unless named) is the highest joint on average outside the legs.
 pub fn feet_by_hierarchy(motion: &crate::Motion, names: &FootNames) -> Option<FootNames> {
     let sk = &motion.skeleton;
     let nf = motion.frame_count();
@@ -320,31 +340,7 @@ pub fn feet_by_hierarchy(motion: &crate::Motion, names: &FootNames) -> Option<Fo
             t.iter().map(|x| x.position).collect()
         })
         .collect();
-    let count = positions.len() as f64;
-    // Mean height of every joint, and mean lowest height of every subtree.
-    let mean_y: Vec<f64> = (0..nj)
-        .map(|j| positions.iter().map(|p| p[j].y).sum::<f64>() / count)
-        .collect();
-    let mut low = mean_y.clone();
-    for j in (1..nj).rev() {
-        if let Some(p) = sk.joints[j].parent {
-            low[p] = low[p].min(low[j]);
-        }
-    }
-    // The pelvis: the joint whose second-lowest child subtree reaches lowest below it.
-    let mut best: Option<(usize, usize, usize, f64)> = None;
-    for j in 0..nj {
-        let mut kids: Vec<usize> = sk.children(j).collect();
-        if kids.len() < 2 {
-            continue;
-        }
-        kids.sort_by(|&a, &b| low[a].total_cmp(&low[b]).then(a.cmp(&b)));
-        let depth = mean_y[j] - low[kids[1]];
-        if depth > 0.0 && best.is_none_or(|b| depth > b.3) {
-            best = Some((j, kids[0], kids[1], depth));
-        }
-    }
-    let (pelvis, a, b, _) = best?;
+    let (pelvis, a, b, _, mean_y, low) = legs_below(sk, &positions, DVec3::Y)?;
     let leg = |top: usize| -> (usize, Option<usize>) {
         let mut chain = vec![top];
         let mut j = top;
@@ -383,30 +379,69 @@ pub fn feet_by_hierarchy(motion: &crate::Motion, names: &FootNames) -> Option<Fo
     } else {
         ((foot_b, toe_b), (foot_a, toe_a))
     };
+    // The head: the highest joint on average outside the legs (the joint, not its End Site).
+    let legs = |j: usize| sk.is_ancestor_or_self(a, j) || sk.is_ancestor_or_self(b, j);
+    let head = (0..nj)
+        .filter(|&j| sk.is_ancestor_or_self(pelvis, j) && j != pelvis && !legs(j))
+        .max_by(|&x, &y| mean_y[x].total_cmp(&mean_y[y]).then(y.cmp(&x)));
     let name = |j: usize| Some(sk.joints[j].name.clone());
     Some(FootNames {
         left_foot: names.left_foot.clone().or_else(|| name(lf)),
         right_foot: names.right_foot.clone().or_else(|| name(rf)),
         left_toe: names.left_toe.clone().or_else(|| lt.and_then(name)),
         right_toe: names.right_toe.clone().or_else(|| rt.and_then(name)),
+        head: names.head.clone().or_else(|| head.and_then(name)),
     })
+}
+
+/// The pelvis and its two legs seen along `up`: the joint whose second-lowest child subtree reaches
+/// lowest below it, on average over the frames of `positions` (world positions of every joint per
+/// frame). Returns `(pelvis, leg a, leg b, depth, mean height per joint, mean lowest height per
+/// subtree)`, heights along `up`; `None` when no joint has two children reaching below it.
+#[allow(clippy::type_complexity)]
+pub(crate) fn legs_below(
+    sk: &Skeleton,
+    positions: &[Vec<DVec3>],
+    up: DVec3,
+) -> Option<(usize, usize, usize, f64, Vec<f64>, Vec<f64>)> {
+    let nj = sk.joints.len();
+    let count = positions.len() as f64;
+    if positions.is_empty() {
+        return None;
+    }
+    // Mean height of every joint, and mean lowest height of every subtree.
+    let mean_y: Vec<f64> = (0..nj)
+        .map(|j| positions.iter().map(|p| p[j].dot(up)).sum::<f64>() / count)
+        .collect();
+    let mut low = mean_y.clone();
+    for j in (1..nj).rev() {
+        if let Some(p) = sk.joints[j].parent {
+            low[p] = low[p].min(low[j]);
+        }
+    }
+    let mut best: Option<(usize, usize, usize, f64)> = None;
+    for j in 0..nj {
+        let mut kids: Vec<usize> = sk.children(j).collect();
+        if kids.len() < 2 {
+            continue;
+        }
+        kids.sort_by(|&a, &b| low[a].total_cmp(&low[b]).then(a.cmp(&b)));
+        let depth = mean_y[j] - low[kids[1]];
+        if depth > 0.0 && best.is_none_or(|b| depth > b.3) {
+            best = Some((j, kids[0], kids[1], depth));
+        }
+    }
+    let (pelvis, a, b, depth) = best?;
+    Some((pelvis, a, b, depth, mean_y, low))
 }
 
 /// Standing height of the skeleton in file units, from bone lengths only (so it is the same for
 /// every take of one skeleton): leg length (pelvis -> ankle) plus the chain from the pelvis to the
-/// head (the shallowest joint named `head`, or else the highest-reaching chain) and the head's
-/// End Site. It leaves out the ankle height and the scalp, so it underestimates the height of a
+/// head ([`Feet::head`]: by name, or as [`feet_by_hierarchy`] found it) and the head's End Site;
+/// the leg length alone without a head. It leaves out the ankle height and the scalp, so it underestimates the height of a
 /// real person by about 10%.
 pub fn standing_height(sk: &Skeleton, feet: &Feet) -> f64 {
-    let head = sk
-        .joints
-        .iter()
-        .enumerate()
-        .filter(|(j, x)| {
-            x.name.to_ascii_lowercase().contains("head") && sk.is_ancestor_or_self(feet.pelvis, *j)
-        })
-        .min_by_key(|(j, _)| depth(sk, *j))
-        .map(|(j, _)| j);
+    let head = feet.head;
     let trunk = match head {
         Some(h) => {
             sk.chain_length(feet.pelvis, h) + sk.joints[h].end_site.map_or(0.0, |e| e.length())

@@ -4,9 +4,10 @@
 //! BVH says nothing about units, axes or what the root's position channels mean, and every tool
 //! decides differently. [`normalize_take`] decides from the data, in this order:
 //!
-//! 1. **Up axis** (gravity): the signed file axis along which the lowest joint hangs farthest below
-//!    the motion root, on average over the take (while walking or standing the feet stay at the
-//!    bottom; a T-pose or swinging arms reach less far sideways than the legs reach down). The take is
+//! 1. **Up axis** (gravity): the signed file axis along which two legs hang deepest below a pelvis,
+//!    on average over the take ([`detect_up`]: while walking or standing the feet stay at the bottom;
+//!    a stride or a T-pose reaches less far sideways, and upside down no joint has two chains hanging
+//!    below it). The take is
 //!    rotated by the proper rotation that maps that axis to +Y; the rotation only renames channels
 //!    and flips signs (`Zrotation` about the old up axis becomes `Yrotation`), so values stay exact.
 //!    `--up y|z` forces it.
@@ -291,36 +292,31 @@ fn sampled_positions(motion: &Motion) -> Vec<Vec<DVec3>> {
         .collect()
 }
 
-/// Detects the up axis (module docs, step 1): the signed axis along which the lowest joint lies
-/// farthest below the motion root on average. `None` when no axis stands out (by 20%) from the four
-/// perpendicular ones.
+/// Detects the up axis (module docs, step 1): the signed axis along which the legs hang deepest
+/// below the pelvis, on average over the take (for every signed axis, the joint whose second-lowest
+/// child subtree reaches lowest below it; the pelvis with its two legs wins along the true up axis,
+/// by the leg length against a stride's reach sideways or a trunk's reach upside down). `None` when
+/// no axis stands out (by 20%) from the four perpendicular ones.
 pub fn detect_up(motion: &Motion) -> Option<SignedAxis> {
-    let root = motion_root(motion);
     let frames = sampled_positions(motion);
     if frames.is_empty() {
         return None;
     }
     let mut reach = [0.0f64; 6];
-    for p in &frames {
-        for (k, r) in reach.iter_mut().enumerate() {
-            let a = SignedAxis {
-                axis: (k / 2) as u8,
-                negative: k % 2 == 1,
-            }
-            .vector();
-            let below = p
-                .iter()
-                .map(|q| -(*q - p[root]).dot(a))
-                .fold(f64::NEG_INFINITY, f64::max);
-            *r += below / frames.len() as f64;
-        }
+    for (k, r) in reach.iter_mut().enumerate() {
+        let a = SignedAxis {
+            axis: (k / 2) as u8,
+            negative: k % 2 == 1,
+        };
+        *r = crate::contacts::legs_below(&motion.skeleton, &frames, a.vector())
+            .map_or(0.0, |l| l.3);
     }
-    let best = (0..6).max_by(|&a, &b| reach[a].total_cmp(&reach[b]))?;
+    let best = (0..6).max_by(|&a, &b| reach[a].total_cmp(&reach[b]).then(b.cmp(&a)))?;
     let side = (0..6)
         .filter(|&k| k / 2 != best / 2)
         .map(|k| reach[k])
-        .fold(f64::NEG_INFINITY, f64::max);
-    if !(reach[best] > 0.0 && reach[best] > 1.2 * side.max(0.0)) {
+        .fold(0.0, f64::max);
+    if !(reach[best] > 0.0 && reach[best] > 1.2 * side) {
         return None;
     }
     Some(SignedAxis {
@@ -431,22 +427,11 @@ fn fix_root_positions(motion: &mut Motion) -> RootPositions {
 }
 
 /// Standing height (file units) measured on the take's bone lengths (median over sampled frames):
-/// the leg chain (pelvis to ankle, the longer side) plus the chain from the pelvis to the shallowest
-/// joint named `head` and its End Site; without a head, 1.75 leg lengths.
+/// the leg chain (pelvis to ankle, the longer side) plus the chain from the pelvis to the head
+/// ([`Feet::head`]) and its End Site; without a head, 1.75 leg lengths.
 pub fn take_standing_height(motion: &Motion, feet: &Feet) -> f64 {
     let sk = &motion.skeleton;
-    let head = sk
-        .joints
-        .iter()
-        .enumerate()
-        .filter(|(j, x)| {
-            crate::contacts::name_words(&x.name)
-                .iter()
-                .any(|w| w == "head")
-                && sk.is_ancestor_or_self(feet.pelvis, *j)
-        })
-        .min_by_key(|(j, _)| crate::contacts::depth(sk, *j))
-        .map(|(j, _)| j);
+    let head = feet.head;
     let chain = |p: &[DVec3], top: usize, mut j: usize| {
         let mut len = 0.0;
         while j != top {
@@ -510,6 +495,12 @@ pub fn normalize_take(
     }
     let root_positions = fix_root_positions(&mut m);
     let (names, by_hierarchy) = match find_feet(&m.skeleton, &options.feet) {
+        Ok(f) if f.head.is_none() => {
+            // Feet by name or map, but no head by name: the hierarchy's head.
+            let mut names = options.feet.clone();
+            names.head = feet_by_hierarchy(&m, &options.feet).and_then(|h| h.head);
+            (names, false)
+        }
         Ok(_) => (options.feet.clone(), false),
         Err(name_error) => match feet_by_hierarchy(&m, &options.feet) {
             Some(names) => (names, true),

@@ -489,9 +489,7 @@ fn cycles_from_takes(
     // The joints the cycles use: the map's, else those found by name, else by the hierarchy of the
     // first take.
     let mut cycle_config = config.cycle.clone();
-    if conventions.feet_by_hierarchy || like.is_some() {
-        cycle_config.feet = conventions.feet.clone();
-    }
+    cycle_config.feet = conventions.feet.clone();
     let layout = match like {
         Some(set) => {
             let reference = &set.layout.skeleton().joints;
@@ -1069,10 +1067,11 @@ struct JointMapFile {
     right_foot: Option<String>,
     left_toe: Option<String>,
     right_toe: Option<String>,
+    head: Option<String>,
 }
 
-/// Parses a joint map (TOML, keys `left_foot`, `right_foot`, `left_toe`, `right_toe`, each a joint
-/// name as written in the BVH files), e.g.
+/// Parses a joint map (TOML, keys `left_foot`, `right_foot`, `left_toe`, `right_toe` and `head`, each
+/// a joint name as written in the BVH files), e.g.
 ///
 /// ```toml
 /// left_foot = "Bip01 L Foot"
@@ -1088,6 +1087,7 @@ pub fn joint_map_from_toml(text: &str) -> Result<FootNames, DatasetError> {
         right_foot: map.right_foot,
         left_toe: map.left_toe,
         right_toe: map.right_toe,
+        head: map.head,
     })
 }
 

@@ -182,13 +182,10 @@ fn print_report(
             }
         )?;
     }
+    // Skipped frames of the takes that gave cycles are noted on stderr while loading.
     for t in &set.takes {
         if let Some(reason) = &t.reason {
             writeln!(out, "  no cycle from {}: {reason}", t.path.display())?;
-        } else {
-            for s in &t.skipped {
-                writeln!(out, "  {}: skipped {s}", t.path.display())?;
-            }
         }
     }
     writeln!(

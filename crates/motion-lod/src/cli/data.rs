@@ -89,7 +89,7 @@ pub struct DataArgs {
     #[arg(long, value_enum, default_value_t = UpArg::Auto)]
     pub up: UpArg,
     /// A TOML file naming the joints of the feet when neither their names nor the hierarchy find
-    /// them: `left_foot`, `right_foot`, and optionally `left_toe`, `right_toe`.
+    /// them: `left_foot`, `right_foot`, and optionally `left_toe`, `right_toe`, `head`.
     #[arg(long, value_name = "FILE")]
     pub joint_map: Option<PathBuf>,
 }
