@@ -308,8 +308,8 @@ pub fn detect_up(motion: &Motion) -> Option<SignedAxis> {
             axis: (k / 2) as u8,
             negative: k % 2 == 1,
         };
-        *r = crate::contacts::legs_below(&motion.skeleton, &frames, a.vector())
-            .map_or(0.0, |l| l.3);
+        *r =
+            crate::contacts::legs_below(&motion.skeleton, &frames, a.vector()).map_or(0.0, |l| l.3);
     }
     let best = (0..6).max_by(|&a, &b| reach[a].total_cmp(&reach[b]).then(b.cmp(&a)))?;
     let side = (0..6)

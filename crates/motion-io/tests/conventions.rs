@@ -193,7 +193,11 @@ fn feet_from_the_hierarchy_when_no_name_says_foot() {
     assert_eq!(names.right_foot.as_deref(), Some("j5b"));
     assert_eq!(names.left_toe.as_deref(), Some("j6a"));
     assert_eq!(names.right_toe.as_deref(), Some("j6b"));
-    assert_eq!(names.head.as_deref(), Some("j2"), "the highest joint outside the legs");
+    assert_eq!(
+        names.head.as_deref(),
+        Some("j2"),
+        "the highest joint outside the legs"
+    );
     // Travelling the other way without turning round (a mirrored take) swaps them.
     let mut back = m.clone();
     let n = back.skeleton.channel_count();

@@ -431,3 +431,39 @@ fn shared_data_keep_their_conventions() {
         assert_eq!(set.cycles.len(), expected, "{name}");
     }
 }
+
+#[test]
+fn a_crowd_of_a_model_of_straight_walks_fits_its_field_instead_of_refusing() {
+    use crowd_sim::{Camera, CrowdConfig};
+    use lod_policy::DistancePolicy;
+    use motion_lod::crowd::{CrowdRun, ModelPolicy, run_crowd};
+    let loaded = DataSpec::default().load(&|_, _| {}).expect("embedded data");
+    let straight: Vec<usize> = (0..loaded.training.controls.len())
+        .filter(|&k| loaded.training.controls[k][2].abs() < 0.5f64.to_radians())
+        .collect();
+    assert!(straight.len() >= 3, "straight cycles: {}", straight.len());
+    let set = loaded.training.select(&straight);
+    let model = motion_lod::MotionModel::build(
+        &set,
+        &motion_lod::BuildConfig::default(),
+        &motion_lod::progress::NoProgress,
+    )
+    .expect("model of straight walks builds");
+    let run = CrowdRun {
+        config: CrowdConfig {
+            seed: 5,
+            ..CrowdConfig::with_density(40, 0.05)
+        },
+        seconds: 1.0,
+        lens: Camera::default(),
+        render: None,
+    };
+    let lod = &model.lod;
+    let source = motion_lod::LodSource::new(&model);
+    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    let outcome = run_crowd(&source, &policy, &run).expect("the crowd runs");
+    let asked = run.config.field_size_m;
+    assert_eq!(outcome.field_enlarged_from, Some(asked));
+    assert!(outcome.field_m > asked, "{} vs {asked}", outcome.field_m);
+    assert_eq!(outcome.last.level_histogram.iter().sum::<u32>(), 40);
+}
