@@ -420,13 +420,13 @@ pub(crate) fn legs_below(
         }
     }
     let mut best: Option<(usize, usize, usize, f64)> = None;
-    for j in 0..nj {
+    for (j, &height) in mean_y.iter().enumerate() {
         let mut kids: Vec<usize> = sk.children(j).collect();
         if kids.len() < 2 {
             continue;
         }
         kids.sort_by(|&a, &b| low[a].total_cmp(&low[b]).then(a.cmp(&b)));
-        let depth = mean_y[j] - low[kids[1]];
+        let depth = height - low[kids[1]];
         if depth > 0.0 && best.is_none_or(|b| depth > b.3) {
             best = Some((j, kids[0], kids[1], depth));
         }

@@ -106,7 +106,9 @@ fn walking_frames(frames: usize, channels: usize) -> String {
 
 #[test]
 fn feet_by_name_in_every_convention() {
-    let conventions: [([&str; 7], (&str, &str), &str, &str); 6] = [
+    // (joint names with `#` for the side, side markers, expected left foot, expected left toe)
+    type Convention<'a> = ([&'a str; 7], (&'a str, &'a str), &'a str, &'a str);
+    let conventions: [Convention; 6] = [
         (
             [
                 "Hips", "Spine", "Head", "#UpLeg", "#Leg", "#Foot", "#ToeBase",

@@ -507,7 +507,8 @@ impl Analysis {
             .map(|j| !CONTROL_DEFINED_ROWS.contains(&(j % p)))
             .collect();
         let (kriging_config, dropped_for_samples) = fit_to_sample_count(&params, &config.kriging)?;
-        let select = config.select_controls && s >= MIN_SAMPLES + 1;
+        // Leave-one-out needs a sample more than the fewest a model builds from.
+        let select = config.select_controls && s > MIN_SAMPLES;
         let (kriging, mut control_decisions) = if select {
             let selection = select_dims(
                 params.as_ref(),

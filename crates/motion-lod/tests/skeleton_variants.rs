@@ -226,7 +226,7 @@ fn a_joint_map_names_the_feet_of_anonymous_joints() {
     // A map naming a joint that does not exist fails every file, each with its reason.
     let mut config = DatasetConfig::default();
     config.cycle.feet.left_foot = Some("no_such_joint".into());
-    match load_cycles(&[dir.clone()], &config, &|_, _| {}) {
+    match load_cycles(std::slice::from_ref(&dir), &config, &|_, _| {}) {
         Err(DatasetError::NoCycles { reasons, .. }) => {
             assert_eq!(reasons.len(), 2);
             for r in reasons {
@@ -266,7 +266,12 @@ fn a_folder_of_failing_files_lists_every_file_and_exits_non_zero() {
         format!("{header}Frames: 0\nFrame Time: 0.0083333\n"),
     )
     .expect("write");
-    let err = load_cycles(&[dir.clone()], &DatasetConfig::default(), &|_, _| {}).unwrap_err();
+    let err = load_cycles(
+        std::slice::from_ref(&dir),
+        &DatasetConfig::default(),
+        &|_, _| {},
+    )
+    .unwrap_err();
     let text = err.to_string();
     for f in ["a_garbage.bvh", "b_short.bvh", "c_empty.bvh"] {
         assert!(text.contains(f), "{f} missing from: {text}");
