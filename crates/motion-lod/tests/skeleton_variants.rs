@@ -322,7 +322,11 @@ fn five_cycles_build_evaluate_and_synthesize_and_eval_runs_from_anywhere() {
     let spec: &DataSpec = loaded.report.data.as_ref().expect("data recorded");
     // Stored relative to the model file, read back joined to the model's folder.
     let models = model.parent().expect("parent");
-    assert!(spec.dirs[0].starts_with(models), "{}", spec.dirs[0].display());
+    assert!(
+        spec.dirs[0].starts_with(models),
+        "{}",
+        spec.dirs[0].display()
+    );
     assert!(spec.dirs[0].is_dir(), "{}", spec.dirs[0].display());
     assert_eq!(loaded.report.samples, 5);
     let used = 4 - loaded.report.dropped_controls.len();
