@@ -109,6 +109,11 @@ fn round_to(x: f64, decimals: i32) -> f64 {
 ///
 /// The HIERARCHY section is motion-io's own (`to_bvh_string` of the frameless motion).
 pub fn bvh_text(motion: &Motion) -> String {
+    bvh_text_with(motion, 4)
+}
+
+/// [`bvh_text`] with `decimals` decimals (4 or 6).
+pub fn bvh_text_with(motion: &Motion, decimals: usize) -> String {
     let frameless = Motion {
         skeleton: motion.skeleton.clone(),
         frame_time: motion.frame_time,
@@ -130,21 +135,22 @@ pub fn bvh_text(motion: &Motion) -> String {
             if k > 0 {
                 s.push(' ');
             }
-            push_4dp(&mut s, v);
+            push_decimals(&mut s, v, decimals);
         }
         s.push('\n');
     }
     s
 }
 
-/// Appends `v` rounded to 4 decimals without trailing zeros (`1.5`, `-0.0012`, `0`; never `-0`).
-fn push_4dp(s: &mut String, v: f64) {
-    if v.abs() < 5e-5 {
+/// Appends `v` rounded to `decimals` decimals without trailing zeros (`1.5`, `-0.0012`, `0`; never
+/// `-0`).
+fn push_decimals(s: &mut String, v: f64, decimals: usize) {
+    if v.abs() < 0.5 * 10f64.powi(-(decimals as i32)) {
         s.push('0');
         return;
     }
     let start = s.len();
-    let _ = write!(s, "{v:.4}");
+    let _ = write!(s, "{v:.decimals$}");
     let trimmed = s[start..].trim_end_matches('0').trim_end_matches('.').len();
     s.truncate(start + trimmed);
 }
@@ -165,6 +171,7 @@ pub fn generate_all(seed: u64) -> Result<Vec<FixtureFile>> {
     let mut controls = String::from(
         "file,performer,height_m,speed_mps,turn_rate_dps,heading0_deg,start_x_m,start_z_m,frames,duration_s,steady_start_s,stride_m,cycle_s\n",
     );
+    let mut bases = Vec::new();
     for p in &planned {
         let take: Take =
             walker::generate(&p.spec).with_context(|| format!("generating {}", p.file))?;
@@ -197,11 +204,19 @@ pub fn generate_all(seed: u64) -> Result<Vec<FixtureFile>> {
             stride_length(s.speed, leg),
             1.0 / cycle_frequency(s.speed, leg),
         );
+        let content = bvh_text(m);
+        if crate::variants::VARIANT_TAKES.contains(&p.file.as_str()) {
+            // Variants rewrite the take as written (4 decimals), not the unrounded motion.
+            let written = motion_io::parse_bvh(&content)
+                .with_context(|| format!("reading back {}", p.file))?;
+            bases.push((p.file.clone(), written));
+        }
         files.push(FixtureFile {
             name: p.file.clone(),
-            content: bvh_text(m),
+            content,
         });
     }
+    files.extend(crate::variants::variant_files(&bases));
     files.push(FixtureFile {
         name: "controls.csv".into(),
         content: controls,
@@ -294,6 +309,10 @@ pub fn write(dir: &Path, files: &[FixtureFile]) -> Result<u64> {
     let mut total = 0;
     for f in files {
         let path = dir.join(&f.name);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("creating {}", parent.display()))?;
+        }
         std::fs::write(&path, f.content.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
         total += f.content.len() as u64;
@@ -306,6 +325,33 @@ pub fn write(dir: &Path, files: &[FixtureFile]) -> Result<u64> {
             && !files.iter().any(|f| f.name == name)
         {
             std::fs::remove_file(entry.path()).with_context(|| format!("removing stale {name}"))?;
+        }
+    }
+    // Stale variant takes and folders.
+    let variants = dir.join("variants");
+    if let Ok(folders) = std::fs::read_dir(&variants) {
+        for folder in folders {
+            let folder = folder?.path();
+            if !folder.is_dir() {
+                continue;
+            }
+            for entry in std::fs::read_dir(&folder)
+                .with_context(|| format!("listing {}", folder.display()))?
+            {
+                let path = entry?.path();
+                let rel = path
+                    .strip_prefix(dir)
+                    .map(|p| p.to_string_lossy().replace('\\', "/"))
+                    .unwrap_or_default();
+                if !files.iter().any(|f| f.name == rel) {
+                    std::fs::remove_file(&path)
+                        .with_context(|| format!("removing stale {}", path.display()))?;
+                }
+            }
+            if std::fs::read_dir(&folder)?.next().is_none() {
+                std::fs::remove_dir(&folder)
+                    .with_context(|| format!("removing {}", folder.display()))?;
+            }
         }
     }
     Ok(total)

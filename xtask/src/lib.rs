@@ -42,4 +42,5 @@ pub mod leg_ik;
 pub mod rig;
 pub mod rng;
 pub mod tables;
+pub mod variants;
 pub mod walker;

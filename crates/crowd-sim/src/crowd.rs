@@ -166,16 +166,21 @@ pub struct Crowd<C> {
     bones: Vec<(usize, usize)>,
     frame: u64,
     time_s: f64,
+    field_enlarged_from: Option<f32>,
 }
 
 impl<C: Send> Crowd<C> {
     /// Places `config.walkers` walkers on seeded paths with root-only clips at random phases.
     ///
+    /// A field too small for the paths the source's turn range can follow (a model of straight
+    /// walks turns little per cycle, so its paths need large radii) is enlarged to fit them:
+    /// [`Crowd::field_enlarged_from`] tells, and [`Crowd::config`] holds the size used.
+    ///
     /// Errors: zero walkers, a source without levels or with unusable control bounds, a bad
-    /// config value, a field too small for the source's turning range, or an invalid clip.
+    /// config value, or an invalid clip.
     pub fn new<S: ClipSource<Clip = C>>(
         source: &S,
-        config: CrowdConfig,
+        mut config: CrowdConfig,
     ) -> Result<Self, CrowdError> {
         config.validate()?;
         let levels = source.levels();
@@ -201,6 +206,13 @@ impl<C: Send> Crowd<C> {
         );
         let turn_max = bounds.max.turn.min(-bounds.min.turn);
         let min_radius = 2.0 * stride_hi / turn_max;
+        // The field EllipsePath::random needs for that radius (half-width >= 1.5 r + border).
+        let needed = 2.0 * ((1.5 * min_radius).max(3.0) + config.border_m) * 1.001;
+        let field_enlarged_from = (config.field_size_m < needed && needed.is_finite()).then(|| {
+            let from = config.field_size_m;
+            config.field_size_m = needed;
+            from
+        });
         let root_only = Detail::root_only(&levels);
         let make = |i: usize| -> Result<Walker<C>, CrowdError> {
             let mut g = SplitMix64::for_walker(config.seed, i);
@@ -266,6 +278,7 @@ impl<C: Send> Crowd<C> {
         let mut crowd = Self {
             config,
             params,
+            field_enlarged_from,
             walkers,
             poses: vec![0.0; n * levels.pose_len],
             bins: vec![0; n],
@@ -502,7 +515,14 @@ impl<C> Crowd<C> {
         self.walkers.is_empty()
     }
 
-    /// The configuration the crowd was built with.
+    /// The field size asked for, when it was too small for the source's turn range and the crowd
+    /// enlarged it (see [`Crowd::new`]); `None` when the field was used as given.
+    pub fn field_enlarged_from(&self) -> Option<f32> {
+        self.field_enlarged_from
+    }
+
+    /// The configuration in use (with the field size enlarged when the source's turn range needed
+    /// it, see [`Crowd::new`]).
     pub fn config(&self) -> &CrowdConfig {
         &self.config
     }

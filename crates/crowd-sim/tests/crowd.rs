@@ -323,10 +323,13 @@ fn bad_input_gives_clear_errors() {
         Crowd::new(&NoLevels(source.clone()), config(5, 50.0)),
         Err(CrowdError::NoLevels { .. })
     ));
-    assert!(matches!(
-        Crowd::new(&source, config(5, 4.0)),
-        Err(CrowdError::FieldTooSmall { .. })
-    ));
+    // A field too small for the source's turn range is enlarged to fit the paths, and says so.
+    let small = Crowd::new(&source, config(5, 4.0)).expect("field enlarged");
+    assert_eq!(small.field_enlarged_from(), Some(4.0));
+    assert!(small.config().field_size_m > 4.0);
+    let fits = Crowd::new(&source, config(5, 50.0)).expect("field fits");
+    assert_eq!(fits.field_enlarged_from(), None);
+    assert_eq!(fits.config().field_size_m, 50.0);
     assert!(matches!(
         Crowd::new(&source, config(5, f32::NAN)),
         Err(CrowdError::BadConfig { .. })

@@ -2,6 +2,7 @@
 //! the floor").
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use crate::skeleton::Skeleton;
 
@@ -55,27 +56,64 @@ pub struct Feet {
     pub pelvis: usize,
     /// Leg length in file units: the longer of the two bone chains pelvis -> foot.
     pub leg_length: f64,
+    /// The head: the joint the names override gives, else the shallowest joint below the pelvis
+    /// whose name contains `head`; `None` when there is none.
+    pub head: Option<usize>,
+}
+
+/// The words of a joint name, lower-case: the part after the last `:` (a namespace such as
+/// `mixamorig:`), split at every character that is not a letter or digit and at case changes
+/// (`CC_Base_L_Foot` -> `cc`, `base`, `l`, `foot`; `lFoot` -> `l`, `foot`; `LHipJoint` -> `l`, `hip`,
+/// `joint`; `LeftToeBase` -> `left`, `toe`, `base`).
+pub fn name_words(name: &str) -> Vec<String> {
+    let name = name.rsplit(':').next().unwrap_or(name);
+    let mut words = Vec::new();
+    for part in name.split(|c: char| !c.is_ascii_alphanumeric()) {
+        let chars: Vec<char> = part.chars().collect();
+        let mut word = String::new();
+        for (i, &c) in chars.iter().enumerate() {
+            let boundary = i > 0
+                && c.is_ascii_uppercase()
+                && (chars[i - 1].is_ascii_lowercase()
+                    || chars[i - 1].is_ascii_digit()
+                    || (chars[i - 1].is_ascii_uppercase()
+                        && chars.get(i + 1).is_some_and(|n| n.is_ascii_lowercase())));
+            if boundary && !word.is_empty() {
+                words.push(std::mem::take(&mut word));
+            }
+            word.push(c.to_ascii_lowercase());
+        }
+        if !word.is_empty() {
+            words.push(word);
+        }
+    }
+    words
 }
 
 /// Side of a joint name: `Some(true)` left, `Some(false)` right, `None` when the name carries no
 /// side marker (or both): `left`/`right` anywhere (any case), `l_`/`r_` prefixes, `_l`/`_r` and
-/// `.l`/`.r` suffixes, and camel-case `lFoot`/`RFoot` prefixes.
+/// `.l`/`.r` suffixes, camel-case `lFoot`/`RFoot` prefixes, and a word `l`/`r` anywhere in the name
+/// ([`name_words`]: `CC_Base_L_Foot`, `mixamorig:LeftFoot`, `LHipJoint`).
 pub fn side_of(name: &str) -> Option<bool> {
     let lower = name.to_ascii_lowercase();
     let b = name.as_bytes();
     let camel = |c: u8| b.len() > 1 && (b[0] == c) && b[1].is_ascii_uppercase();
+    let words = name_words(name);
+    let word = |w: &str| words.iter().any(|x| x == w);
     let left = lower.contains("left")
         || lower.starts_with("l_")
         || lower.ends_with("_l")
         || lower.ends_with(".l")
         || camel(b'l')
-        || camel(b'L');
+        || camel(b'L')
+        || word("l");
     let right = lower.contains("right")
         || lower.starts_with("r_")
         || lower.ends_with("_r")
         || lower.ends_with(".r")
         || camel(b'r')
-        || camel(b'R');
+        || camel(b'R')
+        || word("r");
     match (left, right) {
         (true, false) => Some(true),
         (false, true) => Some(false),
@@ -127,6 +165,14 @@ pub fn mirrored_names(name: &str) -> Vec<String> {
                 push(replace_at(0, c));
             }
         }
+        // A middle marker `_L_` (`CC_Base_L_Foot`).
+        for i in 1..n - 1 {
+            if let Some(c) = swap(chars[i]) {
+                if chars[i - 1] == '_' && chars[i + 1] == '_' {
+                    push(replace_at(i, c));
+                }
+            }
+        }
         // Suffix `_l` / `.l`.
         if let Some(c) = swap(chars[n - 1]) {
             if chars[n - 2] == '_' || chars[n - 2] == '.' {
@@ -137,7 +183,8 @@ pub fn mirrored_names(name: &str) -> Vec<String> {
     out
 }
 
-fn depth(sk: &Skeleton, mut j: usize) -> usize {
+/// Number of ancestors of joint `j`.
+pub(crate) fn depth(sk: &Skeleton, mut j: usize) -> usize {
     let mut d = 0;
     while let Some(p) = sk.joints[j].parent {
         d += 1;
@@ -168,7 +215,7 @@ fn lookup(sk: &Skeleton, name: &str) -> Result<usize, CycleError> {
 }
 
 /// Name overrides for [`find_feet`]; `None` means "find by name".
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct FootNames {
     /// Left ankle joint name.
     pub left_foot: Option<String>,
@@ -178,10 +225,15 @@ pub struct FootNames {
     pub left_toe: Option<String>,
     /// Right toe joint name.
     pub right_toe: Option<String>,
+    /// Head joint name (for the standing height).
+    #[serde(default)]
+    pub head: Option<String>,
 }
 
 /// Finds the feet: ankles are the shallowest joints whose name contains `foot` or `ankle` with a
-/// side marker (`Left`, `l_`, `_L`, `lFoot` ...); toes are joints below them containing `toe`.
+/// side marker (`Left`, `l_`, `_L`, `lFoot`, `CC_Base_L_Foot`, `mixamorig:LeftFoot`, `foot.L` ...,
+/// see [`side_of`]); toes are joints below them containing `toe` (or `ball`), or, below a joint
+/// named `ankle`, `foot` (SMPL's `L_Ankle` and `L_Foot`).
 pub fn find_feet(sk: &Skeleton, names: &FootNames) -> Result<Feet, CycleError> {
     let foot = |ov: &Option<String>, left: bool, side: &'static str| -> Result<usize, CycleError> {
         match ov {
@@ -199,7 +251,14 @@ pub fn find_feet(sk: &Skeleton, names: &FootNames) -> Result<Feet, CycleError> {
     let toe = |ov: &Option<String>, left: bool, f: usize| -> Result<Option<usize>, CycleError> {
         match ov {
             Some(n) => lookup(sk, n).map(Some),
-            None => Ok(find_by_name(sk, &["toe"], left, Some(f))),
+            None => Ok(
+                find_by_name(sk, &["toe", "ball"], left, Some(f)).or_else(|| {
+                    let ankle = sk.joints[f].name.to_ascii_lowercase().contains("ankle");
+                    ankle
+                        .then(|| find_by_name(sk, &["foot"], left, Some(f)))
+                        .flatten()
+                }),
+            ),
         }
     };
     let left_toe = toe(&names.left_toe, true, left_foot)?;
@@ -229,7 +288,20 @@ pub fn find_feet(sk: &Skeleton, names: &FootNames) -> Result<Feet, CycleError> {
     if !(leg_length.is_finite() && leg_length > 0.0) {
         return Err(CycleError::BadLegLength(leg_length));
     }
+    let head = match &names.head {
+        Some(n) => Some(lookup(sk, n)?),
+        None => sk
+            .joints
+            .iter()
+            .enumerate()
+            .filter(|(j, x)| {
+                x.name.to_ascii_lowercase().contains("head") && sk.is_ancestor_or_self(pelvis, *j)
+            })
+            .min_by_key(|(j, _)| depth(sk, *j))
+            .map(|(j, _)| j),
+    };
     Ok(Feet {
+        head,
         left_foot,
         right_foot,
         left_toe,
@@ -241,21 +313,135 @@ pub fn find_feet(sk: &Skeleton, names: &FootNames) -> Result<Feet, CycleError> {
     })
 }
 
+/// Finds the feet of a Y-up take from its hierarchy when no name says which joint is a foot, and
+/// returns their names (the given `names` kept where they are set), or `None` when the skeleton has
+/// no two legs or the subject does not travel.
+///
+/// The pelvis is the joint with two child chains reaching lowest below it (mean over the take); each
+/// leg follows, from the pelvis down, the child whose subtree reaches lowest; the ankle is the first
+/// joint of that chain within 15% of the chain's lowest mean height (so the knee is above it and the
+/// toe, if any, below it: the toe is the ankle's next joint in the chain). Left and right: the left
+/// hip lies on the walker's left of the direction of travel (`up x forward`), on average. The head
+/// (unless named) is the highest joint on average outside the legs.
+pub fn feet_by_hierarchy(motion: &crate::Motion, names: &FootNames) -> Option<FootNames> {
+    let sk = &motion.skeleton;
+    let nf = motion.frame_count();
+    let nj = sk.joints.len();
+    if nf < 3 || nj < 3 {
+        return None;
+    }
+    let step = nf.div_ceil(256).max(1);
+    let mut t = vec![crate::Transform::IDENTITY; nj];
+    let frames: Vec<usize> = (0..nf).step_by(step).collect();
+    let positions: Vec<Vec<DVec3>> = frames
+        .iter()
+        .map(|&f| {
+            sk.forward_kinematics(motion.frame(f), &mut t);
+            t.iter().map(|x| x.position).collect()
+        })
+        .collect();
+    let (pelvis, a, b, _, mean_y, low) = legs_below(sk, &positions, DVec3::Y)?;
+    let leg = |top: usize| -> (usize, Option<usize>) {
+        let mut chain = vec![top];
+        let mut j = top;
+        while let Some(next) = sk
+            .children(j)
+            .min_by(|&x, &y| low[x].total_cmp(&low[y]).then(x.cmp(&y)))
+        {
+            chain.push(next);
+            j = next;
+        }
+        let lowest = chain
+            .iter()
+            .map(|&k| mean_y[k] - mean_y[pelvis])
+            .fold(f64::INFINITY, f64::min);
+        let i = chain
+            .iter()
+            .position(|&k| mean_y[k] - mean_y[pelvis] <= 0.85 * lowest)
+            .unwrap_or(chain.len() - 1);
+        (chain[i], chain.get(i + 1).copied())
+    };
+    let (foot_a, toe_a) = leg(a);
+    let (foot_b, toe_b) = leg(b);
+    // Left of travel: up x forward = (fz, 0, -fx).
+    let k = ((0.25 / motion.frame_time).round() as usize / step).max(1);
+    let mut side = 0.0;
+    for i in k..positions.len().saturating_sub(k) {
+        let d = positions[i + k][pelvis] - positions[i - k][pelvis];
+        let left = DVec3::new(d.z, 0.0, -d.x);
+        side += (positions[i][a] - positions[i][b]).dot(left);
+    }
+    if side == 0.0 || !side.is_finite() {
+        return None;
+    }
+    let ((lf, lt), (rf, rt)) = if side > 0.0 {
+        ((foot_a, toe_a), (foot_b, toe_b))
+    } else {
+        ((foot_b, toe_b), (foot_a, toe_a))
+    };
+    // The head: the highest joint on average outside the legs (the joint, not its End Site).
+    let legs = |j: usize| sk.is_ancestor_or_self(a, j) || sk.is_ancestor_or_self(b, j);
+    let head = (0..nj)
+        .filter(|&j| sk.is_ancestor_or_self(pelvis, j) && j != pelvis && !legs(j))
+        .max_by(|&x, &y| mean_y[x].total_cmp(&mean_y[y]).then(y.cmp(&x)));
+    let name = |j: usize| Some(sk.joints[j].name.clone());
+    Some(FootNames {
+        left_foot: names.left_foot.clone().or_else(|| name(lf)),
+        right_foot: names.right_foot.clone().or_else(|| name(rf)),
+        left_toe: names.left_toe.clone().or_else(|| lt.and_then(name)),
+        right_toe: names.right_toe.clone().or_else(|| rt.and_then(name)),
+        head: names.head.clone().or_else(|| head.and_then(name)),
+    })
+}
+
+/// The pelvis and its two legs seen along `up`: the joint whose second-lowest child subtree reaches
+/// lowest below it, on average over the frames of `positions` (world positions of every joint per
+/// frame). Returns `(pelvis, leg a, leg b, depth, mean height per joint, mean lowest height per
+/// subtree)`, heights along `up`; `None` when no joint has two children reaching below it.
+#[allow(clippy::type_complexity)]
+pub(crate) fn legs_below(
+    sk: &Skeleton,
+    positions: &[Vec<DVec3>],
+    up: DVec3,
+) -> Option<(usize, usize, usize, f64, Vec<f64>, Vec<f64>)> {
+    let nj = sk.joints.len();
+    let count = positions.len() as f64;
+    if positions.is_empty() {
+        return None;
+    }
+    // Mean height of every joint, and mean lowest height of every subtree.
+    let mean_y: Vec<f64> = (0..nj)
+        .map(|j| positions.iter().map(|p| p[j].dot(up)).sum::<f64>() / count)
+        .collect();
+    let mut low = mean_y.clone();
+    for j in (1..nj).rev() {
+        if let Some(p) = sk.joints[j].parent {
+            low[p] = low[p].min(low[j]);
+        }
+    }
+    let mut best: Option<(usize, usize, usize, f64)> = None;
+    for (j, &height) in mean_y.iter().enumerate() {
+        let mut kids: Vec<usize> = sk.children(j).collect();
+        if kids.len() < 2 {
+            continue;
+        }
+        kids.sort_by(|&a, &b| low[a].total_cmp(&low[b]).then(a.cmp(&b)));
+        let depth = height - low[kids[1]];
+        if depth > 0.0 && best.is_none_or(|b| depth > b.3) {
+            best = Some((j, kids[0], kids[1], depth));
+        }
+    }
+    let (pelvis, a, b, depth) = best?;
+    Some((pelvis, a, b, depth, mean_y, low))
+}
+
 /// Standing height of the skeleton in file units, from bone lengths only (so it is the same for
 /// every take of one skeleton): leg length (pelvis -> ankle) plus the chain from the pelvis to the
-/// head (the shallowest joint named `head`, or else the highest-reaching chain) and the head's
-/// End Site. It leaves out the ankle height and the scalp, so it underestimates the height of a
+/// head ([`Feet::head`]: by name, or as [`feet_by_hierarchy`] found it) and the head's End Site;
+/// the leg length alone without a head. It leaves out the ankle height and the scalp, so it underestimates the height of a
 /// real person by about 10%.
 pub fn standing_height(sk: &Skeleton, feet: &Feet) -> f64 {
-    let head = sk
-        .joints
-        .iter()
-        .enumerate()
-        .filter(|(j, x)| {
-            x.name.to_ascii_lowercase().contains("head") && sk.is_ancestor_or_self(feet.pelvis, *j)
-        })
-        .min_by_key(|(j, _)| depth(sk, *j))
-        .map(|(j, _)| j);
+    let head = feet.head;
     let trunk = match head {
         Some(h) => {
             sk.chain_length(feet.pelvis, h) + sk.joints[h].end_site.map_or(0.0, |e| e.length())

@@ -610,6 +610,56 @@ pub fn segment_cycles(
     Ok(report)
 }
 
+/// [`segment_cycles`] on each frame range of `segments` separately (the walking pieces of a take,
+/// see [`crate::normalize_take`]), with frame numbers of the whole take: cycles never span two
+/// pieces, and `skip_start_seconds` counts from the start of the take. One range covering the whole
+/// take gives exactly [`segment_cycles`]'s result.
+pub fn segment_take(
+    motion: &Motion,
+    layout: &PoseLayout,
+    config: &CycleConfig,
+    source: &Path,
+    segments: &[std::ops::Range<usize>],
+) -> Result<CycleReport, CycleError> {
+    let nf = motion.frame_count();
+    if let [only] = segments {
+        if only.start == 0 && only.end == nf {
+            return segment_cycles(motion, layout, config, source);
+        }
+    }
+    let n = motion.skeleton.channel_count();
+    let mut report = CycleReport::default();
+    for range in segments {
+        let range = range.start.min(nf)..range.end.min(nf);
+        if range.len() < 3 {
+            continue;
+        }
+        let piece = Motion {
+            skeleton: motion.skeleton.clone(),
+            frame_time: motion.frame_time,
+            frames: motion.frames[range.start * n..range.end * n].to_vec(),
+        };
+        let config = CycleConfig {
+            skip_start_seconds: (config.skip_start_seconds
+                - range.start as f64 * motion.frame_time)
+                .max(0.0),
+            ..config.clone()
+        };
+        let mut r = segment_cycles(&piece, layout, &config, source)?;
+        for c in &mut r.cycles {
+            c.first_frame += range.start;
+            c.last_frame += range.start;
+        }
+        for d in &mut r.dropped {
+            d.first_frame += range.start;
+            d.last_frame += range.start;
+        }
+        report.cycles.extend(r.cycles);
+        report.dropped.extend(r.dropped);
+    }
+    Ok(report)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

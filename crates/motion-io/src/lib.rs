@@ -6,7 +6,8 @@
 //! or statistics over many cycles.
 //!
 //! Modules: [`bvh`] (reader, writer, errors with line numbers), [`Skeleton`] / [`Motion`] (hierarchy,
-//! frames, FK in file units), [`units`] (units per metre), [`euler`] and [`expmap`] (rotation
+//! frames, FK in file units), [`units`] (units per metre), [`normalize`] (any exporter's units, up axis, root semantics, feet
+//! and reference frames brought into the project's conventions), [`euler`] and [`expmap`] (rotation
 //! conversions), [`pose`] (pose vectors of the paper's section 3 and their FK in metres),
 //! [`contacts`] (feet, leg length, contacts) and [`cycles`] (segmentation, canonicalisation,
 //! controls).
@@ -39,6 +40,7 @@ pub mod euler;
 pub mod expmap;
 mod folder;
 mod motion;
+pub mod normalize;
 pub mod pose;
 mod skeleton;
 pub mod test_data;
@@ -48,13 +50,19 @@ pub use bvh::{
     BvhError, BvhErrorKind, parse_bvh, read_bvh, to_bvh_string, with_rest_at_origin, write_bvh,
 };
 pub use contacts::{
-    CycleError, Feet, FootNames, find_feet, mirrored_names, side_of, standing_height,
+    CycleError, Feet, FootNames, feet_by_hierarchy, find_feet, mirrored_names, name_words, side_of,
+    standing_height,
 };
 pub use cycles::{
     Controls, CycleConfig, CycleReport, DropReason, DroppedCycle, GaitCycle, segment_cycles,
+    segment_take,
 };
 pub use folder::{FolderReport, read_folder};
 pub use motion::Motion;
+pub use normalize::{
+    Conventions, NormalizeOptions, NormalizedTake, RootPositions, SignedAxis, SkipReason,
+    SkippedFrames, Units, normalize_take,
+};
 pub use pose::{
     PoseError, PoseLayout, PoseLayoutParts, align_exp_maps, align_sequence, unwrap_exp_maps,
 };

@@ -206,11 +206,10 @@ impl TrainingSet {
                 self.controls[i]
             )));
         }
-        let min_samples = 6;
-        if s < min_samples {
+        if s < MIN_SAMPLES {
             return Err(BuildError::Data(format!(
-                "{s} samples: universal kriging over {} controls needs at least {min_samples}",
-                CONTROL_NAMES.len()
+                "{s} samples: a model needs at least {MIN_SAMPLES} cycles (universal kriging over one \
+                 control needs 3)"
             )));
         }
         Ok(())
@@ -253,6 +252,50 @@ impl TrainingSet {
             quality: self.quality.clone(),
         }
     }
+}
+
+/// The fewest samples a model builds from: universal kriging over one control needs 3.
+pub const MIN_SAMPLES: usize = 3;
+
+/// Fits the kriging settings to the number of samples. Universal kriging over `d` varying controls
+/// needs `d + 2` samples, and its leave-one-out (variogram choice, control selection, evaluation)
+/// one more; with fewer samples the controls that vary least (standard deviation relative to the
+/// mean step length for `dx`, `dz` and `height`, in radians for `turn`) are left out, down to one.
+/// With `MIN_SAMPLES` samples (no leave-one-out possible) the variogram is chosen by its fit to the
+/// empirical variogram. Returns the settings and the controls left out (sorted).
+fn fit_to_sample_count(
+    params: &Mat<f64>,
+    config: &KrigingConfig,
+) -> Result<(KrigingConfig, Vec<usize>), BuildError> {
+    let s = params.nrows();
+    let base = kriging::ParamScaling::from_choice(&config.scaling, params.as_ref())?;
+    let varying: Vec<usize> = (0..base.dims()).filter(|&k| base.scale[k] != 0.0).collect();
+    let allowed = s.saturating_sub(3).max(1);
+    let mut out = config.clone();
+    if s <= MIN_SAMPLES && matches!(out.model, kriging::ModelChoice::Auto(_)) {
+        out.model = kriging::ModelChoice::Auto(kriging::Selection::BestFit);
+    }
+    if varying.len() <= allowed || config.method != kriging::Method::Regression {
+        return Ok((out, Vec::new()));
+    }
+    let mean = |k: usize| params.col(k).iter().sum::<f64>() / s as f64;
+    let std = |k: usize| {
+        let m = mean(k);
+        (params.col(k).iter().map(|v| (v - m).powi(2)).sum::<f64>() / s as f64).sqrt()
+    };
+    let step = mean(1).abs().max(1e-9);
+    let spread = |k: usize| if k == 2 { std(k) } else { std(k) / step };
+    let mut order = varying.clone();
+    // Most varying first; ties by index, so the choice is deterministic.
+    order.sort_by(|&a, &b| spread(b).total_cmp(&spread(a)).then(a.cmp(&b)));
+    let mut dropped: Vec<usize> = order[allowed..].to_vec();
+    dropped.sort_unstable();
+    let mut scaling = base;
+    for &k in &dropped {
+        scaling.scale[k] = 0.0;
+    }
+    out.scaling = kriging::ScalingChoice::Given(scaling);
+    Ok((out, dropped))
 }
 
 /// Controls as an `S x d` matrix, one row per sample.
@@ -360,6 +403,9 @@ pub struct Analysis {
     pub order_note: Option<String>,
     /// What the control selection decided for each control ([`kriging::select_dims`]).
     pub control_decisions: Vec<DimDecision>,
+    /// Controls that vary over the data but were left out because the samples are too few for a
+    /// trend over all of them (see [`MIN_SAMPLES`]); their decision reads `Constant`.
+    pub dropped_for_samples: Vec<usize>,
     /// The key levels (ALS), decomposed with the rows weighted (`mse` and `rel_error` are those of the
     /// weighted tensor, which the greedy search compares).
     pub keys: KeyLevels,
@@ -460,11 +506,14 @@ impl Analysis {
         let scored: Vec<bool> = (0..p * t)
             .map(|j| !CONTROL_DEFINED_ROWS.contains(&(j % p)))
             .collect();
-        let (kriging, control_decisions) = if config.select_controls {
+        let (kriging_config, dropped_for_samples) = fit_to_sample_count(&params, &config.kriging)?;
+        // Leave-one-out needs a sample more than the fewest a model builds from.
+        let select = config.select_controls && s > MIN_SAMPLES;
+        let (kriging, mut control_decisions) = if select {
             let selection = select_dims(
                 params.as_ref(),
                 values.as_ref(),
-                &config.kriging,
+                &kriging_config,
                 SelectRule {
                     margin: config.control_margin,
                     min_t: config.control_min_t,
@@ -473,7 +522,7 @@ impl Analysis {
             )?;
             (selection.kriging, selection.decisions)
         } else {
-            let kriging = Kriging::fit(params.as_ref(), values.as_ref(), &config.kriging)?;
+            let kriging = Kriging::fit(params.as_ref(), values.as_ref(), &kriging_config)?;
             let decisions = (0..CONTROL_NAMES.len())
                 .map(|k| {
                     if kriging.dropped_dims().contains(&k) {
@@ -489,8 +538,12 @@ impl Analysis {
                 .collect();
             (kriging, decisions)
         };
+        for &k in &dropped_for_samples {
+            control_decisions[k] = DimDecision::Constant;
+        }
         progress.inc(1);
         Ok(Analysis {
+            dropped_for_samples,
             layout,
             tensor,
             time_scale,
@@ -628,6 +681,7 @@ impl Analysis {
                 variogram: *krig.variogram(),
                 dropped_controls: krig.dropped_dims().to_vec(),
                 control_decisions: self.control_decisions.clone(),
+                dropped_for_samples: self.dropped_for_samples.clone(),
                 static_joints: self.static_joints.clone(),
                 order_note: self.order_note.clone(),
                 kriging_loo_rmse: None,

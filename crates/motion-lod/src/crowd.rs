@@ -106,6 +106,11 @@ pub struct CrowdOutcome {
     pub rendered: usize,
     /// The animated GIF written at the end, if any.
     pub gif: Option<std::path::PathBuf>,
+    /// The field size used, metres.
+    pub field_m: f32,
+    /// The field size asked for, when the source's turn range needed a larger one
+    /// ([`Crowd::field_enlarged_from`]).
+    pub field_enlarged_from: Option<f32>,
 }
 
 /// Steps a crowd of `source` under `policy` for `run.seconds`, timing every frame; renders every n-th
@@ -123,7 +128,8 @@ where
         return Err(CrowdRunError::Seconds(run.seconds));
     }
     let mut crowd = Crowd::new(source, run.config)?;
-    let field = run.config.field_size_m;
+    // The field the crowd uses (enlarged when the source's turn range needs larger paths).
+    let field = crowd.config().field_size_m;
     let path = run.scene.path(field);
     let lens = run.scene.lens(run.lens, field);
     let frames = ((run.seconds * run.config.fps).round() as usize).max(1);
@@ -155,6 +161,8 @@ where
         last,
         rendered,
         gif,
+        field_m: crowd.config().field_size_m,
+        field_enlarged_from: crowd.field_enlarged_from(),
     })
 }
 

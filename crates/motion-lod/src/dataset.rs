@@ -17,8 +17,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use motion_io::pose::TIME_ROW;
 use motion_io::{
-    Controls, CycleConfig, DropReason, DroppedCycle, GaitCycle, Motion, PoseError, PoseLayout,
-    align_sequence, detect_units_per_metre, find_feet, read_bvh, segment_cycles,
+    Controls, Conventions, CycleConfig, DropReason, DroppedCycle, FootNames, GaitCycle, Motion,
+    NormalizeOptions, NormalizedTake, PoseError, PoseLayout, SignedAxis, SkippedFrames, Units,
+    align_sequence, find_feet, normalize_take, read_bvh, segment_take,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -49,12 +50,15 @@ pub enum DatasetError {
         folders: String,
     },
     /// Every file failed to read.
-    #[error("none of the {failed} .bvh files could be read (first error: {first})")]
+    #[error(
+        "none of the {failed} .bvh files could be read:{}",
+        list_reasons(reasons)
+    )]
     NoMotions {
         /// Number of failed files.
         failed: usize,
-        /// The first file's error.
-        first: String,
+        /// Every file with its error.
+        reasons: Vec<FailedFile>,
     },
     /// Two takes have different skeletons.
     #[error(
@@ -74,12 +78,17 @@ pub enum DatasetError {
     #[error("pose layout: {0}")]
     Layout(#[source] PoseError),
     /// No steady cycle was found in any take.
-    #[error("no gait cycle kept from {files} takes ({dropped} candidates dropped)")]
+    #[error(
+        "no gait cycle kept from {files} takes ({dropped} candidates dropped); every file:{}",
+        list_reasons(reasons)
+    )]
     NoCycles {
         /// Takes read.
         files: usize,
         /// Candidate cycles dropped.
         dropped: usize,
+        /// Every `.bvh` file with the reason it gave no cycle.
+        reasons: Vec<FailedFile>,
     },
     /// A cycle's poses could not be brought to the common exp-map branch.
     #[error("cycle {index} ({}): {source}", file.display())]
@@ -99,6 +108,9 @@ pub enum DatasetError {
         /// Its take.
         file: PathBuf,
     },
+    /// A joint map could not be parsed.
+    #[error("joint map: {0}")]
+    JointMap(String),
     /// Time alignment failed.
     #[error("time alignment: {0}")]
     Align(#[from] TimewarpError),
@@ -107,13 +119,25 @@ pub enum DatasetError {
     Tensor(#[from] tensor_ops::TensorError),
 }
 
+/// One line per file, `\n  <file>: <reason>`, for error messages.
+fn list_reasons(reasons: &[FailedFile]) -> String {
+    reasons
+        .iter()
+        .map(|f| format!("\n  {}: {}", f.path.display(), f.error))
+        .collect()
+}
+
 /// Settings of [`load_cycles`].
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct DatasetConfig {
-    /// Contact detection and cycle selection (`CycleConfig::cmu()` for the CMU conversions).
+    /// Contact detection and cycle selection (`CycleConfig::cmu()` for the CMU conversions); its
+    /// `feet` names are the joint map (names not given are found by name, then by hierarchy).
     pub cycle: CycleConfig,
-    /// File units per metre; `None` detects them from the first take (hip height).
-    pub units_per_metre: Option<f64>,
+    /// File length units; `None` detects them from the skeleton's standing height
+    /// (`motion_io::normalize`), the most common choice over the takes.
+    pub units: Option<Units>,
+    /// The files' up axis; `None` detects it per take and uses the most common one.
+    pub up: Option<SignedAxis>,
 }
 
 /// A file that could not be used, with the reason.
@@ -154,6 +178,27 @@ pub struct CycleSet {
     /// The motion-quality meter on the data's own takes (the steady stretch of every take that gave
     /// cycles); `None` when the feet cannot be found.
     pub quality: Option<QualityReference>,
+    /// What was decided about the files' conventions (units, up axis, root positions, feet), for the
+    /// set: the first take's, with the set's units and up axis.
+    pub conventions: Option<Conventions>,
+    /// Every file read, in file order: its cycles, dropped candidates, skipped frames, and why it gave
+    /// no cycle.
+    pub takes: Vec<TakeSummary>,
+}
+
+/// What one file gave.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TakeSummary {
+    /// The file.
+    pub path: PathBuf,
+    /// Cycles kept.
+    pub cycles: usize,
+    /// Candidates dropped.
+    pub dropped: usize,
+    /// Frames left out (reference poses, jumps, standing still).
+    pub skipped: Vec<SkippedFrames>,
+    /// Why the file gave no cycle (`None` when it gave some).
+    pub reason: Option<String>,
 }
 
 impl CycleSet {
@@ -343,31 +388,113 @@ fn cycles_from_takes(
 ) -> Result<CycleSet, DatasetError> {
     let tick = || progress(0, 0);
     let mut failed = Vec::new();
-    let mut motions: Vec<(&Path, Motion)> = Vec::new();
+    let mut read_ok: Vec<(&Path, Motion)> = Vec::new();
     for (p, r) in paths.iter().zip(read) {
         match r {
             Ok(m) if m.frame_count() == 0 => failed.push(FailedFile {
                 path: p.clone(),
                 error: "no frames".into(),
             }),
-            Ok(m) => motions.push((p, m)),
+            Ok(m) => read_ok.push((p, m)),
             Err(error) => failed.push(FailedFile {
                 path: p.clone(),
                 error,
             }),
         }
     }
-    if motions.is_empty() {
+    if read_ok.is_empty() {
         return Err(DatasetError::NoMotions {
             failed: failed.len(),
-            first: failed.first().map(|f| f.error.clone()).unwrap_or_default(),
+            reasons: failed,
         });
     }
-    check_skeletons(&motions)?;
+    check_skeletons(&read_ok)?;
+    // Conventions per take; then the set's up axis and units (the most common), and the takes that
+    // disagree normalised again with them forced, so that every take shares one skeleton.
+    let mut options = NormalizeOptions {
+        units: config.units,
+        up: config.up,
+        feet: config.cycle.feet.clone(),
+    };
+    if let Some(set) = like {
+        if let Some(c) = &set.conventions {
+            options.units = Some(c.units);
+            options.up = Some(c.up);
+            options.feet = c.feet.clone();
+        }
+    }
+    let normalize = |options: &NormalizeOptions| -> Vec<Result<NormalizedTake, String>> {
+        read_ok
+            .par_iter()
+            .map(|(_, m)| normalize_take(m, options).map_err(|e| format!("conventions: {e}")))
+            .collect()
+    };
+    let mut normalized = normalize(&options);
+    let majority = |key: &dyn Fn(&NormalizedTake) -> String| -> Option<String> {
+        let mut counts: BTreeMap<String, (usize, usize)> = BTreeMap::new();
+        for (i, n) in normalized.iter().enumerate() {
+            if let Ok(n) = n {
+                let e = counts.entry(key(n)).or_insert((0, i));
+                e.0 += 1;
+            }
+        }
+        counts
+            .into_iter()
+            .max_by(|a, b| a.1.0.cmp(&b.1.0).then(b.1.1.cmp(&a.1.1)))
+            .map(|(k, _)| k)
+    };
+    let up = majority(&|n| n.conventions.up.to_string());
+    let units = majority(&|n| n.conventions.units.name().to_string());
+    let agree = |n: &Result<NormalizedTake, String>| match n {
+        Ok(n) => {
+            Some(n.conventions.up.to_string()) == up
+                && Some(n.conventions.units.name().to_string()) == units
+        }
+        Err(_) => true,
+    };
+    if !normalized.iter().all(agree) {
+        let first = normalized
+            .iter()
+            .flatten()
+            .find(|n| Some(n.conventions.up.to_string()) == up)
+            .map(|n| n.conventions.clone());
+        if let Some(c) = first {
+            let forced = NormalizeOptions {
+                up: Some(c.up),
+                units: units.as_deref().and_then(Units::parse),
+                ..options.clone()
+            };
+            normalized = normalize(&forced);
+        }
+    }
+    let mut motions: Vec<(&Path, NormalizedTake)> = Vec::new();
+    for ((p, _), n) in read_ok.iter().zip(normalized) {
+        match n {
+            Ok(n) => motions.push((p, n)),
+            Err(error) => failed.push(FailedFile {
+                path: p.to_path_buf(),
+                error,
+            }),
+        }
+    }
+    if motions.is_empty() {
+        failed.sort_by(|a, b| a.path.cmp(&b.path));
+        return Err(DatasetError::NoCycles {
+            files: read_ok.len(),
+            dropped: 0,
+            reasons: failed,
+        });
+    }
+    let conventions = motions[0].1.conventions.clone();
+    // The joints the cycles use: the map's, else those found by name, else by the hierarchy of the
+    // first take.
+    let mut cycle_config = config.cycle.clone();
+    cycle_config.feet = conventions.feet.clone();
     let layout = match like {
         Some(set) => {
             let reference = &set.layout.skeleton().joints;
-            for (p, m) in &motions {
+            for (p, n) in &motions {
+                let m = &n.motion;
                 let same = m.skeleton.joints.len() == reference.len()
                     && m.skeleton.joints.iter().zip(reference).all(|(a, b)| {
                         a.name == b.name && a.parent == b.parent && a.channels == b.channels
@@ -387,12 +514,11 @@ fn cycles_from_takes(
             set.layout.clone()
         }
         None => {
-            let units = match config.units_per_metre {
-                Some(u) => u,
-                None => detect_units_per_metre(&motions[0].1),
-            };
-            let refs: Vec<&Motion> = motions.iter().map(|(_, m)| m).collect();
-            PoseLayout::from_motions(&refs, units).map_err(|e| match e {
+            // The layout sees only the frames that are segmented (no reference pose).
+            let walking: Vec<std::borrow::Cow<'_, Motion>> =
+                motions.iter().map(|(_, n)| walking_frames(n)).collect();
+            let refs: Vec<&Motion> = walking.iter().map(|m| m.as_ref()).collect();
+            PoseLayout::from_motions(&refs, conventions.units.per_metre()).map_err(|e| match e {
                 PoseError::SkeletonMismatch {
                     motion,
                     joint,
@@ -408,44 +534,83 @@ fn cycles_from_takes(
     };
     let segmented: Vec<_> = motions
         .par_iter()
-        .map(|(p, m)| {
-            let r = segment_cycles(m, &layout, &config.cycle, p);
+        .map(|(p, n)| {
+            let r = segment_take(&n.motion, &layout, &cycle_config, p, &n.segments);
             tick();
             r
         })
         .collect();
     let mut cycles = Vec::new();
     let mut dropped = Vec::new();
-    let feet = find_feet(layout.skeleton(), &config.cycle.feet)
+    let feet = find_feet(layout.skeleton(), &cycle_config.feet)
         .ok()
         .map(|f| FootJoints::from_feet(&f));
     let measured: Vec<Option<(MotionQuality, f64)>> = motions
         .par_iter()
         .zip(&segmented)
-        .map(|((_, m), r)| {
+        .map(|((_, n), r)| {
             let (feet, report) = (feet.as_ref()?, r.as_ref().ok()?);
-            take_quality(&layout, feet, m, &report.cycles)
+            take_quality(&layout, feet, &n.motion, &report.cycles)
         })
         .collect();
-    let takes: Vec<(MotionQuality, f64)> = measured.into_iter().flatten().collect();
-    for ((p, _), r) in motions.iter().zip(segmented) {
+    let takes_quality: Vec<(MotionQuality, f64)> = measured.into_iter().flatten().collect();
+    let mut takes: Vec<TakeSummary> = failed
+        .iter()
+        .map(|f| TakeSummary {
+            path: f.path.clone(),
+            cycles: 0,
+            dropped: 0,
+            skipped: Vec::new(),
+            reason: Some(f.error.clone()),
+        })
+        .collect();
+    for ((p, n), r) in motions.iter().zip(segmented) {
         match r {
             Ok(report) => {
+                let reason = report
+                    .cycles
+                    .is_empty()
+                    .then(|| no_cycle_reason(&report.dropped, &n.skipped));
+                takes.push(TakeSummary {
+                    path: p.to_path_buf(),
+                    cycles: report.cycles.len(),
+                    dropped: report.dropped.len(),
+                    skipped: n.skipped.clone(),
+                    reason,
+                });
                 cycles.extend(report.cycles);
                 dropped.extend(report.dropped.into_iter().map(|d| (p.to_path_buf(), d)));
             }
-            Err(e) => failed.push(FailedFile {
-                path: p.to_path_buf(),
-                error: format!("cycle segmentation: {e}"),
-            }),
+            Err(e) => {
+                let error = format!("cycle segmentation: {e}");
+                takes.push(TakeSummary {
+                    path: p.to_path_buf(),
+                    cycles: 0,
+                    dropped: 0,
+                    skipped: n.skipped.clone(),
+                    reason: Some(error.clone()),
+                });
+                failed.push(FailedFile {
+                    path: p.to_path_buf(),
+                    error,
+                })
+            }
         }
     }
     // Keep the failures in file order whatever stage they come from.
     failed.sort_by(|a, b| a.path.cmp(&b.path));
+    takes.sort_by(|a, b| a.path.cmp(&b.path));
     if cycles.is_empty() {
         return Err(DatasetError::NoCycles {
             files: motions.len(),
             dropped: dropped.len(),
+            reasons: takes
+                .iter()
+                .map(|t| FailedFile {
+                    path: t.path.clone(),
+                    error: t.reason.clone().unwrap_or_default(),
+                })
+                .collect(),
         });
     }
     let reference = match like {
@@ -459,7 +624,7 @@ fn cycles_from_takes(
         .collect();
     let quality = feet
         .as_ref()
-        .and_then(|f| quality::reference_from_takes(f, &takes, steps));
+        .and_then(|f| quality::reference_from_takes(f, &takes_quality, steps));
     Ok(CycleSet {
         layout,
         cycles,
@@ -467,7 +632,57 @@ fn cycles_from_takes(
         failed,
         dropped,
         quality,
+        conventions: Some(conventions),
+        takes,
     })
+}
+
+/// The take restricted to its walking segments (the whole take, borrowed, when nothing is skipped).
+fn walking_frames(n: &NormalizedTake) -> std::borrow::Cow<'_, Motion> {
+    let nf = n.motion.frame_count();
+    if let [only] = n.segments.as_slice() {
+        if only.start == 0 && only.end == nf {
+            return std::borrow::Cow::Borrowed(&n.motion);
+        }
+    }
+    let c = n.motion.skeleton.channel_count();
+    let mut frames = Vec::new();
+    for r in &n.segments {
+        frames.extend_from_slice(&n.motion.frames[r.start * c..r.end.min(nf) * c]);
+    }
+    if frames.is_empty() {
+        return std::borrow::Cow::Borrowed(&n.motion);
+    }
+    std::borrow::Cow::Owned(Motion {
+        skeleton: n.motion.skeleton.clone(),
+        frame_time: n.motion.frame_time,
+        frames,
+    })
+}
+
+/// Why a take that read and segmented gave no cycle: its dropped candidates by reason, or no
+/// candidate at all (fewer than two left contacts), and its skipped frames.
+fn no_cycle_reason(dropped: &[DroppedCycle], skipped: &[SkippedFrames]) -> String {
+    let mut text = if dropped.is_empty() {
+        "no cycle candidate (fewer than two left foot contacts: not a walk, or the feet or up axis \
+         are wrong; see --joint-map and --up)"
+            .to_string()
+    } else {
+        let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+        for d in dropped {
+            *counts.entry(drop_reason_name(&d.reason)).or_insert(0) += 1;
+        }
+        let list: Vec<String> = counts.iter().map(|(r, n)| format!("{n} {r}")).collect();
+        format!(
+            "every candidate cycle dropped ({}; first: {})",
+            list.join(", "),
+            dropped[0].reason
+        )
+    };
+    for s in skipped {
+        text.push_str(&format!("; skipped {s}"));
+    }
+    text
 }
 
 /// The meter on the steady stretch of one take (from its first kept cycle's start to its last kept
@@ -683,6 +898,12 @@ pub struct DataSpec {
     pub samples: Option<usize>,
     /// Seed of the subset.
     pub seed: u64,
+    /// Length units of the files (`None`: detected from the skeleton's standing height).
+    pub units: Option<Units>,
+    /// Up axis of the files (`None`: detected).
+    pub up: Option<SignedAxis>,
+    /// Joint names of the feet (a joint map; unset names are found by name, then by hierarchy).
+    pub joint_map: FootNames,
 }
 
 /// Serializable form of [`AlignMethod`].
@@ -725,6 +946,9 @@ impl Default for DataSpec {
             preset: Preset::Default,
             samples: None,
             seed: 1,
+            units: None,
+            up: None,
+            joint_map: FootNames::default(),
         }
     }
 }
@@ -742,16 +966,56 @@ pub struct LoadedData {
 }
 
 impl DataSpec {
+    /// The dataset settings of this specification.
+    pub fn dataset_config(&self) -> DatasetConfig {
+        let mut cycle = self.preset.cycle_config();
+        cycle.feet = self.joint_map.clone();
+        DatasetConfig {
+            cycle,
+            units: self.units,
+            up: self.up,
+        }
+    }
+
+    /// The same specification with every relative folder made relative to `base` (the folder of a
+    /// model file) instead of the working directory, for storing in the model. Absolute folders stay
+    /// absolute; a folder that cannot be resolved is kept as given.
+    pub fn relative_to(&self, base: &Path) -> DataSpec {
+        let mut spec = self.clone();
+        let Ok(base) = std::fs::canonicalize(base) else {
+            return spec;
+        };
+        for d in &mut spec.dirs {
+            if d.is_absolute() {
+                continue;
+            }
+            if let Ok(full) = std::fs::canonicalize(&*d) {
+                if let Some(rel) = relative_path(&full, &base) {
+                    *d = rel;
+                }
+            }
+        }
+        spec
+    }
+
+    /// The specification as read from a model file in folder `base`: relative folders joined to it.
+    pub fn resolved_from(&self, base: &Path) -> DataSpec {
+        let mut spec = self.clone();
+        for d in &mut spec.dirs {
+            if d.is_relative() {
+                *d = base.join(&*d);
+            }
+        }
+        spec
+    }
+
     /// Reads, segments and aligns the data; `progress(done, total)` is called per take read and per take
     /// segmented.
     pub fn load(
         &self,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<LoadedData, DatasetError> {
-        let config = DatasetConfig {
-            cycle: self.preset.cycle_config(),
-            units_per_metre: None,
-        };
+        let config = self.dataset_config();
         let cycles = if self.dirs.is_empty() {
             load_embedded_fixtures(&config, progress)?
         } else {
@@ -792,6 +1056,61 @@ impl DataSpec {
         };
         format!("{data}; {align}{subset}")
     }
+}
+
+/// The contents of a joint-map file (TOML): the joint names of the feet; unset roles are found by
+/// name or hierarchy.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointMapFile {
+    left_foot: Option<String>,
+    right_foot: Option<String>,
+    left_toe: Option<String>,
+    right_toe: Option<String>,
+    head: Option<String>,
+}
+
+/// Parses a joint map (TOML, keys `left_foot`, `right_foot`, `left_toe`, `right_toe` and `head`, each
+/// a joint name as written in the BVH files), e.g.
+///
+/// ```toml
+/// left_foot = "Bip01 L Foot"
+/// right_foot = "Bip01 R Foot"
+/// ```
+///
+/// Errors name the line and the unknown or mistyped key.
+pub fn joint_map_from_toml(text: &str) -> Result<FootNames, DatasetError> {
+    let map: JointMapFile =
+        toml::from_str(text).map_err(|e| DatasetError::JointMap(e.to_string()))?;
+    Ok(FootNames {
+        left_foot: map.left_foot,
+        right_foot: map.right_foot,
+        left_toe: map.left_toe,
+        right_toe: map.right_toe,
+        head: map.head,
+    })
+}
+
+/// `path` relative to `base` (both absolute and canonical): `..` for every component of `base` past
+/// their common prefix, then the rest of `path`. `None` on different roots (Windows drives).
+fn relative_path(path: &Path, base: &Path) -> Option<PathBuf> {
+    let p: Vec<_> = path.components().collect();
+    let b: Vec<_> = base.components().collect();
+    if p.first() != b.first() {
+        return None;
+    }
+    let common = p.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    let mut out = PathBuf::new();
+    for _ in common..b.len() {
+        out.push("..");
+    }
+    for c in &p[common..] {
+        out.push(c.as_os_str());
+    }
+    if out.as_os_str().is_empty() {
+        out.push(".");
+    }
+    Some(out)
 }
 
 /// The take (source file) of a training sample's source as [`AlignedSet::training_set`] writes it

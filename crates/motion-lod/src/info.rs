@@ -242,6 +242,12 @@ pub fn control_notes(r: &crate::BuildReport) -> Vec<String> {
     let mut lines = Vec::new();
     for (k, name) in crate::CONTROL_NAMES.iter().enumerate() {
         match r.control_decisions.get(k) {
+            Some(DimDecision::Constant) if r.dropped_for_samples.contains(&k) => {
+                lines.push(format!(
+                    "control {name} ignored: too few samples ({}) for a trend over it too",
+                    r.samples
+                ));
+            }
             Some(DimDecision::Constant) => {
                 lines.push(format!("control {name} ignored: constant over the data"));
             }

@@ -61,6 +61,9 @@ pub struct BuildReport {
     /// Per control, what the build's leave-one-out selection decided and measured
     /// ([`kriging::select_dims`]).
     pub control_decisions: Vec<kriging::DimDecision>,
+    /// Controls that vary over the data but were left out because the samples are too few for a
+    /// trend over all of them (`crate::build::MIN_SAMPLES`).
+    pub dropped_for_samples: Vec<usize>,
     /// Rotating joints of the data that are static (held at their mean rotation, not counted).
     pub static_joints: Vec<crate::importance::StaticJoint>,
     /// Why the legs-before-arms order could not be applied, when it could not.
@@ -83,6 +86,22 @@ impl BuildReport {
     /// that the same build writes the same bytes.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
+        if !self.dropped_for_samples.is_empty() {
+            let used = crate::CONTROL_NAMES.len() - self.dropped_controls.len();
+            let names: Vec<&str> = self
+                .dropped_for_samples
+                .iter()
+                .filter_map(|&k| crate::CONTROL_NAMES.get(k).copied())
+                .collect();
+            out.push(format!(
+                "{} samples are too few for a trend over every varying control (universal kriging \
+                 over d controls needs d + 2, and leave-one-out one more): left out the least varying \
+                 ({}), kriging over {used} control{}",
+                self.samples,
+                names.join(", "),
+                if used == 1 { "" } else { "s" }
+            ));
+        }
         for (k, key) in self.keys.iter().enumerate() {
             if !key.converged {
                 out.push(format!(
@@ -139,10 +158,27 @@ impl Evaluator {
     }
 }
 
+/// The folder of a model file (`.` for a bare file name).
+fn model_folder(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
 impl MotionModel {
-    /// Writes the model file atomically (see [`crate::model_file`]).
+    /// Writes the model file atomically (see [`crate::model_file`]). The recorded data folders are
+    /// written relative to the model file's folder (absolute ones stay absolute), so that the model
+    /// and its data can move together and be used from any working directory.
     pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
-        model_file::save(self, path)
+        match &self.report.data {
+            Some(spec) if spec.dirs.iter().any(|d| d.is_relative()) => {
+                let mut model = self.clone();
+                model.report.data = Some(spec.relative_to(model_folder(path)));
+                model_file::save(&model, path)
+            }
+            _ => model_file::save(self, path),
+        }
     }
 
     /// Reads a model file: framing and checksum ([`model_file::decode`]), then the semantic
@@ -152,7 +188,11 @@ impl MotionModel {
             path: path.to_path_buf(),
             source,
         })?;
-        MotionModel::from_bytes(&bytes, path)
+        let mut model = MotionModel::from_bytes(&bytes, path)?;
+        if let Some(spec) = &model.report.data {
+            model.report.data = Some(spec.resolved_from(model_folder(path)));
+        }
+        Ok(model)
     }
 
     /// Decodes and validates a model from the bytes of a model file (`path` only labels errors).

@@ -33,7 +33,9 @@ pub const FORMAT_VERSION: u32 = 5;
 // and is validated on load; the motion-quality reference measured on the training takes; static
 // joints leave the pose vector, and the build report records them, the control selection and the
 // joint-order note); 5 (every level and joint-count error records the foot slide, for the policies'
-// screen check). Files of an older version are refused with a request to rebuild: a model is
+// screen check; the recorded data folders are relative to the model file, and the data
+// specification records the units, up axis and joint map). Files of an older version are refused
+// with a request to rebuild: a model is
 // rebuilt from its data in seconds, and a converter would carry guesses.
 /// Bytes before the payload: magic, version, length, checksum.
 pub const HEADER_LEN: usize = 24;

@@ -118,7 +118,7 @@ pub struct BuildArgs {
 
 /// Loads the data of `data` and builds a model with `model`'s settings (progress on stderr unless quiet).
 pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::Result<MotionModel> {
-    let spec = data.spec();
+    let spec = data.spec()?;
     let loaded = load(&spec, quiet)?;
     let bar = BarProgress::new(!quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bar };

@@ -155,6 +155,10 @@ struct Summary {
     /// Mean frame rate of the main source over that of the PCA source.
     pca_ratio: Option<f64>,
     levels: Vec<u32>,
+    /// Field size used, metres (enlarged when the model's turn range needs larger paths).
+    field_m: f32,
+    /// The field size asked for, when it was enlarged.
+    field_enlarged_from: Option<f32>,
 }
 
 /// The model to animate and, when the naive or PCA source is needed, the analysis it was built from.
@@ -286,6 +290,8 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     let pca_ratio = pca.as_ref().map(ratio_to);
     if args.json {
         let summary = Summary {
+            field_m: main.field_m,
+            field_enlarged_from: main.field_enlarged_from,
             walkers: args.walkers,
             frames: main.report.frames,
             fps: Fps::from(&main.report),
@@ -310,8 +316,15 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     };
     println!(
         "{} walkers, {:.1} s at {} fps ({} frames), {source_name}, field {:.0} m",
-        args.walkers, args.seconds, args.fps, main.report.frames, run.config.field_size_m
+        args.walkers, args.seconds, args.fps, main.report.frames, main.field_m
     );
+    if let Some(from) = main.field_enlarged_from {
+        println!(
+            "note: the model turns little per cycle, so its walkers need paths of large radius: \
+             field enlarged from {from:.0} m to {:.0} m",
+            main.field_m
+        );
+    }
     println!("{}", main.report);
     println!(
         "levels in the last frame (accuracy 0.., then root only): {:?}",

@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use clap::Args;
-use motion_lod::dataset::{AlignedSet, CycleSet};
+use motion_io::{FootNames, RootPositions};
+use motion_lod::dataset::{AlignedSet, CycleSet, DatasetError, FailedFile, TakeSummary};
 use motion_lod::model_file::write_atomic;
 use serde::Serialize;
 use tensor_ops::npy::{NpyArray, NpyDtype, to_npy_bytes};
@@ -47,6 +48,28 @@ struct Summary {
     t: usize,
     #[serde(rename = "S")]
     s: usize,
+    /// Length units used (`m`, `cm`, `mm`, `in`, `cmu`) and whether they were detected.
+    units: Option<String>,
+    units_detected: Option<bool>,
+    /// The files' up axis (`+y`, `+z`, ...) and whether it was detected.
+    up: Option<String>,
+    up_detected: Option<bool>,
+    /// The axis the skeleton faces at a zero root rotation (from the direction of travel).
+    forward: Option<String>,
+    /// Root position channels: `Absolute`, `Relative` or `Same` (first take).
+    root_positions: Option<RootPositions>,
+    /// The feet's joints used and whether they were found from the hierarchy.
+    feet: Option<FootNames>,
+    feet_by_hierarchy: Option<bool>,
+    /// Every file: cycles, dropped candidates, skipped frames and why it gave no cycle.
+    takes: Vec<TakeSummary>,
+}
+
+/// The `--json` line when nothing could be used: the error and every file's reason.
+#[derive(Debug, Serialize)]
+struct Failure {
+    error: String,
+    files: Vec<FailedFile>,
 }
 
 /// Runs the subcommand.
@@ -54,7 +77,28 @@ pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
     if args.data.dirs.is_empty() {
         anyhow::bail!("name at least one folder of BVH takes");
     }
-    let loaded = load(&args.data.spec(), args.json)?;
+    let loaded = match load(&args.data.spec()?, args.json) {
+        Ok(l) => l,
+        Err(e) => {
+            if args.json {
+                let files = e
+                    .chain()
+                    .find_map(|c| c.downcast_ref::<DatasetError>())
+                    .map(|d| match d {
+                        DatasetError::NoCycles { reasons, .. }
+                        | DatasetError::NoMotions { reasons, .. } => reasons.clone(),
+                        _ => Vec::new(),
+                    })
+                    .unwrap_or_default();
+                let line = Failure {
+                    error: format!("{e:#}"),
+                    files,
+                };
+                println!("{}", serde_json::to_string(&line)?);
+            }
+            return Err(e);
+        }
+    };
     let (set, aligned) = (&loaded.cycles, &loaded.aligned);
     if let Some(path) = &args.tensor {
         let bytes = to_npy_bytes(&NpyArray::from_tensor(&aligned.tensor), NpyDtype::F64)
@@ -78,6 +122,18 @@ pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
             p,
             t,
             s,
+            units: set.conventions.as_ref().map(|c| c.units.name().to_string()),
+            units_detected: set.conventions.as_ref().map(|c| c.units_detected),
+            up: set.conventions.as_ref().map(|c| c.up.to_string()),
+            up_detected: set.conventions.as_ref().map(|c| c.up_detected),
+            forward: set
+                .conventions
+                .as_ref()
+                .and_then(|c| c.forward.map(|f| f.to_string())),
+            root_positions: set.conventions.as_ref().map(|c| c.root_positions),
+            feet: set.conventions.as_ref().map(|c| c.feet.clone()),
+            feet_by_hierarchy: set.conventions.as_ref().map(|c| c.feet_by_hierarchy),
+            takes: set.takes.clone(),
         };
         writeln!(out, "{}", serde_json::to_string(&summary)?)?;
     } else {
@@ -100,6 +156,38 @@ fn print_report(
         set.files - set.failed.len(),
         set.failed.len()
     )?;
+    if let Some(c) = &set.conventions {
+        writeln!(
+            out,
+            "conventions: units {} ({}; standing height {:.3} m), up {} ({}), forward {}, root positions {:?}{}",
+            c.units,
+            if c.units_detected {
+                "detected"
+            } else {
+                "given"
+            },
+            c.standing_height / c.units.per_metre(),
+            c.up,
+            if c.up_detected { "detected" } else { "given" },
+            c.forward.map_or("unknown".to_string(), |f| f.to_string()),
+            c.root_positions,
+            if c.feet_by_hierarchy {
+                format!(
+                    ", feet from the hierarchy ({} / {})",
+                    c.feet.left_foot.as_deref().unwrap_or("?"),
+                    c.feet.right_foot.as_deref().unwrap_or("?")
+                )
+            } else {
+                String::new()
+            }
+        )?;
+    }
+    // Skipped frames of the takes that gave cycles are noted on stderr while loading.
+    for t in &set.takes {
+        if let Some(reason) = &t.reason {
+            writeln!(out, "  no cycle from {}: {reason}", t.path.display())?;
+        }
+    }
     writeln!(
         out,
         "cycles: {} kept, {} dropped",

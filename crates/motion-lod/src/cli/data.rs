@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use anyhow::Context as _;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use motion_lod::dataset::{AlignSpec, DataSpec, LoadedData, Preset};
+use motion_io::{SignedAxis, Units};
+use motion_lod::dataset::{AlignSpec, DataSpec, LoadedData, Preset, joint_map_from_toml};
 use timewarp::DtwConfig;
 
 /// Time alignment of the cycles.
@@ -24,6 +25,34 @@ pub enum PresetArg {
     Default,
     /// CMU (cgspeed) conversions: ignore the first 0.1 s, looser floor height.
     Cmu,
+}
+
+/// Length units of the BVH files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum UnitsArg {
+    /// Detect from the skeleton's standing height (bone lengths).
+    Auto,
+    /// Metres.
+    M,
+    /// Centimetres.
+    Cm,
+    /// Millimetres.
+    Mm,
+    /// Inches.
+    In,
+    /// The CMU ASF/AMC unit, 1/0.45 inch.
+    Cmu,
+}
+
+/// Up axis of the BVH files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum UpArg {
+    /// Detect from where the feet stay.
+    Auto,
+    /// Y up (most exporters).
+    Y,
+    /// Z up (3ds Max, some Blender and robotics exports).
+    Z,
 }
 
 /// Where the training data comes from and how it is aligned.
@@ -53,12 +82,31 @@ pub struct DataArgs {
     /// Seed of the random subset.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Length units of the files.
+    #[arg(long, value_enum, default_value_t = UnitsArg::Auto)]
+    pub units: UnitsArg,
+    /// Up axis of the files.
+    #[arg(long, value_enum, default_value_t = UpArg::Auto)]
+    pub up: UpArg,
+    /// A TOML file naming the joints of the feet when neither their names nor the hierarchy find
+    /// them: `left_foot`, `right_foot`, and optionally `left_toe`, `right_toe`, `head`.
+    #[arg(long, value_name = "FILE")]
+    pub joint_map: Option<PathBuf>,
 }
 
 impl DataArgs {
-    /// The data specification these options describe.
-    pub fn spec(&self) -> DataSpec {
-        DataSpec {
+    /// The data specification these options describe (reads the joint map).
+    pub fn spec(&self) -> anyhow::Result<DataSpec> {
+        let joint_map = match &self.joint_map {
+            Some(path) => {
+                let text = std::fs::read_to_string(path)
+                    .with_context(|| format!("reading the joint map {}", path.display()))?;
+                joint_map_from_toml(&text)
+                    .with_context(|| format!("joint map {}", path.display()))?
+            }
+            None => Default::default(),
+        };
+        Ok(DataSpec {
             dirs: self.dirs.clone(),
             frames: self.frames,
             align: match self.align {
@@ -74,7 +122,21 @@ impl DataArgs {
             },
             samples: self.samples,
             seed: self.seed,
-        }
+            units: match self.units {
+                UnitsArg::Auto => None,
+                UnitsArg::M => Some(Units::Metres),
+                UnitsArg::Cm => Some(Units::Centimetres),
+                UnitsArg::Mm => Some(Units::Millimetres),
+                UnitsArg::In => Some(Units::Inches),
+                UnitsArg::Cmu => Some(Units::CmuUnits),
+            },
+            up: match self.up {
+                UpArg::Auto => None,
+                UpArg::Y => Some(SignedAxis::Y),
+                UpArg::Z => Some(SignedAxis::Z),
+            },
+            joint_map,
+        })
     }
 }
 
@@ -105,6 +167,13 @@ pub fn load(spec: &DataSpec, quiet: bool) -> anyhow::Result<LoadedData> {
     bar.finish_and_clear();
     for f in &loaded.cycles.failed {
         eprintln!("warning: skipped {}: {}", f.path.display(), f.error);
+    }
+    for t in &loaded.cycles.takes {
+        if t.reason.is_none() {
+            for s in &t.skipped {
+                eprintln!("note: {}: skipped {s}", t.path.display());
+            }
+        }
     }
     Ok(loaded)
 }

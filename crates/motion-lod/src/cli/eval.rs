@@ -6,7 +6,7 @@ use anyhow::Context as _;
 use clap::Args;
 use lod_policy::Precision;
 use motion_lod::build::Analysis;
-use motion_lod::dataset::{DatasetConfig, align_cycles_to, load_cycles_like};
+use motion_lod::dataset::{align_cycles_to, load_cycles_like};
 use motion_lod::eval::{EvalConfig, EvalReport, FoldBy, held_out, k_fold, leave_one_out};
 use motion_lod::progress::{BarProgress, NoProgress, Progress};
 use motion_lod::storage::Storage;
@@ -47,6 +47,10 @@ pub struct EvalArgs {
     /// Print one JSON line instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// With a model file: read its training data from these folders instead of the ones it records
+    /// (which are relative to the model file).
+    #[arg(long = "data", value_name = "DIR", num_args = 1..)]
+    pub data_dirs: Vec<std::path::PathBuf>,
 }
 
 /// `--by` values.
@@ -74,9 +78,22 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
                     one.display()
                 )
             })?;
+            let spec = if args.data_dirs.is_empty() {
+                spec
+            } else {
+                motion_lod::dataset::DataSpec {
+                    dirs: args.data_dirs.clone(),
+                    ..spec
+                }
+            };
             (spec, model.report.config.clone())
         }
-        _ => (args.data.spec(), args.model.config()),
+        _ => {
+            if !args.data_dirs.is_empty() {
+                anyhow::bail!("--data replaces a model file's data folders; name a model file");
+            }
+            (args.data.spec()?, args.model.config())
+        }
     };
     if let Some(folds) = args.folds {
         let loaded = load(&spec, args.json)?;
@@ -168,10 +185,7 @@ pub fn evaluate(
         return leave_one_out(&analysis, model_bytes, &key_bytes, &eval_config, progress)
             .context("leave-one-out evaluation");
     }
-    let dataset_config = DatasetConfig {
-        cycle: spec.preset.cycle_config(),
-        units_per_metre: None,
-    };
+    let dataset_config = spec.dataset_config();
     let held = load_cycles_like(holdout, &dataset_config, &loaded.cycles, &|_, _| {})
         .context("loading the held-out cycles")?;
     for f in &held.failed {
