@@ -2,7 +2,7 @@
 //! weights (paper eq. 1 with the universal kriging kernel of eq. 8), no tensor and no accuracy levels.
 //!
 //! Per clip it evaluates universal kriging of the raw samples in its dual form
-//! ([`crate::sample_weights::DualBlend`]): `S` variogram values and `O(S D')` multiply-adds for the
+//! (`sample_weights::DualBlend`): `S` variogram values and `O(S D')` multiply-adds for the
 //! `D' = P' T` values of the clip's rows (`P'` the rows of its active joints, 7 for a root-only
 //! clip), the same result as computing the kriging weights `b(c)` (`O(S^2)`), the equivalent sample
 //! weights `l(c) = b + C^+ ([c'; 1] - C b)` and the blend `sum_i l_i M_i`, without the `O(S^2)` step.
