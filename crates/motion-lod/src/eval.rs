@@ -445,6 +445,16 @@ pub enum FoldBy {
     Sample,
 }
 
+impl FoldBy {
+    /// The name the CLI's `--by` takes (`take`, `sample`).
+    pub fn name(self) -> &'static str {
+        match self {
+            FoldBy::Take => "take",
+            FoldBy::Sample => "sample",
+        }
+    }
+}
+
 /// The fold of every sample: by take, the distinct takes in name order dealt round-robin to the
 /// `folds` folds; by sample, `i mod folds`. Errors when there are fewer takes (or samples) than
 /// folds.

@@ -63,14 +63,7 @@ pub fn refit_table(report: &FoldReport) -> String {
         ">storage, f64 (first fold)",
     ]);
     for m in &pooled.methods {
-        t.row(&[
-            m.name.clone(),
-            m.level.map_or("-".into(), |l| l.to_string()),
-            m.ranks.map_or("-".into(), ranks),
-            format!("{:.3}", m.error_cm),
-            format!("{:.2}", m.shell_cm),
-            mib(m.bytes),
-        ]);
+        t.row(&method_cells(m));
     }
     let mut out = t.render();
     let error = |name: &str, level: Option<usize>| {
@@ -89,6 +82,18 @@ Refitted, multilinear level 0 is {:+.1}% from naive kriging ({ml:.3} against {na
         ));
     }
     out
+}
+
+/// The cells both accuracy tables share: method, level, ranks, joint error, shell error, bytes.
+fn method_cells(m: &motion_lod::eval::MethodError) -> [String; 6] {
+    [
+        m.name.clone(),
+        m.level.map_or("-".into(), |l| l.to_string()),
+        m.ranks.map_or("-".into(), ranks),
+        format!("{:.3}", m.error_cm),
+        format!("{:.2}", m.shell_cm),
+        mib(m.bytes),
+    ]
 }
 
 /// What each method keeps, for the table's storage column.
@@ -113,16 +118,10 @@ pub fn table(report: &EvalReport) -> String {
         "storage holds",
     ]);
     for m in &report.methods {
-        t.row(&[
-            m.name.clone(),
-            m.level.map_or("-".into(), |l| l.to_string()),
-            m.ranks.map_or("-".into(), ranks),
-            format!("{:.3}", m.error_cm),
-            format!("{:.2}", m.shell_cm),
-            mib(m.bytes),
-            percent(m.bytes as f64 / report.raw_bytes.max(1) as f64),
-            kept(&m.name).to_string(),
-        ]);
+        let mut cells = method_cells(m).to_vec();
+        cells.push(percent(m.bytes as f64 / report.raw_bytes.max(1) as f64));
+        cells.push(kept(&m.name).to_string());
+        t.row(&cells);
     }
     t.render()
 }

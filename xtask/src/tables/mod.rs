@@ -141,14 +141,6 @@ impl TablesConfig {
     }
 }
 
-/// How the folds were split, as the CLI's `--by` spells it.
-fn fold_word(by: motion_lod::eval::FoldBy) -> &'static str {
-    match by {
-        motion_lod::eval::FoldBy::Take => "take",
-        motion_lod::eval::FoldBy::Sample => "sample",
-    }
-}
-
 /// What is dealt to the folds.
 fn fold_plural(by: motion_lod::eval::FoldBy) -> &'static str {
     match by {
@@ -382,11 +374,11 @@ pub fn run(config: &TablesConfig) -> Result<()> {
          their own controls (`motion-lod eval DIR --folds {} --by {}`). Held out per fold: {:?} cycles. \
          Only the time alignment (reference cycle and T) is shared, fixed before the split.\n",
         refit.folds,
-        fold_word(refit.by),
+        refit.by.name(),
         fold_plural(refit.by),
         refit.folds,
         refit.folds,
-        fold_word(refit.by),
+        refit.by.name(),
         refit.fold_sizes,
     );
     doc.push_str(&accuracy::refit_table(&refit));

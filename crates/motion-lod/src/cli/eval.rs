@@ -115,10 +115,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
             println!(
                 "{folds}-fold cross-validation by {}, every method refitted on the other folds \
                  (held out per fold: {:?})",
-                match by {
-                    FoldBy::Take => "take",
-                    FoldBy::Sample => "sample",
-                },
+                by.name(),
                 report.fold_sizes
             );
             let first_training = report.pooled.samples - report.fold_sizes[0];
