@@ -12,7 +12,7 @@ use motion_lod::{BuildConfig, MotionModel};
 
 fn build(c: &mut Criterion) {
     let loaded = DataSpec::default()
-        .load(&|_, _| {})
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
         .expect("embedded data loads");
     let config = BuildConfig::default();
     let mut group = c.benchmark_group("build");

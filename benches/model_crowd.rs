@@ -22,7 +22,7 @@ const DENSITY: f32 = 0.01;
 
 fn model() -> (MotionModel, Analysis) {
     let data = DataSpec::default()
-        .load(&|_, _| {})
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
         .expect("embedded fixtures load");
     MotionModel::build_with_analysis(&data.training, &BuildConfig::default(), &NoProgress)
         .expect("model builds from the fixtures")

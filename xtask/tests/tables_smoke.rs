@@ -66,7 +66,7 @@ fn online_truncation_matches_the_runtime_kernel_on_truncations_of_key_0() {
         samples: config.samples,
         ..DataSpec::default()
     }
-    .load(&|_, _| {})
+    .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
     .expect("fixtures load");
     let (model, analysis) =
         MotionModel::build_with_analysis(&data.training, &config.build, &NoProgress)

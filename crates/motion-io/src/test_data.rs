@@ -52,6 +52,39 @@ pub fn shared_mocap(manifest_dir: &str, name: &str) -> Option<PathBuf> {
     require_dir(&dir, "../shared/mocap")
 }
 
+/// The workspace's default data set, read from its `fixtures/` folder (written by
+/// `cargo xtask fixtures` and committed): `(file name, BVH text)` for every `.bvh` file, sorted by
+/// name, read once per process. This is what the `motion-lod` binary embeds; tests, benches and
+/// `xtask` read it from the checkout instead, since no library embeds it.
+///
+/// # Panics
+/// When the folder cannot be read: it is part of the checkout, so that is a broken checkout.
+pub fn fixture_takes() -> &'static [(&'static str, &'static str)] {
+    static TAKES: std::sync::OnceLock<Vec<(&'static str, &'static str)>> =
+        std::sync::OnceLock::new();
+    TAKES.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()))
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("bvh")))
+            .collect();
+        files.sort();
+        assert!(!files.is_empty(), "no .bvh file in {}", dir.display());
+        files
+            .iter()
+            .map(|f| {
+                let text = std::fs::read_to_string(f)
+                    .unwrap_or_else(|e| panic!("cannot read {}: {e}", f.display()));
+                let name = f
+                    .file_name()
+                    .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+                (&*String::leak(name), &*String::leak(text))
+            })
+            .collect()
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

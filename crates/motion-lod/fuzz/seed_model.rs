@@ -17,7 +17,7 @@ pub fn build_small_model(fixtures: &Path) -> Result<MotionModel, Box<dyn std::er
         samples: Some(8),
         ..DataSpec::default()
     };
-    let data = spec.load(&|_, _| {})?;
+    let data = spec.load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})?;
     let config = BuildConfig {
         key_levels: 2,
         accuracy_levels: 3,

@@ -83,7 +83,9 @@ fn measured_cycle(model: &MotionModel, bvh: &Path, cycle_frames: usize) -> (f64,
 /// Builds a model from `spec` and checks that walks synthesized at training controls (every
 /// `S / 6`-th) and at midpoints between pairs of them travel what was asked, measured from the BVH.
 fn assert_walks_travel(what: &str, spec: &DataSpec) {
-    let loaded = spec.load(&|_, _| {}).expect("data loads");
+    let loaded = spec
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("data loads");
     let model = MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress)
         .expect("model builds");
     let c = &loaded.training.controls;
@@ -159,7 +161,9 @@ fn cmu() -> Option<DataSpec> {
 }
 
 fn loo(spec: &DataSpec, config: &BuildConfig) -> EvalReport {
-    let loaded = spec.load(&|_, _| {}).expect("data loads");
+    let loaded = spec
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("data loads");
     let analysis = Analysis::run(&loaded.training, config, &NoProgress).expect("analysis runs");
     leave_one_out(&analysis, 0, &[], &EvalConfig::default(), &NoProgress).expect("evaluation runs")
 }
@@ -286,7 +290,9 @@ fn bandai_at_the_papers_settings_keeps_at_most_an_eighth_of_the_samples() {
         seed: 1,
         ..DataSpec::default()
     };
-    let loaded = spec.load(&|_, _| {}).expect("data loads");
+    let loaded = spec
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("data loads");
     let config = BuildConfig::default();
     assert_eq!(
         (config.key_levels, config.max_ranks, config.min_ranks),

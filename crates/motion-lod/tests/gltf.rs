@@ -393,7 +393,9 @@ fn embedded_walk_and_crowd_export_to_glb() {
 }
 
 fn build(spec: &DataSpec) -> MotionModel {
-    let loaded = spec.load(&|_, _| {}).expect("data loads");
+    let loaded = spec
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("data loads");
     MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress).expect("builds")
 }
 

@@ -46,7 +46,9 @@ fn cmu() -> Option<DataSpec> {
 }
 
 fn training(spec: &DataSpec) -> TrainingSet {
-    spec.load(&|_, _| {}).expect("data loads").training
+    spec.load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("data loads")
+        .training
 }
 
 /// Checks the evaluation order of `layout` (the model's) for every joint count; returns the number of
@@ -96,7 +98,9 @@ fn assert_limbs_whole(what: &str, layout: &PoseLayout) -> (usize, usize) {
 
 #[test]
 fn embedded_model_keeps_limbs_whole_at_every_joint_count() {
-    let loaded = DataSpec::default().load(&|_, _| {}).unwrap();
+    let loaded = DataSpec::default()
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .unwrap();
     let joints = JointLayout::measure(&loaded.training, &BuildConfig::default()).unwrap();
     let (legs, arms) = assert_limbs_whole("embedded", &joints.layout);
     assert!(legs >= 6 && arms >= 2, "{legs} leg and {arms} arm joints");

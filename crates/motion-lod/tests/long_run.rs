@@ -19,7 +19,9 @@ fn rss_bytes() -> Option<u64> {
 
 #[test]
 fn one_hour_of_animated_time_stays_finite_on_path_and_bounded() {
-    let loaded = DataSpec::default().load(&|_, _| {}).unwrap();
+    let loaded = DataSpec::default()
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .unwrap();
     let model = MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress).unwrap();
     let lod = &model.lod;
     let source = LodSource::new(&model);

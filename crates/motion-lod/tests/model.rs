@@ -78,7 +78,9 @@ fn model_file_round_trips_and_rejects_damage() {
 fn build_is_deterministic_whatever_the_thread_count() {
     let (model, _) = built();
     let reference = model_file::encode(model, Path::new("m")).unwrap();
-    let loaded = DataSpec::default().load(&|_, _| {}).unwrap();
+    let loaded = DataSpec::default()
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .unwrap();
     // The file holds no timing: every build of the same data and settings writes the same bytes.
     for threads in [1, 2, 8] {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -244,7 +246,9 @@ fn held_out_takes_are_predicted_from_the_training_takes() {
         dirs: vec![train],
         ..DataSpec::default()
     };
-    let loaded = spec.load(&|_, _| {}).unwrap();
+    let loaded = spec
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .unwrap();
     let analysis = Analysis::run(&loaded.training, &BuildConfig::default(), &NoProgress).unwrap();
     let held = load_cycles_like(
         &[hold],
@@ -294,7 +298,9 @@ fn held_out_takes_are_predicted_from_the_training_takes() {
 #[test]
 fn k_fold_refits_per_fold_and_holds_out_whole_takes() {
     use motion_lod::eval::{FoldBy, fold_of_samples, k_fold};
-    let loaded = DataSpec::default().load(&|_, _| {}).unwrap();
+    let loaded = DataSpec::default()
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .unwrap();
     let set = &loaded.training;
     let s = set.tensor.dims()[2];
     let fold = fold_of_samples(&set.sources, 3, FoldBy::Take).unwrap();

@@ -66,7 +66,9 @@ fn cmu_spec() -> Option<DataSpec> {
 
 /// The model of `spec` with the default settings, and its training controls.
 fn build(spec: &DataSpec) -> (MotionModel, Vec<[f64; 4]>) {
-    let loaded = spec.load(&|_, _| {}).expect("data loads");
+    let loaded = spec
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("data loads");
     let model = MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
         .expect("model builds");
     (model, loaded.training.controls.clone())
@@ -239,7 +241,9 @@ fn shared_data_sets_build_to_the_same_bytes_on_one_thread() {
             .build()
             .unwrap();
         let again = pool.install(|| {
-            let loaded = spec.load(&|_, _| {}).expect("data loads");
+            let loaded = spec
+                .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+                .expect("data loads");
             MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
                 .expect("model builds")
         });

@@ -393,7 +393,9 @@ fn three_cycles_build_and_two_are_refused_with_a_count_of_cycles() {
         samples: Some(3),
         ..DataSpec::default()
     };
-    let loaded = spec.load(&|_, _| {}).expect("loads");
+    let loaded = spec
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("loads");
     let config = motion_lod::BuildConfig::default();
     let model = motion_lod::MotionModel::build(
         &loaded.training,
@@ -452,7 +454,9 @@ fn a_crowd_of_a_model_of_straight_walks_fits_its_field_instead_of_refusing() {
     use crowd_sim::{Camera, CrowdConfig};
     use lod_policy::DistancePolicy;
     use motion_lod::crowd::{CrowdRun, ModelPolicy, run_crowd};
-    let loaded = DataSpec::default().load(&|_, _| {}).expect("embedded data");
+    let loaded = DataSpec::default()
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("embedded data");
     let straight: Vec<usize> = (0..loaded.training.controls.len())
         .filter(|&k| loaded.training.controls[k][2].abs() < 0.5f64.to_radians())
         .collect();

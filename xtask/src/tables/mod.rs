@@ -238,7 +238,7 @@ pub fn run(config: &TablesConfig) -> Result<()> {
     };
     progress.stage("reading and aligning the data", 1);
     let loaded = spec
-        .load(&|_, _| {})
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
         .with_context(|| format!("loading {}", spec.describe()))?;
     progress.inc(1);
     let build_started = Instant::now();

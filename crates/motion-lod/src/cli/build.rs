@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use anyhow::Context as _;
 use clap::Args;
 use motion_lod::build::RowWeights;
-use motion_lod::progress::{BarProgress, NoProgress, Progress};
+use motion_lod::progress::{NoProgress, Progress};
+
+use super::progress::BarProgress;
 use motion_lod::{BuildConfig, MotionModel};
 
 use super::data::{DataArgs, load};

@@ -159,7 +159,7 @@ pub fn load(spec: &DataSpec, quiet: bool) -> anyhow::Result<LoadedData> {
     let bar = bar(quiet)?;
     bar.set_message("takes");
     let loaded = spec
-        .load(&|_, total| {
+        .load_with_default(super::default_takes::DEFAULT_TAKES, &|_, total| {
             bar.set_length(total as u64);
             bar.inc(1);
         })

@@ -8,7 +8,9 @@ use lod_policy::Precision;
 use motion_lod::build::Analysis;
 use motion_lod::dataset::{align_cycles_to, load_cycles_like};
 use motion_lod::eval::{EvalConfig, EvalReport, FoldBy, held_out, k_fold, leave_one_out};
-use motion_lod::progress::{BarProgress, NoProgress, Progress};
+use motion_lod::progress::{NoProgress, Progress};
+
+use super::progress::BarProgress;
 use motion_lod::storage::Storage;
 use motion_lod::{BuildConfig, MotionModel};
 

@@ -13,7 +13,7 @@ pub fn built() -> &'static (MotionModel, Analysis) {
     static MODEL: OnceLock<(MotionModel, Analysis)> = OnceLock::new();
     MODEL.get_or_init(|| {
         let loaded = DataSpec::default()
-            .load(&|_, _| {})
+            .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
             .expect("embedded data loads");
         MotionModel::build_with_analysis(&loaded.training, &BuildConfig::default(), &NoProgress)
             .expect("model builds")
