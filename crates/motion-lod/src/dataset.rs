@@ -32,6 +32,16 @@ use timewarp::{AlignConfig, AlignMethod, FrameSeq, TimewarpError, align};
 /// [`CycleSet::failed`] and the file is skipped.
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
+    /// A subset larger than the data was asked for.
+    #[error(
+        "{asked} samples asked for, but the data has {available} usable cycles: ask for at most {available} (or build from all of them)"
+    )]
+    TooManySamples {
+        /// The subset size asked for.
+        asked: usize,
+        /// The cycles kept from the data.
+        available: usize,
+    },
     /// No folder was given (and no default takes).
     #[error(
         "no input folder given (the default data set is built into the motion-lod binary, not the library)"
@@ -1042,6 +1052,12 @@ impl DataSpec {
         let mut all = aligned.training_set();
         all.quality = cycles.quality.clone();
         let training = match self.samples {
+            Some(n) if n > all.tensor.dims()[2] => {
+                return Err(DatasetError::TooManySamples {
+                    asked: n,
+                    available: all.tensor.dims()[2],
+                });
+            }
             Some(n) => all.subset(n, self.seed),
             None => all,
         };

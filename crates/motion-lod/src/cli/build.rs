@@ -127,6 +127,24 @@ pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::R
     let mut built = MotionModel::build(&loaded.training, &model.config(), progress)
         .context("building the model")?;
     built.report.data = Some(spec);
+    let config = model.config();
+    let made = built.lod.levels().len();
+    if made != config.accuracy_levels {
+        let why = if config.accuracy_levels < config.key_levels {
+            format!(
+                "every one of the {} key levels is an accuracy level",
+                config.key_levels
+            )
+        } else {
+            "levels between key levels whose ranks would repeat are merged; the ranks between \
+             --max-ranks and --min-ranks leave room for no more"
+                .to_string()
+        };
+        eprintln!(
+            "note: --accuracy-levels {}: the model has {made} accuracy levels ({why})",
+            config.accuracy_levels
+        );
+    }
     Ok(built)
 }
 

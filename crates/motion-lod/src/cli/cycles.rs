@@ -74,9 +74,6 @@ struct Failure {
 
 /// Runs the subcommand.
 pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
-    if args.data.dirs.is_empty() {
-        anyhow::bail!("name at least one folder of BVH takes");
-    }
     let loaded = match load(&args.data.spec()?, args.json) {
         Ok(l) => l,
         Err(e) => {

@@ -76,7 +76,8 @@ pub struct DataArgs {
     /// Contact detection preset.
     #[arg(long, value_enum, default_value_t = PresetArg::Default)]
     pub preset: PresetArg,
-    /// Use a random subset of N cycles (the paper used 186; 1..=10000000).
+    /// Use a random subset of N cycles (the paper used 186; 1..=10000000, and at most the cycles the
+    /// data gives: more is an error).
     #[arg(long, value_name = "N", value_parser = super::ranges::count(super::ranges::SAMPLES))]
     pub samples: Option<usize>,
     /// Seed of the random subset.

@@ -1,0 +1,73 @@
+//! The command line as a newcomer meets it: the help's promises hold, and values the data cannot
+//! honour are an error or a stated adjustment, never silent.
+
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_motion-lod");
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(BIN).args(args).output().expect("the binary runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn cycles_without_a_folder_reads_the_embedded_data_as_its_help_says() {
+    let (_, help, _) = run(&["cycles", "--help"]);
+    assert!(help.contains("without any, the embedded default data set"), "{help}");
+    let (ok, stdout, stderr) = run(&["cycles", "--json"]);
+    assert!(ok, "{stderr}");
+    let line: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
+    assert_eq!(line["cycles"].as_u64(), Some(60), "{line}");
+}
+
+#[test]
+fn more_samples_than_cycles_is_an_error_and_writes_nothing() {
+    let dir = std::env::temp_dir().join(format!("motion-lod-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("too-many.mlod");
+    let (ok, _, stderr) = run(&[
+        "build",
+        "--samples",
+        "5000",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok, "5000 samples of 60 cycles must fail");
+    assert!(
+        stderr.contains("5000 samples asked for, but the data has 60 usable cycles"),
+        "{stderr}"
+    );
+    assert!(!out.exists(), "nothing is written");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn fewer_accuracy_levels_than_key_levels_is_a_stated_adjustment() {
+    let dir = std::env::temp_dir().join(format!("motion-lod-cli-levels-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("small.mlod");
+    let (ok, _, stderr) = run(&[
+        "build",
+        "--samples",
+        "12",
+        "--levels",
+        "3",
+        "--accuracy-levels",
+        "2",
+        "--json",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.contains(
+            "note: --accuracy-levels 2: the model has 3 accuracy levels (every one of the 3 key levels is an accuracy level)"
+        ),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
