@@ -7,7 +7,12 @@ use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Multilinear motion synthesis with level-of-detail controls.
 #[derive(Debug, Parser)]
-#[command(name = "motion-lod", version, about)]
+#[command(
+    name = "motion-lod",
+    version,
+    about,
+    after_help = "Terms in the output (accuracy level, key level, shell error, pop, ...): motion-lod explain TERM"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -34,6 +39,8 @@ enum Command {
     View(cli::view::ViewArgs),
     /// The main job on the embedded data: build, run 1,000 walkers for 10 s, render, report.
     Demo(cli::demo::DemoArgs),
+    /// What a term in the output means (accuracy level, shell error, pop, ...); no term lists them.
+    Explain(cli::explain::ExplainArgs),
 }
 
 /// Runs the command; a user error (anything returned as `Err`) is printed by [`report`] and exits
@@ -84,6 +91,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Crowd(args) => cli::crowd::run(args),
         Command::Demo(args) => cli::demo::run(args),
         Command::View(args) => cli::view::run(args),
+        Command::Explain(args) => cli::explain::run(args),
     }
 }
 

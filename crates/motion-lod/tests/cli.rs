@@ -6,7 +6,10 @@ use std::process::Command;
 const BIN: &str = env!("CARGO_BIN_EXE_motion-lod");
 
 fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(BIN).args(args).output().expect("the binary runs");
+    let out = Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("the binary runs");
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -17,7 +20,10 @@ fn run(args: &[&str]) -> (bool, String, String) {
 #[test]
 fn cycles_without_a_folder_reads_the_embedded_data_as_its_help_says() {
     let (_, help, _) = run(&["cycles", "--help"]);
-    assert!(help.contains("without any, the embedded default data set"), "{help}");
+    assert!(
+        help.contains("without any, the embedded default data set"),
+        "{help}"
+    );
     let (ok, stdout, stderr) = run(&["cycles", "--json"]);
     assert!(ok, "{stderr}");
     let line: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
@@ -29,13 +35,7 @@ fn more_samples_than_cycles_is_an_error_and_writes_nothing() {
     let dir = std::env::temp_dir().join(format!("motion-lod-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("too-many.mlod");
-    let (ok, _, stderr) = run(&[
-        "build",
-        "--samples",
-        "5000",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let (ok, _, stderr) = run(&["build", "--samples", "5000", "-o", out.to_str().unwrap()]);
     assert!(!ok, "5000 samples of 60 cycles must fail");
     assert!(
         stderr.contains("5000 samples asked for, but the data has 60 usable cycles"),
@@ -70,4 +70,54 @@ fn fewer_accuracy_levels_than_key_levels_is_a_stated_adjustment() {
         "{stderr}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn every_column_header_of_info_eval_and_quality_is_explained() {
+    let (_, help, _) = run(&["--help"]);
+    assert!(help.contains("motion-lod explain TERM"), "{help}");
+    // The words the reports print as headers or units of their numbers.
+    for term in [
+        "key level",
+        "acc.level",
+        "accuracy level",
+        "ranks",
+        "joint error",
+        "shell error",
+        "foot slide",
+        "1 px from",
+        "rel.error",
+        "MSE",
+        "sweeps",
+        "pop",
+        "seam",
+        "skate",
+        "floor",
+        "float",
+        "facing",
+        "cycle/data",
+        "--joints",
+        "leave-one-out",
+        "variogram",
+        "naive-kriging",
+        "rbf-smoothed",
+        "hybrid model",
+        "row weights",
+        "turn",
+    ] {
+        let (ok, stdout, stderr) = run(&["explain", term]);
+        assert!(ok, "`explain {term}` fails: {stderr}");
+        assert!(
+            stdout.len() > 60,
+            "`explain {term}` says too little: {stdout}"
+        );
+    }
+    let (ok, _, stderr) = run(&["explain", "frobnication"]);
+    assert!(!ok);
+    assert!(stderr.contains("no entry for `frobnication`"), "{stderr}");
+    let (ok, list, _) = run(&["explain"]);
+    assert!(
+        ok && list.contains("accuracy level") && list.contains("shell error"),
+        "{list}"
+    );
 }

@@ -216,18 +216,31 @@ fn print(r: &EvalReport) {
     print_methods(r);
 }
 
-/// The per-method table of `r`.
+/// The per-method table of `r`: one multilinear row per key level (`key`), with the accuracy level
+/// that key is (`acc.level`, what `--level` and `info` number); `motion-lod explain` defines both.
 fn print_methods(r: &EvalReport) {
-    println!("  method          level  ranks           joint error   shell error   bytes (f64)");
+    println!(
+        "  method          key  acc.level  ranks           joint error   shell error   bytes (f64)"
+    );
+    let mut key = 0;
     for m in &r.methods {
+        let (key_col, level_col) = match m.level {
+            Some(l) => {
+                key += 1;
+                ((key - 1).to_string(), l.to_string())
+            }
+            None => ("-".to_string(), "-".to_string()),
+        };
         println!(
-            "  {:<14}  {:>5}  {:<14}  {:>8.3} cm  {:>9.2} cm  {:>12}",
+            "  {:<14}  {:>3}  {:>9}  {:<14}  {:>8.3} cm  {:>9.2} cm  {:>12}",
             m.name,
-            m.level.map_or("-".to_string(), |l| l.to_string()),
+            key_col,
+            level_col,
             m.ranks.map_or("-".to_string(), |r| format!("{r:?}")),
             m.error_cm,
             m.shell_cm,
             m.bytes
         );
     }
+    println!("  (terms: motion-lod explain \"key level\", \"accuracy level\", \"shell error\")");
 }

@@ -8,6 +8,7 @@ pub mod data;
 pub mod default_takes;
 pub mod demo;
 pub mod eval;
+pub mod explain;
 pub mod info;
 pub mod progress;
 pub mod quality;

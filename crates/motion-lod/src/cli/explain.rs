@@ -1,0 +1,217 @@
+//! `motion-lod explain [TERM]`: what the words in the output mean. One entry per term, the same
+//! wording as README.md and docs/ (accuracy level, key level, joints, the two error meters, the
+//! motion-quality columns).
+
+use clap::Args;
+
+/// Arguments of `motion-lod explain`.
+#[derive(Debug, Args)]
+pub struct ExplainArgs {
+    /// The term to explain (case and spaces do not matter; `-`, `_` and `.` read as spaces). Without
+    /// one, every term is listed.
+    #[arg(value_name = "TERM", num_args = 0.., allow_hyphen_values = true)]
+    pub term: Vec<String>,
+}
+
+/// One glossary entry: the term, other spellings seen in the output, and its definition.
+pub struct Entry {
+    /// The term as the output prints it.
+    pub term: &'static str,
+    /// Other spellings that find it (column headers, option names).
+    pub aliases: &'static [&'static str],
+    /// What it means, with its unit.
+    pub text: &'static str,
+}
+
+/// Every term the commands print, in the order a new user meets them.
+pub const GLOSSARY: &[Entry] = &[
+    Entry {
+        term: "cycle",
+        aliases: &["cycles", "gait cycle", "sample", "samples", "S"],
+        text: "Two steps of a walk, from one contact of the left foot to the next. Cycles are cut from the takes, aligned in time to T frames and stacked as the S samples of the motion tensor (P x T x S).",
+    },
+    Entry {
+        term: "controls",
+        aliases: &["control", "dx", "dz", "turn", "height", "d"],
+        text: "The parameters a walk is synthesized for, per cycle: dx (sideways root displacement, metres, + = the character's left), dz (forward root displacement, metres), turn (heading change, radians in files and the library, degrees on the command line), height (the performer's standing height, metres). A control constant over the data, or carrying no signal (see `leave-one-out`), is ignored by the model and reported by `build` and `info`.",
+    },
+    Entry {
+        term: "DOF",
+        aliases: &["P", "rows", "pose vector", "rotating joints"],
+        text: "Rows of the pose vector: root position (3, metres), root orientation (3, exponential map), the time increment to the next aligned frame (1, seconds), then 3 exponential-map rows per rotating joint, joints in evaluation order. P is their number.",
+    },
+    Entry {
+        term: "key level",
+        aliases: &["key", "key levels", "--levels", "N"],
+        text: "One of the N Tucker models (core and factors) that the build fits by ALS, from the largest ranks (key 0) down to the smallest (paper section 4.2). Key levels are stored; accuracy levels are made from them.",
+    },
+    Entry {
+        term: "accuracy level",
+        aliases: &[
+            "level",
+            "levels",
+            "acc. level",
+            "--level",
+            "--accuracy-levels",
+            "N_A",
+        ],
+        text: "What `--level` selects and what the policies choose from: level 0 is key 0 at full ranks, higher levels are smaller and less accurate. Each is a key level or a leading-block truncation of the nearest larger key (paper section 4.2). `--accuracy-levels` asks for a number; levels whose ranks would repeat are merged, and every key is one, so the model may hold another number (the build says so).",
+    },
+    Entry {
+        term: "ranks",
+        aliases: &["rank", "R_P", "R_T", "R_S", "--max-ranks", "--min-ranks"],
+        text: "The sizes (R_P, R_T, R_S) of a level's core tensor along joint DOF, time and samples. Smaller ranks: fewer bytes and less work per clip, more error.",
+    },
+    Entry {
+        term: "joints",
+        aliases: &[
+            "--joints",
+            "active joints",
+            "evaluated joints",
+            "joint count",
+        ],
+        text: "How many joints, in evaluation order (legs before arms, left/right adjacent), a level of detail animates; the others hold their mean rotation, the root always moves. `--joints 0` animates the root alone (the legs then hold the mean pose).",
+    },
+    Entry {
+        term: "detail",
+        aliases: &["level of detail", "LOD"],
+        text: "An accuracy level and a joint count: what one character is animated with. The distance and screen-space policies pick one per character from its distance or its size on screen.",
+    },
+    Entry {
+        term: "joint error",
+        aliases: &["joint error (cm)"],
+        text: "Mean distance between the joints of a synthesized pose and the reference pose (the held-out cycle, or full detail), by forward kinematics with root motion, in centimetres, averaged over joints and frames (paper section 5).",
+    },
+    Entry {
+        term: "shell error",
+        aliases: &["shell"],
+        text: "As ACL measures it: six virtual vertices 3 cm from every joint along its local axes; the error is the largest displacement of any vertex, in centimetres (the largest over frames for a clip, over clips for a set). It sees rotation errors of end joints (hands, feet) that the joint error misses. The policies keep it within a pixel on screen.",
+    },
+    Entry {
+        term: "foot slide",
+        aliases: &["slide"],
+        text: "How far a planted foot slides per stance beyond what full detail slides, in centimetres, over the quality walks (without the foot lock). Reported per accuracy level by `info`; the policies keep it within a pixel on screen.",
+    },
+    Entry {
+        term: "1 px from",
+        aliases: &["pixel", "screen budget"],
+        text: "The nearest distance from the camera (metres; 1920 x 1080, 60 degree vertical field of view) at which a level's shell error and foot slide, times the policies' margin of 1.5, cover at most one pixel.",
+    },
+    Entry {
+        term: "pop",
+        aliases: &["pop (cm/frame^2)", "seam"],
+        text: "The largest joint acceleration of a walk, in cm per frame squared at 30 fps: a jump at a cycle seam shows here. `seam` is the largest within one frame of a seam; `x data` divides by the data's (the median over its takes of each take's largest).",
+    },
+    Entry {
+        term: "skate",
+        aliases: &["skate (cm/s)"],
+        text: "The mean horizontal speed of the lowest foot point while it is on the floor (within 2 cm of it), cm/s; `x data` divides by the data's.",
+    },
+    Entry {
+        term: "floor",
+        aliases: &["float", "floor offset"],
+        text: "Against the data's floor, in cm, over half-second step windows: `floor` is the median of each window's lowest foot point (negative: the feet sink); `float` the largest (both feet in the air for a whole step).",
+    },
+    Entry {
+        term: "facing",
+        aliases: &["crab"],
+        text: "Mean pelvis heading minus travel heading, degrees (+ = facing left of the path); the data's range is printed in the header. A sidestep facing far from its travel crabs.",
+    },
+    Entry {
+        term: "cycle/data",
+        aliases: &["cadence"],
+        text: "The synthesized cycle's duration against the median of the data's cycles of about the same step length (within 10%), seconds.",
+    },
+    Entry {
+        term: "leave-one-out",
+        aliases: &["loo", "leave one out", "RMSE", "t"],
+        text: "Each sample predicted from all the others. With `eval DIR` (no --folds) the factors are fitted on all samples (fast, optimistic); `--folds K` refits everything per fold. For control selection: the kriging's leave-one-out RMSE with and without a control, and the paired t statistic of the difference.",
+    },
+    Entry {
+        term: "refit",
+        aliases: &["folds", "k-fold", "--folds", "--by", "holdout", "--holdout"],
+        text: "Cross-validation that builds a new model per fold without the held-out takes (`--by take`) or cycles (`--by sample`) and measures it on them; `--holdout DIR` measures a model on separate folders.",
+    },
+    Entry {
+        term: "variogram",
+        aliases: &["nugget", "sill", "range"],
+        text: "How different two cycles are expected to be as their controls move apart: gamma(h) = nugget + sill * shape(h / range). Fitted to the residuals at build and used by kriging.",
+    },
+    Entry {
+        term: "kriging",
+        aliases: &["universal kriging", "naive-kriging", "naive"],
+        text: "The interpolation that turns controls into blending weights of the samples: a linear trend in the controls plus correlated residuals (paper eq. 8). `naive-kriging` applies it to the raw samples (the paper's baseline).",
+    },
+    Entry {
+        term: "rbf",
+        aliases: &["rbf-smoothed", "pca", "nearest", "method"],
+        text: "Baselines in `eval`: radial basis functions on the raw samples (`rbf-smoothed` with a fitted smoothing), PCA of the samples (fewer components per level), and the nearest sample.",
+    },
+    Entry {
+        term: "storage",
+        aliases: &[
+            "bytes",
+            "raw samples",
+            "hybrid model",
+            "bytes (f32)",
+            "bytes (f64)",
+        ],
+        text: "Bytes a method keeps: `raw samples` the aligned tensor, `hybrid model` every key level's core and factors plus the kriging data (f64 as the paper counts, f32 as the file stores).",
+    },
+    Entry {
+        term: "rel.error",
+        aliases: &["MSE", "sweeps", "C_E"],
+        text: "Of a key level: ||M - M~|| / ||M|| over the weighted tensor, its mean squared error (the paper's E), and the ALS sweeps it took. C_E is the greedy key search's error coefficient.",
+    },
+    Entry {
+        term: "row weights",
+        aliases: &["--row-weights", "weights"],
+        text: "How much each DOF row counts in the decomposition: how far it moves the joints per unit (metres per radian for rotations), so that tensor error follows joint error. `--row-weights unit` is the paper's plain tensor.",
+    },
+];
+
+/// Lower-case, `-`, `_` and `.` as spaces, single spaces.
+fn key(s: &str) -> String {
+    s.trim_start_matches("--")
+        .to_lowercase()
+        .replace(['-', '_', '.'], " ")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The entry for `term`, by its name or an alias.
+pub fn find(term: &str) -> Option<&'static Entry> {
+    let k = key(term);
+    GLOSSARY.iter().find(|e| key(e.term) == k).or_else(|| {
+        GLOSSARY
+            .iter()
+            .find(|e| e.aliases.iter().any(|a| key(a) == k))
+    })
+}
+
+/// Runs the subcommand.
+pub fn run(args: ExplainArgs) -> anyhow::Result<()> {
+    if args.term.is_empty() {
+        println!("terms (motion-lod explain TERM):");
+        for e in GLOSSARY {
+            println!("  {:<16} {}", e.term, e.aliases.join(", "));
+        }
+        return Ok(());
+    }
+    let term = args.term.join(" ");
+    match find(&term) {
+        Some(e) => {
+            println!("{}: {}", e.term, e.text);
+            Ok(())
+        }
+        None => anyhow::bail!(
+            "no entry for `{term}`; `motion-lod explain` lists the terms: {}",
+            GLOSSARY
+                .iter()
+                .map(|e| e.term)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
