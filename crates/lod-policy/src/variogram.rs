@@ -101,28 +101,29 @@ impl Variogram {
         Ok(v)
     }
 
-    /// Checks that every parameter the model uses is finite and inside its domain.
+    /// Checks that every parameter the model uses is finite and inside its domain: nugget
+    /// `>= 0`, sill `> 0`, range `> 0` (bounded models), exponent in `(0, 2)` (`Power`).
     pub fn validate(&self) -> Result<(), VariogramError> {
-        let fail = |reason: String| {
-            Err(VariogramError {
-                model: self.model.name(),
-                reason,
-            })
-        };
         let (n, s, a, e) = (self.nugget, self.sill, self.range, self.exponent);
-        if !(n.is_finite() && n >= 0.0) {
-            return fail(format!("nugget {n} must be finite and >= 0"));
+        let power = self.model == VariogramModel::Power;
+        let rules = [
+            ("nugget", n, n.is_finite() && n >= 0.0, "finite and >= 0"),
+            ("sill", s, s.is_finite() && s > 0.0, "finite and > 0"),
+            (
+                "range",
+                a,
+                !self.model.has_range() || (a.is_finite() && a > 0.0),
+                "finite and > 0",
+            ),
+            ("exponent", e, !power || (e > 0.0 && e < 2.0), "in (0, 2)"),
+        ];
+        match rules.into_iter().find(|&(_, _, ok, _)| !ok) {
+            Some((name, value, _, rule)) => Err(VariogramError {
+                model: self.model.name(),
+                reason: format!("{name} {value} must be {rule}"),
+            }),
+            None => Ok(()),
         }
-        if !(s.is_finite() && s > 0.0) {
-            return fail(format!("sill {s} must be finite and > 0"));
-        }
-        if self.model.has_range() && !(a.is_finite() && a > 0.0) {
-            return fail(format!("range {a} must be finite and > 0"));
-        }
-        if self.model == VariogramModel::Power && !(e > 0.0 && e < 2.0) {
-            return fail(format!("exponent {e} must be in (0, 2)"));
-        }
-        Ok(())
     }
 
     /// `gamma(h)`: 0 for `h <= 0` (and NaN), `nugget + sill f(h)` beyond, with `f` the unit shape

@@ -90,21 +90,12 @@ pub fn load<T: DeserializeOwned>(path: &Path) -> Result<T, ModelFileError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde::Deserialize;
 
-    #[derive(Debug, PartialEq, Serialize, Deserialize)]
-    struct Sample {
-        name: String,
-        values: Vec<f32>,
-        dims: [u32; 3],
-    }
+    /// Any serde value will do: the framing's own tests are the runtime's (`lod_policy::file`).
+    type Sample = (String, Vec<f32>);
 
     fn sample() -> Sample {
-        Sample {
-            name: "walk".into(),
-            values: (0..200).map(|i| i as f32 * 0.25).collect(),
-            dims: [94, 100, 186],
-        }
+        ("walk".into(), (0..200).map(|i| i as f32 * 0.25).collect())
     }
 
     fn p() -> &'static Path {
@@ -114,9 +105,8 @@ mod tests {
     #[test]
     fn round_trip() {
         let bytes = encode(&sample(), p()).unwrap();
-        assert_eq!(&bytes[..8], &MAGIC);
-        let back: Sample = decode(&bytes, p()).unwrap();
-        assert_eq!(back, sample());
+        assert_eq!((&bytes[..8], bytes.len() > HEADER_LEN), (&MAGIC[..], true));
+        assert_eq!(decode::<Sample>(&bytes, p()).unwrap(), sample());
     }
 
     #[test]

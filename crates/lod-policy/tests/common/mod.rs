@@ -223,6 +223,29 @@ fn f32v(v: &[f64]) -> Vec<f32> {
     v.iter().map(|&x| x as f32).collect()
 }
 
+/// Entry `(row, i)` of `C`, the `(d + 1) x S` matrix of columns `[c_i; 1]` (scaled controls).
+pub fn c_entry(truth: &Truth, row: usize, i: usize) -> f64 {
+    if row < truth.d {
+        truth.controls[i + truth.s * row]
+    } else {
+        1.0
+    }
+}
+
+/// `C C^T`, `(d + 1) x (d + 1)` column-major.
+pub fn c_gram(truth: &Truth) -> Vec<f64> {
+    let dc = truth.d + 1;
+    let mut cct = vec![0.0; dc * dc];
+    for x in 0..dc {
+        for y in 0..dc {
+            cct[x + dc * y] = (0..truth.s)
+                .map(|i| c_entry(truth, x, i) * c_entry(truth, y, i))
+                .sum();
+        }
+    }
+    cct
+}
+
 /// Builds the runtime model from the truth (kriging inverse by solving A X = I here).
 pub fn build_model(truth: &Truth) -> LodModel {
     let s = truth.s;
@@ -237,20 +260,9 @@ pub fn build_model(truth: &Truth) -> LodModel {
         rows[s * j..s * (j + 1)].copy_from_slice(&x[..s]);
     }
     // C = [c_i; 1] ((d + 1) x S, scaled controls) and (C C^T).
-    let (d, dc) = (truth.d, truth.d + 1);
-    let cm = |row: usize, i: usize| {
-        if row < d {
-            truth.controls[i + s * row]
-        } else {
-            1.0
-        }
-    };
-    let mut cct = vec![0.0; dc * dc];
-    for x in 0..dc {
-        for y in 0..dc {
-            cct[x + dc * y] = (0..s).map(|i| cm(x, i) * cm(y, i)).sum();
-        }
-    }
+    let dc = truth.d + 1;
+    let cm = |row: usize, i: usize| c_entry(truth, row, i);
+    let cct = c_gram(truth);
     let keys: Vec<KeyTensor> = truth
         .keys
         .iter()
@@ -390,19 +402,8 @@ pub fn direct_pose(truth: &Truth, level: usize, c: &[f64], phase: f64) -> Vec<f6
     }
     // F = K C^+ = K C^T (C C^T)^{-1}: solve (C C^T) F^T = C K^T.
     let dc = d + 1;
-    let cm = |row: usize, i: usize| {
-        if row < d {
-            truth.controls[i + s * row]
-        } else {
-            1.0
-        }
-    };
-    let mut cct = vec![0.0; dc * dc];
-    for x in 0..dc {
-        for y in 0..dc {
-            cct[x + dc * y] = (0..s).map(|i| cm(x, i) * cm(y, i)).sum();
-        }
-    }
+    let cm = |row: usize, i: usize| c_entry(truth, row, i);
+    let cct = c_gram(truth);
     let mut f = vec![0.0; m * dc]; // m x dc column-major
     for e in 0..m {
         let rhs: Vec<f64> = (0..dc)
