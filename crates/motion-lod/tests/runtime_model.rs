@@ -194,3 +194,44 @@ fn a_layout_that_does_not_fit_the_model_is_refused() {
     assert!(e.to_string().contains("DOF rows"), "{e}");
     assert!(other.runtime().is_err());
 }
+
+/// Random edits of the stored pose layout behind a valid checksum: the runtime's reader never
+/// panics, and every file the offline reader accepts the runtime accepts too, with the offline
+/// layout's rig (the runtime's mirror checks what the layout checks, and derives the same rig).
+#[test]
+fn edited_layouts_are_read_alike_offline_and_at_runtime() {
+    let (model, _) = built();
+    let bytes = file_bytes();
+    let payload = &bytes[HEADER_LEN..];
+    let layout_len = bincode::serde::encode_to_vec(&model.layout, bincode::config::standard())
+        .unwrap()
+        .len();
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let (mut both, mut refused, mut runtime_only) = (0, 0, 0);
+    for _ in 0..600 {
+        let mut edited = payload.to_vec();
+        for _ in 0..1 + next() % 3 {
+            let at = (next() % layout_len as u64) as usize;
+            edited[at] = next() as u8;
+        }
+        let framed = lod_policy::file::frame(&edited);
+        let runtime = RuntimeModel::from_bytes(&framed);
+        match motion_lod::MotionModel::from_bytes(&framed, Path::new("m")) {
+            Ok(offline) => {
+                let runtime = runtime.expect("the runtime reads what the offline reader reads");
+                assert_eq!(runtime.rig(), offline.layout.rig());
+                both += 1;
+            }
+            Err(_) if runtime.is_ok() => runtime_only += 1,
+            Err(_) => refused += 1,
+        }
+    }
+    println!("{both} read by both, {runtime_only} by the runtime only, {refused} refused");
+    assert!(both > 20 && refused > 20, "{both} {refused}");
+}
