@@ -3,7 +3,7 @@
 //! ranks 40 x 40 x 60 down to 7 x 7 x 9).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use lod_policy::model::{AccuracyLevel, ControlSpace, KeyTensor, ModelParts, Ranks};
+use lod_policy::model::{AccuracyLevel, KeyTensor, ModelParts, Ranks};
 use lod_policy::{ClipKernel, Detail, KernelScratch, LodModel, Variogram, VariogramModel};
 use std::hint::black_box;
 
@@ -48,7 +48,8 @@ fn paper_model() -> LodModel {
     let raw = rng.vec(S * D, 1.0);
     let variogram = Variogram::new(VariogramModel::Exponential, 0.05, 1.0, 1.5, 1.0).unwrap();
     let mut controls =
-        ControlSpace::from_raw(variogram, &raw, S, vec![0.0; D], vec![1.0; D]).unwrap();
+        motion_lod::projection::control_space(variogram, &raw, S, vec![0.0; D], vec![1.0; D])
+            .unwrap();
     controls.projection = rng.vec((D + 1) * (S + 1), 0.1);
     LodModel::new(ModelParts {
         p: P,

@@ -1,4 +1,5 @@
-//! Error types of the runtime model: shape and value validation, kernel evaluation.
+//! Error types of the runtime model: shape and value validation, kernel evaluation, variogram
+//! parameters and rigs (the model file's errors are [`crate::file::FileError`]).
 
 use thiserror::Error;
 
@@ -140,5 +141,52 @@ pub enum KernelError {
         what: &'static str,
         /// Which size does not fit.
         detail: String,
+    },
+}
+
+/// A variogram parameter outside its domain ([`crate::Variogram::validate`]).
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("invalid {model} variogram: {reason}")]
+pub struct VariogramError {
+    /// The model's name ([`crate::VariogramModel::name`]).
+    pub model: &'static str,
+    /// Which parameter is wrong, with its value.
+    pub reason: String,
+}
+
+/// Why a [`crate::Rig`] could not be built, or forward kinematics could not run on the buffers
+/// given.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum RigError {
+    /// A joint (or the rig as a whole) does not fit the rig's rules.
+    #[error("joint {joint} ({name}): {reason}")]
+    Joint {
+        /// Index of the joint in the rig.
+        joint: usize,
+        /// Its name.
+        name: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The rig has no joint, or no root joint.
+    #[error("rig: {0}")]
+    Structure(String),
+    /// The pose is shorter than the rows the active joints read.
+    #[error("pose: {found} rows, the {active} active joints read {needed}")]
+    PoseLength {
+        /// Joints read from the pose.
+        active: usize,
+        /// Rows they need.
+        needed: usize,
+        /// Rows given.
+        found: usize,
+    },
+    /// The output slice is shorter than the rig's joint count.
+    #[error("output: {found} slots for {joints} joints")]
+    OutputLength {
+        /// Joints of the rig.
+        joints: usize,
+        /// Slots given.
+        found: usize,
     },
 }

@@ -17,10 +17,10 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::KernelError;
-use timewarp::TimeTable;
+use crate::time_table::TimeTable;
 
 use crate::chain::{RootMotion, exp_map_to_quat};
-use crate::model::{LodModel, Ranks, TIME_ROW, Variogram, VariogramModel};
+use crate::model::{LodModel, Ranks, TIME_ROW};
 
 /// Index of the control that is a clip's travel turn (radians, + = left): the heading of the
 /// direction of travel changes by it over one cycle (the data's definition; the pelvis may turn by more
@@ -259,8 +259,8 @@ impl ClipKernel {
         self.root_motion
     }
     /// The clip's time table: playback time (seconds) of each aligned frame, built from the
-    /// time-increment row (row 6) of `G(c)` at every aligned frame (`timewarp::TimeTable`: the
-    /// increment of the last frame is unused, increments below `timewarp::MIN_INCREMENT` are
+    /// time-increment row (row 6) of `G(c)` at every aligned frame ([`TimeTable`]: the
+    /// increment of the last frame is unused, increments below [`crate::MIN_INCREMENT`] are
     /// raised to it). Empty until the kernel is built.
     pub fn time_table(&self) -> &TimeTable {
         &self.times
@@ -308,37 +308,6 @@ impl ClipKernel {
         let (t0, t1) = (times[k], times[k + 1]);
         let f = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
         (k as f64 + f) as f32
-    }
-}
-
-/// `x_i <- gamma(sqrt(x_i))` for squared distances `x` ([`Variogram::eval`] of each distance). The
-/// spherical and linear models, the ones the data choose, run branch-free so that the loop
-/// vectorises, with the same operations as `eval` (bitwise the same values); other models call
-/// `eval`.
-fn variogram_of_squared(v: &Variogram, x: &mut [f64]) {
-    let (nugget, sill, range) = (v.nugget, v.sill, v.range);
-    match v.model {
-        VariogramModel::Spherical if range > 0.0 => {
-            for g in x.iter_mut() {
-                let h = g.sqrt();
-                // h >= range gives t = 1 and 1.5 - 0.5 = 1 exactly, as `eval`'s branch does.
-                let t = (h / range).min(1.0);
-                let y = nugget + sill * (1.5 * t - 0.5 * t * t * t);
-                *g = if h > 0.0 { y } else { 0.0 };
-            }
-        }
-        VariogramModel::Linear => {
-            for g in x.iter_mut() {
-                let h = g.sqrt();
-                let y = nugget + sill * h;
-                *g = if h > 0.0 { y } else { 0.0 };
-            }
-        }
-        _ => {
-            for g in x.iter_mut() {
-                *g = v.eval(g.sqrt());
-            }
-        }
     }
 }
 
@@ -543,7 +512,7 @@ impl LodModel {
                 }
             }
         }
-        variogram_of_squared(&cs.variogram, x);
+        cs.variogram.eval_squared(x);
         scratch.x[s] = 1.0;
 
         // 3. y = [U_S^T b (first r_S rows) ; C b] = [Q x ; P_C x], Q column-major R_S x (S + 1) (the
@@ -703,36 +672,6 @@ impl LodModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn branch_free_variogram_equals_eval_bitwise() {
-        let h2: Vec<f64> = (0..400)
-            .map(|i| {
-                let x = i as f64 * 0.037;
-                x * x
-            })
-            .chain([0.0, 1e-300, 8.187 * 8.187, 1e6])
-            .collect();
-        for model in [
-            VariogramModel::Spherical,
-            VariogramModel::Linear,
-            VariogramModel::Exponential,
-            VariogramModel::Gaussian,
-            VariogramModel::Power,
-        ] {
-            let v = Variogram::new(model, 0.0347, 0.3472, 8.187, 1.3).unwrap();
-            let mut got = h2.clone();
-            variogram_of_squared(&v, &mut got);
-            for (&g, &x) in got.iter().zip(&h2) {
-                let want = v.eval(x.sqrt());
-                assert_eq!(
-                    g.to_bits(),
-                    want.to_bits(),
-                    "{model:?} at h^2 = {x}: {g} vs {want}"
-                );
-            }
-        }
-    }
 
     #[test]
     fn blocked_columns_equal_the_plain_column_loop_bitwise() {

@@ -1,19 +1,25 @@
-//! The runtime multilinear motion model and the level-of-detail policies.
+//! The motion-lod runtime: the one crate an engine links to animate characters from a model file.
 //!
-//! This crate is for: evaluating poses from a compressed motion model at any accuracy level (clip
-//! kernels and per-frame poses into caller-owned buffers) and for choosing a level per character from
-//! its distance or projected size. It is not for: building models (see `motion-lod`) or simulating
-//! crowds (see `crowd-sim`).
+//! This crate is for: loading a model file ([`RuntimeModel::load`], [`RuntimeModel::from_bytes`]:
+//! framing, checksum, version, validation), evaluating poses from the compressed multilinear model at
+//! any accuracy level (clip kernels and per-frame poses into caller-owned buffers), turning poses into
+//! joint positions and transforms in f32 ([`Rig`]), chaining clips into a walk, and choosing a level
+//! per character from its distance or projected size. Its dependencies are serde, bincode, glam,
+//! thiserror and crc32fast only. It is not for: building models (the offline `motion-lod` crate
+//! fits the decomposition, the kriging and the variogram, and writes the file with this crate's
+//! framing), reading motion capture, or simulating crowds (see `crowd-sim`).
 //!
 //! The pieces (Mukai and Kuriyama, sections 3.2-4.3):
+//! - [`runtime`]: [`RuntimeModel`], a model file's [`Rig`] and [`LodModel`]; [`file`](mod@file): the file
+//!   framing and its errors ([`FileError`]), shared with the offline writer.
 //! - [`model`]: [`LodModel`], validated from plain-data [`ModelParts`]: key tensors (ordered Tucker
 //!   models with their universal-kriging projections), accuracy levels (leading sub-block
-//!   truncations of a key), the control space, the mean pose, measured error tables, storage.
-//! - [`projection`]: offline helpers that compute a key's kriging projection `Q` and trend
-//!   projection `V` from `U_S`, the kriging matrix inverse and the sample controls.
+//!   truncations of a key), the control space with its [`Variogram`], the mean pose, measured error
+//!   tables, storage.
 //! - [`kernel`]: per clip, [`LodModel::build_kernel`] computes the kriging weights, the blended
-//!   core `K(c) = Z x_3 w` (eq. 8), `G(c) = U_P K(c)` for the active rows and the clip's time
-//!   table; per frame, [`LodModel::pose`] evaluates `G w_T` (eq. 4-5). Neither allocates.
+//!   core `K(c) = Z x_3 w` (eq. 8), `G(c) = U_P K(c)` for the active rows and the clip's
+//!   [`TimeTable`]; per frame, [`LodModel::pose`] evaluates `G w_T` (eq. 4-5). Neither allocates.
+//! - [`rig`]: [`Rig`], forward kinematics of f32 poses for the active joints.
 //! - [`policy`]: the paper's [`DistancePolicy`] and a [`ScreenSpacePolicy`] with a pixel budget,
 //!   both behind the [`LevelPolicy`] trait.
 //!
@@ -36,18 +42,43 @@
 //! }
 //! # let _ = animate;
 //! ```
+//!
+//! From a file to joint positions:
+//!
+//! ```no_run
+//! use lod_policy::{ClipKernel, Detail, KernelScratch, RuntimeModel};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let model = RuntimeModel::load(std::path::Path::new("walk.mlod"))?;
+//! let (lod, rig) = (model.lod(), model.rig());
+//! let (mut scratch, mut kernel) = (KernelScratch::new(lod), ClipKernel::new(lod));
+//! let mut pose = vec![0.0f32; lod.p()];
+//! let mut joints = vec![glam::Vec3::ZERO; rig.joint_count()];
+//! lod.build_kernel(&[0.0, 1.4, 0.0, 1.7], Detail::full(), &mut scratch, &mut kernel)?;
+//! lod.pose(&kernel, kernel.phase_at(0.25), &mut pose)?;
+//! rig.joint_positions(&pose, kernel.detail().active_joints, &mut joints)?; // metres, cycle frame
+//! # Ok(())
+//! # }
+//! ```
 
 #![warn(missing_docs)]
 
 pub mod chain;
 pub mod error;
+pub mod file;
 pub mod kernel;
 pub mod model;
 pub mod policy;
-pub mod projection;
+pub mod rig;
+pub mod runtime;
+pub mod time_table;
+pub mod variogram;
 
 pub use chain::{CycleFrame, PoseState, RootMotion, SeamScratch, SeamTransition};
-pub use error::{KernelError, ModelError};
+pub use error::{KernelError, ModelError, RigError, VariogramError};
+pub use file::{FileError, InvalidModel};
+/// The math types of the runtime API (`Vec3`, `Quat`), so an engine uses the same version.
+pub use glam;
 pub use kernel::{ClipKernel, Detail, KernelScratch, TURN_CONTROL};
 pub use model::{
     ALWAYS_ROWS, AccuracyLevel, ControlSpace, KeyTensor, LevelError, LodModel, ModelParts,
@@ -57,4 +88,6 @@ pub use policy::{
     DistanceConfig, DistancePolicy, ERROR_MARGIN, ErrorMetric, LevelPolicy, PolicyError,
     ScreenConfig, ScreenSpacePolicy, ViewParams,
 };
-pub use projection::KeyFactors;
+pub use rig::{JointRole, JointTransform, Rig, RigJoint};
+pub use runtime::RuntimeModel;
+pub use time_table::{MIN_INCREMENT, TimeTable};

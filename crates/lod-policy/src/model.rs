@@ -13,7 +13,7 @@ use crate::chain::RootMotion;
 
 use crate::error::ModelError;
 
-pub use kriging::{Variogram, VariogramModel};
+pub use crate::variogram::{Variogram, VariogramModel};
 
 /// Rows 0..7 of the pose vector are always evaluated: root position (0..3), root exp-map (3..6)
 /// and the time increment (6).
@@ -95,7 +95,7 @@ pub struct AccuracyLevel {
 /// controls. A dimension that is constant over the data has `scale_k = 0` (it is then ignored).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ControlSpace {
-    /// Variogram `gamma(h)` of the residuals (fitted offline by the `kriging` crate).
+    /// Variogram `gamma(h)` of the residuals (fitted offline, evaluated here).
     pub variogram: Variogram,
     /// Per-dimension offset (length `d`).
     pub offset: Vec<f32>,

@@ -6,8 +6,8 @@
 mod common;
 
 use common::*;
+use lod_policy::TimeTable;
 use lod_policy::{ClipKernel, Detail, KernelError, KernelScratch, LodModel};
-use timewarp::TimeTable;
 
 fn kernel_pose(model: &LodModel, c: &[f32], detail: Detail, phase: f32) -> (ClipKernel, Vec<f32>) {
     let mut scratch = KernelScratch::new(model);

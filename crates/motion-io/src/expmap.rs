@@ -7,7 +7,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use glam::{DQuat, DVec3, Quat, Vec3};
+use glam::{DQuat, DVec3};
 
 /// Logarithm of a unit quaternion: `v = theta a` with `q = (cos(theta/2), sin(theta/2) a)`,
 /// `theta` in `[0, pi]` (the sign of `q` is chosen with `w >= 0`).
@@ -37,18 +37,8 @@ pub fn exp_to_quat(v: DVec3) -> DQuat {
     DQuat::from_xyzw(v.x * k, v.y * k, v.z * k, half.cos())
 }
 
-/// Single-precision [`exp_to_quat`] for the runtime.
-#[inline]
-pub fn exp_to_quat_f32(v: Vec3) -> Quat {
-    let theta = v.length();
-    let half = 0.5 * theta;
-    let k = if theta < 1e-3 {
-        0.5 - theta * theta / 48.0
-    } else {
-        half.sin() / theta
-    };
-    Quat::from_xyzw(v.x * k, v.y * k, v.z * k, half.cos())
-}
+/// Single-precision [`exp_to_quat`]: the runtime's ([`lod_policy::rig::exp_to_quat`]).
+pub use lod_policy::rig::exp_to_quat as exp_to_quat_f32;
 
 /// The branch of `v` (same rotation) nearest `reference`: among `v + 2 pi k v/|v|` for integer
 /// `k` (which includes the opposite-axis form `-(2 pi - theta) a`), the one minimising the distance

@@ -7,18 +7,20 @@
 
 use std::ops::Range;
 
-use glam::{DQuat, DVec3, Quat, Vec3};
+use glam::{DQuat, DVec3, Vec3};
+use lod_policy::{JointRole, Rig, RigJoint};
 use serde::{Deserialize, Serialize};
 
 use crate::euler::{channels_to_quat, quat_to_channels};
-use crate::expmap::{exp_to_quat, exp_to_quat_f32, nearest_branch, quat_to_exp};
+use crate::expmap::{exp_to_quat, nearest_branch, quat_to_exp};
 use crate::motion::Motion;
 use crate::skeleton::{Skeleton, SkeletonError, Transform};
 
-/// Rows before the first joint: root position (3), root orientation (3), time increment (1).
-pub const ROOT_ROWS: usize = 7;
-/// Row of the time increment.
-pub const TIME_ROW: usize = 6;
+/// Rows before the first joint: root position (3), root orientation (3), time increment (1)
+/// (the runtime's [`lod_policy::ALWAYS_ROWS`]).
+pub const ROOT_ROWS: usize = lod_policy::ALWAYS_ROWS;
+/// Row of the time increment (the runtime's constant).
+pub use lod_policy::TIME_ROW;
 
 /// Errors of pose-vector construction and conversion.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -126,10 +128,10 @@ pub struct PoseLayout {
     /// Local rotation of every joint used when it is not evaluated from the pose (static joints:
     /// the template's; rotating joints beyond the active count: the mean rotation).
     rest: Vec<DQuat>,
-    rest_f32: Vec<Quat>,
-    /// Local translation of every joint in metres (f32, runtime FK).
-    offset_m_f32: Vec<Vec3>,
     offset_m: Vec<DVec3>,
+    /// The runtime's rig of this layout (f32 offsets and rest rotations, roles): the f32 forward
+    /// kinematics ([`PoseLayout::joint_positions`]) is the runtime's.
+    rig: Rig,
 }
 
 /// What a [`PoseLayout`] is made of, as stored in files: everything else is derived from these.
@@ -309,7 +311,7 @@ impl PoseLayout {
                 layout.rest[j] = DQuat::from_vec4(s).normalize();
             }
         }
-        layout.refresh_f32();
+        layout.refresh_rig()?;
         Ok(layout)
     }
 
@@ -398,7 +400,7 @@ impl PoseLayout {
             Some(joint_order),
         )?;
         layout.rest = rest;
-        layout.refresh_f32();
+        layout.refresh_rig()?;
         Ok(layout)
     }
 
@@ -444,7 +446,8 @@ impl PoseLayout {
             rest.push(local.rotation);
             offset_m.push(local.position / units_per_metre);
         }
-        let mut layout = PoseLayout {
+        let rig = make_rig(&skeleton, &role, &rest, &offset_m)?;
+        Ok(PoseLayout {
             skeleton,
             units_per_metre,
             root,
@@ -454,17 +457,22 @@ impl PoseLayout {
             channel_starts,
             root_parent_world,
             rest,
-            rest_f32: Vec::new(),
-            offset_m_f32: Vec::new(),
             offset_m,
-        };
-        layout.refresh_f32();
-        Ok(layout)
+            rig,
+        })
     }
 
-    fn refresh_f32(&mut self) {
-        self.rest_f32 = self.rest.iter().map(|q| q.as_quat()).collect();
-        self.offset_m_f32 = self.offset_m.iter().map(|v| v.as_vec3()).collect();
+    /// Rebuilds the runtime rig after the roles or rest rotations changed.
+    fn refresh_rig(&mut self) -> Result<(), PoseError> {
+        self.rig = make_rig(&self.skeleton, &self.role, &self.rest, &self.offset_m)?;
+        Ok(())
+    }
+
+    /// The runtime's rig of this layout: its joints (skeleton order), f32 offsets in metres and
+    /// rest rotations, and which rows drive each joint. [`PoseLayout::joint_positions`] runs its
+    /// forward kinematics.
+    pub fn rig(&self) -> &Rig {
+        &self.rig
     }
 
     /// The same layout with the rotating joints in a new order (skeleton joint indices, a
@@ -483,6 +491,7 @@ impl PoseLayout {
             self.role[j] = Role::Rotating(k);
         }
         self.order = order;
+        self.refresh_rig()?;
         Ok(self)
     }
 
@@ -523,6 +532,7 @@ impl PoseLayout {
             self.role[j] = Role::Rotating(k);
         }
         self.order = order;
+        self.refresh_rig()?;
         Ok(self)
     }
 
@@ -623,8 +633,7 @@ impl PoseLayout {
                 self.rest[j] = DQuat::from_vec4(sum).normalize();
             }
         }
-        self.refresh_f32();
-        Ok(())
+        self.refresh_rig()
     }
 
     fn check_motion(&self, motion: &Motion) -> Result<(), PoseError> {
@@ -912,7 +921,8 @@ impl PoseLayout {
     }
 
     /// Runtime forward kinematics (paper section 3.2's last step): world positions in metres of
-    /// every skeleton joint for an f32 pose vector, into `out` (length = skeleton joint count).
+    /// every skeleton joint for an f32 pose vector, into `out` (length = skeleton joint count), by
+    /// the runtime's [`Rig::joint_positions`] ([`PoseLayout::rig`]).
     ///
     /// Only the first `active_joints` joints of the order are read from `pose` (which may be
     /// truncated to `7 + 3 * active_joints` rows, the level's `P'`); the others use the layout's
@@ -924,52 +934,38 @@ impl PoseLayout {
     /// If `pose` has fewer than `7 + 3 * min(active_joints, joint_count())` rows or `out` is shorter
     /// than the skeleton's joint count.
     pub fn joint_positions(&self, pose: &[f32], active_joints: usize, out: &mut [Vec3]) {
-        let active = active_joints.min(self.order.len());
-        let needed = if active == 0 {
-            6
-        } else {
-            ROOT_ROWS + 3 * active
-        };
-        assert!(pose.len() >= needed, "pose too short for the active joints");
-        let nj = self.skeleton.joints.len();
-        assert!(out.len() >= nj, "output shorter than the joint count");
-        let root_pos = Vec3::from_slice(&pose[0..3]);
-        let root_rot = exp_to_quat_f32(Vec3::from_slice(&pose[3..6]));
-        let ground = Vec3::new(root_pos.x, 0.0, root_pos.z);
-        let mut stack = [Quat::IDENTITY; 128];
-        let mut heap = Vec::new();
-        let rot: &mut [Quat] = if nj <= stack.len() {
-            &mut stack[..nj]
-        } else {
-            heap.resize(nj, Quat::IDENTITY);
-            &mut heap
-        };
-        for j in 0..nj {
-            match self.role[j] {
-                Role::Outside => {
-                    out[j] = ground;
-                    rot[j] = Quat::IDENTITY;
-                }
-                Role::Root => {
-                    out[j] = root_pos;
-                    rot[j] = root_rot;
-                }
-                role => {
-                    let p = self.skeleton.joints[j].parent.unwrap_or(0);
-                    debug_assert!(p < j);
-                    let local = match role {
-                        Role::Rotating(k) if k < active => {
-                            let r = ROOT_ROWS + 3 * k;
-                            exp_to_quat_f32(Vec3::new(pose[r], pose[r + 1], pose[r + 2]))
-                        }
-                        _ => self.rest_f32[j],
-                    };
-                    out[j] = out[p] + rot[p] * self.offset_m_f32[j];
-                    rot[j] = rot[p] * local;
-                }
-            }
+        if let Err(e) = self.rig.joint_positions(pose, active_joints, out) {
+            panic!("joint positions: {e}");
         }
     }
+}
+
+/// The runtime rig of a layout: the skeleton's joints with their f32 offsets (metres) and rest
+/// rotations, and their roles.
+fn make_rig(
+    skeleton: &Skeleton,
+    role: &[Role],
+    rest: &[DQuat],
+    offset_m: &[DVec3],
+) -> Result<Rig, PoseError> {
+    let joints = skeleton
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(j, joint)| RigJoint {
+            name: joint.name.clone(),
+            parent: joint.parent,
+            offset: offset_m[j].as_vec3(),
+            rest: rest[j].as_quat(),
+            role: match role[j] {
+                Role::Outside => JointRole::Outside,
+                Role::Root => JointRole::Root,
+                Role::Rotating(k) => JointRole::Rotating(k),
+                Role::Static => JointRole::Static,
+            },
+        })
+        .collect();
+    Rig::new(joints).map_err(|e| PoseError::BadLayout(format!("runtime rig: {e}")))
 }
 
 fn check_shape(len: usize, dof: usize) -> Result<(), PoseError> {

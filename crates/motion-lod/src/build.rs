@@ -16,10 +16,7 @@
 use faer::Mat;
 use hosvd_als::{AlsOptions, AlsReport, KeyLevels, KeySearchConfig, Tucker, hybrid_levels};
 use kriging::{DimDecision, Kriging, KrigingConfig, SelectRule, select_dims};
-use lod_policy::{
-    AccuracyLevel, ControlSpace, Detail, KeyFactors, KeyTensor, LevelError, LodModel, ModelParts,
-    Ranks,
-};
+use lod_policy::{AccuracyLevel, Detail, LevelError, LodModel, ModelParts, Ranks};
 use motion_io::PoseLayout;
 use serde::{Deserialize, Serialize};
 use tensor_ops::Tensor3;
@@ -31,6 +28,10 @@ use crate::importance::{
 use crate::metrics::ErrorMeter;
 use crate::model::{BuildReport, CONTROL_NAMES, KeyReport, MotionModel, TIME_ROW};
 use crate::progress::Progress;
+use crate::projection::{
+    KeyFactors, VariogramConversionError, control_space, key_tensor, runtime_variogram,
+    with_projection,
+};
 
 /// Aligned training data: the motion tensor and what each sample is.
 #[derive(Debug, Clone)]
@@ -167,6 +168,9 @@ pub enum BuildError {
     /// The runtime model rejected the parts.
     #[error("runtime model: {0}")]
     Model(#[from] lod_policy::ModelError),
+    /// The fitted variogram cannot go into the runtime model.
+    #[error("runtime model: {0}")]
+    Variogram(#[from] VariogramConversionError),
     /// Evaluating the model while measuring its errors failed.
     #[error("measuring level errors: {0}")]
     Kernel(#[from] lod_policy::KernelError),
@@ -615,13 +619,7 @@ impl Analysis {
                 u_t: &u_t,
                 u_s: &u_s,
             };
-            key_tensors.push(KeyTensor::from_factors(
-                &factors,
-                p,
-                t,
-                &kriging_rows,
-                &scaled,
-            )?);
+            key_tensors.push(key_tensor(&factors, p, t, &kriging_rows, &scaled)?);
             key_reports.push(KeyReport {
                 ranks: key.ranks,
                 mse: key.mse,
@@ -635,14 +633,14 @@ impl Analysis {
         let raw: Vec<f32> = (0..CONTROL_NAMES.len())
             .flat_map(|k| self.controls.iter().map(move |c| c[k] as f32))
             .collect();
-        let controls = ControlSpace::from_raw(
-            *krig.variogram(),
+        let controls = control_space(
+            runtime_variogram(krig.variogram())?,
             &raw,
             s,
             scaling.offset.iter().map(|&v| v as f32).collect(),
             scaling.scale.iter().map(|&v| v as f32).collect(),
-        )?
-        .with_projection(&kriging_rows, &scaled)?;
+        )?;
+        let controls = with_projection(controls, &kriging_rows, &scaled)?;
         let mean_pose = mean_rows(&self.tensor, &self.layout);
         let parts = ModelParts {
             p,

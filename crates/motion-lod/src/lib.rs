@@ -73,6 +73,7 @@ pub mod model_file;
 pub mod naive;
 pub mod pca;
 pub mod progress;
+pub mod projection;
 pub mod quality;
 mod sample_weights;
 pub mod source;

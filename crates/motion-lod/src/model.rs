@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use kriging::Variogram;
-use lod_policy::{ClipKernel, Detail, KernelScratch, LodModel};
+use lod_policy::{ClipKernel, Detail, KernelScratch, LodModel, Rig, RuntimeModel};
 use motion_io::PoseLayout;
 use serde::{Deserialize, Serialize};
 
@@ -14,8 +14,9 @@ use crate::model_file::{self, ModelFileError};
 /// Names and units of the control parameters, in the order of every control vector.
 pub const CONTROL_NAMES: [&str; 4] = ["dx (m)", "dz (m)", "turn (rad)", "height (m)"];
 
-/// Row of the pose vector that holds the time increment (docs/architecture.md).
-pub const TIME_ROW: usize = 6;
+/// Row of the pose vector that holds the time increment (docs/architecture.md; the runtime's
+/// constant).
+pub use lod_policy::TIME_ROW;
 
 /// One key level as built (for reports and tables).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -116,10 +117,8 @@ impl BuildReport {
 }
 
 /// What is wrong with a decoded model whose parts do not fit together
-/// ([`MotionModel::validate`]).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{0}")]
-pub struct InvalidModel(pub String);
+/// ([`MotionModel::validate`]; the runtime's type, shared by the file errors).
+pub use lod_policy::InvalidModel;
 
 /// The multilinear motion model with level-of-detail controls.
 ///
@@ -207,6 +206,18 @@ impl MotionModel {
             source,
         })?;
         Ok(model)
+    }
+
+    /// The runtime form of this model ([`RuntimeModel`]): the pose layout's rig ([`PoseLayout::rig`])
+    /// and the runtime model, what [`RuntimeModel::load`] reads from this model's file. Fails only
+    /// when the layout's rows are not the runtime model's.
+    pub fn runtime(&self) -> Result<RuntimeModel, InvalidModel> {
+        RuntimeModel::new(self.rig().clone(), self.lod.clone())
+    }
+
+    /// The skeleton and its f32 forward kinematics, as the runtime evaluates them.
+    pub fn rig(&self) -> &Rig {
+        self.layout.rig()
     }
 
     /// Checks that the parts fit together (each part validates itself when it is built or

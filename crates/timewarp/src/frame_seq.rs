@@ -122,21 +122,9 @@ impl FrameSeq {
     }
 }
 
-/// Splits a fractional frame position into `(k, f)` with `k + f = t` clamped to `[0, n - 1]`,
-/// `0 <= f < 1` and `k + 1 < n` whenever `f > 0`. `n` must be at least 1.
-pub(crate) fn split_position(t: f64, n: usize) -> (usize, f64) {
-    debug_assert!(n >= 1);
-    let last = (n - 1) as f64;
-    // NaN maps to 0 through `max`.
-    let t = t.max(0.0).min(last);
-    let k = (t.floor() as usize).min(n - 1);
-    let f = t - k as f64;
-    if k + 1 >= n || f <= 0.0 {
-        (k, 0.0)
-    } else {
-        (k, f)
-    }
-}
+/// The runtime's frame split ([`lod_policy::time_table::split_phase`]): one rule for the runtime's
+/// time table and the offline resampling.
+pub(crate) use lod_policy::time_table::split_phase as split_position;
 
 /// Squared Euclidean distance `sum_c (a_c - b_c)^2` between two frames of equal length.
 #[inline]

@@ -14,7 +14,8 @@
 //! - [`align`]: every sequence mapped onto the reference's time at `T` frames by DTW or by uniform
 //!   scaling ([`AlignMethod`]), values resampled by linear interpolation, plus one column of time
 //!   increments in seconds that sum to each sequence's true duration.
-//! - [`TimeTable`] and [`playback`]: a (synthesized) aligned sequence back to frames at any rate.
+//! - [`TimeTable`] (the runtime's, re-exported from `lod-policy`) and [`playback`]: a (synthesized)
+//!   aligned sequence back to frames at any rate.
 //!
 //! ```
 //! use timewarp::{AlignConfig, AlignMethod, DtwConfig, FrameSeq, align, playback};
@@ -43,14 +44,14 @@ mod error;
 mod frame_seq;
 mod medoid;
 mod playback;
-mod time_table;
 
 pub use align::{AlignConfig, AlignMethod, Alignment, align};
 pub use dtw::{DtwConfig, DtwWorkspace, WarpPath, dtw, dtw_cost_with, dtw_with};
 pub use error::TimewarpError;
 pub use frame_seq::FrameSeq;
+/// The playback time table is the runtime's (`lod-policy`), shared so there is one definition.
+pub use lod_policy::time_table::{MIN_INCREMENT, TimeTable};
 pub use medoid::{
     DEFAULT_MEDOID_CANDIDATES, median_length, medoid, medoid_with_candidates, uniform_medoid,
 };
 pub use playback::{playback, playback_into};
-pub use time_table::{MIN_INCREMENT, TimeTable};

@@ -3,7 +3,7 @@
 
 use crate::error::TimewarpError;
 use crate::frame_seq::FrameSeq;
-use crate::time_table::TimeTable;
+use lod_policy::time_table::TimeTable;
 
 /// Frames of `aligned` at times `m / fps`, `m = 0, 1, ...` up to its duration, with the increment
 /// column dropped (see [`playback_into`] for the formulas).

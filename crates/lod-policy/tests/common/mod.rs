@@ -3,7 +3,6 @@
 #![allow(dead_code, clippy::needless_range_loop)]
 
 use lod_policy::model::{AccuracyLevel, ControlSpace, KeyTensor, LevelError, ModelParts, Ranks};
-use lod_policy::projection::KeyFactors;
 use lod_policy::{LodModel, Variogram};
 
 /// SplitMix64: deterministic, dependency-free.
@@ -224,6 +223,29 @@ fn f32v(v: &[f64]) -> Vec<f32> {
     v.iter().map(|&x| x as f32).collect()
 }
 
+/// Entry `(row, i)` of `C`, the `(d + 1) x S` matrix of columns `[c_i; 1]` (scaled controls).
+pub fn c_entry(truth: &Truth, row: usize, i: usize) -> f64 {
+    if row < truth.d {
+        truth.controls[i + truth.s * row]
+    } else {
+        1.0
+    }
+}
+
+/// `C C^T`, `(d + 1) x (d + 1)` column-major.
+pub fn c_gram(truth: &Truth) -> Vec<f64> {
+    let dc = truth.d + 1;
+    let mut cct = vec![0.0; dc * dc];
+    for x in 0..dc {
+        for y in 0..dc {
+            cct[x + dc * y] = (0..truth.s)
+                .map(|i| c_entry(truth, x, i) * c_entry(truth, y, i))
+                .sum();
+        }
+    }
+    cct
+}
+
 /// Builds the runtime model from the truth (kriging inverse by solving A X = I here).
 pub fn build_model(truth: &Truth) -> LodModel {
     let s = truth.s;
@@ -237,20 +259,49 @@ pub fn build_model(truth: &Truth) -> LodModel {
         let x = solve(&a, &e, n);
         rows[s * j..s * (j + 1)].copy_from_slice(&x[..s]);
     }
+    // C = [c_i; 1] ((d + 1) x S, scaled controls) and (C C^T).
+    let dc = truth.d + 1;
+    let cm = |row: usize, i: usize| c_entry(truth, row, i);
+    let cct = c_gram(truth);
     let keys: Vec<KeyTensor> = truth
         .keys
         .iter()
         .map(|k| {
-            let f = KeyFactors {
+            let rs = k.ranks.s;
+            // Q = U_S^T A^{-1}[:S, :] (R_S x (S + 1)).
+            let mut q = vec![0.0; rs * n];
+            for j in 0..n {
+                for l in 0..rs {
+                    q[l + rs * j] = (0..s).map(|i| k.u_s[i + s * l] * rows[i + s * j]).sum();
+                }
+            }
+            // V = U_S^T C^T (C C^T)^{-1} (R_S x (d + 1)): row l solves (C C^T) v = C U_S[:, l].
+            let mut v = vec![0.0; rs * dc];
+            for l in 0..rs {
+                let rhs: Vec<f64> = (0..dc)
+                    .map(|x| (0..s).map(|i| cm(x, i) * k.u_s[i + s * l]).sum())
+                    .collect();
+                for (m, vm) in solve(&cct, &rhs, dc).into_iter().enumerate() {
+                    v[l + rs * m] = vm;
+                }
+            }
+            KeyTensor {
                 ranks: k.ranks,
-                core: &k.core,
-                u_p: &k.u_p,
-                u_t: &k.u_t,
-                u_s: &k.u_s,
-            };
-            KeyTensor::from_factors(&f, truth.p, truth.t, &rows, &truth.controls).unwrap()
+                core: f32v(&k.core),
+                u_p: f32v(&k.u_p),
+                u_t: f32v(&k.u_t),
+                projection: f32v(&q),
+                trend: f32v(&v),
+            }
         })
         .collect();
+    // C A^{-1}[:S, :] ((d + 1) x (S + 1)).
+    let mut pc = vec![0.0; dc * n];
+    for j in 0..n {
+        for x in 0..dc {
+            pc[x + dc * j] = (0..s).map(|i| cm(x, i) * rows[i + s * j]).sum();
+        }
+    }
     let controls = ControlSpace {
         variogram: truth.variogram,
         offset: f32v(&truth.offset),
@@ -258,11 +309,9 @@ pub fn build_model(truth: &Truth) -> LodModel {
         samples: f32v(&truth.controls),
         min: f32v(&truth.min),
         max: f32v(&truth.max),
-        projection: Vec::new(),
+        projection: f32v(&pc),
         implied: Vec::new(),
-    }
-    .with_projection(&rows, &truth.controls)
-    .unwrap();
+    };
     LodModel::new(ModelParts {
         p: truth.p,
         t: truth.t,
@@ -353,19 +402,8 @@ pub fn direct_pose(truth: &Truth, level: usize, c: &[f64], phase: f64) -> Vec<f6
     }
     // F = K C^+ = K C^T (C C^T)^{-1}: solve (C C^T) F^T = C K^T.
     let dc = d + 1;
-    let cm = |row: usize, i: usize| {
-        if row < d {
-            truth.controls[i + s * row]
-        } else {
-            1.0
-        }
-    };
-    let mut cct = vec![0.0; dc * dc];
-    for x in 0..dc {
-        for y in 0..dc {
-            cct[x + dc * y] = (0..s).map(|i| cm(x, i) * cm(y, i)).sum();
-        }
-    }
+    let cm = |row: usize, i: usize| c_entry(truth, row, i);
+    let cct = c_gram(truth);
     let mut f = vec![0.0; m * dc]; // m x dc column-major
     for e in 0..m {
         let rhs: Vec<f64> = (0..dc)

@@ -1,5 +1,7 @@
 //! [`TimeTable`]: playback times of an aligned sequence from its time-increment channel (the
-//! incremental inverse timewarp of the paper's section 3.1).
+//! incremental inverse timewarp of the paper's section 3.1). A clip kernel fills one per clip
+//! ([`crate::ClipKernel::time_table`]); the offline `timewarp` crate plays aligned data back with
+//! the same table (it re-exports this module's items).
 
 /// Smallest time increment, in seconds, that [`TimeTable`] accepts: a synthesized increment that is
 /// smaller than this, negative, NaN or infinite is replaced by it, so that playback time always
@@ -100,12 +102,31 @@ impl TimeTable {
         if n < 2 {
             return 0.0;
         }
-        let (k, f) = crate::frame_seq::split_position(phase, n);
+        let (k, f) = split_phase(phase, n);
         if f == 0.0 {
             self.times[k]
         } else {
             self.times[k] + f * (self.times[k + 1] - self.times[k])
         }
+    }
+}
+
+/// Splits a fractional frame position into `(k, f)` with `k + f = phase` clamped to
+/// `[0, frames - 1]`, `0 <= f < 1` and `k + 1 < frames` whenever `f > 0` (NaN gives `(0, 0)`).
+/// The rule by which [`TimeTable::time_at`] (and the offline crates' resampling) interpolate
+/// between frames. `frames` must be at least 1.
+pub fn split_phase(phase: f64, frames: usize) -> (usize, f64) {
+    debug_assert!(frames >= 1);
+    let n = frames.max(1);
+    let last = (n - 1) as f64;
+    // NaN maps to 0 through `max`.
+    let t = phase.max(0.0).min(last);
+    let k = (t.floor() as usize).min(n - 1);
+    let f = t - k as f64;
+    if k + 1 >= n || f <= 0.0 {
+        (k, 0.0)
+    } else {
+        (k, f)
     }
 }
 

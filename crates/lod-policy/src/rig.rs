@@ -1,0 +1,460 @@
+//! [`Rig`]: the model's skeleton as the runtime needs it, and forward kinematics in f32 into
+//! caller-owned slices.
+//!
+//! A rig lists the joints of the model's skeleton, parents before children (the skeleton's own
+//! order, so one pass evaluates it), each with its parent, its offset from the parent in metres,
+//! its rest rotation and what drives it ([`JointRole`]): the root rows of the pose vector, three
+//! rows of it (the rotating joints, in the model's row order), or nothing (a static joint keeps its
+//! rest rotation). Pose rows are those of docs/architecture.md: `0..3` root position, `3..6` root
+//! exponential map, `6` time increment, then 3 rows per rotating joint.
+//!
+//! `world_j = world_parent(j) * (offset_j, local_j)`, with `local_j` the exponential map of the
+//! joint's rows for the first `active_joints` rotating joints and the rest rotation otherwise.
+//! Joints that are not below the motion root are placed on the ground under it.
+
+use std::ops::Range;
+
+use glam::{Quat, Vec3};
+
+use crate::error::RigError;
+use crate::model::{ALWAYS_ROWS, ROWS_PER_JOINT};
+
+/// Rigs up to this many joints run forward kinematics without any allocation (larger ones
+/// allocate one scratch buffer per [`Rig::joint_positions`] call).
+pub const STACK_JOINTS: usize = 128;
+
+/// Largest `| |q| - 1 |` accepted for a rest rotation.
+const UNIT_TOLERANCE: f32 = 1e-4;
+
+/// The rotation of an exponential map `v` (rotation vector, any length):
+/// `q = (sin(|v|/2) v/|v|, cos(|v|/2))`, with a Taylor series of `sin(|v|/2)/|v|` below `1e-3`.
+#[inline]
+pub fn exp_to_quat(v: Vec3) -> Quat {
+    let theta = v.length();
+    let half = 0.5 * theta;
+    let k = if theta < 1e-3 {
+        0.5 - theta * theta / 48.0
+    } else {
+        half.sin() / theta
+    };
+    Quat::from_xyzw(v.x * k, v.y * k, v.z * k, half.cos())
+}
+
+/// What drives a joint of a [`Rig`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointRole {
+    /// Not below the motion root: static, placed on the ground under the root.
+    Outside,
+    /// The motion root: position rows `0..3`, rotation rows `3..6`.
+    Root,
+    /// Rotating joint number `k` of the row order: rows `7 + 3k .. 7 + 3k + 3` (an exponential
+    /// map of its local rotation).
+    Rotating(usize),
+    /// Below the root with a constant local rotation (its rest rotation).
+    Static,
+}
+
+/// One joint of a [`Rig`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigJoint {
+    /// The joint's name in the source data.
+    pub name: String,
+    /// Index of the parent joint in the rig (smaller than this joint's), `None` for the skeleton's
+    /// top joint.
+    pub parent: Option<usize>,
+    /// Translation from the parent, in metres.
+    pub offset: Vec3,
+    /// Local rotation used when the pose does not drive the joint (static joints; rotating joints
+    /// beyond the active count: the data's mean rotation). A unit quaternion.
+    pub rest: Quat,
+    /// What drives the joint.
+    pub role: JointRole,
+}
+
+/// A joint's rotation and position in the cycle frame (metres), as [`Rig::joint_transforms`]
+/// writes them.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct JointTransform {
+    /// Orientation of the joint's frame.
+    pub rotation: Quat,
+    /// Position of the joint, metres.
+    pub position: Vec3,
+}
+
+/// The model's joints and forward kinematics (see the module documentation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rig {
+    joints: Vec<RigJoint>,
+    root: usize,
+    /// Rig index of rotating joint `k` of the row order.
+    rotating: Vec<usize>,
+}
+
+/// Where forward kinematics writes: positions alone (with rotation scratch) or whole transforms.
+trait FkOut {
+    fn get(&self, j: usize) -> (Vec3, Quat);
+    fn set(&mut self, j: usize, position: Vec3, rotation: Quat);
+}
+
+struct Split<'a> {
+    positions: &'a mut [Vec3],
+    rotations: &'a mut [Quat],
+}
+
+impl FkOut for Split<'_> {
+    #[inline]
+    fn get(&self, j: usize) -> (Vec3, Quat) {
+        (self.positions[j], self.rotations[j])
+    }
+    #[inline]
+    fn set(&mut self, j: usize, position: Vec3, rotation: Quat) {
+        self.positions[j] = position;
+        self.rotations[j] = rotation;
+    }
+}
+
+impl FkOut for [JointTransform] {
+    #[inline]
+    fn get(&self, j: usize) -> (Vec3, Quat) {
+        (self[j].position, self[j].rotation)
+    }
+    #[inline]
+    fn set(&mut self, j: usize, position: Vec3, rotation: Quat) {
+        self[j] = JointTransform { rotation, position };
+    }
+}
+
+impl Rig {
+    /// A validated rig: at least one joint and exactly one [`JointRole::Root`]; every joint's parent
+    /// before it, and present for rotating and static joints; rotating joints numbered `0..n`, each
+    /// number once; finite offsets and unit rest rotations (within `1e-4`). Each failure names the
+    /// joint.
+    pub fn new(joints: Vec<RigJoint>) -> Result<Rig, RigError> {
+        if joints.is_empty() {
+            return Err(RigError::Structure("no joints".into()));
+        }
+        let bad = |j: usize, reason: String| RigError::Joint {
+            joint: j,
+            name: joints[j].name.clone(),
+            reason,
+        };
+        let mut root = None;
+        let mut slots: Vec<Option<usize>> = vec![None; joints.len()];
+        for (j, joint) in joints.iter().enumerate() {
+            if let Some(p) = joint.parent
+                && p >= j
+            {
+                return Err(bad(j, format!("parent {p} does not come before the joint")));
+            }
+            match joint.role {
+                JointRole::Root => {
+                    if let Some(r) = root {
+                        return Err(bad(j, format!("a second root (the first is joint {r})")));
+                    }
+                    root = Some(j);
+                }
+                JointRole::Rotating(k) => {
+                    let slot = slots.get_mut(k).ok_or_else(|| {
+                        bad(
+                            j,
+                            format!("rotating joint number {k} of only {} joints", joints.len()),
+                        )
+                    })?;
+                    if let Some(other) = slot.replace(j) {
+                        return Err(bad(
+                            j,
+                            format!("rotating joint number {k} is also joint {other}'s"),
+                        ));
+                    }
+                }
+                JointRole::Static | JointRole::Outside => {}
+            }
+            if matches!(joint.role, JointRole::Rotating(_) | JointRole::Static)
+                && joint.parent.is_none()
+            {
+                return Err(bad(j, "a joint below the root needs a parent".into()));
+            }
+            if !joint.offset.is_finite() {
+                return Err(bad(j, format!("offset {} is not finite", joint.offset)));
+            }
+            let q = joint.rest;
+            if !q.is_finite() || (q.length() - 1.0).abs() > UNIT_TOLERANCE {
+                return Err(bad(
+                    j,
+                    format!("rest rotation {q} is not a unit quaternion"),
+                ));
+            }
+        }
+        let root = root.ok_or_else(|| RigError::Structure("no root joint".into()))?;
+        let n = slots.iter().take_while(|s| s.is_some()).count();
+        if let Some(k) = slots[n..].iter().position(Option::is_some) {
+            return Err(RigError::Structure(format!(
+                "rotating joint number {n} is missing (number {} is used)",
+                n + k
+            )));
+        }
+        let rotating = slots[..n].iter().flatten().copied().collect();
+        Ok(Rig {
+            joints,
+            root,
+            rotating,
+        })
+    }
+
+    /// The joints, parents before children.
+    pub fn joints(&self) -> &[RigJoint] {
+        &self.joints
+    }
+
+    /// Number of joints (the length [`Rig::joint_positions`] writes).
+    pub fn joint_count(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Index of the motion root.
+    pub fn root(&self) -> usize {
+        self.root
+    }
+
+    /// Rig indices of the rotating joints in row order (entry `k` is driven by rows
+    /// `7 + 3k .. 7 + 3k + 3`).
+    pub fn rotating_joints(&self) -> &[usize] {
+        &self.rotating
+    }
+
+    /// Pose rows the rig reads: `7 + 3 * rotating joints` (the model's `P`).
+    pub fn dof(&self) -> usize {
+        ALWAYS_ROWS + ROWS_PER_JOINT * self.rotating.len()
+    }
+
+    /// Pose rows that drive joint `j` (`0..6` for the root, three rows for a rotating joint,
+    /// `None` otherwise or for an index out of range).
+    pub fn rows(&self, j: usize) -> Option<Range<usize>> {
+        match self.joints.get(j)?.role {
+            JointRole::Root => Some(0..6),
+            JointRole::Rotating(k) => {
+                let r = ALWAYS_ROWS + ROWS_PER_JOINT * k;
+                Some(r..r + ROWS_PER_JOINT)
+            }
+            JointRole::Outside | JointRole::Static => None,
+        }
+    }
+
+    /// Index of the joint called `name` (exact match).
+    pub fn find(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+
+    /// Checks the slices of a forward-kinematics call; returns the number of active joints.
+    fn check(&self, pose: &[f32], active_joints: usize, out: usize) -> Result<usize, RigError> {
+        let active = active_joints.min(self.rotating.len());
+        let needed = if active == 0 {
+            6
+        } else {
+            ALWAYS_ROWS + ROWS_PER_JOINT * active
+        };
+        if pose.len() < needed {
+            return Err(RigError::PoseLength {
+                active,
+                needed,
+                found: pose.len(),
+            });
+        }
+        if out < self.joints.len() {
+            return Err(RigError::OutputLength {
+                joints: self.joints.len(),
+                found: out,
+            });
+        }
+        Ok(active)
+    }
+
+    /// World positions in metres (the cycle frame of the pose) of every joint, into `out[..joint_count]`.
+    ///
+    /// Only the first `active_joints` rotating joints are read from `pose` (which may be truncated
+    /// to `7 + 3 * active_joints` rows, a level's `P'`; 6 rows with no active joint); the others
+    /// take their rest rotation. No allocation for rigs of up to [`STACK_JOINTS`] joints. Errors: a
+    /// pose shorter than the active joints' rows, an output shorter than the joint count.
+    pub fn joint_positions(
+        &self,
+        pose: &[f32],
+        active_joints: usize,
+        out: &mut [Vec3],
+    ) -> Result<(), RigError> {
+        let active = self.check(pose, active_joints, out.len())?;
+        let nj = self.joints.len();
+        let mut stack = [Quat::IDENTITY; STACK_JOINTS];
+        let mut heap = Vec::new();
+        let rotations: &mut [Quat] = if nj <= STACK_JOINTS {
+            &mut stack[..nj]
+        } else {
+            heap.resize(nj, Quat::IDENTITY);
+            &mut heap
+        };
+        let mut split = Split {
+            positions: out,
+            rotations,
+        };
+        self.forward(pose, active, &mut split);
+        Ok(())
+    }
+
+    /// World rotation and position (metres, the cycle frame of the pose) of every joint, into
+    /// `out[..joint_count]`; positions are those of [`Rig::joint_positions`], bit for bit. Never
+    /// allocates. Errors as [`Rig::joint_positions`].
+    pub fn joint_transforms(
+        &self,
+        pose: &[f32],
+        active_joints: usize,
+        out: &mut [JointTransform],
+    ) -> Result<(), RigError> {
+        let active = self.check(pose, active_joints, out.len())?;
+        self.forward(pose, active, out);
+        Ok(())
+    }
+
+    fn forward<O: FkOut + ?Sized>(&self, pose: &[f32], active: usize, out: &mut O) {
+        let root_pos = Vec3::new(pose[0], pose[1], pose[2]);
+        let root_rot = exp_to_quat(Vec3::new(pose[3], pose[4], pose[5]));
+        let ground = Vec3::new(root_pos.x, 0.0, root_pos.z);
+        for (j, joint) in self.joints.iter().enumerate() {
+            match joint.role {
+                JointRole::Outside => out.set(j, ground, Quat::IDENTITY),
+                JointRole::Root => out.set(j, root_pos, root_rot),
+                role => {
+                    let (parent_pos, parent_rot) = out.get(joint.parent.unwrap_or(0));
+                    let local = match role {
+                        JointRole::Rotating(k) if k < active => {
+                            let r = ALWAYS_ROWS + ROWS_PER_JOINT * k;
+                            exp_to_quat(Vec3::new(pose[r], pose[r + 1], pose[r + 2]))
+                        }
+                        _ => joint.rest,
+                    };
+                    out.set(
+                        j,
+                        parent_pos + parent_rot * joint.offset,
+                        parent_rot * local,
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn joint(name: &str, parent: Option<usize>, offset: [f32; 3], role: JointRole) -> RigJoint {
+        RigJoint {
+            name: name.into(),
+            parent,
+            offset: Vec3::from_array(offset),
+            rest: Quat::IDENTITY,
+            role,
+        }
+    }
+
+    /// Ground (outside) -> hips (root) -> spine (rotating 1) -> head (static); hips -> leg
+    /// (rotating 0).
+    fn rig() -> Rig {
+        Rig::new(vec![
+            joint("ground", None, [0.0; 3], JointRole::Outside),
+            joint("hips", Some(0), [0.0; 3], JointRole::Root),
+            joint("spine", Some(1), [0.0, 0.5, 0.0], JointRole::Rotating(1)),
+            joint("head", Some(2), [0.0, 0.3, 0.0], JointRole::Static),
+            joint("leg", Some(1), [0.1, -0.5, 0.0], JointRole::Rotating(0)),
+        ])
+        .unwrap()
+    }
+
+    #[test]
+    fn forward_kinematics_follows_the_rows() {
+        let rig = rig();
+        assert_eq!(rig.dof(), 13);
+        assert_eq!(rig.rotating_joints(), &[4, 2]);
+        assert_eq!(rig.rows(2), Some(10..13));
+        assert_eq!(rig.rows(3), None);
+        // Root at (1, 0.9, 2) turned 90 degrees about y; spine bent 90 degrees about z.
+        let h = std::f32::consts::FRAC_PI_2;
+        let mut pose = [0.0f32; 13];
+        pose[..6].copy_from_slice(&[1.0, 0.9, 2.0, 0.0, h, 0.0]);
+        pose[12] = h;
+        let mut pos = [Vec3::ZERO; 5];
+        rig.joint_positions(&pose, 2, &mut pos).unwrap();
+        assert_eq!(pos[0], Vec3::new(1.0, 0.0, 2.0));
+        assert_eq!(pos[1], Vec3::new(1.0, 0.9, 2.0));
+        assert!(pos[2].abs_diff_eq(Vec3::new(1.0, 1.4, 2.0), 1e-6));
+        // The head sits 0.3 m along the spine's bent y axis: -x in the spine frame, then the root's
+        // quarter turn about y takes -x to +z.
+        assert!(
+            pos[3].abs_diff_eq(Vec3::new(1.0, 1.4, 2.3), 1e-6),
+            "{}",
+            pos[3]
+        );
+        assert!(
+            pos[4].abs_diff_eq(Vec3::new(1.0, 0.4, 1.9), 1e-6),
+            "{}",
+            pos[4]
+        );
+        // One active joint: the spine takes its rest rotation and may be cut from the pose.
+        rig.joint_positions(&pose[..10], 1, &mut pos).unwrap();
+        assert!(
+            pos[3].abs_diff_eq(Vec3::new(1.0, 1.7, 2.0), 1e-6),
+            "{}",
+            pos[3]
+        );
+        // Transforms agree with positions bit for bit.
+        let mut tr = [JointTransform::default(); 5];
+        rig.joint_transforms(&pose, 2, &mut tr).unwrap();
+        rig.joint_positions(&pose, 2, &mut pos).unwrap();
+        for (t, p) in tr.iter().zip(&pos) {
+            assert_eq!(t.position, *p);
+        }
+    }
+
+    #[test]
+    fn short_slices_and_bad_rigs_are_errors() {
+        let rig = rig();
+        let mut pos = [Vec3::ZERO; 5];
+        let e = rig.joint_positions(&[0.0; 9], 1, &mut pos).unwrap_err();
+        assert_eq!(
+            e,
+            RigError::PoseLength {
+                active: 1,
+                needed: 10,
+                found: 9
+            }
+        );
+        assert!(rig.joint_positions(&[0.0; 6], 0, &mut pos).is_ok());
+        let e = rig
+            .joint_positions(&[0.0; 13], 2, &mut pos[..4])
+            .unwrap_err();
+        assert!(e.to_string().contains("4 slots for 5 joints"), "{e}");
+
+        let mut joints = rig.joints().to_vec();
+        joints[3].parent = Some(4);
+        let e = Rig::new(joints).unwrap_err();
+        assert!(e.to_string().contains("head"), "{e}");
+        let mut joints = rig.joints().to_vec();
+        joints[4].role = JointRole::Rotating(1);
+        assert!(Rig::new(joints).is_err());
+        let mut joints = rig.joints().to_vec();
+        joints[4].role = JointRole::Rotating(2);
+        assert!(Rig::new(joints).is_err());
+        let mut joints = rig.joints().to_vec();
+        joints[2].rest = Quat::from_xyzw(0.0, 0.0, 0.0, 2.0);
+        assert!(Rig::new(joints).is_err());
+        let mut joints = rig.joints().to_vec();
+        joints[1].role = JointRole::Static;
+        assert!(matches!(Rig::new(joints), Err(RigError::Structure(_))));
+        assert!(Rig::new(Vec::new()).is_err());
+    }
+
+    #[test]
+    fn exp_map_is_a_rotation_about_its_axis() {
+        let q = exp_to_quat(Vec3::new(0.0, 0.0, std::f32::consts::PI));
+        assert!((q * Vec3::X).abs_diff_eq(-Vec3::X, 1e-6));
+        assert_eq!(exp_to_quat(Vec3::ZERO), Quat::IDENTITY);
+    }
+}
