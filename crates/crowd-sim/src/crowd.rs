@@ -219,7 +219,10 @@ impl<C: Send> Crowd<C> {
         });
         let root_only = levels
             .resolve(&Detail::root_only())
-            .expect("a source with levels has a smallest level");
+            .ok_or(CrowdError::NoLevels {
+                accuracy_levels: levels.accuracy_levels,
+                pose_len: levels.pose_len,
+            })?;
         let make = |i: usize| -> Result<Walker<C>, CrowdError> {
             let mut g = SplitMix64::for_walker(config.seed, i);
             let path =
@@ -355,7 +358,10 @@ impl<C: Send> Crowd<C> {
     /// (4) forward kinematics into world positions. Stages 2-4 run as one parallel pass over chunks
     /// of walkers (each chunk runs the three in turn while its walkers are in cache; the pass's wall
     /// time is split between them in proportion to their summed times) and give the same bytes for
-    /// any thread count.
+    /// any thread count. The policy's detail is resolved against the source's [`LevelTable`]
+    /// ([`LevelTable::resolve`]); a clip the source cannot build is counted in
+    /// `stats.clip_faults` and the walker keeps its previous clip (a level the source does not
+    /// have, or a clip of unusable duration, is an error).
     pub fn step_into<S, P>(
         &mut self,
         source: &S,

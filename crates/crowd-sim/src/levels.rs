@@ -65,13 +65,10 @@ impl LevelTable {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use lod_policy::Controls;
+    use crate::ClipSource;
 
     fn range() -> ControlRange {
-        ControlRange {
-            min: Controls::from_array([-0.3, 0.5, -1.0, 1.5]),
-            max: Controls::from_array([0.3, 1.8, 1.0, 1.9]),
-        }
+        crate::testing::ProceduralSource.control_range()
     }
 
     #[test]

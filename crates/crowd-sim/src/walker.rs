@@ -178,9 +178,12 @@ impl<C> Walker<C> {
                 None
             }
             None => {
-                self.seam.clear();
-                self.seam_start = 0.0;
-                self.rebuild(src, d)?
+                let failed = self.rebuild(src, d)?;
+                if failed.is_none() || motion.is_some() {
+                    self.seam.clear();
+                    self.seam_start = 0.0;
+                }
+                failed
             }
         };
         Ok(failed)

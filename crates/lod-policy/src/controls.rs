@@ -4,7 +4,7 @@
 //! cycle (two steps): where the root goes over the cycle, how much the heading turns, and the
 //! character's body height. Every runtime consumer (clip kernels, the crowd, `synth`, the CLI)
 //! speaks [`Controls`]; the offline cycle analysis measures them in `f64`
-//! (`motion_io::MeasuredControls`) and the facade converts once (`motion_lod::runtime_controls`).
+//! (`motion_io::MeasuredControls`), and [`Controls::from_f64`] is the one conversion.
 //!
 //! Conventions (`docs/architecture.md`): metres and radians, y up, +z forward, +x to the
 //! character's left, positive turn = turn left (a positive rotation about +y). The model's own
@@ -47,6 +47,13 @@ impl Controls {
             turn: a[2],
             height: a[3],
         }
+    }
+
+    /// Controls from `[dx, dz, turn, height]` in `f64`, as the offline analysis measures them
+    /// (`motion_io::MeasuredControls::to_array`, `motion_lod::Analysis::controls`), rounded to `f32`: the
+    /// one conversion from measured to runtime controls.
+    pub fn from_f64(a: [f64; 4]) -> Controls {
+        Controls::from_array(a.map(|v| v as f32))
     }
 
     /// `[dx, dz, turn, height]`: the raw control vector the kernel takes

@@ -72,6 +72,17 @@ impl Detail {
             .map(|d| d.accuracy)
     }
 
+    /// The detail a clip source evaluates for this one: a root-only detail (no joints) at the
+    /// smallest level, [`Detail::root_only`], whatever level the policy gave it (every root-only
+    /// clip is then the same, and the cheapest); any other detail as it is.
+    pub fn evaluated(&self) -> Detail {
+        if self.active_joints == 0 {
+            Detail::root_only()
+        } else {
+            *self
+        }
+    }
+
     /// True when `self` asks for more than `held` provides (a finer accuracy level or more joints).
     pub fn is_finer_than(&self, held: &Detail) -> bool {
         self.accuracy < held.accuracy || self.active_joints > held.active_joints
@@ -98,5 +109,11 @@ mod tests {
         assert!(Detail::new(2, 6).is_finer_than(&held));
         assert!(!Detail::new(3, 5).is_finer_than(&held));
         assert!(!held.is_finer_than(&held));
+    }
+
+    #[test]
+    fn root_only_details_evaluate_at_the_smallest_level() {
+        assert_eq!(Detail::new(2, 0).evaluated(), Detail::root_only());
+        assert_eq!(Detail::new(2, 1).evaluated(), Detail::new(2, 1));
     }
 }

@@ -492,3 +492,48 @@ impl LevelPolicy for ScreenSpacePolicy {
         best.map_or(full, |(_, d)| d)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn level_keys_give_the_schedule_without_a_model() {
+        let config = DistanceConfig {
+            screen_budget_px: None,
+            ..DistanceConfig::default()
+        };
+        // Two keys: levels 0-1 share key 0 (50 m between them is split in two), level 2 has key 1.
+        let p = DistancePolicy::for_level_keys(&[0, 0, 1], 5, config).unwrap();
+        let v = ViewParams::default();
+        assert_eq!(p.detail(10.0, true, &v), Detail::new(0, 5));
+        assert_eq!(p.detail(60.0, true, &v), Detail::new(1, 2));
+        assert_eq!(p.detail(85.0, true, &v), Detail::new(2, 0));
+        assert_eq!(p.detail(131.0, true, &v), Detail::root_only());
+        assert_eq!(p.detail(10.0, false, &v), Detail::root_only());
+        assert_eq!(
+            DistancePolicy::for_level_keys(&[1, 0], 5, config),
+            Err(PolicyError::LevelKeys)
+        );
+        assert_eq!(
+            DistancePolicy::for_level_keys(&[], 5, config),
+            Err(PolicyError::LevelKeys)
+        );
+        let bad = DistanceConfig {
+            key_step_m: 0.0,
+            ..config
+        };
+        assert!(matches!(
+            DistancePolicy::for_level_keys(&[0], 5, bad),
+            Err(PolicyError::Config { .. })
+        ));
+    }
+
+    #[test]
+    fn closures_and_full_detail_are_policies() {
+        let v = ViewParams::default();
+        let near = |d: f32, _: bool, _: &ViewParams| Detail::new(usize::from(d > 10.0), 3);
+        assert_eq!(near.detail(20.0, true, &v), Detail::new(1, 3));
+        assert_eq!(FullDetail.detail(1e6, false, &v), Detail::full());
+    }
+}

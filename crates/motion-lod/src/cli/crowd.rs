@@ -6,11 +6,9 @@ use std::path::PathBuf;
 use anyhow::{Context as _, bail};
 use clap::{Args, ValueEnum};
 use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport, Scene};
-use lod_policy::{DistancePolicy, LodModel, ScreenSpacePolicy};
+use lod_policy::{DistancePolicy, FullDetail, LodModel, ScreenSpacePolicy};
 use motion_lod::build::Analysis;
-use motion_lod::crowd::{
-    CrowdOutcome, CrowdRun, FullDetail, ModelPolicy, check_render_dir, run_crowd,
-};
+use motion_lod::crowd::{CrowdOutcome, CrowdRun, check_render_dir, run_crowd};
 use motion_lod::gltf::crowd::{CrowdClip, export_crowd};
 use motion_lod::progress::NoProgress;
 use motion_lod::{LodSource, MotionModel, NaiveSource, PcaSource};
@@ -372,17 +370,10 @@ fn export_clip(
     };
     let lod = &model.lod;
     let (scene, summary) = match args.policy {
-        PolicyArg::Distance => export_crowd(
-            model,
-            &ModelPolicy::new(DistancePolicy::for_model(lod), lod),
-            &clip,
-        ),
+        PolicyArg::Distance => export_crowd(model, &DistancePolicy::for_model(lod), &clip),
         PolicyArg::Screen => export_crowd(
             model,
-            &ModelPolicy::new(
-                ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
-                lod,
-            ),
+            &ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
             &clip,
         ),
     }
@@ -429,26 +420,13 @@ fn run_with_policy<S: ClipSource>(
     run: &CrowdRun,
 ) -> anyhow::Result<CrowdOutcome> {
     if full_detail {
-        return Ok(run_crowd(
-            source,
-            &FullDetail {
-                joints: lod.joints(),
-            },
-            run,
-        )?);
+        return Ok(run_crowd(source, &FullDetail, run)?);
     }
     Ok(match policy {
-        PolicyArg::Distance => run_crowd(
-            source,
-            &ModelPolicy::new(DistancePolicy::for_model(lod), lod),
-            run,
-        )?,
+        PolicyArg::Distance => run_crowd(source, &DistancePolicy::for_model(lod), run)?,
         PolicyArg::Screen => run_crowd(
             source,
-            &ModelPolicy::new(
-                ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
-                lod,
-            ),
+            &ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
             run,
         )?,
     })
