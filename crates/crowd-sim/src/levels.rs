@@ -1,7 +1,7 @@
 //! What the crowd asks of a [`ClipSource`](crate::ClipSource) besides the runtime's vocabulary
-//! (`lod_policy`'s [`Controls`](lod_policy::Controls), [`ControlRange`],
-//! [`Detail`](lod_policy::Detail) and [`RootMotion`](lod_policy::RootMotion)): the source's level
-//! table and the conditions its control range must meet for walkers to follow paths.
+//! (`lod_policy`'s [`Controls`](lod_policy::Controls), [`ControlRange`], [`Detail`] and
+//! [`RootMotion`](lod_policy::RootMotion)): the source's level table and the conditions its control
+//! range must meet for walkers to follow paths.
 
 use crate::error::CrowdError;
 use lod_policy::{ControlRange, Detail};

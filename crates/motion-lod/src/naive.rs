@@ -13,7 +13,7 @@
 //! active joints (root only beyond the last level or outside the view) and runs forward kinematics of
 //! those joints only; it has no cheaper accuracy level, so every clip with joints blends the full
 //! samples. What the paper compares its LOD against ("naive interpolation", 3.9 fps for 100 walkers)
-//! is this source with every walker at full detail ([`crate::crowd::FullDetail`]).
+//! is this source with every walker at full detail ([`lod_policy::FullDetail`]).
 
 use crowd_sim::{ClipError, ClipSource, LevelTable};
 use faer::Mat;

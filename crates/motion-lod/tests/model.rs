@@ -151,6 +151,15 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
             &mut clip,
         )
         .unwrap();
+    // A level the model does not have is refused loudly, and the clip is left as it was.
+    let (held_duration, held_motion) =
+        (source.clip_duration(&clip), source.clip_root_motion(&clip));
+    let refused = source
+        .build_clip(&controls, lod_policy::Detail::new(99, 3), &mut clip)
+        .unwrap_err();
+    assert!(refused.to_string().contains("level"), "{refused}");
+    assert_eq!(source.clip_duration(&clip), held_duration);
+    assert_eq!(source.clip_root_motion(&clip), held_motion);
     // Root motion of a clip is the root's displacement from its first pose to its last.
     let mut start = vec![0.0f32; lod.p()];
     let mut end = vec![0.0f32; lod.p()];

@@ -157,6 +157,8 @@ struct Summary {
     field_m: f32,
     /// The field size asked for, when it was enlarged.
     field_enlarged_from: Option<f32>,
+    /// Clips the main source failed to build over the run (the walkers kept their previous clips).
+    clip_faults: u64,
 }
 
 /// The model to animate and, when the naive or PCA source is needed, the analysis it was built from.
@@ -298,6 +300,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             pca_fps: pca.as_ref().map(|n| Fps::from(&n.report)),
             pca_ratio,
             levels: main.last.level_histogram.clone(),
+            clip_faults: main.report.clip_faults,
         };
         println!("{}", serde_json::to_string(&summary)?);
         if let Some(msg) = exported {
