@@ -3,11 +3,11 @@
 //! BVH rebuild versus refit at 10k and 100k walker boxes.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use crowd_sim::culling::WalkerBvh;
-use crowd_sim::rng::SplitMix64;
+use crowd_sim::culling::WalkerAabbTree;
 use crowd_sim::testing::{ProceduralSource, paper_distance_policy};
 use crowd_sim::{Bounds, Camera, CameraPath, ClipSource, Crowd, CrowdConfig, Frustum};
 use glam::Vec3;
+use lod_policy::rng::SplitMix64;
 use std::hint::black_box;
 
 /// Walkers per square metre.
@@ -90,7 +90,7 @@ fn bvh(c: &mut Criterion) {
                 }
             })
             .collect();
-        let mut tree = WalkerBvh::new(&a);
+        let mut tree = WalkerAabbTree::new(&a);
         g.bench_function(BenchmarkId::new("rebuild", n), |b| {
             b.iter(|| tree.rebuild(black_box(&moved)))
         });

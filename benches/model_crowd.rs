@@ -8,11 +8,9 @@
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use crowd_sim::{
-    Camera, ClipSource, Crowd, CrowdConfig, Detail as CrowdDetail, DetailPolicy, FrameStats, Scene,
-};
+use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, FrameStats, Scene};
 use glam::Vec3;
-use lod_policy::{ClipKernel, Detail, DistancePolicy, KernelScratch, LevelPolicy, ViewParams};
+use lod_policy::{ClipKernel, Detail, DistancePolicy, FullDetail, KernelScratch, LevelPolicy};
 use motion_lod::dataset::DataSpec;
 use motion_lod::progress::NoProgress;
 use motion_lod::{Analysis, BuildConfig, LodSource, MotionModel, NaiveSource, PcaSource};
@@ -82,23 +80,8 @@ fn kernels_and_poses(c: &mut Criterion, model: &MotionModel, analysis: &Analysis
 
 fn crowd_frame(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
     let lod = &model.lod;
-    let policy = DistancePolicy::for_model(lod);
-    let (levels, joints) = (lod.levels().len(), lod.joints());
-    let lod_policy = move |d: f32, visible: bool, cam: &Camera| {
-        let view = ViewParams {
-            fov_y_radians: cam.fov_y,
-            image_height_px: cam.image_height as f32,
-        };
-        let det = policy.detail(d, visible, &view);
-        CrowdDetail {
-            accuracy: det.accuracy.min(levels - 1),
-            active_joints: det.active_joints.min(joints),
-        }
-    };
-    let full = move |_: f32, _: bool, _: &Camera| CrowdDetail {
-        accuracy: 0,
-        active_joints: joints,
-    };
+    let lod_policy = DistancePolicy::for_model(lod);
+    let full = FullDetail;
     let walkers = 1_000;
     let config = CrowdConfig {
         seed: 7,
@@ -120,7 +103,7 @@ fn crowd_frame(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
 }
 
 /// One crowd frame of `source` under `policy` in `scene`, after a 1.5 s warm-up.
-fn frame<S: ClipSource, P: DetailPolicy>(
+fn frame<S: ClipSource, P: LevelPolicy + Sync>(
     g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
     id: BenchmarkId,
     source: &S,

@@ -202,8 +202,7 @@ fn root_travels_the_commanded_speed_and_turn_rate() {
         assert!(i1 < m.frame_count(), "{}: take too short", g.planned.file);
         let dt = (i1 - i0) as f64 / FPS;
         let (a, b) = (world(m, i0)[0], world(m, i1)[0]);
-        let mut turn = heading_of(b.rotation) - heading_of(a.rotation);
-        turn -= std::f64::consts::TAU * (turn / std::f64::consts::TAU).round();
+        let turn = motion_io::expmap::wrap_angle(heading_of(b.rotation) - heading_of(a.rotation));
         let rate = turn.to_degrees() / dt;
         assert!(
             (rate - spec.turn_rate_deg).abs() < 0.5,

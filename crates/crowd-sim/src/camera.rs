@@ -55,6 +55,15 @@ pub struct CameraBasis {
 }
 
 impl Camera {
+    /// What a level-of-detail policy sees of the camera: its vertical field of view and image
+    /// height.
+    pub fn view(&self) -> lod_policy::ViewParams {
+        lod_policy::ViewParams {
+            fov_y_radians: self.fov_y,
+            image_height_px: self.image_height as f32,
+        }
+    }
+
     /// Checks every field: finite, `0 < fov_y < pi`, `aspect > 0`, `0 < near < far`, a non-zero
     /// view direction not parallel to `up`, and a non-zero image.
     pub fn validate(&self) -> Result<(), CrowdError> {

@@ -1,17 +1,17 @@
 //! The crowd: configuration, construction and the per-frame step (cull, kernels, poses, FK).
 
 use crate::camera::{Bounds, Camera, CameraPath, Frustum};
-use crate::controls::{Controls, Detail, LevelTable};
-use crate::culling::WalkerBvh;
+use crate::culling::WalkerAabbTree;
 use crate::error::CrowdError;
+use crate::levels::{LevelTable, check_control_range};
 use crate::path::{EllipsePath, heading_of, path_controls};
-use crate::policy::DetailPolicy;
-use crate::rng::SplitMix64;
 use crate::source::ClipSource;
-use crate::stats::{CrowdReport, FrameStats, StageTimings};
+use crate::stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
 use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
 use glam::{Vec2, Vec3};
 use lod_policy::chain::{SeamScratch, SeamTransition};
+use lod_policy::rng::SplitMix64;
+use lod_policy::{Controls, Detail, LevelPolicy};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
@@ -27,6 +27,8 @@ const MAX_DT: f32 = 10.0;
 struct ChunkOutcome {
     built: usize,
     in_transition: usize,
+    /// Clips the source could not build (the walkers kept their previous clips).
+    clip_faults: ClipFaults,
     /// The first failing walker (lowest index) and its fault.
     fault: Option<(usize, WalkerFault)>,
     /// Time spent in the kernel, pose and FK stages, summed over chunks.
@@ -42,6 +44,7 @@ impl ChunkOutcome {
         ChunkOutcome {
             built: a.built + b.built,
             in_transition: a.in_transition + b.in_transition,
+            clip_faults: ClipFaults::merge(a.clip_faults, b.clip_faults),
             fault,
             cpu: [
                 a.cpu[0] + b.cpu[0],
@@ -73,9 +76,10 @@ pub struct CrowdConfig {
     pub border_m: f32,
     /// Growth of each walker's culling box beyond its body, covering one frame of motion (m).
     pub cull_margin_m: f32,
-    /// Rebuild the BVH every this many frames; refit it in between (1 = rebuild every frame).
-    /// Default 240: a rebuild costs ~20 refits at 10k walkers, and walkers move little per frame.
-    pub bvh_rebuild_interval: u32,
+    /// Rebuild the culling tree ([`WalkerAabbTree`]) every this many frames; refit it in between
+    /// (1 = rebuild every frame). Default 240: a rebuild costs ~20 refits at 10k walkers, and
+    /// walkers move little per frame.
+    pub tree_rebuild_interval: u32,
     /// Spread the clip builds of the first frames over the first cycle: a new walker that the
     /// policy wants finer than its starting root-only clip waits a seeded fraction of that clip
     /// (uniform in `[0, duration)`) before it rebuilds mid-cycle, instead of every such walker
@@ -94,7 +98,7 @@ impl Default for CrowdConfig {
             seam_halflife_s: lod_policy::chain::DEFAULT_HALFLIFE_S,
             border_m: 2.0,
             cull_margin_m: 0.25,
-            bvh_rebuild_interval: 240,
+            tree_rebuild_interval: 240,
             spread_first_builds: true,
         }
     }
@@ -136,8 +140,8 @@ impl CrowdConfig {
         if !(self.cull_margin_m.is_finite() && self.cull_margin_m >= 0.0) {
             return bad("cull_margin_m", self.cull_margin_m);
         }
-        if self.bvh_rebuild_interval == 0 {
-            return bad("bvh_rebuild_interval", 0.0);
+        if self.tree_rebuild_interval == 0 {
+            return bad("tree_rebuild_interval", 0.0);
         }
         Ok(())
     }
@@ -145,8 +149,8 @@ impl CrowdConfig {
 
 /// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
 ///
-/// All per-frame buffers are allocated by `new`; `step_into` allocates only when the BVH is
-/// rebuilt (every `bvh_rebuild_interval` frames), when a walker starts its first inertialized seam
+/// All per-frame buffers are allocated by `new`; `step_into` allocates only when the culling tree
+/// is rebuilt (every `tree_rebuild_interval` frames), when a walker starts its first inertialized seam
 /// (its seam buffers, `2 P` floats, are allocated then, so far and culled walkers never hold them),
 /// and when a source sizes a clip for its level (the model's source does, see
 /// `lod_policy::ClipKernel::compact`).
@@ -162,7 +166,7 @@ pub struct Crowd<C> {
     joints: Vec<Vec3>,
     bounds: Vec<Bounds>,
     visible: Vec<bool>,
-    bvh: WalkerBvh,
+    tree: WalkerAabbTree,
     bones: Vec<(usize, usize)>,
     frame: u64,
     time_s: f64,
@@ -190,8 +194,8 @@ impl<C: Send> Crowd<C> {
                 pose_len: levels.pose_len,
             });
         }
-        let bounds = source.control_bounds();
-        bounds.validate()?;
+        let bounds = source.control_range();
+        check_control_range(&bounds)?;
         let params = StageParams {
             levels,
             bounds,
@@ -213,7 +217,12 @@ impl<C: Send> Crowd<C> {
             config.field_size_m = needed;
             from
         });
-        let root_only = Detail::root_only(&levels);
+        let root_only = levels
+            .resolve(&Detail::root_only())
+            .ok_or(CrowdError::NoLevels {
+                accuracy_levels: levels.accuracy_levels,
+                pose_len: levels.pose_len,
+            })?;
         let make = |i: usize| -> Result<Walker<C>, CrowdError> {
             let mut g = SplitMix64::for_walker(config.seed, i);
             let path =
@@ -230,7 +239,9 @@ impl<C: Send> Crowd<C> {
             let heading = heading_of(path.velocity(s));
             let controls = path_controls(&path, s, base, heading, stride, height, &bounds);
             let mut cur = source.new_clip();
-            source.build_clip(&controls, root_only, &mut cur);
+            source
+                .build_clip(&controls, root_only, &mut cur)
+                .map_err(|error| CrowdError::FirstClip { walker: i, error })?;
             let dur = source.clip_duration(&cur);
             if !valid_duration(dur) {
                 return Err(CrowdError::BadClipDuration {
@@ -294,13 +305,13 @@ impl<C: Send> Crowd<C> {
                 n
             ],
             visible: vec![false; n],
-            bvh: WalkerBvh::new(&[]),
+            tree: WalkerAabbTree::new(&[]),
             bones: source.bones().to_vec(),
             frame: 0,
             time_s: 0.0,
         };
         crowd.update_bounds();
-        crowd.bvh.rebuild(&crowd.bounds);
+        crowd.tree.rebuild(&crowd.bounds);
         Ok(crowd)
     }
 
@@ -330,7 +341,7 @@ impl<C: Send> Crowd<C> {
     ) -> Result<FrameStats, CrowdError>
     where
         S: ClipSource<Clip = C>,
-        P: DetailPolicy + ?Sized,
+        P: LevelPolicy + Sync + ?Sized,
     {
         let mut stats = FrameStats::default();
         self.step_into(source, policy, camera, dt, &mut stats)?;
@@ -340,13 +351,17 @@ impl<C: Send> Crowd<C> {
     /// [`Crowd::step`] writing into a caller-owned `stats` (no allocation once its histogram has
     /// the right length).
     ///
-    /// Stages: (1) cull: boxes from last frame's roots, BVH refit (or rebuild), frustum query;
+    /// Stages: (1) cull: boxes from last frame's roots, culling tree refit (or rebuild), frustum
+    /// query;
     /// (2) kernels: per walker, detail from `policy` (distance from the camera to the root,
     /// visibility), cycle scheduling and clip builds; (3) poses with the running seam transitions;
     /// (4) forward kinematics into world positions. Stages 2-4 run as one parallel pass over chunks
     /// of walkers (each chunk runs the three in turn while its walkers are in cache; the pass's wall
     /// time is split between them in proportion to their summed times) and give the same bytes for
-    /// any thread count.
+    /// any thread count. The policy's detail is resolved against the source's [`LevelTable`]
+    /// ([`LevelTable::resolve`]); a clip the source cannot build is counted in
+    /// `stats.clip_faults` and the walker keeps its previous clip (a level the source does not
+    /// have, or a clip of unusable duration, is an error).
     pub fn step_into<S, P>(
         &mut self,
         source: &S,
@@ -357,7 +372,7 @@ impl<C: Send> Crowd<C> {
     ) -> Result<(), CrowdError>
     where
         S: ClipSource<Clip = C>,
-        P: DetailPolicy + ?Sized,
+        P: LevelPolicy + Sync + ?Sized,
     {
         if !(dt.is_finite() && (0.0..=MAX_DT).contains(&dt)) {
             return Err(CrowdError::BadTimeStep { dt });
@@ -367,12 +382,12 @@ impl<C: Send> Crowd<C> {
         // (1) Culling.
         let t0 = Instant::now();
         self.update_bounds();
-        if self.frame % u64::from(self.config.bvh_rebuild_interval) == 0 {
-            self.bvh.rebuild(&self.bounds);
+        if self.frame % u64::from(self.config.tree_rebuild_interval) == 0 {
+            self.tree.rebuild(&self.bounds);
         } else {
-            self.bvh.refit(&self.bounds);
+            self.tree.refit(&self.bounds);
         }
-        let visible = self.bvh.query(&frustum, &mut self.visible);
+        let visible = self.tree.query(&frustum, &mut self.visible);
 
         // (2)-(4) Kernels, poses, forward kinematics: one parallel pass over chunks of walkers, each
         // chunk running the three stages in turn while its walkers are in cache. Every chunk's
@@ -380,6 +395,7 @@ impl<C: Send> Crowd<C> {
         let t1 = Instant::now();
         let params = self.params;
         let eye = camera.position;
+        let view = camera.view();
         let pl = params.levels.pose_len;
         let npos = params.levels.joints + 1;
         // One seam scratch per chunk of walkers, allocated by `new`: nothing is allocated here.
@@ -397,11 +413,17 @@ impl<C: Send> Crowd<C> {
                     let mut out = ChunkOutcome::default();
                     let ta = Instant::now();
                     for (k, (w, &vis)) in walkers.iter_mut().zip(visible).enumerate() {
-                        let d = policy.detail(w.root.distance(eye), vis, camera);
+                        let d = policy.detail(w.root.distance(eye), vis, &view);
+                        let i = c * CHUNK + k;
                         match w.advance(source, &params, d, dt, scratch) {
-                            Ok(n) => out.built += n,
+                            Ok(a) => {
+                                out.built += a.built;
+                                if let Some(e) = a.fault {
+                                    out.clip_faults.record(i, a.faults, e);
+                                }
+                            }
                             Err(e) => {
-                                out.fault.get_or_insert((c * CHUNK + k, e));
+                                out.fault.get_or_insert((i, e));
                             }
                         }
                     }
@@ -473,6 +495,7 @@ impl<C: Send> Crowd<C> {
         stats.in_transition = pass.in_transition;
         stats.visible = visible;
         stats.kernels_built = pass.built;
+        stats.clip_faults = pass.clip_faults;
         self.frame += 1;
         self.time_s += f64::from(dt);
         Ok(())
@@ -490,7 +513,7 @@ impl<C: Send> Crowd<C> {
     ) -> Result<CrowdReport, CrowdError>
     where
         S: ClipSource<Clip = C>,
-        P: DetailPolicy + ?Sized,
+        P: LevelPolicy + Sync + ?Sized,
     {
         let dt = 1.0 / self.config.fps;
         let mut report = CrowdReport::new();

@@ -1,4 +1,6 @@
-//! Frustum culling of walker bounds over a bounding volume hierarchy (crate `bvh` 0.13).
+//! Frustum culling of walker bounds over an AABB tree: a binary tree of axis-aligned bounding
+//! boxes, one leaf per walker (built with the `bvh` crate 0.13, whose name says "bounding volume
+//! hierarchy"; nothing here has to do with BVH motion files).
 //!
 //! The tree is built with SAH splits (`Bvh::build_par`) and, between rebuilds, *refitted*: leaf
 //! boxes are replaced and inner boxes recomputed bottom-up without changing the topology, which
@@ -19,7 +21,7 @@ impl IntersectsAabb<f32, 3> for Frustum {
     }
 }
 
-/// A walker's box as a BVH leaf shape.
+/// A walker's box as a leaf shape of the tree.
 #[derive(Debug, Clone, Copy)]
 struct BoxShape {
     aabb: Aabb<f32, 3>,
@@ -48,20 +50,20 @@ fn to_aabb(b: &Bounds) -> Aabb<f32, 3> {
     )
 }
 
-/// A BVH over walker boxes that can be rebuilt or refitted, and queried with a frustum.
+/// An AABB tree over walker boxes that can be rebuilt or refitted, and queried with a frustum.
 #[derive(Debug, Clone)]
-pub struct WalkerBvh {
-    bvh: Bvh<f32, 3>,
+pub struct WalkerAabbTree {
+    tree: Bvh<f32, 3>,
     shapes: Vec<BoxShape>,
     node_boxes: Vec<Aabb<f32, 3>>,
     stack: Vec<usize>,
 }
 
-impl WalkerBvh {
+impl WalkerAabbTree {
     /// Builds the hierarchy over `bounds` (one box per walker, may be empty).
     pub fn new(bounds: &[Bounds]) -> Self {
         let mut s = Self {
-            bvh: Bvh { nodes: Vec::new() },
+            tree: Bvh { nodes: Vec::new() },
             shapes: Vec::new(),
             node_boxes: Vec::new(),
             stack: Vec::new(),
@@ -88,9 +90,9 @@ impl WalkerBvh {
             aabb: to_aabb(b),
             node: 0,
         }));
-        self.bvh = Bvh::build_par(&mut self.shapes);
+        self.tree = Bvh::build_par(&mut self.shapes);
         self.node_boxes.clear();
-        self.node_boxes.resize(self.bvh.nodes.len(), Aabb::empty());
+        self.node_boxes.resize(self.tree.nodes.len(), Aabb::empty());
         self.stack.clear();
         self.stack.reserve(64);
         debug_assert!(self.children_follow_parents());
@@ -99,7 +101,7 @@ impl WalkerBvh {
     /// Every child node index is larger than its parent's (true for trees from `Bvh::build`),
     /// which lets `refit` run as one reverse sweep.
     fn children_follow_parents(&self) -> bool {
-        self.bvh.nodes.iter().enumerate().all(|(i, n)| match *n {
+        self.tree.nodes.iter().enumerate().all(|(i, n)| match *n {
             BvhNode::Node {
                 child_l_index,
                 child_r_index,
@@ -119,8 +121,8 @@ impl WalkerBvh {
         for (s, b) in self.shapes.iter_mut().zip(bounds) {
             s.aabb = to_aabb(b);
         }
-        for i in (0..self.bvh.nodes.len()).rev() {
-            let bx = match &mut self.bvh.nodes[i] {
+        for i in (0..self.tree.nodes.len()).rev() {
+            let bx = match &mut self.tree.nodes[i] {
                 BvhNode::Leaf { shape_index, .. } => self.shapes[*shape_index].aabb,
                 BvhNode::Node {
                     child_l_index,
@@ -144,7 +146,7 @@ impl WalkerBvh {
     pub fn query<Q: IntersectsAabb<f32, 3>>(&mut self, query: &Q, visible: &mut [bool]) -> usize {
         debug_assert_eq!(visible.len(), self.shapes.len());
         visible.fill(false);
-        let nodes = &self.bvh.nodes;
+        let nodes = &self.tree.nodes;
         if nodes.is_empty() {
             return 0;
         }
@@ -190,7 +192,7 @@ impl WalkerBvh {
     pub fn query_with_crate<Q: IntersectsAabb<f32, 3>>(&self, query: &Q) -> Vec<usize> {
         let base = self.shapes.as_ptr();
         let mut idx: Vec<usize> = self
-            .bvh
+            .tree
             .traverse(query, &self.shapes)
             .into_iter()
             // SAFETY-free index recovery: every returned reference points into `self.shapes`.
@@ -207,8 +209,8 @@ impl WalkerBvh {
 mod tests {
     use super::*;
     use crate::camera::Camera;
-    use crate::rng::SplitMix64;
     use glam::Vec3;
+    use lod_policy::rng::SplitMix64;
 
     fn random_bounds(n: usize, seed: u64) -> Vec<Bounds> {
         let mut g = SplitMix64::new(seed);
@@ -241,14 +243,14 @@ mod tests {
         };
         let f = Frustum::from_camera(&cam).unwrap();
         let mut b = random_bounds(3000, 1);
-        let mut bvh = WalkerBvh::new(&b);
+        let mut tree = WalkerAabbTree::new(&b);
         let mut vis = vec![false; b.len()];
-        let n = bvh.query(&f, &mut vis);
+        let n = tree.query(&f, &mut vis);
         let expected = brute(&f, &b);
         assert!(!expected.is_empty() && expected.len() < b.len());
         assert_eq!(n, expected.len());
         assert_eq!(flags_to_idx(&vis), expected);
-        assert_eq!(bvh.query_with_crate(&f), expected);
+        assert_eq!(tree.query_with_crate(&f), expected);
         // Move every box a lot, refit only: still exact.
         for (i, x) in b.iter_mut().enumerate() {
             let d = Vec3::new(
@@ -259,22 +261,22 @@ mod tests {
             x.min += d;
             x.max += d;
         }
-        bvh.refit(&b);
-        bvh.query(&f, &mut vis);
+        tree.refit(&b);
+        tree.query(&f, &mut vis);
         assert_eq!(flags_to_idx(&vis), brute(&f, &b));
-        assert_eq!(bvh.query_with_crate(&f), brute(&f, &b));
+        assert_eq!(tree.query_with_crate(&f), brute(&f, &b));
     }
 
     #[test]
     fn tiny_hierarchies_work() {
         let f = Frustum::from_camera(&Camera::default()).unwrap();
-        let mut empty = WalkerBvh::new(&[]);
+        let mut empty = WalkerAabbTree::new(&[]);
         assert_eq!(empty.query(&f, &mut []), 0);
         let one = [Bounds {
             min: Vec3::new(-0.5, 0.0, 9.5),
             max: Vec3::new(0.5, 2.0, 10.5),
         }];
-        let mut b1 = WalkerBvh::new(&one);
+        let mut b1 = WalkerAabbTree::new(&one);
         let mut v = [false];
         assert_eq!(b1.query(&f, &mut v), 1);
         let behind = [Bounds {

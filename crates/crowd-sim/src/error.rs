@@ -18,9 +18,9 @@ pub enum CrowdError {
         /// Pose vector length reported by the source.
         pose_len: usize,
     },
-    /// The control bounds of the source are not finite, inverted, or allow no forward motion/turn.
-    #[error("clip source control bounds are unusable: {what}")]
-    BadControlBounds {
+    /// The control range of the source is not finite, inverted, or allows no forward motion/turn.
+    #[error("clip source control range is unusable: {what}")]
+    BadControlRange {
         /// Which bound is wrong.
         what: &'static str,
     },
@@ -62,6 +62,14 @@ pub enum CrowdError {
         /// Reported duration in seconds.
         duration: f32,
     },
+    /// The source could not build a walker's first clip (there is no previous clip to keep).
+    #[error("walker {walker}: first clip: {error}")]
+    FirstClip {
+        /// Index of the walker.
+        walker: usize,
+        /// The source's error.
+        error: ClipError,
+    },
     /// The policy asked for an accuracy level the source does not have.
     #[error("walker {walker}: policy asked for accuracy level {level}, source has {levels}")]
     BadLevel {
@@ -73,6 +81,14 @@ pub enum CrowdError {
         levels: usize,
     },
 }
+
+/// Why a [`ClipSource`](crate::ClipSource) could not build a clip, in the source's words.
+///
+/// During a step the crowd does not stop on it: the walker keeps its previous clip and the fault
+/// is counted in the frame's statistics ([`FrameStats::clip_faults`](crate::FrameStats)).
+#[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]
+#[error("{0}")]
+pub struct ClipError(pub String);
 
 /// What went wrong while rendering or writing images.
 #[derive(Debug, thiserror::Error)]

@@ -5,13 +5,20 @@
 //! It knows nothing of tensors: clips come from a `ClipSource` implementation. It is not for:
 //! synthesising motion itself.
 //!
+//! It speaks the runtime's vocabulary (`lod_policy`): [`Controls`](lod_policy::Controls),
+//! [`Detail`](lod_policy::Detail), [`RootMotion`](lod_policy::RootMotion) and the one policy trait
+//! [`LevelPolicy`](lod_policy::LevelPolicy).
+//!
 //! Each walker follows a seeded closed path inside the field; every gait cycle asks the source
 //! for a clip at controls taken from the path ahead (clamped to the source's
-//! [`ControlBounds`]) and at the [`Detail`] a [`DetailPolicy`] picks from the walker's distance to
-//! the camera and its visibility. Cycles chain through their root motion with the runtime's one
+//! [`ControlRange`](lod_policy::ControlRange)) and at the detail a policy picks from the walker's
+//! distance to the camera and its visibility (resolved against the source's [`LevelTable`]). A
+//! clip the source cannot build is counted in the frame's statistics
+//! ([`FrameStats::clip_faults`]) and the walker keeps its previous clip. Cycles chain through their root motion with the runtime's one
 //! chaining routine ([`lod_policy::chain`]): changes of clip are inertialized at the first levels
 //! (continuous in position and velocity) and switched as they are beyond. Each frame
-//! culls walker boxes against the camera frustum through a BVH, then runs kernels, poses and
+//! culls walker boxes against the camera frustum through an AABB tree ([`culling`]), then runs
+//! kernels, poses and
 //! forward kinematics in parallel over walkers (rayon), with the same result for any thread
 //! count, and reports per-stage timings and a level histogram. [`render`] draws stick figures
 //! coloured by level (paper Figure 6), a top-down map and an animated GIF.
@@ -35,23 +42,20 @@
 #![warn(missing_docs)]
 
 pub mod camera;
-pub mod controls;
 mod crowd;
 pub mod culling;
 pub mod error;
+pub mod levels;
 pub mod path;
-pub mod policy;
 pub mod render;
-pub mod rng;
 pub mod source;
 pub mod stats;
 pub mod testing;
 mod walker;
 
 pub use camera::{Bounds, Camera, CameraPath, Frustum, Scene};
-pub use controls::{ControlBounds, Controls, Detail, LevelTable, RootMotion};
 pub use crowd::{Crowd, CrowdConfig};
-pub use error::{CrowdError, RenderError};
-pub use policy::DetailPolicy;
+pub use error::{ClipError, CrowdError, RenderError};
+pub use levels::{LevelTable, check_control_range};
 pub use source::ClipSource;
-pub use stats::{CrowdReport, FrameStats, StageTimings};
+pub use stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};

@@ -4,9 +4,9 @@
 //! Ground coordinates are `(x, z)` as a `Vec2`; a heading `h` faces `(sin h, cos h)` and its left
 //! is `(cos h, -sin h)` (positive heading change = turn left, as in `docs/architecture.md`).
 
-use crate::controls::{ControlBounds, Controls};
-use crate::rng::SplitMix64;
 use glam::Vec2;
+use lod_policy::rng::SplitMix64;
+use lod_policy::{ControlRange, Controls, wrap_angle};
 use std::f32::consts::{PI, TAU};
 
 /// Unit forward direction `(sin h, cos h)` of heading `h`.
@@ -23,9 +23,6 @@ pub fn left(h: f32) -> Vec2 {
 pub fn heading_of(d: Vec2) -> f32 {
     d.x.atan2(d.y)
 }
-
-/// Wraps an angle into `(-pi, pi]`: the runtime's [`lod_policy::chain::wrap_angle`].
-pub use lod_policy::chain::wrap_angle;
 
 /// A closed elliptic path `p(s) = c + R(rot) (a cos s, b sin s)`, travelled with increasing `s`
 /// when `dir = 1` and decreasing `s` when `dir = -1`.
@@ -145,7 +142,7 @@ pub fn path_controls(
     heading: f32,
     stride: f32,
     height: f32,
-    bounds: &ControlBounds,
+    bounds: &ControlRange,
 ) -> Controls {
     let speed = path.velocity(s).length().max(1e-3);
     let s_t = s + path.dir * stride / speed;
@@ -171,8 +168,6 @@ mod tests {
         assert!(left(0.0).distance(Vec2::new(1.0, 0.0)) < 1e-6);
         assert!(forward(0.1).x > 0.0);
         assert!((heading_of(forward(1.2)) - 1.2).abs() < 1e-5);
-        assert!((wrap_angle(3.0 * PI) - PI).abs() < 1e-5);
-        assert!((wrap_angle(-0.5) + 0.5).abs() < 1e-6);
     }
 
     #[test]

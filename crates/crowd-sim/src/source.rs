@@ -1,7 +1,9 @@
 //! The contract between the crowd and whatever synthesises motion.
 
-use crate::controls::{ControlBounds, Controls, Detail, LevelTable, RootMotion};
+use crate::error::ClipError;
+use crate::levels::LevelTable;
 use glam::Vec3;
+use lod_policy::{ControlRange, Controls, Detail, RootMotion};
 
 /// A provider of gait clips at (controls, detail), implemented by the facade for the multilinear
 /// model and for a naive baseline, and by [`testing::ProceduralSource`](crate::testing::ProceduralSource).
@@ -29,14 +31,24 @@ pub trait ClipSource: Sync {
     fn levels(&self) -> LevelTable;
 
     /// The range of controls the source covers; the crowd clamps every request into it.
-    fn control_bounds(&self) -> ControlBounds;
+    fn control_range(&self) -> ControlRange;
 
     /// A fresh clip buffer (its content is unspecified until `build_clip`).
     fn new_clip(&self) -> Self::Clip;
 
     /// Synthesises the clip for `controls` at `detail` into `clip` (the per-cycle kernel).
-    /// `detail.accuracy < levels().accuracy_levels` and `detail.active_joints <= levels().joints`.
-    fn build_clip(&self, controls: &Controls, detail: Detail, clip: &mut Self::Clip);
+    /// `detail` is resolved ([`LevelTable::resolve`]): `detail.accuracy < levels().accuracy_levels`
+    /// and `detail.active_joints <= levels().joints`.
+    ///
+    /// Errors: the clip cannot be built. An implementation must then leave `clip` as it was (check
+    /// before writing), so that the crowd keeps showing it; the crowd counts the fault in its frame
+    /// statistics ([`FrameStats::clip_faults`](crate::FrameStats)).
+    fn build_clip(
+        &self,
+        controls: &Controls,
+        detail: Detail,
+        clip: &mut Self::Clip,
+    ) -> Result<(), ClipError>;
 
     /// Duration of the clip in seconds (must be finite and at least 1 ms).
     fn clip_duration(&self, clip: &Self::Clip) -> f32;

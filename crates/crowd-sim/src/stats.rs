@@ -1,11 +1,46 @@
 //! Per-frame timings and level histograms, and their aggregate over a run.
 
+use crate::error::ClipError;
 use std::time::Duration;
+
+/// Clips a source could not build during one frame ([`ClipSource::build_clip`] errors): each such
+/// walker kept its previous clip.
+///
+/// [`ClipSource::build_clip`]: crate::ClipSource::build_clip
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ClipFaults {
+    /// Failed builds.
+    pub count: usize,
+    /// The failing walker with the lowest index, and the source's error.
+    pub first: Option<(usize, ClipError)>,
+}
+
+impl ClipFaults {
+    /// Counts `count` failed builds of `walker`'s clips, the first of which gave `error`.
+    pub fn record(&mut self, walker: usize, count: usize, error: ClipError) {
+        self.count += count;
+        if self.first.as_ref().is_none_or(|(w, _)| walker < *w) {
+            self.first = Some((walker, error));
+        }
+    }
+
+    /// The faults of two sets of walkers together.
+    pub fn merge(a: ClipFaults, b: ClipFaults) -> ClipFaults {
+        let first = match (a.first, b.first) {
+            (Some(x), Some(y)) => Some(if x.0 <= y.0 { x } else { y }),
+            (x, y) => x.or(y),
+        };
+        ClipFaults {
+            count: a.count + b.count,
+            first,
+        }
+    }
+}
 
 /// Wall-clock time of each stage of one crowd frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimings {
-    /// Bounds update, BVH refit or rebuild, frustum query.
+    /// Bounds update, culling tree refit or rebuild, frustum query.
     pub cull: Duration,
     /// Detail choice, cycle scheduling and clip kernels (`ClipSource::build_clip`).
     pub kernels: Duration,
@@ -43,6 +78,8 @@ pub struct FrameStats {
     pub kernels_built: usize,
     /// Walkers inside a seam transition (`lod_policy::chain`).
     pub in_transition: usize,
+    /// Clips the source failed to build (those walkers kept their previous clips).
+    pub clip_faults: ClipFaults,
 }
 
 /// Aggregate of many frames: frames per second worst/mean/best and summed histograms.
@@ -67,6 +104,10 @@ pub struct CrowdReport {
     pub visible_sum: u64,
     /// Summed kernel builds.
     pub kernels_built: u64,
+    /// Summed failed clip builds ([`FrameStats::clip_faults`]).
+    pub clip_faults: u64,
+    /// The first failed clip build of the run: frame index (from 0), walker and error.
+    pub first_clip_fault: Option<(usize, usize, ClipError)>,
 }
 
 impl CrowdReport {
@@ -86,6 +127,10 @@ impl CrowdReport {
             self.fps_worst = self.fps_worst.min(fps);
             self.fps_best = self.fps_best.max(fps);
         }
+        if let (None, Some((walker, e))) = (&self.first_clip_fault, &f.clip_faults.first) {
+            self.first_clip_fault = Some((self.frames, *walker, e.clone()));
+        }
+        self.clip_faults += f.clip_faults.count as u64;
         self.frames += 1;
         self.total.add(&f.timings);
         self.fps_mean = self.frames as f64 / self.total.total().as_secs_f64().max(1e-9);
@@ -142,7 +187,16 @@ impl std::fmt::Display for CrowdReport {
             f,
             "level histogram (walker-frames, last = root only): {:?}",
             self.level_histogram
-        )
+        )?;
+        if let Some((frame, walker, e)) = &self.first_clip_fault {
+            write!(
+                f,
+                "\nclip faults: {} (walkers kept their previous clips); first: frame {frame}, \
+                 walker {walker}: {e}",
+                self.clip_faults
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -171,5 +225,28 @@ mod tests {
         assert_eq!(r.level_histogram, vec![4, 2]);
         assert_eq!(r.mean_visible(), 3.0);
         assert!(r.to_string().contains("fps worst 25.0"));
+        assert!(!r.to_string().contains("clip faults"));
+    }
+
+    #[test]
+    fn clip_faults_keep_the_lowest_walker_and_are_reported() {
+        let mut a = ClipFaults::default();
+        a.record(9, 1, ClipError("late".into()));
+        a.record(4, 1, ClipError("early".into()));
+        let mut b = ClipFaults::default();
+        b.record(6, 1, ClipError("middle".into()));
+        let m = ClipFaults::merge(b, a);
+        assert_eq!(m.count, 3);
+        assert_eq!(m.first, Some((4, ClipError("early".into()))));
+        let mut r = CrowdReport::new();
+        r.add(&FrameStats::default());
+        r.add(&FrameStats {
+            clip_faults: m,
+            ..Default::default()
+        });
+        assert_eq!(r.clip_faults, 3);
+        let text = r.to_string();
+        assert!(text.contains("clip faults: 3"), "{text}");
+        assert!(text.contains("frame 1, walker 4: early"), "{text}");
     }
 }

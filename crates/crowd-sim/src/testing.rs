@@ -1,11 +1,12 @@
-//! A procedural [`ClipSource`] (an analytic stick walker) and a distance policy, for tests,
-//! benches, demos and the facade's tests. No data, no model: clips are sums of two harmonics of
-//! the gait phase per pose row.
+//! A procedural [`ClipSource`] (an analytic stick walker), a source that fails on purpose, and the
+//! paper's distance policy for a level table, for tests, benches, demos and the facade's tests. No
+//! data, no model: clips are sums of two harmonics of the gait phase per pose row.
 
-use crate::camera::Camera;
-use crate::controls::{ControlBounds, Controls, Detail, LevelTable, RootMotion};
+use crate::error::ClipError;
+use crate::levels::LevelTable;
 use crate::source::ClipSource;
 use glam::{Quat, Vec3};
+use lod_policy::{ControlRange, Controls, Detail, DistanceConfig, DistancePolicy, RootMotion};
 use std::f32::consts::TAU;
 
 /// Non-root joints of the stick walker.
@@ -136,8 +137,8 @@ impl ClipSource for ProceduralSource {
         }
     }
 
-    fn control_bounds(&self) -> ControlBounds {
-        ControlBounds {
+    fn control_range(&self) -> ControlRange {
+        ControlRange {
             min: Controls {
                 dx: -0.4,
                 dz: 0.6,
@@ -165,7 +166,12 @@ impl ClipSource for ProceduralSource {
 
     /// Duration `(0.85 + 0.18 |(dx, dz)|) sqrt(height / 1.75)`; root rows: `x = dx u + 0.02 sin
     /// phi`, `y = 0.53 h + 0.01 h cos 2phi`, `z = dz u - 0.03 dz sin 2phi / (2 pi)`, yaw `turn u`.
-    fn build_clip(&self, c: &Controls, detail: Detail, clip: &mut ProceduralClip) {
+    fn build_clip(
+        &self,
+        c: &Controls,
+        detail: Detail,
+        clip: &mut ProceduralClip,
+    ) -> Result<(), ClipError> {
         let h = c.height;
         let dist = (c.dx * c.dx + c.dz * c.dz).sqrt();
         let duration = (0.85 + 0.18 * dist) * (h / 1.75).sqrt();
@@ -207,6 +213,7 @@ impl ClipSource for ProceduralSource {
             turn: c.turn,
         };
         clip.height = h;
+        Ok(())
     }
 
     fn clip_duration(&self, clip: &ProceduralClip) -> f32 {
@@ -252,31 +259,88 @@ impl ClipSource for ProceduralSource {
     }
 }
 
-/// The paper's distance policy (section 5.1) for a source with `levels`: full accuracy and all
-/// joints below 30 m, one accuracy level more every 50 m beyond, one joint (three DOF) fewer
-/// every 10 m beyond 30 m, root only beyond the last level or when not visible.
-pub fn paper_distance_policy(
-    levels: LevelTable,
-) -> impl Fn(f32, bool, &Camera) -> Detail + Sync + Send {
-    move |d: f32, visible: bool, _cam: &Camera| {
-        let root = Detail::root_only(&levels);
-        if !visible || !d.is_finite() {
-            return root;
+/// The paper's distance policy (section 5.1, [`DistancePolicy`] with its defaults and without the
+/// screen check, which needs measured errors) for a source with `levels`, one key per accuracy
+/// level: every joint below 30 m, one accuracy level more every 50 m beyond, one joint (three DOF)
+/// fewer every 10 m beyond 30 m, root only beyond the last level or when not visible.
+pub fn paper_distance_policy(levels: LevelTable) -> DistancePolicy {
+    let keys: Vec<usize> = (0..levels.accuracy_levels.max(1)).collect();
+    let config = DistanceConfig {
+        screen_budget_px: None,
+        ..DistanceConfig::default()
+    };
+    DistancePolicy::for_level_keys(&keys, levels.joints, config)
+        .expect("the default distances are valid and the keys increase")
+}
+
+/// A source that fails some of its clip builds on purpose, for testing that faults are counted:
+/// a build with joints fails when a hash of the controls' bits is a multiple of `every` (so the
+/// same clips fail for any thread count), leaving the clip as it was; root-only builds (a new
+/// crowd's first clips among them) never fail.
+#[derive(Debug, Clone)]
+pub struct FailingSource<S> {
+    /// The source that builds the clips that do not fail.
+    pub inner: S,
+    /// One build with joints in about `every` fails (at least 1: then every one).
+    pub every: u32,
+}
+
+impl<S> FailingSource<S> {
+    /// Whether the build of `c` at `detail` fails.
+    pub fn fails(&self, c: &Controls, detail: &Detail) -> bool {
+        let h = c.dx.to_bits() ^ c.dz.to_bits().rotate_left(7) ^ c.turn.to_bits().rotate_left(13);
+        detail.active_joints > 0 && (h.wrapping_mul(0x9E37_79B1) >> 8) % self.every.max(1) == 0
+    }
+}
+
+impl<S: ClipSource> ClipSource for FailingSource<S> {
+    type Clip = S::Clip;
+
+    fn levels(&self) -> LevelTable {
+        self.inner.levels()
+    }
+
+    fn control_range(&self) -> ControlRange {
+        self.inner.control_range()
+    }
+
+    fn new_clip(&self) -> S::Clip {
+        self.inner.new_clip()
+    }
+
+    fn build_clip(
+        &self,
+        c: &Controls,
+        detail: Detail,
+        clip: &mut S::Clip,
+    ) -> Result<(), ClipError> {
+        if self.fails(c, &detail) {
+            return Err(ClipError(format!(
+                "test failure for controls {:?} at {detail:?}",
+                c.to_array()
+            )));
         }
-        let beyond = (d - 30.0).max(0.0);
-        let accuracy = if d < 30.0 {
-            0
-        } else {
-            1 + (beyond / 50.0) as usize
-        };
-        if accuracy >= levels.accuracy_levels {
-            return root;
-        }
-        let dropped = (beyond / 10.0) as usize;
-        Detail {
-            accuracy,
-            active_joints: levels.joints.saturating_sub(dropped).max(1),
-        }
+        self.inner.build_clip(c, detail, clip)
+    }
+
+    fn clip_duration(&self, clip: &S::Clip) -> f32 {
+        self.inner.clip_duration(clip)
+    }
+
+    fn clip_root_motion(&self, clip: &S::Clip) -> RootMotion {
+        self.inner.clip_root_motion(clip)
+    }
+
+    fn pose(&self, clip: &S::Clip, t_seconds: f32, out: &mut [f32]) -> usize {
+        self.inner.pose(clip, t_seconds, out)
+    }
+
+    fn joints(&self, clip: &S::Clip, pose: &[f32], out: &mut [Vec3]) -> usize {
+        self.inner.joints(clip, pose, out)
+    }
+
+    fn bones(&self) -> &[(usize, usize)] {
+        self.inner.bones()
     }
 }
 
@@ -309,7 +373,7 @@ mod tests {
                 active_joints: 0,
             },
         ] {
-            s.build_clip(&controls(), det, &mut clip);
+            s.build_clip(&controls(), det, &mut clip).unwrap();
             let d = s.clip_duration(&clip);
             let n = s.pose(&clip, d, &mut pose);
             assert_eq!(n, 7 + 3 * det.active_joints);
@@ -335,7 +399,8 @@ mod tests {
                 active_joints: JOINTS,
             },
             &mut clip,
-        );
+        )
+        .unwrap();
         let mut pose = vec![0.0; POSE_LEN];
         let mut pos = vec![Vec3::ZERO; JOINTS + 1];
         for k in 0..20 {
@@ -359,7 +424,8 @@ mod tests {
                 active_joints: JOINTS,
             },
             &mut a,
-        );
+        )
+        .unwrap();
         s.build_clip(
             &controls(),
             Detail {
@@ -367,7 +433,8 @@ mod tests {
                 active_joints: JOINTS,
             },
             &mut b,
-        );
+        )
+        .unwrap();
         let (mut pa, mut pb) = (vec![0.0; POSE_LEN], vec![0.0; POSE_LEN]);
         s.pose(&a, 0.3, &mut pa);
         s.pose(&b, 0.3, &mut pb);
@@ -382,24 +449,14 @@ mod tests {
 
     #[test]
     fn paper_policy_follows_the_distance_bands() {
+        use lod_policy::{LevelPolicy, ViewParams};
         let lv = ProceduralSource.levels();
         let p = paper_distance_policy(lv);
-        let cam = Camera::default();
-        assert_eq!(
-            p(10.0, true, &cam),
-            Detail {
-                accuracy: 0,
-                active_joints: JOINTS
-            }
-        );
-        assert_eq!(
-            p(45.0, true, &cam),
-            Detail {
-                accuracy: 1,
-                active_joints: JOINTS - 1
-            }
-        );
-        assert_eq!(p(10.0, false, &cam).active_joints, 0);
-        assert_eq!(p(1000.0, true, &cam).active_joints, 0);
+        let v = ViewParams::default();
+        assert_eq!(p.detail(10.0, true, &v), Detail::new(0, JOINTS));
+        assert_eq!(p.detail(45.0, true, &v), Detail::new(0, JOINTS - 1));
+        assert_eq!(p.detail(85.0, true, &v), Detail::new(1, JOINTS - 5));
+        assert_eq!(p.detail(10.0, false, &v).active_joints, 0);
+        assert_eq!(p.detail(1000.0, true, &v).active_joints, 0);
     }
 }

@@ -2,17 +2,19 @@
 //! clips (kernels), evaluate poses with the running seam transition, forward kinematics into the
 //! world.
 
-use crate::controls::{ControlBounds, Controls, Detail, LevelTable, RootMotion};
-use crate::path::{EllipsePath, forward, left, path_controls, wrap_angle};
+use crate::error::ClipError;
+use crate::levels::LevelTable;
+use crate::path::{EllipsePath, forward, left, path_controls};
 use crate::source::ClipSource;
 use glam::{Vec2, Vec3};
 use lod_policy::chain::{SeamScratch, SeamTransition};
+use lod_policy::{ControlRange, Controls, Detail, RootMotion, wrap_angle};
 
 /// Settings the stages need, copied out of the crowd config.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct StageParams {
     pub levels: LevelTable,
-    pub bounds: ControlBounds,
+    pub bounds: ControlRange,
     pub seam_levels: usize,
     /// Half-life of a seam's offset (s), for transitions allocated on a walker's first seam.
     pub seam_halflife_s: f32,
@@ -64,6 +66,27 @@ pub(crate) fn valid_duration(d: f32) -> bool {
     d.is_finite() && d >= 1e-3
 }
 
+/// What one walker's kernel stage did: clips built, and clips the source failed to build (the
+/// walker kept its previous clip) with the first error.
+#[derive(Debug, Default)]
+pub(crate) struct Advance {
+    pub built: usize,
+    pub faults: usize,
+    pub fault: Option<ClipError>,
+}
+
+impl Advance {
+    fn count(&mut self, outcome: Option<ClipError>) {
+        match outcome {
+            None => self.built += 1,
+            Some(e) => {
+                self.faults += 1;
+                self.fault.get_or_insert(e);
+            }
+        }
+    }
+}
+
 /// A failure found while running a stage for one walker.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum WalkerFault {
@@ -87,9 +110,16 @@ impl<C> Walker<C> {
     }
 
     /// Rebuilds `cur` for `self.controls` at `d` (in place: the outgoing clip's state has been
-    /// captured before when a seam follows).
-    fn rebuild<S: ClipSource<Clip = C>>(&mut self, src: &S, d: Detail) -> Result<(), WalkerFault> {
-        src.build_clip(&self.controls, d, &mut self.cur);
+    /// captured before when a seam follows). `Ok(Some(error))` when the source could not build it:
+    /// `cur` is then the previous clip, unchanged.
+    fn rebuild<S: ClipSource<Clip = C>>(
+        &mut self,
+        src: &S,
+        d: Detail,
+    ) -> Result<Option<ClipError>, WalkerFault> {
+        if let Err(e) = src.build_clip(&self.controls, d, &mut self.cur) {
+            return Ok(Some(e));
+        }
         let dur = src.clip_duration(&self.cur);
         if !valid_duration(dur) {
             return Err(WalkerFault::Duration(dur));
@@ -97,12 +127,16 @@ impl<C> Walker<C> {
         self.cur_detail = d;
         self.cur_dur = dur;
         self.cur_motion = src.clip_root_motion(&self.cur);
-        Ok(())
+        Ok(None)
     }
 
     /// Replaces the current clip by one at `d` (and `self.controls`), shown from clip phase
     /// `phase` of the new clip; with `seam`, the change is inertialized from the displayed state at
     /// clip time `t_out` of the outgoing clip (in the next cycle frame when `motion` is given).
+    ///
+    /// When the source cannot build the new clip (`Ok(Some(error))`), the walker keeps the
+    /// previous one: mid-cycle it plays on with its running seam; at a cycle end it replays from
+    /// the start in the next cycle frame, switched as it is (no seam).
     #[allow(clippy::too_many_arguments)]
     fn switch<S: ClipSource<Clip = C>>(
         &mut self,
@@ -112,8 +146,8 @@ impl<C> Walker<C> {
         t_out: f32,
         motion: Option<&RootMotion>,
         phase: f32,
-    ) -> Result<(), WalkerFault> {
-        match seam {
+    ) -> Result<Option<ClipError>, WalkerFault> {
+        let failed = match seam {
             Some((scratch, p)) => {
                 if !self.seam_sized {
                     self.seam = SeamTransition::new(p.levels.pose_len, p.seam_halflife_s);
@@ -124,7 +158,13 @@ impl<C> Walker<C> {
                     Ok::<usize, std::convert::Infallible>(this.displayed(src, t, out))
                 });
                 let Ok(()) = captured;
-                self.rebuild(src, d)?;
+                if let Some(e) = self.rebuild(src, d)? {
+                    if motion.is_some() {
+                        self.seam.clear();
+                        self.seam_start = 0.0;
+                    }
+                    return Ok(Some(e));
+                }
                 let t_in = phase * self.cur_dur;
                 let cur = &self.cur;
                 let started = scratch.start(
@@ -135,22 +175,27 @@ impl<C> Walker<C> {
                 );
                 let Ok(()) = started;
                 self.seam_start = t_in;
+                None
             }
             None => {
-                self.seam.clear();
-                self.rebuild(src, d)?;
-                self.seam_start = 0.0;
+                let failed = self.rebuild(src, d)?;
+                if failed.is_none() || motion.is_some() {
+                    self.seam.clear();
+                    self.seam_start = 0.0;
+                }
+                failed
             }
-        }
-        Ok(())
+        };
+        Ok(failed)
     }
 
     /// Kernel stage: advance time by `dt`; at each cycle end move the cycle frame by the clip's
     /// root motion, pick controls from the path ahead and build the next clip at `d`, with an
     /// inertialized seam at the first `seam_levels` levels; mid-cycle, rebuild at once when `d` is
     /// finer than the clip held (inertialized likewise), except while `hold_s` (a new crowd's
-    /// spread of first builds) runs. `scratch` is the thread's seam scratch.
-    /// Returns the number of kernels built.
+    /// spread of first builds) runs. `scratch` is the thread's seam scratch. `d` is the policy's
+    /// answer, resolved here against the source's level table ([`LevelTable::resolve`]).
+    /// Returns the kernels built and the builds that failed.
     pub fn advance<S: ClipSource<Clip = C>>(
         &mut self,
         src: &S,
@@ -158,15 +203,9 @@ impl<C> Walker<C> {
         d: Detail,
         dt: f32,
         scratch: &mut SeamScratch,
-    ) -> Result<usize, WalkerFault> {
-        if d.accuracy >= p.levels.accuracy_levels {
-            return Err(WalkerFault::Level(d.accuracy));
-        }
-        let d = Detail {
-            accuracy: d.accuracy,
-            active_joints: d.active_joints.min(p.levels.joints),
-        };
-        let mut built = 0;
+    ) -> Result<Advance, WalkerFault> {
+        let d = p.levels.resolve(&d).ok_or(WalkerFault::Level(d.accuracy))?;
+        let mut done = Advance::default();
         self.t += dt;
         while self.t >= self.cur_dur {
             let m = self.cur_motion;
@@ -176,6 +215,7 @@ impl<C> Walker<C> {
             self.heading = wrap_angle(self.heading + m.turn);
             self.heading_sc = self.heading.sin_cos();
             self.s = self.path.closest_param_near(self.base, self.s);
+            let held = self.controls;
             self.controls = path_controls(
                 &self.path,
                 self.s,
@@ -186,23 +226,30 @@ impl<C> Walker<C> {
                 &p.bounds,
             );
             let seam = Self::seams(p, &d, &self.cur_detail).then_some((&mut *scratch, p));
-            self.switch(src, d, seam, end, Some(&m), 0.0)?;
+            let failed = self.switch(src, d, seam, end, Some(&m), 0.0)?;
+            if failed.is_some() {
+                // The previous clip plays on: its controls stay the walker's.
+                self.controls = held;
+            }
+            done.count(failed);
             self.hold_s = 0.0;
-            built += 1;
         }
         if self.hold_s > 0.0 {
             self.hold_s -= dt;
         }
-        if built == 0 && self.hold_s <= 0.0 && d.is_finer_than(&self.cur_detail) {
+        if done.built + done.faults == 0 && self.hold_s <= 0.0 && d.is_finer_than(&self.cur_detail)
+        {
             self.hold_s = 0.0;
             let u = self.t / self.cur_dur;
             let seam = Self::seams(p, &d, &self.cur_detail).then_some((&mut *scratch, p));
             let t_out = self.t;
-            self.switch(src, d, seam, t_out, None, u)?;
-            built += 1;
-            self.t = (u * self.cur_dur).min(self.cur_dur * 0.999_999);
+            let failed = self.switch(src, d, seam, t_out, None, u)?;
+            if failed.is_none() {
+                self.t = (u * self.cur_dur).min(self.cur_dur * 0.999_999);
+            }
+            done.count(failed);
         }
-        Ok(built)
+        Ok(done)
     }
 
     /// Pose stage: the current clip's pose at `t` with the running seam applied (the seam ends

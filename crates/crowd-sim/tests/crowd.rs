@@ -2,10 +2,10 @@
 
 use crowd_sim::testing::{ProceduralClip, ProceduralSource, paper_distance_policy};
 use crowd_sim::{
-    Camera, CameraPath, ClipSource, ControlBounds, Controls, Crowd, CrowdConfig, CrowdError,
-    Detail, Frustum, LevelTable, RootMotion,
+    Camera, CameraPath, ClipError, ClipSource, Crowd, CrowdConfig, CrowdError, Frustum, LevelTable,
 };
 use glam::{Vec2, Vec3};
+use lod_policy::{ControlRange, Controls, Detail, RootMotion, ViewParams};
 
 const DT: f32 = 1.0 / 30.0;
 
@@ -36,13 +36,18 @@ impl ClipSource for BiasedSource {
     fn levels(&self) -> LevelTable {
         self.0.levels()
     }
-    fn control_bounds(&self) -> ControlBounds {
-        self.0.control_bounds()
+    fn control_range(&self) -> ControlRange {
+        self.0.control_range()
     }
     fn new_clip(&self) -> ProceduralClip {
         self.0.new_clip()
     }
-    fn build_clip(&self, c: &Controls, d: Detail, clip: &mut ProceduralClip) {
+    fn build_clip(
+        &self,
+        c: &Controls,
+        d: Detail,
+        clip: &mut ProceduralClip,
+    ) -> Result<(), ClipError> {
         let biased = Controls {
             dz: 0.92 * c.dz,
             turn: c.turn - 0.03,
@@ -150,7 +155,7 @@ fn seams_happen_only_at_the_first_levels_and_are_smooth() {
     let source = ProceduralSource::new();
     let lv = source.levels();
     // Near walkers at level 0, the rest at level 6, all with every joint, all visible or not.
-    let policy = |d: f32, _vis: bool, _c: &Camera| Detail {
+    let policy = |d: f32, _vis: bool, _c: &ViewParams| Detail {
         accuracy: if d < 38.0 { 0 } else { 6 },
         active_joints: lv.joints,
     };
@@ -220,7 +225,7 @@ fn culled_walkers_are_exactly_those_whose_bounds_miss_the_frustum() {
     let source = ProceduralSource::new();
     let policy = paper_distance_policy(source.levels());
     let cfg = CrowdConfig {
-        bvh_rebuild_interval: 7,
+        tree_rebuild_interval: 7,
         ..config(800, 80.0)
     };
     let mut crowd = Crowd::new(&source, cfg).unwrap();
@@ -285,13 +290,18 @@ impl ClipSource for NoLevels {
             ..self.0.levels()
         }
     }
-    fn control_bounds(&self) -> ControlBounds {
-        self.0.control_bounds()
+    fn control_range(&self) -> ControlRange {
+        self.0.control_range()
     }
     fn new_clip(&self) -> ProceduralClip {
         self.0.new_clip()
     }
-    fn build_clip(&self, c: &Controls, d: Detail, clip: &mut ProceduralClip) {
+    fn build_clip(
+        &self,
+        c: &Controls,
+        d: Detail,
+        clip: &mut ProceduralClip,
+    ) -> Result<(), ClipError> {
         self.0.build_clip(c, d, clip)
     }
     fn clip_duration(&self, clip: &ProceduralClip) -> f32 {
@@ -346,7 +356,7 @@ fn bad_input_gives_clear_errors() {
         crowd.step(&source, &policy, &Camera::default(), f32::NAN),
         Err(CrowdError::BadTimeStep { .. })
     ));
-    let greedy = |_: f32, _: bool, _: &Camera| Detail {
+    let greedy = |_: f32, _: bool, _: &ViewParams| Detail {
         accuracy: 99,
         active_joints: 3,
     };
@@ -376,7 +386,7 @@ fn run_in_pool(threads: usize) -> (Vec<Vec3>, Vec<bool>, Vec<u32>) {
         let source = ProceduralSource::new();
         let policy = paper_distance_policy(source.levels());
         let cfg = CrowdConfig {
-            bvh_rebuild_interval: 5,
+            tree_rebuild_interval: 5,
             ..config(700, 70.0)
         };
         let mut crowd = Crowd::new(&source, cfg).unwrap();
@@ -418,7 +428,7 @@ fn results_are_identical_for_one_and_four_threads() {
 fn first_clip_builds_are_spread_over_the_first_cycle() {
     let source = ProceduralSource::new();
     // Every walker wants full detail: without spreading, all of them rebuild in the first frame.
-    let full = |_d: f32, _v: bool, _c: &Camera| Detail {
+    let full = |_d: f32, _v: bool, _c: &ViewParams| Detail {
         accuracy: 0,
         active_joints: source.levels().joints,
     };
@@ -453,4 +463,63 @@ fn first_clip_builds_are_spread_over_the_first_cycle() {
         last = Some(crowd.step(&source, &full, &Camera::default(), DT).unwrap());
     }
     assert_eq!(last.unwrap().level_histogram[0], 400);
+}
+
+#[test]
+fn failing_clip_builds_are_counted_and_walkers_keep_their_clips() {
+    use crowd_sim::testing::FailingSource;
+    let source = FailingSource {
+        inner: ProceduralSource::new(),
+        every: 7,
+    };
+    let policy = paper_distance_policy(source.levels());
+    let mut crowd = Crowd::new(&source, config(300, 60.0)).unwrap();
+    let lens = Camera::default();
+    let path = orbit();
+    let mut report = crowd_sim::CrowdReport::new();
+    let mut prev: Vec<Vec3> = Vec::new();
+    for f in 0..240 {
+        let cam = path.camera_at(f as f32 * DT, &lens);
+        let s = crowd.step(&source, &policy, &cam, DT).unwrap();
+        if let Some((walker, e)) = &s.clip_faults.first {
+            assert!(s.clip_faults.count >= 1);
+            assert!(*walker < crowd.len());
+            assert!(e.to_string().contains("test failure"), "{e}");
+        } else {
+            assert_eq!(s.clip_faults.count, 0);
+        }
+        report.add(&s);
+        // Walkers never jump: a failed build keeps the clip that was playing.
+        let roots: Vec<Vec3> = (0..crowd.len())
+            .map(|i| crowd.joint_positions(i)[0])
+            .collect();
+        for (a, b) in prev.iter().zip(&roots) {
+            assert!(
+                a.distance(*b) < 0.2,
+                "a root moved {} m in one frame",
+                a.distance(*b)
+            );
+        }
+        for i in 0..crowd.len() {
+            let c = crowd.controls(i);
+            let held = crowd.detail(i);
+            // A walker whose current clip has joints holds one that did build.
+            assert!(held.active_joints == 0 || !source.fails(&c, &held));
+        }
+        prev = roots;
+    }
+    assert!(
+        report.clip_faults > 10,
+        "only {} clip faults were counted",
+        report.clip_faults
+    );
+    let text = report.to_string();
+    assert!(text.contains("clip faults"), "{text}");
+    // The same source without failures counts none.
+    let mut clean = Crowd::new(&source.inner, config(300, 60.0)).unwrap();
+    for f in 0..60 {
+        let cam = path.camera_at(f as f32 * DT, &lens);
+        let s = clean.step(&source.inner, &policy, &cam, DT).unwrap();
+        assert_eq!(s.clip_faults.count, 0);
+    }
 }

@@ -26,6 +26,7 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::math::wrap_angle;
 use crate::model::TIME_ROW;
 
 /// Default half-life of a seam offset (s), chosen with the motion-quality meter (`motion-lod
@@ -34,6 +35,13 @@ use crate::model::TIME_ROW;
 pub const DEFAULT_HALFLIFE_S: f32 = 0.15;
 
 /// Root motion of one clip in its start cycle frame: ground displacement and travel turn.
+///
+/// Not [`Controls`](crate::Controls), though it has three of their fields: controls are what a
+/// clip is *asked* for, root motion is where the clip's root *actually goes* from its first to its
+/// last aligned frame (the model's output: the requested displacement up to clamping and the
+/// model's error), which is what the next cycle must start from. Only the turn is taken from the
+/// (clamped) controls, since the data define a cycle's turn as that of its direction of travel
+/// ([`ControlSpace::root_motion`](crate::ControlSpace::root_motion)).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct RootMotion {
     /// Displacement to the character's left (m).
@@ -82,23 +90,6 @@ impl RootMotion {
     pub fn next_frame(&self, frame: &CycleFrame) -> CycleFrame {
         frame.next(self)
     }
-}
-
-/// Wraps an angle into `(-pi, pi]`.
-pub fn wrap_angle(a: f32) -> f32 {
-    let tau = std::f32::consts::TAU;
-    let w = a - tau * (a / tau).round();
-    if w <= -std::f32::consts::PI {
-        w + tau
-    } else {
-        w
-    }
-}
-
-/// Ease-in/out weight `3u^2 - 2u^3` for `u` clamped to `[0, 1]` (zero slope at both ends).
-pub fn ease_in_out(u: f32) -> f32 {
-    let u = u.clamp(0.0, 1.0);
-    u * u * (3.0 - 2.0 * u)
 }
 
 /// The quaternion of an exponential map (rotation vector).

@@ -14,12 +14,11 @@
 //! of the `C` part are kept). This equals the paper's universal kriging of the truncated sample
 //! cores, with the trend refitted to them: `F_trunc = Z_t(12) U_S[:, :r_S]^T C^+`.
 
-use serde::{Deserialize, Serialize};
-
 use crate::error::KernelError;
 use crate::time_table::TimeTable;
 
 use crate::chain::{RootMotion, exp_map_to_quat};
+use crate::detail::Detail;
 use crate::model::{LodModel, Ranks, TIME_ROW};
 
 /// Index of the control that is a clip's travel turn (radians, + = left): the heading of the
@@ -32,59 +31,6 @@ pub const TURN_CONTROL: usize = 2;
 pub fn yaw_of_exp_map(v: &[f32]) -> f32 {
     let f = exp_map_to_quat(glam::Vec3::new(v[0], v[1], v[2])) * glam::Vec3::Z;
     f.x.atan2(f.z)
-}
-
-/// Level of detail of one clip: an accuracy level and the number of evaluated joints.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub struct Detail {
-    /// Index into the model's accuracy levels (0 = most accurate), or [`Detail::SMALLEST`].
-    pub accuracy: usize,
-    /// Joints evaluated after the always-evaluated root rows; values above the model's joint
-    /// count mean all joints.
-    pub active_joints: usize,
-}
-
-impl Detail {
-    /// Sentinel accuracy index selecting the model's smallest (last) accuracy level.
-    pub const SMALLEST: usize = usize::MAX;
-
-    /// Full detail: the most accurate level and every joint.
-    pub const fn full() -> Detail {
-        Detail {
-            accuracy: 0,
-            active_joints: usize::MAX,
-        }
-    }
-
-    /// Root only: rows `0..7` (root position, root orientation, time increment) at the smallest
-    /// accuracy level; every other row takes the mean pose.
-    pub const fn root_only() -> Detail {
-        Detail {
-            accuracy: Detail::SMALLEST,
-            active_joints: 0,
-        }
-    }
-
-    /// Builds a detail.
-    pub const fn new(accuracy: usize, active_joints: usize) -> Detail {
-        Detail {
-            accuracy,
-            active_joints,
-        }
-    }
-
-    /// The accuracy level index this detail selects in `model` (resolving [`Detail::SMALLEST`]),
-    /// or `None` when it is out of range.
-    pub fn level_in(&self, model: &LodModel) -> Option<usize> {
-        let n = model.levels().len();
-        if self.accuracy == Detail::SMALLEST {
-            Some(n - 1)
-        } else if self.accuracy < n {
-            Some(self.accuracy)
-        } else {
-            None
-        }
-    }
 }
 
 /// Caller-owned working memory for [`LodModel::build_kernel`], sized for the largest level.

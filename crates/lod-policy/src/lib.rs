@@ -22,11 +22,14 @@
 //! - [`rig`]: [`Rig`], forward kinematics of f32 poses for the active joints.
 //! - [`policy`]: the paper's [`DistancePolicy`] and a [`ScreenSpacePolicy`] with a pixel budget,
 //!   both behind the [`LevelPolicy`] trait.
+//! - The one vocabulary: [`Controls`] (with their names, units and [`ControlRange`] clamp),
+//!   [`Detail`], [`RootMotion`], the angle wrap and ease curve ([`math`]) and the seeded generator
+//!   ([`rng`]).
 //!
 //! ```
 //! use lod_policy::{Detail, DistancePolicy, LevelPolicy, LodModel, ViewParams};
 //!
-//! fn animate(model: &LodModel, controls: &[f32], distance_m: f32) -> Result<Vec<f32>, Box<dyn std::error::Error>> {
+//! fn animate(model: &LodModel, controls: &lod_policy::Controls, distance_m: f32) -> Result<Vec<f32>, Box<dyn std::error::Error>> {
 //!     // Once per model: preallocated buffers.
 //!     let mut scratch = lod_policy::KernelScratch::new(model);
 //!     let mut kernel = lod_policy::ClipKernel::new(model);
@@ -34,7 +37,7 @@
 //!     // Once per clip: the level from the policy, then the kernel.
 //!     let policy = DistancePolicy::for_model(model);
 //!     let detail: Detail = policy.detail(distance_m, true, &ViewParams::default());
-//!     model.build_kernel(controls, detail, &mut scratch, &mut kernel)?;
+//!     model.build_kernel(&controls.to_array(), detail, &mut scratch, &mut kernel)?;
 //!     // Per frame: playback time -> aligned phase -> pose vector.
 //!     let phase = kernel.phase_at(0.5 * kernel.duration());
 //!     model.pose(&kernel, phase, &mut pose)?;
@@ -64,29 +67,36 @@
 #![warn(missing_docs)]
 
 pub mod chain;
+pub mod controls;
+pub mod detail;
 pub mod error;
 pub mod file;
 pub mod kernel;
+pub mod math;
 pub mod model;
 pub mod policy;
 pub mod rig;
+pub mod rng;
 pub mod runtime;
 pub mod time_table;
 pub mod variogram;
 
 pub use chain::{CycleFrame, PoseState, RootMotion, SeamScratch, SeamTransition};
+pub use controls::{ControlRange, Controls, clamp_control};
+pub use detail::Detail;
 pub use error::{KernelError, ModelError, RigError, VariogramError};
 pub use file::{FileError, InvalidModel};
 /// The math types of the runtime API (`Vec3`, `Quat`), so an engine uses the same version.
 pub use glam;
-pub use kernel::{ClipKernel, Detail, KernelScratch, TURN_CONTROL};
+pub use kernel::{ClipKernel, KernelScratch, TURN_CONTROL};
+pub use math::{ease_in_out, wrap_angle};
 pub use model::{
     ALWAYS_ROWS, AccuracyLevel, ControlSpace, KeyTensor, LevelError, LodModel, ModelParts,
     Precision, ROWS_PER_JOINT, Ranks, TIME_ROW, Variogram, VariogramModel,
 };
 pub use policy::{
-    DistanceConfig, DistancePolicy, ERROR_MARGIN, ErrorMetric, LevelPolicy, PolicyError,
-    ScreenConfig, ScreenSpacePolicy, ViewParams,
+    DistanceConfig, DistancePolicy, ERROR_MARGIN, ErrorMetric, FullDetail, LevelPolicy,
+    PolicyError, ScreenConfig, ScreenSpacePolicy, ViewParams,
 };
 pub use rig::{JointRole, JointTransform, Rig, RigJoint};
 pub use runtime::RuntimeModel;

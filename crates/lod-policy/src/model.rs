@@ -132,7 +132,7 @@ impl ControlSpace {
         let turn = if self.scale.len() > TURN_CONTROL && controls.len() > TURN_CONTROL {
             self.implied(TURN_CONTROL, controls)
         } else {
-            crate::chain::wrap_angle(yaw_of_exp_map(&end[3..6]) - yaw_of_exp_map(&start[3..6]))
+            crate::math::wrap_angle(yaw_of_exp_map(&end[3..6]) - yaw_of_exp_map(&start[3..6]))
         };
         RootMotion {
             dx: end[0] - start[0],

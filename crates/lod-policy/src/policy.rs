@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::kernel::Detail;
+use crate::detail::Detail;
 use crate::model::LodModel;
 
 /// Camera parameters a policy may use.
@@ -41,11 +41,32 @@ impl ViewParams {
 /// embedded data), so a detail must fit the budget with this much to spare.
 pub const ERROR_MARGIN: f32 = 1.5;
 
-/// A rule that maps a character's distance and visibility to a level of detail.
+/// A rule that maps a character's distance and visibility to a level of detail: the one policy
+/// trait of the runtime, used by engines and by the crowd (`crowd-sim`). Any
+/// `Fn(f32, bool, &ViewParams) -> Detail` closure is a policy.
 pub trait LevelPolicy {
     /// Detail for a character `distance_m` metres from the camera; `visible` is false outside
     /// the view frustum (then only the root is evaluated).
     fn detail(&self, distance_m: f32, visible: bool, view: &ViewParams) -> Detail;
+}
+
+impl<F> LevelPolicy for F
+where
+    F: Fn(f32, bool, &ViewParams) -> Detail,
+{
+    fn detail(&self, distance_m: f32, visible: bool, view: &ViewParams) -> Detail {
+        self(distance_m, visible, view)
+    }
+}
+
+/// Full detail for every character, visible or not: the baseline without level of detail.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct FullDetail;
+
+impl LevelPolicy for FullDetail {
+    fn detail(&self, _distance_m: f32, _visible: bool, _view: &ViewParams) -> Detail {
+        Detail::full()
+    }
 }
 
 /// Why a policy could not be built.
@@ -61,6 +82,9 @@ pub enum PolicyError {
         /// The rule it breaks.
         rule: &'static str,
     },
+    /// A level table without levels or with decreasing keys.
+    #[error("a level table needs at least one level and non-decreasing keys")]
+    LevelKeys,
     /// The model has no measured error table for its accuracy levels.
     #[error("the model has no per-level error table (the screen-space policy needs one)")]
     NoErrorTable,
@@ -136,6 +160,27 @@ impl DistancePolicy {
     /// A policy with `config` for `model`'s level table; distances must be finite and positive
     /// (`near_m` may be zero).
     pub fn new(model: &LodModel, config: DistanceConfig) -> Result<DistancePolicy, PolicyError> {
+        Self::check(&config)?;
+        Ok(Self::build(model, config))
+    }
+
+    /// The schedule with `config` for a level table given without a model: the key of each
+    /// accuracy level (non-decreasing; consecutive levels sharing a key form a group) and the
+    /// joint count. There are no error tables, so no screen check. Errors: a bad `config`, no
+    /// levels, or decreasing keys.
+    pub fn for_level_keys(
+        keys: &[usize],
+        joints: usize,
+        config: DistanceConfig,
+    ) -> Result<DistancePolicy, PolicyError> {
+        Self::check(&config)?;
+        if keys.is_empty() || keys.windows(2).any(|w| w[1] < w[0]) {
+            return Err(PolicyError::LevelKeys);
+        }
+        Ok(Self::schedule(keys, joints, config, Vec::new(), Vec::new()))
+    }
+
+    fn check(config: &DistanceConfig) -> Result<(), PolicyError> {
         let check = |name, value: f32, zero_ok: bool| {
             let ok = value.is_finite() && (value > 0.0 || (zero_ok && value == 0.0));
             if ok {
@@ -158,24 +203,12 @@ impl DistancePolicy {
         if let Some(b) = config.screen_budget_px {
             check("screen_budget_px", b, false)?;
         }
-        Ok(Self::build(model, config))
+        Ok(())
     }
 
     fn build(model: &LodModel, config: DistanceConfig) -> DistancePolicy {
         let levels = model.levels();
-        let mut positions = Vec::with_capacity(levels.len());
-        let mut group = 0usize;
-        let mut start = 0usize;
-        while start < levels.len() {
-            let key = levels[start].key;
-            let end = start + levels[start..].iter().take_while(|l| l.key == key).count();
-            let n = end - start;
-            for i in 0..n {
-                positions.push(group as f32 + i as f32 / n as f32);
-            }
-            group += 1;
-            start = end;
-        }
+        let keys: Vec<usize> = levels.iter().map(|l| l.key).collect();
         let joints = model.joints();
         let checked = config.screen_budget_px.is_some()
             && model.level_errors().len() == levels.len()
@@ -197,6 +230,31 @@ impl DistancePolicy {
         } else {
             (Vec::new(), Vec::new())
         };
+        Self::schedule(&keys, joints, config, level_err_m, joint_err_m)
+    }
+
+    /// The policy for levels with these keys (see [`DistancePolicy::for_level_keys`]) and the
+    /// given error tables (empty: no screen check).
+    fn schedule(
+        keys: &[usize],
+        joints: usize,
+        config: DistanceConfig,
+        level_err_m: Vec<f32>,
+        joint_err_m: Vec<f32>,
+    ) -> DistancePolicy {
+        let mut positions = Vec::with_capacity(keys.len());
+        let mut group = 0usize;
+        let mut start = 0usize;
+        while start < keys.len() {
+            let key = keys[start];
+            let end = start + keys[start..].iter().take_while(|&&k| k == key).count();
+            let n = end - start;
+            for i in 0..n {
+                positions.push(group as f32 + i as f32 / n as f32);
+            }
+            group += 1;
+            start = end;
+        }
         DistancePolicy {
             config,
             positions,
@@ -432,5 +490,50 @@ impl LevelPolicy for ScreenSpacePolicy {
             }
         }
         best.map_or(full, |(_, d)| d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn level_keys_give_the_schedule_without_a_model() {
+        let config = DistanceConfig {
+            screen_budget_px: None,
+            ..DistanceConfig::default()
+        };
+        // Two keys: levels 0-1 share key 0 (50 m between them is split in two), level 2 has key 1.
+        let p = DistancePolicy::for_level_keys(&[0, 0, 1], 5, config).unwrap();
+        let v = ViewParams::default();
+        assert_eq!(p.detail(10.0, true, &v), Detail::new(0, 5));
+        assert_eq!(p.detail(60.0, true, &v), Detail::new(1, 2));
+        assert_eq!(p.detail(85.0, true, &v), Detail::new(2, 0));
+        assert_eq!(p.detail(131.0, true, &v), Detail::root_only());
+        assert_eq!(p.detail(10.0, false, &v), Detail::root_only());
+        assert_eq!(
+            DistancePolicy::for_level_keys(&[1, 0], 5, config),
+            Err(PolicyError::LevelKeys)
+        );
+        assert_eq!(
+            DistancePolicy::for_level_keys(&[], 5, config),
+            Err(PolicyError::LevelKeys)
+        );
+        let bad = DistanceConfig {
+            key_step_m: 0.0,
+            ..config
+        };
+        assert!(matches!(
+            DistancePolicy::for_level_keys(&[0], 5, bad),
+            Err(PolicyError::Config { .. })
+        ));
+    }
+
+    #[test]
+    fn closures_and_full_detail_are_policies() {
+        let v = ViewParams::default();
+        let near = |d: f32, _: bool, _: &ViewParams| Detail::new(usize::from(d > 10.0), 3);
+        assert_eq!(near.detail(20.0, true, &v), Detail::new(1, 3));
+        assert_eq!(FullDetail.detail(1e6, false, &v), Detail::full());
     }
 }

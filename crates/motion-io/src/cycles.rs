@@ -135,9 +135,12 @@ impl CycleConfig {
     }
 }
 
-/// The control parameters of one cycle.
+/// The control parameters of one cycle *as measured* from the take (`f64`, offline): the
+/// runtime's controls (`lod_policy::Controls`, `f32`, what a clip is asked for) are made from
+/// these once, by `lod_policy::Controls::from_f64(measured.to_array())` (this crate does not
+/// depend on the runtime).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Controls {
+pub struct MeasuredControls {
     /// Root displacement to the character's left over the cycle, metres (start heading frame).
     pub dx: f64,
     /// Root displacement forward over the cycle, metres (start heading frame).
@@ -148,7 +151,7 @@ pub struct Controls {
     pub height: f64,
 }
 
-impl Controls {
+impl MeasuredControls {
     /// The controls as `[dx, dz, turn, height]`.
     pub fn to_array(&self) -> [f64; 4] {
         [self.dx, self.dz, self.turn, self.height]
@@ -170,7 +173,7 @@ pub struct GaitCycle {
     /// exp-maps continuous over time and on the branch nearest the layout's rest pose.
     pub poses: Vec<f64>,
     /// Control parameters.
-    pub controls: Controls,
+    pub controls: MeasuredControls,
     /// Left foot contact per cycle frame (true at frame 0 and the last frame).
     pub left_contact: Vec<bool>,
     /// Right foot contact per cycle frame.
@@ -596,7 +599,7 @@ pub fn segment_cycles(
             last_frame: b,
             frame_time: dt,
             poses,
-            controls: Controls {
+            controls: MeasuredControls {
                 dx: d.x,
                 dz: d.z,
                 turn,

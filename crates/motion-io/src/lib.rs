@@ -54,8 +54,8 @@ pub use contacts::{
     standing_height,
 };
 pub use cycles::{
-    Controls, CycleConfig, CycleReport, DropReason, DroppedCycle, GaitCycle, segment_cycles,
-    segment_take,
+    CycleConfig, CycleReport, DropReason, DroppedCycle, GaitCycle, MeasuredControls,
+    segment_cycles, segment_take,
 };
 pub use folder::{FolderReport, read_folder};
 pub use motion::Motion;

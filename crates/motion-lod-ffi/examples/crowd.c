@@ -54,12 +54,13 @@ int main(int argc, char **argv) {
 
     MlodModel *model = NULL;
     check(mlod_model_load(argv[1], &model), "mlod_model_load");
-    size_t levels = 0, joints = 0, pose_len = 0;
-    check(mlod_model_sizes(model, &levels, &joints, &pose_len), "mlod_model_sizes");
+    size_t levels = 0, joints = 0, animated = 0, pose_len = 0;
+    check(mlod_model_sizes(model, &levels, &joints, &animated, &pose_len), "mlod_model_sizes");
     MlodControls lo, hi;
     check(mlod_model_control_range(model, &lo, &hi), "mlod_model_control_range");
     if (!dump)
-        printf("model: %zu accuracy levels, %zu joints, poses of %zu floats\n", levels, joints,
+        printf("model: %zu accuracy levels, %zu joints (%zu animated), poses of %zu floats\n", levels,
+               joints, animated,
                pose_len);
 
     float *pose = malloc(pose_len * sizeof *pose);

@@ -35,8 +35,8 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use lod_policy::{
-    ClipKernel, Detail, DistancePolicy, JointTransform, KernelScratch, LevelPolicy, RuntimeModel,
-    ViewParams,
+    ClipKernel, Detail, DistancePolicy, FileError, JointTransform, KernelScratch, LevelPolicy,
+    RuntimeModel, ViewParams,
 };
 
 /// Outcome of every call.
@@ -75,14 +75,15 @@ pub struct MlodControls {
     pub height: f32,
 }
 
-/// A level of detail: an accuracy level (0 = the most accurate) and the number of animated joints
-/// (the rest keep the mean pose; the root always moves).
+/// A level of detail: an accuracy level (0 = the most accurate) and the number of animated joints,
+/// in the model's evaluation order (legs first); the others keep their mean rotation and the root
+/// always moves.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct MlodDetail {
     /// Accuracy level, `0..mlod_model_levels()`.
     pub level: u32,
-    /// Animated joints, `0..=mlod_model_joints()`.
+    /// Animated joints, `0..=` the `animated_joints` of `mlod_model_sizes`.
     pub joints: u32,
 }
 
@@ -216,7 +217,7 @@ unsafe fn out_slice<'a, T>(
 }
 
 fn new_model(model: RuntimeModel) -> Box<MlodModel> {
-    let policy = DistancePolicy::for_model(&model.lod);
+    let policy = DistancePolicy::for_model(model.lod());
     Box::new(MlodModel { model, policy })
 }
 
@@ -267,10 +268,9 @@ pub unsafe extern "C" fn mlod_model_load(
             .to_str()
             .map_err(|_| Failure::invalid("path is not UTF-8"))?;
         let model = RuntimeModel::load(Path::new(path)).map_err(|e| {
-            let status = if e.is_io() {
-                MlodStatus::Io
-            } else {
-                MlodStatus::InvalidModel
+            let status = match e {
+                FileError::Io { .. } => MlodStatus::Io,
+                _ => MlodStatus::InvalidModel,
             };
             Failure(status, e.to_string())
         })?;
@@ -291,8 +291,9 @@ pub unsafe extern "C" fn mlod_model_free(model: *mut MlodModel) {
     }
 }
 
-/// The model's sizes: accuracy levels, joints (besides the root rows) and the pose length in
-/// floats. Any output pointer may be null.
+/// The model's sizes: accuracy levels, joints of the skeleton (the transforms' count), animated
+/// joints (the most a detail's `joints` can ask for) and the pose length in floats. Any output
+/// pointer may be null.
 ///
 /// # Safety
 /// `model` is a live model; each non-null output points to a writable `size_t`.
@@ -301,15 +302,17 @@ pub unsafe extern "C" fn mlod_model_sizes(
     model: *const MlodModel,
     levels: *mut usize,
     joints: *mut usize,
+    animated_joints: *mut usize,
     pose_len: *mut usize,
 ) -> MlodStatus {
     guard("mlod_model_sizes", || {
         // SAFETY: per this function's contract.
         let m = unsafe { reference(model, "model") }?;
-        let lod = &m.model.lod;
+        let (rig, lod) = (m.model.rig(), m.model.lod());
         for (ptr, value) in [
             (levels, lod.levels().len()),
-            (joints, m.model.rig.joint_count()),
+            (joints, rig.joint_count()),
+            (animated_joints, rig.rotating_joints().len()),
             (pose_len, lod.p()),
         ] {
             // SAFETY: null or writable per the contract.
@@ -323,7 +326,7 @@ pub unsafe extern "C" fn mlod_model_sizes(
 
 /// Joint `joint`'s name (NUL-terminated, truncated to `capacity` bytes with the NUL) into `name`,
 /// and its parent's index into `*parent` (-1 for the root). Joints are in the model's order
-/// (parents first), the order of poses and transforms. `name` may be null with `capacity` 0 to
+/// (parents first), the order of the transforms. `name` may be null with `capacity` 0 to
 /// ask only for `*name_len`, the name's length in bytes without the NUL; any output may be null.
 ///
 /// # Safety
@@ -341,21 +344,24 @@ pub unsafe extern "C" fn mlod_model_joint(
     guard("mlod_model_joint", || {
         // SAFETY: per this function's contract.
         let m = unsafe { reference(model, "model") }?;
-        let rig = &m.model.rig;
+        let rig = &m.model.rig();
         if joint >= rig.joint_count() {
             return Err(Failure::invalid(format!(
                 "joint {joint} is out of range (the model has {})",
                 rig.joint_count()
             )));
         }
-        let text = rig.joint_name(joint).as_bytes();
+        let text = rig.joints()[joint].name.as_bytes();
         // SAFETY: null or writable per the contract.
         if let Some(len) = unsafe { name_len.as_mut() } {
             *len = text.len();
         }
         // SAFETY: null or writable per the contract.
         if let Some(p) = unsafe { parent.as_mut() } {
-            *p = rig.parent(joint).map_or(-1, |j| j as i32);
+            *p = rig.joints()[joint]
+                .parent
+                .and_then(|j| i32::try_from(j).ok())
+                .unwrap_or(-1);
         }
         if !name.is_null() && capacity > 0 {
             let n = text.len().min(capacity - 1);
@@ -385,7 +391,7 @@ pub unsafe extern "C" fn mlod_model_control_range(
         let m = unsafe { reference(model, "model") }?;
         // SAFETY: per this function's contract.
         let (lo, hi) = unsafe { (mutable(min, "min")?, mutable(max, "max")?) };
-        let c = m.model.lod.controls();
+        let c = m.model.lod().controls();
         let pick = |v: &[f32]| MlodControls {
             dx: v[0],
             dz: v[1],
@@ -421,11 +427,13 @@ pub unsafe extern "C" fn mlod_model_detail_at(
         }
         let detail = m.policy.detail(distance_m, true, &ViewParams::default());
         let level = detail
-            .level_in(&m.model.lod)
+            .level_in(&m.model.lod())
             .ok_or_else(|| Failure::invalid("the policy chose a level the model lacks"))?;
         *out = MlodDetail {
             level: level as u32,
-            joints: detail.active_joints.min(m.model.rig.joint_count()) as u32,
+            joints: detail
+                .active_joints
+                .min(m.model.rig().rotating_joints().len()) as u32,
         };
         Ok(())
     })
@@ -447,13 +455,13 @@ pub unsafe extern "C" fn mlod_walker_new(
         *out = std::ptr::null_mut();
         // SAFETY: per this function's contract.
         let m = unsafe { reference(model, "model") }?;
-        let lod = &m.model.lod;
+        let lod = &m.model.lod();
         let walker = MlodWalker {
             model,
             kernel: ClipKernel::new(lod),
             scratch: KernelScratch::new(lod),
             pose: vec![0.0; lod.p()],
-            transforms: vec![JointTransform::default(); m.model.rig.joint_count()],
+            transforms: vec![JointTransform::default(); m.model.rig().joint_count()],
             prepared: false,
             posed: false,
         };
@@ -521,7 +529,7 @@ pub unsafe extern "C" fn mlod_walker_prepare(
                 values[k]
             )));
         }
-        let lod = &m.model.lod;
+        let lod = &m.model.lod();
         if detail.level as usize >= lod.levels().len() {
             return Err(Failure::invalid(format!(
                 "level {} is out of range (the model has {})",
@@ -575,7 +583,7 @@ pub unsafe extern "C" fn mlod_walker_pose(
         if !seconds.is_finite() {
             return Err(Failure::invalid(format!("time {seconds} s is not finite")));
         }
-        let lod = &m.model.lod;
+        let lod = &m.model.lod();
         let phase = w.kernel.phase_at(seconds);
         lod.pose(&w.kernel, phase, &mut w.pose)
             .map_err(|e| Failure::invalid(e.to_string()))?;
@@ -590,7 +598,7 @@ pub unsafe extern "C" fn mlod_walker_pose(
 }
 
 /// The world transforms (cycle frame) of every joint for the pose last evaluated by
-/// `mlod_walker_pose`, into `out` (`len >= mlod_model_joints` elements, in joint order). Joints
+/// `mlod_walker_pose`, into `out` (`len >=` the `joints` of `mlod_model_sizes`, in joint order). Joints
 /// beyond the prepared detail's count keep the mean pose's rotations.
 ///
 /// # Safety
@@ -611,14 +619,15 @@ pub unsafe extern "C" fn mlod_walker_joint_transforms(
                 "no pose: call mlod_walker_pose first".into(),
             ));
         }
-        let rig = &m.model.rig;
+        let rig = &m.model.rig();
         // SAFETY: per this function's contract.
         let out = unsafe { out_slice(out, len, rig.joint_count(), "out") }?;
-        rig.joint_transforms(&w.pose, w.kernel.detail().active_joints, &mut w.transforms);
+        rig.joint_transforms(&w.pose, w.kernel.detail().active_joints, &mut w.transforms)
+            .map_err(|e| Failure::invalid(e.to_string()))?;
         for (o, t) in out.iter_mut().zip(&w.transforms) {
             *o = MlodJointTransform {
                 rotation: t.rotation.to_array(),
-                translation: t.translation.to_array(),
+                translation: t.position.to_array(),
             };
         }
         Ok(())

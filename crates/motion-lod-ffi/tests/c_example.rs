@@ -68,9 +68,10 @@ fn hex(values: &[f32]) -> String {
 
 /// What `crowd.c --dump` prints, computed through the Rust API.
 fn rust_dump(model: &RuntimeModel) -> String {
-    let lod = &model.lod;
+    let lod = model.lod();
     let policy = DistancePolicy::for_model(lod);
-    let joints = model.rig.joint_count();
+    let joints = model.rig().joint_count();
+    let animated = model.rig().rotating_joints().len();
     let c = lod.controls();
     let (lo, hi) = (&c.min, &c.max);
     let mut out = String::new();
@@ -89,7 +90,7 @@ fn rust_dump(model: &RuntimeModel) -> String {
         ];
         let chosen = policy.detail(distance, true, &ViewParams::default());
         let level = chosen.level_in(lod).expect("policy level");
-        let active = chosen.active_joints.min(joints);
+        let active = chosen.active_joints.min(animated);
         let detail = Detail::new(level, active);
         lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
             .expect("kernel");
@@ -108,12 +109,15 @@ fn rust_dump(model: &RuntimeModel) -> String {
             }
             lod.pose(&kernel, kernel.phase_at(t), &mut pose)
                 .expect("pose");
-            model.rig.joint_transforms(&pose, active, &mut transforms);
+            model
+                .rig()
+                .joint_transforms(&pose, active, &mut transforms)
+                .expect("transforms");
             let flat: Vec<f32> = transforms
                 .iter()
                 .flat_map(|t| {
                     let r = t.rotation.to_array();
-                    let p = t.translation.to_array();
+                    let p = t.position.to_array();
                     [r[0], r[1], r[2], r[3], p[0], p[1], p[2]]
                 })
                 .collect();

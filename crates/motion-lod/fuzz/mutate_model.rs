@@ -13,9 +13,9 @@
 
 use std::path::Path;
 
-use motion_lod::crowd::{CrowdRun, ModelPolicy, run_crowd};
+use motion_lod::crowd::{CrowdRun, run_crowd};
 use motion_lod::crowd_sim::{Camera, CrowdConfig, Scene};
-use motion_lod::lod_policy::{Detail, DistancePolicy};
+use motion_lod::lod_policy::{Controls, Detail, DistancePolicy};
 use motion_lod::model_file::{HEADER_LEN, encode};
 use motion_lod::synth::WalkRequest;
 use motion_lod::{BuildReport, LodSource, MotionModel, info};
@@ -126,7 +126,7 @@ pub fn exercise(bytes: &[u8]) -> Outcome {
     let _ = info::control_notes(&model.report);
 
     let lod = &model.lod;
-    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    let policy = DistancePolicy::for_model(lod);
     // A sparse field (55 m square): paths of the model's turn range fit in it.
     let run = CrowdRun {
         config: CrowdConfig {
@@ -146,7 +146,7 @@ pub fn exercise(bytes: &[u8]) -> Outcome {
     let controls: [f32; 4] = std::array::from_fn(|k| 0.5 * (range[k].0 + range[k].1));
     for accuracy in [0, lod.levels().len().saturating_sub(1)] {
         let req = WalkRequest {
-            controls,
+            controls: Controls::from_array(controls),
             detail: Detail {
                 accuracy,
                 active_joints: lod.joints(),

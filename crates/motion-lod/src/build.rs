@@ -227,7 +227,7 @@ impl TrainingSet {
         }
         // Partial Fisher-Yates with splitmix64: the same (n, seed) always picks the same samples.
         let mut idx: Vec<usize> = (0..s).collect();
-        let mut rng = crowd_sim::rng::SplitMix64::new(seed);
+        let mut rng = lod_policy::rng::SplitMix64::new(seed);
         for i in 0..n {
             let j = i + (rng.next_u64() % (s - i) as u64) as usize;
             idx.swap(i, j);
@@ -804,7 +804,7 @@ pub fn foot_slide_cm(
 ) -> Result<f64, BuildError> {
     let walk = model
         .synthesize_walk(&crate::synth::WalkRequest {
-            controls,
+            controls: lod_policy::Controls::from_array(controls),
             detail,
             cycles: SLIDE_WALK_CYCLES,
             fps: crate::quality::REFERENCE_FPS,

@@ -1,69 +1,14 @@
-//! Crowds of walkers driven by the model: the level-of-detail policies of `lod-policy` adapted to the
-//! crowd's [`DetailPolicy`], and [`run_crowd`], which steps a crowd, times it and optionally renders it.
+//! Crowds of walkers driven by the model: [`run_crowd`] steps a crowd under any of `lod-policy`'s
+//! policies ([`LevelPolicy`]: the crowd speaks the runtime's [`Detail`](lod_policy::Detail) and
+//! resolves it once against the source's level table), times it and optionally renders it.
 
 use std::path::Path;
 
 use crowd_sim::render::{Recorder, RenderStyle};
 use crowd_sim::{
-    Camera, ClipSource, Crowd, CrowdConfig, CrowdError, CrowdReport, Detail as CrowdDetail,
-    DetailPolicy, FrameStats, RenderError, Scene,
+    Camera, ClipSource, Crowd, CrowdConfig, CrowdError, CrowdReport, FrameStats, RenderError, Scene,
 };
-use lod_policy::{Detail, LevelPolicy, LodModel, ViewParams};
-
-/// A `lod-policy` policy seen by the crowd: camera field of view and image height become the policy's
-/// view parameters, the model's root-only detail becomes the crowd's (0 active joints).
-#[derive(Debug, Clone)]
-pub struct ModelPolicy<P> {
-    policy: P,
-    levels: usize,
-    joints: usize,
-}
-
-impl<P: LevelPolicy + Sync> ModelPolicy<P> {
-    /// Wraps `policy` for a crowd over `model`.
-    pub fn new(policy: P, model: &LodModel) -> ModelPolicy<P> {
-        ModelPolicy {
-            policy,
-            levels: model.levels().len(),
-            joints: model.joints(),
-        }
-    }
-}
-
-impl<P: LevelPolicy + Sync> DetailPolicy for ModelPolicy<P> {
-    fn detail(&self, distance_m: f32, visible: bool, camera: &Camera) -> CrowdDetail {
-        let view = ViewParams {
-            fov_y_radians: camera.fov_y,
-            image_height_px: camera.image_height as f32,
-        };
-        let d = self.policy.detail(distance_m, visible, &view);
-        let accuracy = if d.accuracy == Detail::SMALLEST {
-            self.levels - 1
-        } else {
-            d.accuracy.min(self.levels - 1)
-        };
-        CrowdDetail {
-            accuracy,
-            active_joints: d.active_joints.min(self.joints),
-        }
-    }
-}
-
-/// Full detail for every walker, visible or not: the baseline without level of detail.
-#[derive(Debug, Clone, Copy)]
-pub struct FullDetail {
-    /// Joints of the source.
-    pub joints: usize,
-}
-
-impl DetailPolicy for FullDetail {
-    fn detail(&self, _distance_m: f32, _visible: bool, _camera: &Camera) -> CrowdDetail {
-        CrowdDetail {
-            accuracy: 0,
-            active_joints: self.joints,
-        }
-    }
-}
+use lod_policy::LevelPolicy;
 
 /// How to run a crowd.
 #[derive(Debug, Clone)]
@@ -122,7 +67,7 @@ pub fn run_crowd<S, P>(
 ) -> Result<CrowdOutcome, CrowdRunError>
 where
     S: ClipSource,
-    P: DetailPolicy,
+    P: LevelPolicy + Sync,
 {
     if !(run.seconds.is_finite() && run.seconds > 0.0) {
         return Err(CrowdRunError::Seconds(run.seconds));

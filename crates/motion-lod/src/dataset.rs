@@ -17,9 +17,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use motion_io::pose::TIME_ROW;
 use motion_io::{
-    Controls, Conventions, CycleConfig, DropReason, DroppedCycle, FootNames, GaitCycle, Motion,
-    NormalizeOptions, NormalizedTake, PoseError, PoseLayout, SignedAxis, SkippedFrames, Units,
-    align_sequence, find_feet, normalize_take, read_bvh, segment_take,
+    Conventions, CycleConfig, DropReason, DroppedCycle, FootNames, GaitCycle, MeasuredControls,
+    Motion, NormalizeOptions, NormalizedTake, PoseError, PoseLayout, SignedAxis, SkippedFrames,
+    Units, align_sequence, find_feet, normalize_take, read_bvh, segment_take,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -266,7 +266,7 @@ pub struct AlignedSet {
     /// each sample's row 6 sums to its cycle's duration.
     pub tensor: Tensor3,
     /// Controls of each sample.
-    pub controls: Vec<Controls>,
+    pub controls: Vec<MeasuredControls>,
     /// Take and frames of each sample.
     pub sources: Vec<CycleSource>,
     /// The pose layout (row meaning).

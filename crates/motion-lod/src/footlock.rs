@@ -181,11 +181,11 @@ fn correction(world: &[Transform], nj: usize, points: &[usize], floor: f64, dt: 
         let after = runs.get(i + 1).map_or(n - 1 - e, |r| (r.0 - e) / 2);
         let (bi, bo) = (blend.min(before), blend.min(after));
         for k in 1..=bi {
-            let w = lod_policy::chain::ease_in_out(1.0 - k as f32 / (bi + 1) as f32);
+            let w = lod_policy::ease_in_out(1.0 - k as f32 / (bi + 1) as f32);
             d[s - k] = d[s] * f64::from(w);
         }
         for k in 1..=bo {
-            let w = lod_policy::chain::ease_in_out(1.0 - k as f32 / (bo + 1) as f32);
+            let w = lod_policy::ease_in_out(1.0 - k as f32 / (bo + 1) as f32);
             d[e + k] = d[e] * f64::from(w);
         }
     }
@@ -210,7 +210,7 @@ fn correction(world: &[Transform], nj: usize, points: &[usize], floor: f64, dt: 
             .skip(f.saturating_sub(spread))
         {
             let u = 1.0 - f.abs_diff(g) as f32 / (spread + 1) as f32;
-            y = y.max(l * f64::from(lod_policy::chain::ease_in_out(u)));
+            y = y.max(l * f64::from(lod_policy::ease_in_out(u)));
         }
         df.y += y;
     }

@@ -51,7 +51,8 @@
 //! use motion_lod::dataset::DataSpec;
 //! use motion_lod::progress::NoProgress;
 //!
-//! let data = DataSpec::default().load(&|_, _| {})?;
+//! let spec = DataSpec { dirs: vec!["fixtures".into()], ..DataSpec::default() };
+//! let data = spec.load(&|_, _| {})?;
 //! let (model, analysis) =
 //!     MotionModel::build_with_analysis(&data.training, &BuildConfig::default(), &NoProgress)?;
 //! let pca = PcaSource::new(&model, &analysis, 40)?; // R_P,max = 40 as in the paper

@@ -12,7 +12,7 @@ use crate::importance::JointImportance;
 use crate::model_file::{self, ModelFileError};
 
 /// Names and units of the control parameters, in the order of every control vector.
-pub const CONTROL_NAMES: [&str; 4] = ["dx (m)", "dz (m)", "turn (rad)", "height (m)"];
+pub const CONTROL_NAMES: [&str; 4] = lod_policy::Controls::LABELS;
 
 /// Row of the pose vector that holds the time increment (docs/architecture.md; the runtime's
 /// constant).

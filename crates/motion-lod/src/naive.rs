@@ -13,13 +13,12 @@
 //! active joints (root only beyond the last level or outside the view) and runs forward kinematics of
 //! those joints only; it has no cheaper accuracy level, so every clip with joints blends the full
 //! samples. What the paper compares its LOD against ("naive interpolation", 3.9 fps for 100 walkers)
-//! is this source with every walker at full detail ([`crate::crowd::FullDetail`]).
+//! is this source with every walker at full detail ([`lod_policy::FullDetail`]).
 
-use crowd_sim::{
-    ClipSource, ControlBounds, Controls, Detail as CrowdDetail, LevelTable, RootMotion,
-};
+use crowd_sim::{ClipError, ClipSource, LevelTable};
 use faer::Mat;
 use glam::Vec3;
+use lod_policy::{ControlRange, Controls, Detail, RootMotion};
 use timewarp::TimeTable;
 
 use crate::build::{Analysis, BuildError};
@@ -125,8 +124,8 @@ impl ClipSource for NaiveSource<'_> {
         }
     }
 
-    fn control_bounds(&self) -> ControlBounds {
-        crate::source::LodSource::new(self.model).control_bounds()
+    fn control_range(&self) -> ControlRange {
+        crate::source::control_range(self.model)
     }
 
     fn new_clip(&self) -> NaiveClip {
@@ -141,7 +140,12 @@ impl ClipSource for NaiveSource<'_> {
         }
     }
 
-    fn build_clip(&self, controls: &Controls, detail: CrowdDetail, clip: &mut NaiveClip) {
+    fn build_clip(
+        &self,
+        controls: &Controls,
+        detail: Detail,
+        clip: &mut NaiveClip,
+    ) -> Result<(), ClipError> {
         let (p, t) = self.dims();
         let lod = &self.model.lod;
         clip.active_joints = detail.active_joints.min(lod.joints());
@@ -152,8 +156,8 @@ impl ClipSource for NaiveSource<'_> {
             clip.values = Vec::with_capacity(need);
         }
         clip.values.resize(need, 0.0);
-        let c = crate::sample_weights::control_vector(controls);
-        self.blend.eval(&c, &mut clip.values);
+        self.blend
+            .eval(&controls.to_array().map(f64::from), &mut clip.values);
         clip.times.fill_from_iter(
             clip.values[TIME_ROW * t..][..t]
                 .iter()
@@ -162,7 +166,10 @@ impl ClipSource for NaiveSource<'_> {
         let (mut start, mut end) = ([0.0f32; 6], [0.0f32; 6]);
         self.frame(clip, 0.0, &mut start);
         self.frame(clip, (t - 1) as f64, &mut end);
-        clip.root_motion = root_motion_between(self.model, controls, &start, &end);
+        clip.root_motion = lod
+            .controls()
+            .root_motion(&controls.to_array(), &start, &end);
+        Ok(())
     }
 
     fn clip_duration(&self, clip: &NaiveClip) -> f32 {
@@ -187,16 +194,4 @@ impl ClipSource for NaiveSource<'_> {
     fn bones(&self) -> &[(usize, usize)] {
         &self.bones
     }
-}
-
-/// Root motion of a clip built for `controls` from its first and last pose: the model's one rule
-/// ([`lod_policy::ControlSpace::root_motion`]).
-pub(crate) fn root_motion_between(
-    model: &MotionModel,
-    controls: &Controls,
-    start: &[f32],
-    end: &[f32],
-) -> RootMotion {
-    let c = [controls.dx, controls.dz, controls.turn, controls.height];
-    model.lod.controls().root_motion(&c, start, end)
 }

@@ -22,18 +22,15 @@
 //! from two frames of `Y(c)`, expanded as `U[:P', :r_l] y` into the caller's slice (`O(P' r_l)`, no
 //! allocation), with `P'` the rows of the active joints (the 7 root rows for a root-only walker).
 
-use crowd_sim::{
-    ClipSource, ControlBounds, Controls, Detail as CrowdDetail, LevelTable, RootMotion,
-};
+use crowd_sim::{ClipError, ClipSource, LevelTable};
 use faer::Mat;
 use glam::Vec3;
-use lod_policy::Precision;
+use lod_policy::{ControlRange, Controls, Detail, Precision, RootMotion};
 use tensor_ops::Tensor3;
 use timewarp::TimeTable;
 
 use crate::build::{Analysis, BuildError};
 use crate::model::{MotionModel, TIME_ROW};
-use crate::naive::root_motion_between;
 use crate::sample_weights::DualBlend;
 use crate::source::{bones_of, write_joints};
 
@@ -240,8 +237,8 @@ impl ClipSource for PcaSource<'_> {
         }
     }
 
-    fn control_bounds(&self) -> ControlBounds {
-        crate::source::LodSource::new(self.model).control_bounds()
+    fn control_range(&self) -> ControlRange {
+        crate::source::control_range(self.model)
     }
 
     fn new_clip(&self) -> PcaClip {
@@ -256,23 +253,33 @@ impl ClipSource for PcaSource<'_> {
         }
     }
 
-    fn build_clip(&self, controls: &Controls, detail: CrowdDetail, clip: &mut PcaClip) {
+    /// Builds the clip at `detail` evaluated as [`Detail::evaluated`] (a root-only clip at the
+    /// last level); an unknown level is refused before anything is written.
+    fn build_clip(
+        &self,
+        controls: &Controls,
+        detail: Detail,
+        clip: &mut PcaClip,
+    ) -> Result<(), ClipError> {
         let (p, t, _) = self.dims();
         let lod = &self.model.lod;
-        let last = self.level_ranks.len() - 1;
-        let level = if detail.active_joints == 0 {
-            last
-        } else {
-            detail.accuracy.min(last)
-        };
-        let r = self.level_ranks[level];
+        let d = detail
+            .evaluated()
+            .resolve(self.level_ranks.len(), lod.joints())
+            .ok_or_else(|| {
+                ClipError(format!(
+                    "PCA source: no accuracy level {} (it has {})",
+                    detail.accuracy,
+                    self.level_ranks.len()
+                ))
+            })?;
+        let r = self.level_ranks[d.accuracy];
         clip.rank = r;
-        clip.active_joints = detail.active_joints.min(lod.joints());
+        clip.active_joints = d.active_joints;
         clip.rows = lod.active_rows(clip.active_joints).min(p);
-        let c = crate::sample_weights::control_vector(controls);
         // Y(c): the first r components of every frame, component-major.
         let coeffs = &mut clip.coeffs[..r * t];
-        self.blend.eval(&c, coeffs);
+        self.blend.eval(&controls.to_array().map(f64::from), coeffs);
         let big_r = self.rank;
         let time_basis = &self.basis[TIME_ROW * big_r..][..r];
         clip.times.fill_from_iter((0..t).map(|f| {
@@ -288,7 +295,10 @@ impl ClipSource for PcaSource<'_> {
         let (mut start, mut end) = ([0.0f32; ROOT_ROWS], [0.0f32; ROOT_ROWS]);
         self.expand(coeffs, t, r, 0, &mut start[..root]);
         self.expand(coeffs, t, r, t - 1, &mut end[..root]);
-        clip.root_motion = root_motion_between(self.model, controls, &start, &end);
+        clip.root_motion = lod
+            .controls()
+            .root_motion(&controls.to_array(), &start, &end);
+        Ok(())
     }
 
     fn clip_duration(&self, clip: &PcaClip) -> f32 {

@@ -496,7 +496,7 @@ pub fn walk_grid(model: &crate::MotionModel) -> Vec<GridWalk> {
         ("slow".into(), [0.0, pct(1, 0.1), 0.0, height]),
         ("fast".into(), [0.0, pct(1, 0.9), 0.0, height]),
     ];
-    for (k, name) in [(0, "dx"), (1, "dz"), (2, "turn")] {
+    for (k, name) in lod_policy::Controls::NAMES.into_iter().enumerate().take(3) {
         if k >= d || cs.max[k] <= cs.min[k] {
             continue;
         }

@@ -13,16 +13,6 @@ use kriging::Kriging;
 /// Largest control dimension handled (the project uses `d = 4`).
 const MAX_D: usize = 7;
 
-/// A crowd's controls as the `(dx, dz, turn, height)` the kriging takes.
-pub(crate) fn control_vector(controls: &crowd_sim::Controls) -> [f64; 4] {
-    [
-        f64::from(controls.dx),
-        f64::from(controls.dz),
-        f64::from(controls.turn),
-        f64::from(controls.height),
-    ]
-}
-
 /// Universal kriging of per-sample values in its dual form (paper eq. 8 rearranged):
 /// `sum_i l_i(c) v_i = Q [gamma(c); 1] + F [c'; 1]`, with `F = V^T C^+` (the trend) and
 /// `Q = V^T (I - C^+ C) A^-1[:S, :]` (`D x (S + 1)`, precomputed by [`kriging::ProjectedQuery`]),

@@ -5,11 +5,9 @@
 //! joints (the paper's joint-DOF reduction, section 4.3). Bones connect each of those joints to its
 //! nearest ancestor in that list.
 
-use crowd_sim::{
-    ClipSource, ControlBounds, Controls, Detail as CrowdDetail, LevelTable, RootMotion,
-};
+use crowd_sim::{ClipError, ClipSource, LevelTable};
 use glam::Vec3;
-use lod_policy::{ClipKernel, Detail, KernelScratch};
+use lod_policy::{ClipKernel, ControlRange, Controls, Detail, KernelScratch, RootMotion};
 use motion_io::PoseLayout;
 
 use crate::model::MotionModel;
@@ -137,12 +135,12 @@ pub(crate) fn write_joints(
     1 + active
 }
 
-/// Converts a crowd detail into the model's (`active_joints` 0 is root only at the smallest level).
-pub fn model_detail(d: CrowdDetail) -> Detail {
-    if d.active_joints == 0 {
-        Detail::root_only()
-    } else {
-        Detail::new(d.accuracy, d.active_joints)
+/// The range of the model's training controls, which the crowd clamps every request into.
+pub fn control_range(model: &MotionModel) -> ControlRange {
+    let r = model.control_range();
+    ControlRange {
+        min: Controls::from_array(r.map(|(lo, _)| lo)),
+        max: Controls::from_array(r.map(|(_, hi)| hi)),
     }
 }
 
@@ -157,23 +155,8 @@ impl ClipSource for LodSource<'_> {
         }
     }
 
-    fn control_bounds(&self) -> ControlBounds {
-        let r = self.model.control_range();
-        let c = |i: usize| (r[i].0, r[i].1);
-        ControlBounds {
-            min: Controls {
-                dx: c(0).0,
-                dz: c(1).0,
-                turn: c(2).0,
-                height: c(3).0,
-            },
-            max: Controls {
-                dx: c(0).1,
-                dz: c(1).1,
-                turn: c(2).1,
-                height: c(3).1,
-            },
-        }
+    fn control_range(&self) -> ControlRange {
+        control_range(self.model)
     }
 
     fn new_clip(&self) -> LodClip {
@@ -188,34 +171,31 @@ impl ClipSource for LodSource<'_> {
         }
     }
 
-    fn build_clip(&self, controls: &Controls, detail: CrowdDetail, clip: &mut LodClip) {
-        let c = [controls.dx, controls.dz, controls.turn, controls.height];
+    /// Builds the kernel at `detail` evaluated as [`Detail::evaluated`] (a root-only clip at the
+    /// smallest level). The kernel checks controls, level and buffers before it writes, so a
+    /// refused build leaves the clip as it was.
+    fn build_clip(
+        &self,
+        controls: &Controls,
+        detail: Detail,
+        clip: &mut LodClip,
+    ) -> Result<(), ClipError> {
+        let c = controls.to_array();
         let lod = &self.model.lod;
-        let built = self.with_scratch(|s| {
+        let detail = detail.evaluated();
+        self.with_scratch(|s| {
             if self.compact {
-                lod.build_kernel(&c, model_detail(detail), s, &mut clip.kernel)
+                lod.build_kernel(&c, detail, s, &mut clip.kernel)
             } else {
-                lod.build_kernel_reference(&c, model_detail(detail), s, &mut clip.kernel)
+                lod.build_kernel_reference(&c, detail, s, &mut clip.kernel)
             }
-        });
-        if built.is_err() {
-            // The crowd clamps controls and levels into the ranges this source reports, so this is
-            // unreachable for well-formed crowds; fall back to the root-only clip at the same
-            // controls, clamped, rather than leaving a stale kernel.
-            let mid = self.control_bounds().clamp(controls);
-            let c = [mid.dx, mid.dz, mid.turn, mid.height];
-            let _ = self
-                .with_scratch(|s| lod.build_kernel(&c, Detail::root_only(), s, &mut clip.kernel));
-        }
+        })
+        .map_err(|e| ClipError(format!("model kernel: {e}")))?;
         clip.duration = (clip.kernel.duration() as f32).max(1e-3);
         // Root motion of the clip: ground displacement and travel turn, the runtime's one chaining
         // rule (lod_policy::chain), as `synth` uses it.
-        let m = clip.kernel.root_motion();
-        clip.root_motion = RootMotion {
-            dx: m.dx,
-            dz: m.dz,
-            turn: m.turn,
-        };
+        clip.root_motion = clip.kernel.root_motion();
+        Ok(())
     }
 
     fn clip_duration(&self, clip: &LodClip) -> f32 {

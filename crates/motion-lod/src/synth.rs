@@ -8,8 +8,8 @@
 //! feet on the floor are held in place by two-bone IK ([`crate::footlock`]).
 
 use glam::Vec3;
-use lod_policy::Detail;
 use lod_policy::chain::{self, CycleFrame, SeamScratch, SeamTransition};
+use lod_policy::{Controls, Detail};
 use motion_io::Motion;
 
 use crate::model::{Evaluator, MotionModel, TIME_ROW};
@@ -25,8 +25,8 @@ pub const MAX_CYCLE_S: f64 = 60.0;
 /// What to synthesize.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WalkRequest {
-    /// Controls `(dx, dz, turn, height)` of every cycle (metres, metres, radians, metres).
-    pub controls: [f32; 4],
+    /// Controls of every cycle.
+    pub controls: Controls,
     /// Level of detail.
     pub detail: Detail,
     /// Number of cycles.
@@ -82,7 +82,12 @@ impl MotionModel {
         let lod = &self.lod;
         let p = lod.p();
         let mut ev = Evaluator::new(self);
-        lod.build_kernel(&req.controls, req.detail, &mut ev.scratch, &mut ev.kernel)?;
+        lod.build_kernel(
+            &req.controls.to_array(),
+            req.detail,
+            &mut ev.scratch,
+            &mut ev.kernel,
+        )?;
         let kernel = &ev.kernel;
         let duration = kernel.duration();
         let motion = kernel.root_motion();

@@ -110,7 +110,7 @@ fn assert_walks_travel(what: &str, spec: &DataSpec) {
     let fps = 120.0;
     for (n, ctl) in picks.iter().chain(&mids).enumerate() {
         let req = WalkRequest {
-            controls: ctl.map(|v| v as f32),
+            controls: lod_policy::Controls::from_f64(*ctl),
             detail: Detail::full(),
             cycles: 3,
             fps,

@@ -4,7 +4,6 @@
 use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, Scene};
 use lod_policy::DistancePolicy;
 use motion_lod::LodSource;
-use motion_lod::crowd::ModelPolicy;
 
 mod common;
 
@@ -29,7 +28,7 @@ fn simulate<S: ClipSource>(source: &S, scene: Scene, frames: usize) -> Vec<Frame
         screen_budget_px: None,
         ..lod_policy::DistanceConfig::default()
     };
-    let policy = ModelPolicy::new(DistancePolicy::new(lod, published).unwrap(), lod);
+    let policy = DistancePolicy::new(lod, published).unwrap();
     let config = CrowdConfig {
         seed: 11,
         ..CrowdConfig::with_density(300, 0.01)

@@ -202,7 +202,7 @@ fn bandai_counts_ranges_and_cli() {
     .unwrap();
     let aligned = align_cycles(&set, None, AlignMethod::Uniform).unwrap();
     let (lo, hi) = check_set(&set, &aligned);
-    let range = |f: fn(&motion_io::Controls) -> f64| {
+    let range = |f: fn(&motion_io::MeasuredControls) -> f64| {
         let v: Vec<f64> = aligned.controls.iter().map(f).collect();
         (
             v.iter().copied().fold(f64::INFINITY, f64::min),

@@ -176,7 +176,7 @@ impl ReadBack {
 /// Synthesizes a walk, writes it as glb and BVH, and checks the glb against the BVH.
 fn check_walk(what: &str, model: &MotionModel, controls: [f32; 4]) {
     let req = WalkRequest {
-        controls,
+        controls: lod_policy::Controls::from_array(controls),
         detail: Detail::full(),
         cycles: 3,
         fps: 30.0,
@@ -325,10 +325,7 @@ fn check_crowd(what: &str, model: &MotionModel) {
         screen_budget_px: None,
         ..lod_policy::DistanceConfig::default()
     };
-    let policy = motion_lod::crowd::ModelPolicy::new(
-        lod_policy::DistancePolicy::new(&model.lod, published).unwrap(),
-        &model.lod,
-    );
+    let policy = lod_policy::DistancePolicy::new(&model.lod, published).unwrap();
     let (scene, summary) = export_crowd(model, &policy, &clip).expect("crowd export");
     let bytes = scene.to_glb().unwrap();
     let (again, _) = export_crowd(model, &policy, &clip).unwrap();

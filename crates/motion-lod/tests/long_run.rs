@@ -5,7 +5,6 @@
 use crowd_sim::{Camera, CameraPath, Crowd, CrowdConfig, FrameStats};
 use glam::Vec2;
 use lod_policy::DistancePolicy;
-use motion_lod::crowd::ModelPolicy;
 use motion_lod::dataset::DataSpec;
 use motion_lod::progress::NoProgress;
 use motion_lod::{BuildConfig, LodSource, MotionModel};
@@ -25,7 +24,7 @@ fn one_hour_of_animated_time_stays_finite_on_path_and_bounded() {
     let model = MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress).unwrap();
     let lod = &model.lod;
     let source = LodSource::new(&model);
-    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    let policy = DistancePolicy::for_model(lod);
     let config = CrowdConfig {
         seed: 11,
         ..CrowdConfig::with_density(60, 0.05)

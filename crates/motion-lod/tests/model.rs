@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use crowd_sim::{Camera, ClipSource, CrowdConfig};
 use lod_policy::{Detail, DistancePolicy};
 use motion_lod::build::Analysis;
-use motion_lod::crowd::{CrowdRun, FullDetail, ModelPolicy, run_crowd};
+use motion_lod::crowd::{CrowdRun, run_crowd};
 use motion_lod::dataset::DataSpec;
 use motion_lod::eval::EvalConfig;
 use motion_lod::model_file;
@@ -103,7 +103,7 @@ fn out_of_range_controls_are_clamped_and_reported() {
     let (model, _) = built();
     let range = model.control_range();
     let req = WalkRequest {
-        controls: [0.0, range[1].1 * 3.0, 0.0, range[3].0],
+        controls: lod_policy::Controls::from_array([0.0, range[1].1 * 3.0, 0.0, range[3].0]),
         detail: Detail::full(),
         cycles: 1,
         fps: 30.0,
@@ -112,7 +112,7 @@ fn out_of_range_controls_are_clamped_and_reported() {
     };
     assert!(model.synthesize_walk(&req).unwrap().clamped);
     let bad = WalkRequest {
-        controls: [f32::NAN, 1.0, 0.0, 1.7],
+        controls: lod_policy::Controls::from_array([f32::NAN, 1.0, 0.0, 1.7]),
         ..req
     };
     assert!(model.synthesize_walk(&bad).is_err());
@@ -135,7 +135,7 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
     };
     let lod = &model.lod;
     let source = LodSource::new(model);
-    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    let policy = DistancePolicy::for_model(lod);
     let a = run_crowd(&source, &policy, &run).unwrap();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -145,21 +145,23 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
     assert_eq!(a.last.level_histogram, b.last.level_histogram);
     assert_eq!(a.last.level_histogram.iter().sum::<u32>(), 300);
     let mut clip = source.new_clip();
-    let c = analysis.controls[7].map(|v| v as f32);
-    let controls = crowd_sim::Controls {
-        dx: c[0],
-        dz: c[1],
-        turn: c[2],
-        height: c[3],
-    };
-    source.build_clip(
-        &controls,
-        crowd_sim::Detail {
-            accuracy: 0,
-            active_joints: lod.joints(),
-        },
-        &mut clip,
-    );
+    let controls = lod_policy::Controls::from_f64(analysis.controls[7]);
+    source
+        .build_clip(
+            &controls,
+            lod_policy::Detail::new(0, lod.joints()),
+            &mut clip,
+        )
+        .unwrap();
+    // A level the model does not have is refused loudly, and the clip is left as it was.
+    let (held_duration, held_motion) =
+        (source.clip_duration(&clip), source.clip_root_motion(&clip));
+    let refused = source
+        .build_clip(&controls, lod_policy::Detail::new(99, 3), &mut clip)
+        .unwrap_err();
+    assert!(refused.to_string().contains("level"), "{refused}");
+    assert_eq!(source.clip_duration(&clip), held_duration);
+    assert_eq!(source.clip_root_motion(&clip), held_motion);
     // Root motion of a clip is the root's displacement from its first pose to its last.
     let mut start = vec![0.0f32; lod.p()];
     let mut end = vec![0.0f32; lod.p()];
@@ -175,14 +177,7 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
     );
     assert!(dz > 0.3, "a walk travels forward: dz = {dz}");
     let naive = NaiveSource::new(model, analysis).unwrap();
-    let n = run_crowd(
-        &naive,
-        &FullDetail {
-            joints: lod.joints(),
-        },
-        &run,
-    )
-    .unwrap();
+    let n = run_crowd(&naive, &lod_policy::FullDetail, &run).unwrap();
     assert_eq!(n.last.level_histogram[0], 300);
 }
 
@@ -191,7 +186,7 @@ fn crowd_poses_are_bit_identical_for_1_2_and_8_threads() {
     let (model, _) = built();
     let lod = &model.lod;
     let source = LodSource::new(model);
-    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    let policy = DistancePolicy::for_model(lod);
     let config = CrowdConfig {
         seed: 5,
         ..CrowdConfig::with_density(200, 0.05)

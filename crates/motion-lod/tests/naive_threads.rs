@@ -4,8 +4,8 @@
 mod common;
 
 use crowd_sim::{Camera, CrowdConfig};
+use lod_policy::FullDetail;
 use motion_lod::NaiveSource;
-use motion_lod::crowd::FullDetail;
 
 use common::built;
 
@@ -13,9 +13,7 @@ use common::built;
 fn naive_crowd_poses_are_bit_identical_for_1_2_and_8_threads() {
     let (model, analysis) = built();
     let source = NaiveSource::new(model, analysis).unwrap();
-    let policy = FullDetail {
-        joints: model.lod.joints(),
-    };
+    let policy = FullDetail;
     let config = CrowdConfig {
         seed: 17,
         ..CrowdConfig::with_density(120, 0.05)

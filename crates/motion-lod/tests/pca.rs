@@ -3,11 +3,10 @@
 //! components and more error at lower accuracy levels, root-only clips, thread-count determinism and
 //! rejected inputs.
 
-use crowd_sim::{Camera, ClipSource, Controls, CrowdConfig, Detail};
+use crowd_sim::{Camera, ClipSource, CrowdConfig};
 use glam::Vec3;
-use lod_policy::{DistancePolicy, Precision};
+use lod_policy::{Controls, Detail, DistancePolicy, Precision};
 use motion_lod::build::Analysis;
-use motion_lod::crowd::ModelPolicy;
 use motion_lod::metrics::ErrorMeter;
 use motion_lod::{MotionModel, NaiveSource, PcaSource, TIME_ROW};
 
@@ -22,14 +21,7 @@ fn test_controls(analysis: &Analysis) -> Vec<Controls> {
     let mut out: Vec<[f64; 4]> = [0, s / 3, (2 * s) / 3, s - 1].map(|i| c[i]).to_vec();
     out.push(std::array::from_fn(|k| 0.5 * (c[1][k] + c[s / 2][k])));
     out.push(std::array::from_fn(|k| 0.5 * (c[s / 4][k] + c[s - 2][k])));
-    out.iter()
-        .map(|v| Controls {
-            dx: v[0] as f32,
-            dz: v[1] as f32,
-            turn: v[2] as f32,
-            height: v[3] as f32,
-        })
-        .collect()
+    out.into_iter().map(Controls::from_f64).collect()
 }
 
 fn all_joints(model: &MotionModel, accuracy: usize) -> Detail {
@@ -73,8 +65,11 @@ fn all_components_at_level_0_equal_the_naive_clip() {
     let naive = NaiveSource::new(model, analysis).unwrap();
     let (mut pc, mut nc) = (pca.new_clip(), naive.new_clip());
     for controls in test_controls(analysis) {
-        pca.build_clip(&controls, all_joints(model, 0), &mut pc);
-        naive.build_clip(&controls, all_joints(model, 0), &mut nc);
+        pca.build_clip(&controls, all_joints(model, 0), &mut pc)
+            .unwrap();
+        naive
+            .build_clip(&controls, all_joints(model, 0), &mut nc)
+            .unwrap();
         assert_eq!(pc.rank(), p);
         let (dp, dn) = (pca.clip_duration(&pc), naive.clip_duration(&nc));
         assert!((dp - dn).abs() <= 1e-4 * dn, "duration {dp} vs {dn}");
@@ -117,8 +112,11 @@ fn fewer_components_give_the_projection_of_the_naive_pose() {
     let (mut pc, mut nc) = (pca.new_clip(), naive.new_clip());
     let mut worst = 0.0f64;
     for controls in test_controls(analysis) {
-        pca.build_clip(&controls, all_joints(model, 0), &mut pc);
-        naive.build_clip(&controls, all_joints(model, 0), &mut nc);
+        pca.build_clip(&controls, all_joints(model, 0), &mut pc)
+            .unwrap();
+        naive
+            .build_clip(&controls, all_joints(model, 0), &mut nc)
+            .unwrap();
         assert_eq!(pc.rank(), r);
         for phase in phases(model.lod.t()) {
             let a = pose_at(&pca, &pc, pc.times().time_at(phase), p);
@@ -177,8 +175,11 @@ fn lower_levels_use_fewer_components_and_lose_accuracy() {
     for (level, &rank) in ranks.iter().enumerate() {
         let mut meter = ErrorMeter::new(&model.layout);
         for controls in test_controls(analysis) {
-            pca.build_clip(&controls, all_joints(model, level), &mut pc);
-            naive.build_clip(&controls, all_joints(model, 0), &mut nc);
+            pca.build_clip(&controls, all_joints(model, level), &mut pc)
+                .unwrap();
+            naive
+                .build_clip(&controls, all_joints(model, 0), &mut nc)
+                .unwrap();
             assert_eq!(pc.rank(), rank, "level {level}");
             for phase in phases(lod.t()) {
                 let a = pose_at(&pca, &pc, pc.times().time_at(phase), p);
@@ -218,8 +219,9 @@ fn root_only_writes_the_root_rows_of_the_last_level() {
         accuracy: 0,
         active_joints: 0,
     };
-    pca.build_clip(&controls, root_only, &mut root);
-    pca.build_clip(&controls, all_joints(model, last), &mut full);
+    pca.build_clip(&controls, root_only, &mut root).unwrap();
+    pca.build_clip(&controls, all_joints(model, last), &mut full)
+        .unwrap();
     assert_eq!(root.rows(), lod.always_rows());
     assert_eq!(root.rank(), pca.level_ranks()[last]);
     assert_eq!(
@@ -248,7 +250,7 @@ fn crowd_poses_are_bit_identical_for_1_and_2_threads() {
     let (model, analysis) = built();
     let lod = &model.lod;
     let source = PcaSource::new(model, analysis, 40).unwrap();
-    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    let policy = DistancePolicy::for_model(lod);
     let config = CrowdConfig {
         seed: 11,
         ..CrowdConfig::with_density(200, 0.05)

@@ -36,7 +36,7 @@ fn mocap(name: &str) -> Option<PathBuf> {
 
 fn walk(model: &MotionModel, controls: [f32; 4], blend: bool, plant_feet: bool) -> MotionQuality {
     let req = WalkRequest {
-        controls,
+        controls: lod_policy::Controls::from_array(controls),
         detail: Detail::full(),
         cycles: 4,
         fps: 30.0,

@@ -453,7 +453,7 @@ fn shared_data_keep_their_conventions() {
 fn a_crowd_of_a_model_of_straight_walks_fits_its_field_instead_of_refusing() {
     use crowd_sim::{Camera, CrowdConfig};
     use lod_policy::DistancePolicy;
-    use motion_lod::crowd::{CrowdRun, ModelPolicy, run_crowd};
+    use motion_lod::crowd::{CrowdRun, run_crowd};
     let loaded = DataSpec::default()
         .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
         .expect("embedded data");
@@ -480,7 +480,7 @@ fn a_crowd_of_a_model_of_straight_walks_fits_its_field_instead_of_refusing() {
     };
     let lod = &model.lod;
     let source = motion_lod::LodSource::new(&model);
-    let policy = ModelPolicy::new(DistancePolicy::for_model(lod), lod);
+    let policy = DistancePolicy::for_model(lod);
     let outcome = run_crowd(&source, &policy, &run).expect("the crowd runs");
     let asked = run.config.field_size_m;
     assert_eq!(outcome.field_enlarged_from, Some(asked));

@@ -20,11 +20,8 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use crowd_sim::{
-    Camera, ClipSource, Crowd, CrowdConfig, CrowdReport, Detail as CrowdDetail, DetailPolicy,
-    FrameStats, Scene,
-};
-use lod_policy::{Detail, DistancePolicy, LevelPolicy, LodModel, ViewParams};
+use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, CrowdReport, FrameStats, Scene};
+use lod_policy::{DistancePolicy, FullDetail, LevelPolicy};
 use motion_lod::progress::Progress;
 use motion_lod::{Analysis, LodSource, MotionModel, NaiveSource, PcaSource};
 
@@ -114,35 +111,9 @@ impl CrowdRow {
     }
 }
 
-/// The paper's distance policy over `model` as a crowd detail policy (root only: 0 active joints at the
-/// coarsest level).
-pub fn lod_policy_for(
-    model: &LodModel,
-) -> impl Fn(f32, bool, &Camera) -> CrowdDetail + Sync + use<> {
-    let policy = DistancePolicy::for_model(model);
-    let levels = model.levels().len();
-    let joints = model.joints();
-    move |d: f32, visible: bool, cam: &Camera| {
-        let view = ViewParams {
-            fov_y_radians: cam.fov_y,
-            image_height_px: cam.image_height as f32,
-        };
-        let det = policy.detail(d, visible, &view);
-        let accuracy = if det.accuracy == Detail::SMALLEST {
-            levels - 1
-        } else {
-            det.accuracy.min(levels - 1)
-        };
-        CrowdDetail {
-            accuracy,
-            active_joints: det.active_joints.min(joints),
-        }
-    }
-}
-
 /// Runs one crowd: [`WARMUP_S`] of warm-up frames, then `frames` timed frames. Returns the report,
 /// the warm-up's total and slowest frame (s).
-fn run_one<S: ClipSource, P: DetailPolicy>(
+fn run_one<S: ClipSource, P: LevelPolicy + Sync>(
     source: &S,
     policy: &P,
     scene: Scene,
@@ -193,7 +164,7 @@ struct RunSpec {
 
 /// A run of `source` at `size`, or a skipped row when its warm-up is predicted (linearly in walkers
 /// from this run kind's previous size, kept in `warmup_per_walker`) to exceed `max_warmup_s`.
-fn timed_or_skipped<S: ClipSource, P: DetailPolicy>(
+fn timed_or_skipped<S: ClipSource, P: LevelPolicy + Sync>(
     spec: RunSpec,
     source: &S,
     policy: &P,
@@ -260,12 +231,8 @@ pub fn measure(
     let lod = LodSource::new(model);
     let naive = NaiveSource::new(model, analysis).context("naive baseline")?;
     let pca = PcaSource::new(model, analysis, PCA_RANK).context("PCA baseline")?;
-    let lod_policy = lod_policy_for(&model.lod);
-    let joints = model.lod.joints();
-    let full = move |_d: f32, _v: bool, _c: &Camera| CrowdDetail {
-        accuracy: 0,
-        active_joints: joints,
-    };
+    let lod_policy = DistancePolicy::for_model(&model.lod);
+    let full = FullDetail;
     let runs_per_size = 6 + threads.iter().filter(|&&t| t != MAIN_THREADS).count();
     progress.stage(
         "crowds (2 scenes; LOD, naive, PCA; LOD policy and full detail; threads)",

@@ -6,11 +6,9 @@ use std::path::PathBuf;
 use anyhow::{Context as _, bail};
 use clap::{Args, ValueEnum};
 use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport, Scene};
-use lod_policy::{DistancePolicy, LodModel, ScreenSpacePolicy};
+use lod_policy::{DistancePolicy, FullDetail, LodModel, ScreenSpacePolicy};
 use motion_lod::build::Analysis;
-use motion_lod::crowd::{
-    CrowdOutcome, CrowdRun, FullDetail, ModelPolicy, check_render_dir, run_crowd,
-};
+use motion_lod::crowd::{CrowdOutcome, CrowdRun, check_render_dir, run_crowd};
 use motion_lod::gltf::crowd::{CrowdClip, export_crowd};
 use motion_lod::progress::NoProgress;
 use motion_lod::{LodSource, MotionModel, NaiveSource, PcaSource};
@@ -159,6 +157,8 @@ struct Summary {
     field_m: f32,
     /// The field size asked for, when it was enlarged.
     field_enlarged_from: Option<f32>,
+    /// Clips the main source failed to build over the run (the walkers kept their previous clips).
+    clip_faults: u64,
 }
 
 /// The model to animate and, when the naive or PCA source is needed, the analysis it was built from.
@@ -300,6 +300,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             pca_fps: pca.as_ref().map(|n| Fps::from(&n.report)),
             pca_ratio,
             levels: main.last.level_histogram.clone(),
+            clip_faults: main.report.clip_faults,
         };
         println!("{}", serde_json::to_string(&summary)?);
         if let Some(msg) = exported {
@@ -372,17 +373,10 @@ fn export_clip(
     };
     let lod = &model.lod;
     let (scene, summary) = match args.policy {
-        PolicyArg::Distance => export_crowd(
-            model,
-            &ModelPolicy::new(DistancePolicy::for_model(lod), lod),
-            &clip,
-        ),
+        PolicyArg::Distance => export_crowd(model, &DistancePolicy::for_model(lod), &clip),
         PolicyArg::Screen => export_crowd(
             model,
-            &ModelPolicy::new(
-                ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
-                lod,
-            ),
+            &ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
             &clip,
         ),
     }
@@ -429,26 +423,13 @@ fn run_with_policy<S: ClipSource>(
     run: &CrowdRun,
 ) -> anyhow::Result<CrowdOutcome> {
     if full_detail {
-        return Ok(run_crowd(
-            source,
-            &FullDetail {
-                joints: lod.joints(),
-            },
-            run,
-        )?);
+        return Ok(run_crowd(source, &FullDetail, run)?);
     }
     Ok(match policy {
-        PolicyArg::Distance => run_crowd(
-            source,
-            &ModelPolicy::new(DistancePolicy::for_model(lod), lod),
-            run,
-        )?,
+        PolicyArg::Distance => run_crowd(source, &DistancePolicy::for_model(lod), run)?,
         PolicyArg::Screen => run_crowd(
             source,
-            &ModelPolicy::new(
-                ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
-                lod,
-            ),
+            &ScreenSpacePolicy::for_model(lod).context("screen-space policy")?,
             run,
         )?,
     })

@@ -215,7 +215,7 @@ fn print_report(
         lengths.iter().max().copied().unwrap_or(0),
         set.median_length()
     )?;
-    let range = |f: &dyn Fn(&motion_io::Controls) -> f64| {
+    let range = |f: &dyn Fn(&motion_io::MeasuredControls) -> f64| {
         aligned
             .controls
             .iter()

@@ -76,7 +76,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     for &level in &chosen {
         for walk in &grid {
             let req = WalkRequest {
-                controls: walk.controls,
+                controls: lod_policy::Controls::from_array(walk.controls),
                 detail: Detail::new(level, joints),
                 cycles: args.cycles,
                 fps: 30.0,

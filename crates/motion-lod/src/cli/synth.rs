@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context as _, bail};
 use clap::Args;
-use lod_policy::Detail;
+use lod_policy::{Controls, Detail};
 use motion_lod::MotionModel;
 use motion_lod::synth::WalkRequest;
 
@@ -71,10 +71,15 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
         .with_context(|| format!("reading {}", args.model.display()))?;
     let range = model.control_range();
     let height = args.height.unwrap_or(0.5 * (range[3].0 + range[3].1));
-    let controls = [args.dx, args.dz, args.turn.to_radians(), height];
-    let names = ["dx", "dz", "turn", "height"];
+    let controls = Controls {
+        dx: args.dx,
+        dz: args.dz,
+        turn: args.turn.to_radians(),
+        height,
+    };
+    let names = Controls::NAMES;
     let ignored = model.ignored_controls();
-    for (k, (&c, &(lo, hi))) in controls.iter().zip(&range).enumerate() {
+    for (k, (&c, &(lo, hi))) in controls.to_array().iter().zip(&range).enumerate() {
         if !c.is_finite() {
             bail!("--{} is not a finite number", names[k]);
         }

@@ -4,9 +4,10 @@
 
 use std::sync::Arc;
 
-use crowd_sim::{Camera, CameraPath, Crowd, CrowdConfig, DetailPolicy};
+use crowd_sim::{Camera, CameraPath, Crowd, CrowdConfig};
 use glam::{Quat, Vec3};
 use lod_policy::Detail as ModelDetail;
+use lod_policy::LevelPolicy;
 use motion_io::PoseLayout;
 use motion_io::expmap::quat_to_exp;
 use serde_json::json;
@@ -105,7 +106,7 @@ fn world_pose(
 /// exported walkers: one character per walker (`walker NNN`), its body coloured by the level it
 /// showed most often (the crowd renderer's colours), its node's extras holding the level bin of
 /// every frame (`motion_lod.levels`), and the scene's extras the legend.
-pub fn export_crowd<P: DetailPolicy>(
+pub fn export_crowd<P: LevelPolicy + Sync>(
     model: &MotionModel,
     policy: &P,
     clip: &CrowdClip,
@@ -233,7 +234,12 @@ fn reference_rest(model: &MotionModel) -> Result<Rest, GltfError> {
     let range = model.control_range();
     let mid = |k: usize| 0.5 * (range[k].0 + range[k].1);
     let req = WalkRequest {
-        controls: [mid(0), mid(1), 0.0f32.clamp(range[2].0, range[2].1), mid(3)],
+        controls: lod_policy::Controls::from_array([
+            mid(0),
+            mid(1),
+            0.0f32.clamp(range[2].0, range[2].1),
+            mid(3),
+        ]),
         detail: ModelDetail::full(),
         cycles: 1,
         fps: 30.0,

@@ -1,5 +1,5 @@
-//! A tiny seeded pseudo-random generator (SplitMix64), one stream per walker; also the project's
-//! generator for the fixture plan and for random training subsets (same stream on every machine).
+//! The project's one seeded pseudo-random generator (SplitMix64): one stream per crowd walker, the
+//! fixture plan and random training subsets (the same stream on every machine, no dependency).
 //!
 //! Every walker draws from `SplitMix64::new(seed ^ mix(walker index))`, so its path, height and
 //! phase depend only on the crowd seed and its index, never on thread count or scheduling.

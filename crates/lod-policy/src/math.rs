@@ -1,0 +1,50 @@
+//! The runtime's two scalar helpers on angles and blends, defined once for every crate that
+//! depends on the runtime (`motion-io` keeps its own `f64` angle wrap for the offline cycle
+//! analysis, since it does not depend on this crate).
+
+use std::f32::consts::{PI, TAU};
+
+/// Wraps an angle (radians) into `(-pi, pi]`.
+pub fn wrap_angle(a: f32) -> f32 {
+    let w = a - TAU * (a / TAU).round();
+    if w <= -PI { w + TAU } else { w }
+}
+
+/// Ease-in/out weight `3u^2 - 2u^3` (smoothstep) for `u` clamped to `[0, 1]`: 0 at 0, 1 at 1,
+/// zero slope at both ends.
+pub fn ease_in_out(u: f32) -> f32 {
+    let u = u.clamp(0.0, 1.0);
+    u * u * (3.0 - 2.0 * u)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_angle_lands_in_half_open_interval() {
+        assert!((wrap_angle(3.0 * PI) - PI).abs() < 1e-5);
+        assert!((wrap_angle(-0.5) + 0.5).abs() < 1e-6);
+        assert_eq!(wrap_angle(-PI), PI);
+        for k in -20..20 {
+            let a = 0.37 * k as f32;
+            let w = wrap_angle(a);
+            assert!(w > -PI && w <= PI, "{a} -> {w}");
+            assert!(((a - w) / TAU - ((a - w) / TAU).round()).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn ease_in_out_is_monotone_with_flat_ends() {
+        assert_eq!(ease_in_out(-1.0), 0.0);
+        assert_eq!(ease_in_out(0.5), 0.5);
+        assert_eq!(ease_in_out(2.0), 1.0);
+        assert!(ease_in_out(0.01) < 0.001);
+        let mut prev = 0.0;
+        for i in 1..=100 {
+            let v = ease_in_out(i as f32 / 100.0);
+            assert!(v >= prev);
+            prev = v;
+        }
+    }
+}
