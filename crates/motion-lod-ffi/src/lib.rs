@@ -425,15 +425,15 @@ pub unsafe extern "C" fn mlod_model_detail_at(
                 "distance {distance_m} m must be finite and >= 0"
             )));
         }
-        let detail = m.policy.detail(distance_m, true, &ViewParams::default());
-        let level = detail
-            .level_in(&m.model.lod())
+        let lod = m.model.lod();
+        let detail = m
+            .policy
+            .detail(distance_m, true, &ViewParams::default())
+            .resolve(lod.levels().len(), lod.joints())
             .ok_or_else(|| Failure::invalid("the policy chose a level the model lacks"))?;
         *out = MlodDetail {
-            level: level as u32,
-            joints: detail
-                .active_joints
-                .min(m.model.rig().rotating_joints().len()) as u32,
+            level: detail.accuracy as u32,
+            joints: detail.active_joints as u32,
         };
         Ok(())
     })

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use lod_policy::{
-    ClipKernel, Detail, DistancePolicy, JointTransform, KernelScratch, LevelPolicy, RuntimeModel,
+    ClipKernel, DistancePolicy, JointTransform, KernelScratch, LevelPolicy, RuntimeModel,
     ViewParams,
 };
 use motion_lod::dataset::DataSpec;
@@ -88,10 +88,11 @@ fn rust_dump(model: &RuntimeModel) -> String {
             lo[2] + (hi[2] - lo[2]) * (1.0 - u),
             lo[3] + (hi[3] - lo[3]) * 0.5,
         ];
-        let chosen = policy.detail(distance, true, &ViewParams::default());
-        let level = chosen.level_in(lod).expect("policy level");
-        let active = chosen.active_joints.min(animated);
-        let detail = Detail::new(level, active);
+        let detail = policy
+            .detail(distance, true, &ViewParams::default())
+            .resolve(lod.levels().len(), animated)
+            .expect("policy level");
+        let (level, active) = (detail.accuracy, detail.active_joints);
         lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
             .expect("kernel");
         let mut root = [0.0f32; 3];
