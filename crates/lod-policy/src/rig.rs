@@ -313,23 +313,50 @@ impl Rig {
         Ok(())
     }
 
+    /// Local rotation of every joint relative to its parent, into `out[..joint_count]`: what a
+    /// skinned mesh's bones take (with the joints' [`RigJoint::offset`]s as local translations, and
+    /// the root's translation from pose rows `0..3`). The root's is its orientation in the cycle
+    /// frame, a joint not below the root has none (identity), a rotating joint beyond
+    /// `active_joints` and a static joint their rest rotation. Never allocates. Errors as
+    /// [`Rig::joint_positions`].
+    pub fn local_rotations(
+        &self,
+        pose: &[f32],
+        active_joints: usize,
+        out: &mut [Quat],
+    ) -> Result<(), RigError> {
+        let active = self.check(pose, active_joints, out.len())?;
+        for (j, q) in out[..self.joints.len()].iter_mut().enumerate() {
+            *q = self.local_rotation(j, pose, active);
+        }
+        Ok(())
+    }
+
+    /// Joint `j`'s local rotation (see [`Rig::local_rotations`]); `pose` is checked.
+    #[inline]
+    fn local_rotation(&self, j: usize, pose: &[f32], active: usize) -> Quat {
+        let joint = &self.joints[j];
+        match joint.role {
+            JointRole::Outside => Quat::IDENTITY,
+            JointRole::Root => exp_to_quat(Vec3::new(pose[3], pose[4], pose[5])),
+            JointRole::Rotating(k) if k < active => {
+                let r = ALWAYS_ROWS + ROWS_PER_JOINT * k;
+                exp_to_quat(Vec3::new(pose[r], pose[r + 1], pose[r + 2]))
+            }
+            _ => joint.rest,
+        }
+    }
+
     fn forward<O: FkOut + ?Sized>(&self, pose: &[f32], active: usize, out: &mut O) {
         let root_pos = Vec3::new(pose[0], pose[1], pose[2]);
-        let root_rot = exp_to_quat(Vec3::new(pose[3], pose[4], pose[5]));
         let ground = Vec3::new(root_pos.x, 0.0, root_pos.z);
         for (j, joint) in self.joints.iter().enumerate() {
             match joint.role {
                 JointRole::Outside => out.set(j, ground, Quat::IDENTITY),
-                JointRole::Root => out.set(j, root_pos, root_rot),
-                role => {
+                JointRole::Root => out.set(j, root_pos, self.local_rotation(j, pose, active)),
+                _ => {
                     let (parent_pos, parent_rot) = out.get(joint.parent.unwrap_or(0));
-                    let local = match role {
-                        JointRole::Rotating(k) if k < active => {
-                            let r = ALWAYS_ROWS + ROWS_PER_JOINT * k;
-                            exp_to_quat(Vec3::new(pose[r], pose[r + 1], pose[r + 2]))
-                        }
-                        _ => joint.rest,
-                    };
+                    let local = self.local_rotation(j, pose, active);
                     out.set(
                         j,
                         parent_pos + parent_rot * joint.offset,

@@ -22,21 +22,48 @@
 #![warn(missing_docs)]
 
 //! At runtime an engine loads a model once and, per character and cycle, builds a clip kernel for its
-//! controls and level of detail, then evaluates poses into buffers it owns (no allocation per frame):
+//! controls and level of detail, then evaluates poses into buffers it owns (no allocation per frame).
+//! The runtime is [`lod_policy`] (an engine that only animates can depend on it alone); this
+//! example compiles against this crate alone, as `examples/engine` in the workspace does, which
+//! runs it. Units are metres, seconds and radians everywhere in the library (the command line takes
+//! turns in degrees).
 //!
 //! ```no_run
-//! use motion_lod::{Evaluator, MotionModel};
-//! use motion_lod::lod_policy::Detail;
+//! use motion_lod::glam::{Quat, Vec3};
+//! use motion_lod::lod_policy::{
+//!     ClipKernel, Controls, CycleFrame, DistancePolicy, KernelScratch, LevelPolicy, RuntimeModel,
+//!     ViewParams,
+//! };
 //!
-//! let model = MotionModel::load("walk.mlod".as_ref())?;
-//! let mut ev = Evaluator::new(&model); // kernel, scratch and pose buffers, allocated once
-//! let controls = [0.0, 1.3, 0.2, 1.75]; // dx, dz (m), turn (rad), height (m) of one two-step cycle
-//! model.lod.build_kernel(&controls, Detail::new(3, 12), &mut ev.scratch, &mut ev.kernel)?;
-//! let mut joints = vec![glam::Vec3::ZERO; model.layout.skeleton().joints.len()];
-//! for frame in 0..60 {
-//!     let t = frame as f64 / 60.0; // seconds into the cycle
-//!     model.lod.pose(&ev.kernel, ev.kernel.phase_at(t), &mut ev.pose)?;
-//!     model.layout.joint_positions(&ev.pose, 12, &mut joints); // metres, cycle frame
+//! let model = RuntimeModel::load("walk.mlod".as_ref())?;
+//! let (lod, rig) = (model.lod(), model.rig());
+//! // Once per character: buffers for the largest level.
+//! let (mut kernel, mut scratch) = (ClipKernel::new(lod), KernelScratch::new(lod));
+//! let mut pose = vec![0.0f32; lod.p()];
+//! let mut local = vec![Quat::IDENTITY; rig.joint_count()];
+//! // One gait cycle (two steps): metres, radians, metres.
+//! let controls = Controls { dx: 0.0, dz: 1.3, turn: 0.2, height: 1.75 };
+//! let detail = DistancePolicy::for_model(lod)
+//!     .detail(12.0, true, &ViewParams::default()) // 12 m from the camera
+//!     .resolve(lod.levels().len(), lod.joints())
+//!     .ok_or("no such level")?;
+//! lod.build_kernel(&controls.to_array(), detail, &mut scratch, &mut kernel)?;
+//! let mut cycle_frame = CycleFrame::default(); // the first cycle starts at the origin, facing +z
+//! let mut t = 0.0f64; // seconds into the current cycle
+//! for _frame in 0..600 {
+//!     if t >= kernel.duration() {
+//!         // Chain the next cycle where this one's root went.
+//!         t -= kernel.duration();
+//!         cycle_frame = cycle_frame.next(&kernel.root_motion());
+//!         lod.build_kernel(&controls.to_array(), detail, &mut scratch, &mut kernel)?;
+//!     }
+//!     lod.pose(&kernel, kernel.phase_at(t), &mut pose)?;
+//!     // For skinning: each joint's rotation relative to its parent, and the root in the world.
+//!     rig.local_rotations(&pose, detail.active_joints, &mut local)?;
+//!     let root_world: Vec3 = cycle_frame.to_world(Vec3::new(pose[0], pose[1], pose[2]));
+//!     let root_rotation: Quat = cycle_frame.rotation() * local[rig.root()];
+//!     # let _ = (root_world, root_rotation);
+//!     t += 1.0 / 60.0;
 //! }
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -87,5 +114,8 @@ pub use naive::NaiveSource;
 pub use pca::PcaSource;
 pub use source::LodSource;
 
-/// The runtime crates, re-exported so that an engine can depend on this crate alone.
+/// The math types of the runtime's API (`Vec3`, `Quat`), the same version as the runtime's.
+pub use lod_policy::glam;
+/// The crates below, re-exported so that a tool can depend on this crate alone (an engine that only
+/// animates needs just `lod_policy`, the runtime).
 pub use {crowd_sim, hosvd_als, kriging, lod_policy, motion_io, tensor_ops, timewarp};
