@@ -121,3 +121,25 @@ fn every_column_header_of_info_eval_and_quality_is_explained() {
         "{list}"
     );
 }
+
+#[test]
+fn the_crowd_says_which_scene_it_timed() {
+    let (ok, stdout, stderr) = run(&[
+        "crowd",
+        "--walkers",
+        "50",
+        "--seconds",
+        "0.5",
+        "--camera",
+        "overview",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("scene: camera circling above the field, 0.05 walkers per square metre, seed 1, distance policy"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("`cargo xtask tables` (section 4) times another scene"),
+        "{stdout}"
+    );
+}

@@ -319,6 +319,25 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         "{} walkers, {:.1} s at {} fps ({} frames), {source_name}, field {:.0} m",
         args.walkers, args.seconds, args.fps, main.report.frames, main.field_m
     );
+    println!(
+        "scene: camera {}, {} walkers per square metre, seed {}, {} policy; every frame timed from \
+         the first (clip builds of the first cycle included); `cargo xtask tables` (section 4) times \
+         another scene: density 0.01 after a warm-up",
+        match args.camera {
+            CameraArg::Ground => "on the ground inside the crowd",
+            CameraArg::Overview => "circling above the field",
+        },
+        args.density,
+        args.seed,
+        if args.no_lod {
+            "no level of detail"
+        } else {
+            match args.policy {
+                PolicyArg::Distance => "distance",
+                PolicyArg::Screen => "screen-space",
+            }
+        }
+    );
     if let Some(from) = main.field_enlarged_from {
         println!(
             "note: the model turns little per cycle, so its walkers need paths of large radius: \
