@@ -27,7 +27,14 @@ enum Command {
     Build(cli::build::BuildArgs),
     /// Show a model's dimensions, levels, errors and storage.
     Info(cli::info::InfoArgs),
-    /// Leave-one-out error of the model at each key level against naive kriging, RBF, PCA and nearest.
+    /// Error of the model at each key level against naive kriging, RBF, PCA and nearest: leave-one-out,
+    /// K-fold refits (--folds) or held-out folders (--holdout).
+    #[command(
+        override_usage = "motion-lod eval [OPTIONS] MODEL.mlod\n       motion-lod eval [OPTIONS] [DIR]...",
+        after_help = "MODEL.mlod: its recorded training data and settings are used (--data DIR reads \
+                      the data from elsewhere). DIR: folders of BVH takes, with the data and model \
+                      options; no DIR: the embedded default data set."
+    )]
     Eval(cli::eval::EvalArgs),
     /// Motion quality (pop, foot skate, floor, facing, cadence) of walks over the data's controls.
     Quality(cli::quality::QualityArgs),

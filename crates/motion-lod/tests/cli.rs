@@ -143,3 +143,22 @@ fn the_crowd_says_which_scene_it_timed() {
         "{stdout}"
     );
 }
+
+#[test]
+fn eval_names_both_of_its_inputs_and_refuses_a_take_with_a_hint() {
+    let (_, help, _) = run(&["eval", "--help"]);
+    assert!(
+        help.contains("motion-lod eval [OPTIONS] MODEL.mlod"),
+        "{help}"
+    );
+    let take =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/walk_p160_t01.bvh");
+    let (ok, _, stderr) = run(&["eval", take.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(
+        stderr.contains(
+            "is a BVH take; eval reads a model file (.mlod) or folders of takes: pass its folder"
+        ),
+        "{stderr}"
+    );
+}

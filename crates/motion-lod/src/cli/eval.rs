@@ -70,6 +70,21 @@ fn is_model_file(p: &Path) -> bool {
 
 /// Runs the subcommand.
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
+    if let Some(take) = args
+        .data
+        .dirs
+        .iter()
+        .find(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("bvh")))
+    {
+        anyhow::bail!(
+            "{} is a BVH take; eval reads a model file (.mlod) or folders of takes: pass its folder ({})",
+            take.display(),
+            take.parent()
+                .filter(|d| !d.as_os_str().is_empty())
+                .unwrap_or(Path::new("."))
+                .display()
+        );
+    }
     let (spec, config) = match args.data.dirs.as_slice() {
         [one] if is_model_file(one) => {
             let model =
