@@ -149,7 +149,7 @@ pub fn bar(quiet: bool) -> anyhow::Result<ProgressBar> {
         ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr())
     };
     bar.set_style(
-        ProgressStyle::with_template("{msg:12} [{bar:40}] {pos}/{len}")
+        ProgressStyle::with_template("{msg:18} [{bar:40}] {pos}/{len}")
             .context("progress bar template")?,
     );
     Ok(bar)
@@ -158,7 +158,8 @@ pub fn bar(quiet: bool) -> anyhow::Result<ProgressBar> {
 /// Loads and aligns the data of `spec` with a progress bar; warns about skipped files on stderr.
 pub fn load(spec: &DataSpec, quiet: bool) -> anyhow::Result<LoadedData> {
     let bar = bar(quiet)?;
-    bar.set_message("takes");
+    // Two steps per take: read, then segmented into cycles.
+    bar.set_message("steps (2 per take)");
     let loaded = spec
         .load_with_default(super::default_takes::DEFAULT_TAKES, &|_, total| {
             bar.set_length(total as u64);
