@@ -3,13 +3,26 @@
 use crate::{HosvdError, KeyLevels, Tucker};
 use serde::{Deserialize, Serialize};
 
-/// One accuracy level of the hybrid model: the key tensor it is truncated from and its ranks.
+/// One accuracy level of the hybrid model as the offline decomposition schedules it: the key level it
+/// is truncated from and its rank triple `[R_P, R_T, R_S]` as the Tucker models index ranks. The
+/// model builder turns each into the runtime's [`lod_policy::AccuracyLevel`] (same key, ranks as
+/// [`lod_policy::Ranks`]), the one the model file stores.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct AccuracyLevel {
+pub struct HybridLevel {
     /// Index of the key level whose model is truncated (the nearest larger key).
     pub key: usize,
     /// The rank triple of this level (componentwise `<=` the key's ranks).
     pub ranks: [usize; 3],
+}
+
+impl From<HybridLevel> for lod_policy::AccuracyLevel {
+    /// The runtime's form of the level: the same key, the ranks as [`lod_policy::Ranks`].
+    fn from(l: HybridLevel) -> lod_policy::AccuracyLevel {
+        lod_policy::AccuracyLevel {
+            key: l.key,
+            ranks: lod_policy::Ranks::new(l.ranks[0], l.ranks[1], l.ranks[2]),
+        }
+    }
 }
 
 /// The `N_A` accuracy levels of the hybrid scheme for `N` key levels.
@@ -21,13 +34,13 @@ pub struct AccuracyLevel {
 /// (paper 4.2). Ranks never increase with the level; they strictly decrease when the key ranks
 /// leave room for it. `accuracy_levels < N` is raised to `N` (every key level is an accuracy
 /// level); a single key gives a single level; no keys give none.
-pub fn hybrid_levels(keys: &KeyLevels, accuracy_levels: usize) -> Vec<AccuracyLevel> {
+pub fn hybrid_levels(keys: &KeyLevels, accuracy_levels: usize) -> Vec<HybridLevel> {
     let n = keys.levels.len();
     if n <= 1 {
         return keys
             .levels
             .iter()
-            .map(|l| AccuracyLevel {
+            .map(|l| HybridLevel {
                 key: 0,
                 ranks: l.ranks,
             })
@@ -39,7 +52,7 @@ pub fn hybrid_levels(keys: &KeyLevels, accuracy_levels: usize) -> Vec<AccuracyLe
     let mut out = Vec::with_capacity(na);
     for i in 0..n - 1 {
         let (a, b) = (keys.levels[i].ranks, keys.levels[i + 1].ranks);
-        out.push(AccuracyLevel { key: i, ranks: a });
+        out.push(HybridLevel { key: i, ranks: a });
         let m = pos[i + 1] - pos[i] - 1;
         for t in 1..=m {
             let f = t as f64 / (m + 1) as f64;
@@ -47,10 +60,10 @@ pub fn hybrid_levels(keys: &KeyLevels, accuracy_levels: usize) -> Vec<AccuracyLe
                 let r = a[k] as f64 + (b[k] as f64 - a[k] as f64) * f;
                 (r.round() as usize).clamp(b[k].min(a[k]), a[k])
             });
-            out.push(AccuracyLevel { key: i, ranks });
+            out.push(HybridLevel { key: i, ranks });
         }
     }
-    out.push(AccuracyLevel {
+    out.push(HybridLevel {
         key: n - 1,
         ranks: keys.levels[n - 1].ranks,
     });
@@ -63,7 +76,7 @@ impl KeyLevels {
     ///
     /// Errors: [`HosvdError::BadKeyConfig`] for a key index out of range, a rank error if the
     /// ranks exceed the key's.
-    pub fn model_at(&self, level: &AccuracyLevel) -> Result<Tucker, HosvdError> {
+    pub fn model_at(&self, level: &HybridLevel) -> Result<Tucker, HosvdError> {
         let key = self.levels.get(level.key).ok_or_else(|| {
             HosvdError::BadKeyConfig(format!(
                 "accuracy level refers to key {} but there are {} keys",
@@ -78,7 +91,7 @@ impl KeyLevels {
     /// projection of the data on the truncated factors, so `||X - X~||^2 = ||X||^2 - ||Z_r||^2`.
     ///
     /// Errors: as [`KeyLevels::model_at`].
-    pub fn level_errors(&self, level: &AccuracyLevel) -> Result<(f64, f64), HosvdError> {
+    pub fn level_errors(&self, level: &HybridLevel) -> Result<(f64, f64), HosvdError> {
         let key = self.levels.get(level.key).ok_or_else(|| {
             HosvdError::BadKeyConfig(format!(
                 "key {} out of range ({} keys)",

@@ -54,7 +54,7 @@ mod tucker;
 pub use error::HosvdError;
 pub use hooi::{AlsOptions, AlsReport, hooi, hooi_with_start};
 pub use hosvd::{hosvd, hosvd_full};
-pub use hybrid::{AccuracyLevel, hybrid_levels};
+pub use hybrid::{HybridLevel, hybrid_levels};
 pub use keys::{KeyLevel, KeyLevels, KeySearchConfig, key_levels};
 pub use storage::Precision;
 pub use tucker::Tucker;

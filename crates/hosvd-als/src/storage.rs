@@ -6,33 +6,17 @@
 //! The paper's "13.34 MB for all motion samples" is `94 * 100 * 186 * 8` bytes in MiB
 //! (2^20 bytes); [`mib`] converts.
 
-use crate::{AccuracyLevel, KeyLevels};
-use serde::{Deserialize, Serialize};
+use crate::{HybridLevel, KeyLevels};
 
-/// Element type of a stored model.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Precision {
-    /// 8-byte floats (analysis, the paper's counts).
-    F64,
-    /// 4-byte floats (the runtime model file).
-    F32,
-}
-
-impl Precision {
-    /// Bytes per element.
-    pub fn size(self) -> usize {
-        match self {
-            Precision::F64 => 8,
-            Precision::F32 => 4,
-        }
-    }
-}
+/// Element type of a stored model: the runtime's [`lod_policy::Precision`] (one definition for the
+/// runtime model's byte counts and these), re-exported here.
+pub use lod_policy::Precision;
 
 /// Bytes of one Tucker model: `(R_0 R_1 R_2 + sum_n I_n R_n) * size`.
 pub fn tucker_bytes(dims: [usize; 3], ranks: [usize; 3], precision: Precision) -> usize {
     let core = ranks[0] * ranks[1] * ranks[2];
     let factors: usize = (0..3).map(|n| dims[n] * ranks[n]).sum();
-    (core + factors) * precision.size()
+    (core + factors) * precision.value_bytes()
 }
 
 /// Bytes of the hybrid model: every key level's core and factors (paper: "all key tensors and
@@ -46,7 +30,7 @@ pub fn key_levels_bytes(keys: &KeyLevels, precision: Precision) -> usize {
 
 /// Bytes needed if every accuracy level were stored as its own ALS model (the paper's
 /// "9.7 MB when all reduced core tensors are computed by ALS"), for data of shape `dims`.
-pub fn all_levels_bytes(dims: [usize; 3], levels: &[AccuracyLevel], precision: Precision) -> usize {
+pub fn all_levels_bytes(dims: [usize; 3], levels: &[HybridLevel], precision: Precision) -> usize {
     levels
         .iter()
         .map(|l| tucker_bytes(dims, l.ranks, precision))
@@ -55,7 +39,7 @@ pub fn all_levels_bytes(dims: [usize; 3], levels: &[AccuracyLevel], precision: P
 
 /// Bytes of the dense data tensor `I_0 I_1 I_2 * size` (the paper's "naive interpolation").
 pub fn dense_bytes(dims: [usize; 3], precision: Precision) -> usize {
-    dims[0] * dims[1] * dims[2] * precision.size()
+    dims[0] * dims[1] * dims[2] * precision.value_bytes()
 }
 
 /// Bytes to mebibytes (`/ 2^20`), the unit of the paper's MB figures.

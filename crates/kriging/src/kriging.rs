@@ -695,6 +695,23 @@ pub(crate) fn check_query(
     Ok(())
 }
 
+/// `out[j] = gamma(|scale(c) - p_j|)` for `j < out.len()`: the variogram column of a query `c`
+/// (unscaled, length `d`) against scaled sample parameters `scaled_params` (row-major, `d` per
+/// sample), the right-hand side of the kriging system without its trailing 1. The one evaluation
+/// of it offline, shared by [`crate::ProjectedQuery::query`] and the motion baselines' dual form.
+/// No allocation.
+pub fn variogram_column(
+    variogram: &Variogram,
+    scaling: &ParamScaling,
+    scaled_params: &[f64],
+    c: &[f64],
+    out: &mut [f64],
+) {
+    for (j, g) in out.iter_mut().enumerate() {
+        *g = variogram.eval(scaled_dist(scaling, scaled_params, c, j));
+    }
+}
+
 /// `|scale(c) - p_j|` with `p` row-major S x d.
 #[inline]
 pub(crate) fn scaled_dist(scaling: &ParamScaling, rows: &[f64], c: &[f64], j: usize) -> f64 {

@@ -115,7 +115,7 @@ pub use geo::{
     Drift, Krige, KrigeModel, LooStats, Neighbourhood, Prediction, Predictions, VariogramChoice,
     VariogramFitReport,
 };
-pub use kriging::{Kriging, augmented_params};
+pub use kriging::{Kriging, augmented_params, variogram_column};
 pub use linalg::{PINV_RTOL, sym_pinv};
 pub use nested::{NestedVariogram, Structure};
 pub use projected::ProjectedQuery;

@@ -5,7 +5,7 @@ use faer::MatRef;
 use serde::{Deserialize, Serialize};
 
 use crate::error::KrigingError;
-use crate::kriging::{Kriging, check_query, scaled_dist};
+use crate::kriging::{Kriging, check_query, variogram_column};
 use crate::scaling::ParamScaling;
 use crate::variogram::Variogram;
 
@@ -81,11 +81,13 @@ impl ProjectedQuery {
                 got: gamma_scratch.len(),
             });
         }
-        for (j, g) in gamma_scratch[..s].iter_mut().enumerate() {
-            *g = self
-                .variogram
-                .eval(scaled_dist(&self.scaling, &self.scaled_params, c, j));
-        }
+        variogram_column(
+            &self.variogram,
+            &self.scaling,
+            &self.scaled_params,
+            c,
+            &mut gamma_scratch[..s],
+        );
         gamma_scratch[s] = 1.0;
         for (o, row) in out.iter_mut().zip(self.matrix.chunks_exact(s + 1)) {
             *o = dot(row, gamma_scratch);

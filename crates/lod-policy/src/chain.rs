@@ -92,7 +92,14 @@ impl RootMotion {
     }
 }
 
-/// The quaternion of an exponential map (rotation vector).
+/// The quaternion of an exponential map (rotation vector), as `Quat::from_axis_angle(v / |v|, |v|)`
+/// (identity below `|v| = 1e-12`), used for the root's heading in cycle chaining, root motion and
+/// seams.
+///
+/// [`crate::rig::exp_to_quat`] is the same rotation computed another way (`v sin(|v|/2) / |v|`, with
+/// a Taylor series near 0) for forward kinematics. The two can differ in the last bits, and both are
+/// kept because each one's rounding is part of results that are checked bit for bit: chained crowd
+/// paths and root motions here, joint positions there (and the C ABI's poses against Rust's).
 pub fn exp_map_to_quat(v: Vec3) -> Quat {
     let angle = v.length();
     if angle > 1e-12 {

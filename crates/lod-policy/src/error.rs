@@ -112,6 +112,19 @@ pub enum KernelError {
         /// The value given.
         value: f32,
     },
+    /// [`crate::LodModel::kriging_weights`]: the key is out of range, or the number of weights is not
+    /// in `1..=R_S` of that key.
+    #[error("key {key} with {r_s} sample weights: the model has {keys} keys, that key R_S = {max}")]
+    Key {
+        /// The key asked for.
+        key: usize,
+        /// The number of weights asked for.
+        r_s: usize,
+        /// Keys in the model.
+        keys: usize,
+        /// `R_S` of the key (0 when it does not exist).
+        max: usize,
+    },
     /// The requested accuracy level does not exist.
     #[error("accuracy level {level} out of range (model has {levels})")]
     Level {

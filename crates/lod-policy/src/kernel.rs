@@ -369,15 +369,63 @@ impl LodModel {
         self.build_kernel_in(controls, detail, scratch, out, true)
     }
 
-    fn build_kernel_in(
+    /// The sample-mode kriging weights `w` of key `key` for raw `controls` (length `d`), truncated
+    /// to its first `r_s` sample components: steps 1-4 of the module documentation,
+    /// `w = U_S^T b(c) + V ([c' ; 1] - C b(c))` with `b(c)` the kriging weights of the scaled,
+    /// clamped controls `c'`. The same numbers [`LodModel::build_kernel`] blends the core with; the
+    /// returned slice (length `r_s`) lives in `scratch`. No allocation.
+    ///
+    /// Errors: a wrong control length or a non-finite control, a key out of range or `r_s` not in
+    /// `1..=R_S` of that key ([`KernelError::Key`]), scratch sized for another model.
+    pub fn kriging_weights<'s>(
         &self,
         controls: &[f32],
-        detail: Detail,
-        scratch: &mut KernelScratch,
-        out: &mut ClipKernel,
+        key: usize,
+        r_s: usize,
+        scratch: &'s mut KernelScratch,
+    ) -> Result<&'s [f32], KernelError> {
+        self.kriging_weights_checked(controls, key, r_s, scratch, false)
+    }
+
+    /// [`LodModel::kriging_weights`] with the projections accumulated in stored column order, as
+    /// [`LodModel::build_kernel_reference`] does (the two differ by rounding only).
+    pub fn kriging_weights_reference<'s>(
+        &self,
+        controls: &[f32],
+        key: usize,
+        r_s: usize,
+        scratch: &'s mut KernelScratch,
+    ) -> Result<&'s [f32], KernelError> {
+        self.kriging_weights_checked(controls, key, r_s, scratch, true)
+    }
+
+    fn kriging_weights_checked<'s>(
+        &self,
+        controls: &[f32],
+        key: usize,
+        r_s: usize,
+        scratch: &'s mut KernelScratch,
         column_order: bool,
-    ) -> Result<(), KernelError> {
-        let (p, t, s, d) = (self.p(), self.t(), self.s(), self.d());
+    ) -> Result<&'s [f32], KernelError> {
+        self.check_query_controls(controls)?;
+        let keys = self.keys().len();
+        let max = self.keys().get(key).map_or(0, |k| k.ranks.s);
+        if key >= keys || r_s == 0 || r_s > max {
+            return Err(KernelError::Key {
+                key,
+                r_s,
+                keys,
+                max,
+            });
+        }
+        scratch.fits(self)?;
+        self.weights_in(controls, key, r_s, scratch, column_order);
+        Ok(&scratch.w[..r_s])
+    }
+
+    /// A control vector of length `d` with finite entries.
+    fn check_query_controls(&self, controls: &[f32]) -> Result<(), KernelError> {
+        let d = self.d();
         if controls.len() != d {
             return Err(KernelError::ControlLength {
                 expected: d,
@@ -390,20 +438,24 @@ impl LodModel {
                 value: controls[index],
             });
         }
-        let level = detail.level_in(self).ok_or(KernelError::Level {
-            level: detail.accuracy,
-            levels: self.levels().len(),
-        })?;
-        scratch.fits(self)?;
-        self.check_kernel(out)?;
+        Ok(())
+    }
 
-        let lv = self.levels()[level];
-        let key = &self.keys()[lv.key];
+    /// Steps 1-4 for checked `controls`, key `key_index` and `r_s <= R_S` of that key into
+    /// `scratch.w[..r_s]` (and `scratch.c` the scaled controls); returns whether a control was
+    /// clamped.
+    fn weights_in(
+        &self,
+        controls: &[f32],
+        key_index: usize,
+        r_s: usize,
+        scratch: &mut KernelScratch,
+        column_order: bool,
+    ) -> bool {
+        let (s, d) = (self.s(), self.d());
+        let key = &self.keys()[key_index];
         let big = key.ranks;
-        let r = lv.ranks;
-        let rows = self.active_rows(detail.active_joints);
-        debug_assert!(rows <= p && r.fits_in(&big));
-
+        debug_assert!(r_s <= big.s && controls.len() == d);
         // 1. Clamp and scale the controls: c'_k = (clamp(c_k) - offset_k) * scale_k.
         let cs = self.controls();
         let mut clamped = false;
@@ -463,16 +515,16 @@ impl LodModel {
 
         // 3. y = [U_S^T b (first r_S rows) ; C b] = [Q x ; P_C x], Q column-major R_S x (S + 1) (the
         //    key's), P_C column-major (d + 1) x (S + 1) (the control space's, shared by every key).
-        let y = &mut scratch.y[..r.s + d + 1];
+        let y = &mut scratch.y[..r_s + d + 1];
         y.fill(0.0);
-        let (y_top, y_c) = y.split_at_mut(r.s);
+        let (y_top, y_c) = y.split_at_mut(r_s);
         if column_order {
             accumulate_columns(y_top, &key.projection, big.s, &scratch.x);
             accumulate_columns(y_c, &cs.projection, d + 1, &scratch.x);
         } else {
             let rm = self.row_major();
             let x = &scratch.x[..=s];
-            for (yl, row) in y_top.iter_mut().zip(rm.q[lv.key].chunks_exact(s + 1)) {
+            for (yl, row) in y_top.iter_mut().zip(rm.q[key_index].chunks_exact(s + 1)) {
                 *yl = dot(row, x);
             }
             for (ym, row) in y_c.iter_mut().zip(rm.pc.chunks_exact(s + 1)) {
@@ -481,13 +533,43 @@ impl LodModel {
         }
 
         // 4. w = U_S^T b + V ([c' ; 1] - C b), V column-major R_S x (d + 1).
-        for l in 0..r.s {
+        for l in 0..r_s {
             let mut acc = y[l];
             for m in 0..=d {
-                acc += f64::from(key.trend[l + big.s * m]) * (scratch.c[m] - y[r.s + m]);
+                acc += f64::from(key.trend[l + big.s * m]) * (scratch.c[m] - y[r_s + m]);
             }
             scratch.w[l] = acc as f32;
         }
+
+        clamped
+    }
+
+    fn build_kernel_in(
+        &self,
+        controls: &[f32],
+        detail: Detail,
+        scratch: &mut KernelScratch,
+        out: &mut ClipKernel,
+        column_order: bool,
+    ) -> Result<(), KernelError> {
+        let (p, t) = (self.p(), self.t());
+        self.check_query_controls(controls)?;
+        let level = detail.level_in(self).ok_or(KernelError::Level {
+            level: detail.accuracy,
+            levels: self.levels().len(),
+        })?;
+        scratch.fits(self)?;
+        self.check_kernel(out)?;
+
+        let lv = self.levels()[level];
+        let key = &self.keys()[lv.key];
+        let big = key.ranks;
+        let r = lv.ranks;
+        let rows = self.active_rows(detail.active_joints);
+        debug_assert!(rows <= p && r.fits_in(&big));
+
+        // 1-4. The sample-mode kriging weights w (first r_S) into scratch.w.
+        let clamped = self.weights_in(controls, lv.key, r.s, scratch, column_order);
 
         // 5. K(c) = Z[:r_P, :r_T, :r_S] x_3 w, stored r_P x r_T column-major.
         let kmat = &mut scratch.k[..r.p * r.t];
@@ -549,7 +631,7 @@ impl LodModel {
             self.pose_rows(out, phase, e)?;
         }
         let [start, end] = ends;
-        out.root_motion = cs.root_motion(controls, &start, &end);
+        out.root_motion = self.controls().root_motion(controls, &start, &end);
         Ok(())
     }
 

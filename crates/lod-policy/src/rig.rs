@@ -27,7 +27,12 @@ pub const STACK_JOINTS: usize = 128;
 const UNIT_TOLERANCE: f32 = 1e-4;
 
 /// The rotation of an exponential map `v` (rotation vector, any length):
-/// `q = (sin(|v|/2) v/|v|, cos(|v|/2))`, with a Taylor series of `sin(|v|/2)/|v|` below `1e-3`.
+/// `q = (sin(|v|/2) v/|v|, cos(|v|/2))`, with a Taylor series of `sin(|v|/2)/|v|` below `1e-3`, for
+/// forward kinematics (smooth through 0, no division by a tiny `|v|`).
+///
+/// [`crate::chain::exp_map_to_quat`] is the same rotation by `Quat::from_axis_angle` for the root's
+/// heading in cycle chaining and root motion; they can differ in the last bits and each one's rounding is
+/// part of results checked bit for bit (joint positions here, chained paths there), so both stay.
 #[inline]
 pub fn exp_to_quat(v: Vec3) -> Quat {
     let theta = v.length();

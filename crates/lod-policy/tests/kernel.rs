@@ -442,3 +442,97 @@ fn kernel_phase_lookup_equals_the_time_table_bitwise() {
         }
     }
 }
+
+/// The per-sample form of steps 1-4 (every control, one sample at a time, `eval` of the distance,
+/// projections accumulated column by column): what `kriging_weights_reference` computes, bit for bit.
+fn per_sample_weights(model: &LodModel, controls: &[f32], key: usize, r_s: usize) -> Vec<f32> {
+    let (s, d) = (model.s(), model.d());
+    let cs = model.controls();
+    let key = &model.keys()[key];
+    let big = key.ranks;
+    let mut c = vec![0.0f64; d + 1];
+    for k in 0..d {
+        let v = controls[k].clamp(cs.min[k], cs.max[k]);
+        c[k] = (f64::from(v) - f64::from(cs.offset[k])) * f64::from(cs.scale[k]);
+    }
+    c[d] = 1.0;
+    let mut x = vec![0.0f64; s + 1];
+    for i in 0..s {
+        let mut h2 = 0.0f64;
+        for k in 0..d {
+            let diff = c[k] - f64::from(cs.samples[i + s * k]);
+            h2 += diff * diff;
+        }
+        x[i] = cs.variogram.eval(h2.sqrt());
+    }
+    x[s] = 1.0;
+    let mut y = vec![0.0f64; r_s + d + 1];
+    for (j, col) in key.projection.chunks_exact(big.s).enumerate() {
+        for l in 0..r_s {
+            y[l] += f64::from(col[l]) * x[j];
+        }
+    }
+    for (j, col) in cs.projection.chunks_exact(d + 1).enumerate() {
+        for m in 0..=d {
+            y[r_s + m] += f64::from(col[m]) * x[j];
+        }
+    }
+    (0..r_s)
+        .map(|l| {
+            let mut acc = y[l];
+            for m in 0..=d {
+                acc += f64::from(key.trend[l + big.s * m]) * (c[m] - y[r_s + m]);
+            }
+            acc as f32
+        })
+        .collect()
+}
+
+#[test]
+fn kriging_weights_are_the_per_sample_formula_bitwise() {
+    for seed in [3u64, 6, 7] {
+        let truth = random_truth(seed, 0.01 * seed as f64);
+        let model = build_model(&truth);
+        let mut scratch = KernelScratch::new(&model);
+        let mut rng = Rng::new(seed + 40);
+        for key in 0..model.keys().len() {
+            let big = model.keys()[key].ranks.s;
+            for r_s in [1, big.div_ceil(2), big] {
+                // Inside the data and beyond it (clamped).
+                let c: Vec<f32> = (0..truth.d)
+                    .map(|k| rng.uniform(truth.min[k] - 0.2, truth.max[k] + 0.2) as f32)
+                    .collect();
+                let want = per_sample_weights(&model, &c, key, r_s);
+                let got = model
+                    .kriging_weights_reference(&c, key, r_s, &mut scratch)
+                    .unwrap();
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(got), bits(&want), "seed {seed} key {key} r_S {r_s}");
+                let fast = model.kriging_weights(&c, key, r_s, &mut scratch).unwrap();
+                for (a, b) in fast.iter().zip(&want) {
+                    assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "{a} vs {b}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn kriging_weights_refuse_a_missing_key_or_rank() {
+    let truth = random_truth(9, 0.0);
+    let model = build_model(&truth);
+    let mut scratch = KernelScratch::new(&model);
+    let c: Vec<f32> = truth.min.iter().map(|&v| v as f32).collect();
+    let keys = model.keys().len();
+    let big = model.keys()[0].ranks.s;
+    for (key, r_s) in [(keys, 1), (0, 0), (0, big + 1)] {
+        assert!(matches!(
+            model.kriging_weights(&c, key, r_s, &mut scratch),
+            Err(KernelError::Key { .. })
+        ));
+    }
+    assert!(matches!(
+        model.kriging_weights(&c[1..], 0, 1, &mut scratch),
+        Err(KernelError::ControlLength { .. })
+    ));
+}

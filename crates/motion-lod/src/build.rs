@@ -414,7 +414,7 @@ pub struct Analysis {
     /// weighted tensor, which the greedy search compares).
     pub keys: KeyLevels,
     /// The accuracy levels (distinct rank triples, each a truncation of a key).
-    pub levels: Vec<hosvd_als::AccuracyLevel>,
+    pub levels: Vec<hosvd_als::HybridLevel>,
     /// Universal kriging of the samples over the controls.
     pub kriging: Kriging,
     /// Raw controls per sample.
@@ -653,10 +653,7 @@ impl Analysis {
             levels: self
                 .levels
                 .iter()
-                .map(|l| AccuracyLevel {
-                    key: l.key,
-                    ranks: Ranks::new(l.ranks[0], l.ranks[1], l.ranks[2]),
-                })
+                .map(|&l| AccuracyLevel::from(l))
                 .collect(),
             controls,
             time_scale: self.time_scale,
@@ -861,8 +858,8 @@ fn root_speed(tensor: &Tensor3, mean_dt: f64) -> f64 {
 /// narrow for the number of accuracy levels asked for, several levels get the same ranks. A truncation
 /// whose ranks equal a later key's is dropped in favour of that key (ALS beats truncation at equal
 /// size), and of consecutive equal levels the first is kept.
-fn distinct_levels(levels: &[hosvd_als::AccuracyLevel]) -> Vec<hosvd_als::AccuracyLevel> {
-    let mut out: Vec<hosvd_als::AccuracyLevel> = Vec::with_capacity(levels.len());
+fn distinct_levels(levels: &[hosvd_als::HybridLevel]) -> Vec<hosvd_als::HybridLevel> {
+    let mut out: Vec<hosvd_als::HybridLevel> = Vec::with_capacity(levels.len());
     for (i, level) in levels.iter().enumerate() {
         let later_same = levels[i + 1..]
             .iter()

@@ -117,11 +117,7 @@ impl ClipSource for NaiveSource<'_> {
     type Clip = NaiveClip;
 
     fn levels(&self) -> LevelTable {
-        LevelTable {
-            accuracy_levels: self.model.lod.levels().len(),
-            joints: self.model.lod.joints(),
-            pose_len: self.model.lod.p(),
-        }
+        crate::source::level_table(self.model)
     }
 
     fn control_range(&self) -> ControlRange {

@@ -25,7 +25,7 @@
 use crowd_sim::{ClipError, ClipSource, LevelTable};
 use faer::Mat;
 use glam::Vec3;
-use lod_policy::{ControlRange, Controls, Detail, Precision, RootMotion};
+use lod_policy::{ALWAYS_ROWS, ControlRange, Controls, Detail, Precision, RootMotion};
 use tensor_ops::Tensor3;
 use timewarp::TimeTable;
 
@@ -37,9 +37,6 @@ use crate::source::{bones_of, write_joints};
 /// Components interpolated at once in [`ClipSource::pose`] (a stack buffer; any rank is handled in
 /// chunks of this size).
 const CHUNK: usize = 64;
-
-/// Root rows read for the root motion (root position, exponential map and time row).
-const ROOT_ROWS: usize = 7;
 
 /// The first `rank` (clamped into `1..=P`) principal directions of the DOF mode of `x` (`P x T x S`):
 /// the leading left singular vectors of the unfolding `X_(1)` (`P x T S`), without centring, as the
@@ -291,8 +288,9 @@ impl ClipSource for PcaSource<'_> {
                     .sum::<f32>(),
             )
         }));
-        let root = ROOT_ROWS.min(p);
-        let (mut start, mut end) = ([0.0f32; ROOT_ROWS], [0.0f32; ROOT_ROWS]);
+        // The root rows (position, exponential map, time row) read for the root motion.
+        let root = ALWAYS_ROWS.min(p);
+        let (mut start, mut end) = ([0.0f32; ALWAYS_ROWS], [0.0f32; ALWAYS_ROWS]);
         self.expand(coeffs, t, r, 0, &mut start[..root]);
         self.expand(coeffs, t, r, t - 1, &mut end[..root]);
         clip.root_motion = lod

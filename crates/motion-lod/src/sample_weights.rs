@@ -30,8 +30,7 @@ pub(crate) struct DualBlend {
     trend: Vec<f64>,
     /// Scaled sample controls, `S x dims` row-major.
     params: Vec<f64>,
-    offset: Vec<f64>,
-    scale: Vec<f64>,
+    scaling: kriging::ParamScaling,
     variogram: kriging::Variogram,
     /// `d`: trend dimensions (the last trend column multiplies 1).
     d: usize,
@@ -77,8 +76,7 @@ impl DualBlend {
             q_t,
             trend,
             params: pq.scaled_params().to_vec(),
-            offset: scaling.offset.clone(),
-            scale: scaling.scale.clone(),
+            scaling: scaling.clone(),
             variogram: *pq.variogram(),
             d,
         })
@@ -89,7 +87,7 @@ impl DualBlend {
     pub(crate) fn eval(&self, c: &[f64; 4], out: &mut [f32]) {
         let n = out.len().min(self.outputs);
         let s = self.samples;
-        let dims = self.offset.len().min(c.len());
+        let dims = self.scaling.offset.len().min(c.len());
         DUAL_SCRATCH.with(|cell| {
             let mut guard = cell.borrow_mut();
             let (x, acc) = &mut *guard;
@@ -98,13 +96,16 @@ impl DualBlend {
             acc.resize(n, 0.0);
             let mut z = [0.0f64; MAX_D + 1];
             for k in 0..dims {
-                z[k] = (c[k] - self.offset[k]) * self.scale[k];
+                z[k] = (c[k] - self.scaling.offset[k]) * self.scaling.scale[k];
             }
-            for (j, g) in x[..s].iter_mut().enumerate() {
-                let p = &self.params[j * dims..(j + 1) * dims];
-                let h2: f64 = (0..dims).map(|k| (z[k] - p[k]) * (z[k] - p[k])).sum();
-                *g = self.variogram.eval(h2.sqrt());
-            }
+            // gamma(c), as the kriging crate evaluates it for every query.
+            kriging::variogram_column(
+                &self.variogram,
+                &self.scaling,
+                &self.params,
+                &c[..dims],
+                &mut x[..s],
+            );
             x[s] = 1.0;
             for (j, &xj) in x.iter().enumerate() {
                 let col = &self.q_t[j * self.outputs..][..n];

@@ -135,6 +135,16 @@ pub(crate) fn write_joints(
     1 + active
 }
 
+/// The model's accuracy levels, joints and pose length, as a crowd sees them (also reported by the
+/// baselines, so that the crowd's policy applies to them unchanged).
+pub fn level_table(model: &MotionModel) -> LevelTable {
+    LevelTable {
+        accuracy_levels: model.lod.levels().len(),
+        joints: model.lod.joints(),
+        pose_len: model.lod.p(),
+    }
+}
+
 /// The range of the model's training controls, which the crowd clamps every request into.
 pub fn control_range(model: &MotionModel) -> ControlRange {
     let r = model.control_range();
@@ -148,11 +158,7 @@ impl ClipSource for LodSource<'_> {
     type Clip = LodClip;
 
     fn levels(&self) -> LevelTable {
-        LevelTable {
-            accuracy_levels: self.model.lod.levels().len(),
-            joints: self.model.lod.joints(),
-            pose_len: self.model.lod.p(),
-        }
+        level_table(self.model)
     }
 
     fn control_range(&self) -> ControlRange {

@@ -10,11 +10,12 @@
 //! 4. fold the result into the `r_P x r_T` matrix `K(c)`.
 //!
 //! The rest is the runtime model's kernel ([`lod_policy::LodModel::build_kernel`]): the weights
-//! `w = U_S^T b + V ([c;1] - C b)` from the first `r_S` rows of `Q` and `V`, `G(c) = U_P[:P', :r_P] K(c)`
+//! `w = U_S^T b + V ([c;1] - C b)` from the first `r_S` rows of `Q` and `V` (computed by the runtime,
+//! [`lod_policy::LodModel::kriging_weights_reference`]), `G(c) = U_P[:P', :r_P] K(c)`
 //! and the clip's time table; per frame `pose = G w_T` (eq. 4-5). Everything writes into buffers
 //! allocated once by [`OnlineTruncation::new`].
 
-use lod_policy::{LodModel, Ranks, TIME_ROW};
+use lod_policy::{KernelScratch, LodModel, Ranks, TIME_ROW};
 use timewarp::TimeTable;
 
 /// The online-truncation kernel over key 0 of a model, with its preallocated buffers.
@@ -25,10 +26,8 @@ pub struct OnlineTruncation<'m> {
     unfolded: Vec<f32>,
     /// The sub-matrix `r_S x (r_P r_T)` column-major.
     sub: Vec<f32>,
-    x: Vec<f64>,
-    y: Vec<f64>,
-    c: Vec<f64>,
-    w: Vec<f32>,
+    /// The runtime's working memory for the kriging weights.
+    scratch: KernelScratch,
     k: Vec<f32>,
     /// `G(c)`, `rows x r_T` column-major.
     g: Vec<f32>,
@@ -45,10 +44,7 @@ impl<'m> OnlineTruncation<'m> {
             model,
             unfolded: vec![0.0; r.core_len()],
             sub: vec![0.0; r.core_len()],
-            x: vec![0.0; model.s() + 1],
-            y: vec![0.0; r.s + model.d() + 1],
-            c: vec![0.0; model.d() + 1],
-            w: vec![0.0; r.s],
+            scratch: KernelScratch::new(model),
             k: vec![0.0; r.p * r.t],
             g: vec![0.0; model.p() * r.t],
             ranks: r,
@@ -79,8 +75,7 @@ impl<'m> OnlineTruncation<'m> {
             ranks.s.clamp(1, big.s),
         );
         let rows = rows.clamp(lod_policy::ALWAYS_ROWS, m.p());
-        let (p, t, s, d) = (m.p(), m.t(), m.s(), m.d());
-        debug_assert_eq!(controls.len(), d);
+        let (p, t) = (m.p(), m.t());
 
         // Appendix B, step 1: unfold the full core along the sample mode (l fastest).
         let plane = big.p * big.t;
@@ -99,47 +94,13 @@ impl<'m> OnlineTruncation<'m> {
             }
         }
 
-        // Kriging weights, as the runtime kernel computes them (lod_policy::kernel steps 1-4).
-        let cs = m.controls();
-        for (k, &raw) in controls.iter().enumerate().take(d) {
-            let v = raw.clamp(cs.min[k], cs.max[k]);
-            self.c[k] = (f64::from(v) - f64::from(cs.offset[k])) * f64::from(cs.scale[k]);
-        }
-        self.c[d] = 1.0;
-        for i in 0..s {
-            let mut h2 = 0.0f64;
-            for k in 0..d {
-                let diff = self.c[k] - f64::from(cs.samples[i + s * k]);
-                h2 += diff * diff;
-            }
-            self.x[i] = cs.variogram.eval(h2.sqrt());
-        }
-        self.x[s] = 1.0;
-        let y = &mut self.y[..r.s + d + 1];
-        y.fill(0.0);
-        let (y_top, y_c) = y.split_at_mut(r.s);
-        for (j, col) in key.projection.chunks_exact(big.s).enumerate() {
-            let xj = self.x[j];
-            for (yl, &q) in y_top.iter_mut().zip(&col[..r.s]) {
-                *yl += f64::from(q) * xj;
-            }
-        }
-        for (j, col) in cs.projection.chunks_exact(d + 1).enumerate() {
-            let xj = self.x[j];
-            for (ym, &q) in y_c.iter_mut().zip(col) {
-                *ym += f64::from(q) * xj;
-            }
-        }
-        for l in 0..r.s {
-            let mut acc = y[l];
-            for mm in 0..=d {
-                acc += f64::from(key.trend[l + big.s * mm]) * (self.c[mm] - y[r.s + mm]);
-            }
-            self.w[l] = acc as f32;
-        }
+        // Kriging weights of key 0's first r_S sample components: the runtime's own (its reference
+        // summation order, lod_policy::kernel steps 1-4).
+        let w = m
+            .kriging_weights_reference(controls, 0, r.s, &mut self.scratch)
+            .expect("online truncation: controls of the model's length, finite");
 
         // Steps 3-4: K(c) = w^T Z_(3)[:r_S, sub], folded to r_P x r_T (column order (i, j) = i + r_P j).
-        let w = &self.w[..r.s];
         for (kv, col) in self.k[..r.p * r.t]
             .iter_mut()
             .zip(self.sub[..r.s * r.p * r.t].chunks_exact(r.s))

@@ -92,7 +92,7 @@ pub fn als_every_level(
     every.levels = levels
         .iter()
         .enumerate()
-        .map(|(i, k)| hosvd_als::AccuracyLevel {
+        .map(|(i, k)| hosvd_als::HybridLevel {
             key: i,
             ranks: k.ranks,
         })

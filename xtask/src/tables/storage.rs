@@ -7,7 +7,6 @@ use anyhow::{Context, Result};
 use hosvd_als::storage::{
     Precision, all_levels_bytes, dense_bytes, key_levels_bytes, tucker_bytes,
 };
-use lod_policy::Precision as RuntimePrecision;
 use motion_lod::{Analysis, MotionModel};
 
 use super::markdown::{Table, mb, mib, percent};
@@ -59,7 +58,7 @@ pub fn paper_rows(analysis: &Analysis, pca_rank: usize) -> Vec<StorageRow> {
         ),
         (
             format!("PCA (R_P = {})", pca_rank.clamp(1, dims[0])),
-            both(&|pr| pca_bytes(dims, pca_rank, pr.size())),
+            both(&|pr| pca_bytes(dims, pca_rank, pr.value_bytes())),
         ),
     ];
     rows.into_iter()
@@ -136,8 +135,8 @@ pub fn section(
         rt.row(&[
             name.to_string(),
             m.lod.keys().len().to_string(),
-            mib(m.lod.bytes(RuntimePrecision::F64)),
-            mib(m.lod.bytes(RuntimePrecision::F32)),
+            mib(m.lod.bytes(Precision::F64)),
+            mib(m.lod.bytes(Precision::F32)),
             format!("{} ({file} bytes)", mib(file)),
             percent(file as f64 / raw),
         ]);
