@@ -72,6 +72,12 @@ pub struct CrowdConfig {
     pub seam_levels: usize,
     /// Half-life of a seam's offset (s).
     pub seam_halflife_s: f32,
+    /// Walkers at accuracy levels `0..foot_lock_levels` (with joints) keep planted feet planted: the
+    /// source's foot lock ([`ClipSource::plant_feet`], `lod_policy::footlock`) runs on their pose
+    /// every frame. Farther walkers skate only as much as their level's measured slide, which the
+    /// policies keep under a pixel. Default 3, the walkers whose seams are inertialized; 0 turns
+    /// the lock off.
+    pub foot_lock_levels: usize,
     /// Distance kept between paths and the field border (m).
     pub border_m: f32,
     /// Growth of each walker's culling box beyond its body, covering one frame of motion (m).
@@ -96,6 +102,7 @@ impl Default for CrowdConfig {
             fps: 30.0,
             seam_levels: 3,
             seam_halflife_s: lod_policy::chain::DEFAULT_HALFLIFE_S,
+            foot_lock_levels: 3,
             border_m: 2.0,
             cull_margin_m: 0.25,
             tree_rebuild_interval: 240,
@@ -201,6 +208,7 @@ impl<C: Send> Crowd<C> {
             bounds,
             seam_levels: config.seam_levels,
             seam_halflife_s: config.seam_halflife_s,
+            foot_lock_levels: config.foot_lock_levels,
         };
         // Preferred strides and the tightest curvature they can follow with half the turn range.
         let dz_lo = bounds.min.dz.max(0.2 * bounds.max.dz);
@@ -274,6 +282,7 @@ impl<C: Send> Crowd<C> {
                 seam_sized: false,
                 hold_s,
                 seam_start: 0.0,
+                lock: None,
                 rows: 0,
                 n_joints: 0,
                 root: Vec3::new(base.x, 0.0, base.y),
@@ -435,7 +444,7 @@ impl<C: Send> Crowd<C> {
                             if let Some(ahead) = walkers.get(k + PREFETCH) {
                                 source.prefetch(&ahead.cur, ahead.t);
                             }
-                            walkers[k].pose(source, &mut poses[k * pl..(k + 1) * pl]);
+                            walkers[k].pose(source, &params, dt, &mut poses[k * pl..(k + 1) * pl]);
                         }
                     }
                     let tc = Instant::now();

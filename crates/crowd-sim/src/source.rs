@@ -3,7 +3,7 @@
 use crate::error::ClipError;
 use crate::levels::LevelTable;
 use glam::Vec3;
-use lod_policy::{ControlRange, Controls, Detail, RootMotion};
+use lod_policy::{ControlRange, Controls, CycleFrame, Detail, FootLock, RootMotion};
 
 /// A provider of gait clips at (controls, detail), implemented by the facade for the multilinear
 /// model and for a naive baseline, and by [`testing::ProceduralSource`](crate::testing::ProceduralSource).
@@ -66,6 +66,23 @@ pub trait ClipSource: Sync {
     /// it a few walkers ahead). Must not change anything observable. Does nothing by default.
     fn prefetch(&self, clip: &Self::Clip, t_seconds: f32) {
         let _ = (clip, t_seconds);
+    }
+
+    /// Plants the feet of `pose` (the `rows` rows written by `pose` for this clip, seam applied),
+    /// shown in cycle frame `frame` `dt` seconds after the walker's previous frame: a source with a
+    /// rig runs its foot lock (`lock`, the walker's; [`lod_policy::footlock`]) and writes the
+    /// corrected leg rows into `pose`. The crowd calls it for near walkers only
+    /// ([`CrowdConfig::foot_lock_levels`](crate::CrowdConfig)). Does nothing by default (a source
+    /// without feet).
+    fn plant_feet(
+        &self,
+        clip: &Self::Clip,
+        frame: &CycleFrame,
+        dt: f32,
+        lock: &mut FootLock,
+        pose: &mut [f32],
+    ) {
+        let _ = (clip, frame, dt, lock, pose);
     }
 
     /// Forward kinematics of `pose` (as written by `pose` for this clip) into cycle-frame joint

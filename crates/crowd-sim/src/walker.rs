@@ -8,7 +8,7 @@ use crate::path::{EllipsePath, forward, left, path_controls};
 use crate::source::ClipSource;
 use glam::{Vec2, Vec3};
 use lod_policy::chain::{SeamScratch, SeamTransition};
-use lod_policy::{ControlRange, Controls, Detail, RootMotion, wrap_angle};
+use lod_policy::{ControlRange, Controls, CycleFrame, Detail, FootLock, RootMotion, wrap_angle};
 
 /// Settings the stages need, copied out of the crowd config.
 #[derive(Debug, Clone, Copy)]
@@ -18,6 +18,8 @@ pub(crate) struct StageParams {
     pub seam_levels: usize,
     /// Half-life of a seam's offset (s), for transitions allocated on a walker's first seam.
     pub seam_halflife_s: f32,
+    /// Walkers at accuracy levels below this have their feet planted.
+    pub foot_lock_levels: usize,
 }
 
 /// One walker: its path, cycle base frame, current clip and the seam transition into it.
@@ -53,6 +55,9 @@ pub(crate) struct Walker<C> {
     pub hold_s: f32,
     /// Clip time at which the running seam started (its clock is `t - seam_start`).
     pub seam_start: f32,
+    /// The walker's foot lock (`lod_policy::footlock`), allocated when it first comes near enough
+    /// to plant its feet; dropped back to `None` when it leaves, so far walkers hold no lock state.
+    pub lock: Option<Box<FootLock>>,
     /// Rows of the pose vector written this frame.
     pub rows: usize,
     /// Joint positions written this frame.
@@ -253,10 +258,33 @@ impl<C> Walker<C> {
     }
 
     /// Pose stage: the current clip's pose at `t` with the running seam applied (the seam ends
-    /// once its offset has decayed).
-    pub fn pose<S: ClipSource<Clip = C>>(&mut self, src: &S, out: &mut [f32]) {
+    /// once its offset has decayed); then, for a walker at one of the first `foot_lock_levels`
+    /// accuracy levels with joints, planted feet ([`ClipSource::plant_feet`]; `dt` is the frame
+    /// step). A walker that leaves those levels drops its lock: its feet are let go at once, as its
+    /// clip is switched without a seam there.
+    pub fn pose<S: ClipSource<Clip = C>>(
+        &mut self,
+        src: &S,
+        p: &StageParams,
+        dt: f32,
+        out: &mut [f32],
+    ) {
         self.rows = self.displayed(src, self.t, out);
         self.seam.finish_after(self.t - self.seam_start);
+        let near =
+            self.cur_detail.accuracy < p.foot_lock_levels && self.cur_detail.active_joints > 0;
+        if !near {
+            self.lock = None;
+            return;
+        }
+        let frame = CycleFrame {
+            x: self.base.x,
+            z: self.base.y,
+            heading: self.heading,
+        };
+        let lock = self.lock.get_or_insert_with(Box::default);
+        let rows = self.rows;
+        src.plant_feet(&self.cur, &frame, dt, lock, &mut out[..rows]);
     }
 
     /// FK stage: cycle-frame joint positions from the source, then `world = base + R_y(h) p`

@@ -20,6 +20,8 @@
 //!   core `K(c) = Z x_3 w` (eq. 8), `G(c) = U_P K(c)` for the active rows and the clip's
 //!   [`TimeTable`]; per frame, [`LodModel::pose`] evaluates `G w_T` (eq. 4-5). Neither allocates.
 //! - [`rig`]: [`Rig`], forward kinematics of f32 poses for the active joints.
+//! - [`footlock`]: [`FootLock`], planted feet frame by frame (a causal foot lock with two-bone IK)
+//!   for the model file's [`FootRig`].
 //! - [`policy`]: the paper's [`DistancePolicy`] and a [`ScreenSpacePolicy`] with a pixel budget,
 //!   both behind the [`LevelPolicy`] trait.
 //! - The one vocabulary: [`Controls`] (with their names, units and [`ControlRange`] clamp),
@@ -71,6 +73,7 @@ pub mod controls;
 pub mod detail;
 pub mod error;
 pub mod file;
+pub mod footlock;
 pub mod kernel;
 pub mod math;
 pub mod model;
@@ -86,6 +89,7 @@ pub use controls::{ControlRange, Controls, clamp_control};
 pub use detail::Detail;
 pub use error::{KernelError, ModelError, RigError, VariogramError};
 pub use file::{FileError, InvalidModel};
+pub use footlock::{Foot, FootLock, FootLockError, FootRig};
 /// The math types of the runtime API (`Vec3`, `Quat`), so an engine uses the same version.
 pub use glam;
 pub use kernel::{ClipKernel, KernelScratch, TURN_CONTROL};

@@ -1,8 +1,8 @@
 //! [`RuntimeModel`]: what an engine loads from a model file: the [`Rig`] and the [`LodModel`].
 //!
 //! A model file's payload is the offline `MotionModel`: the pose layout (`motion_io::PoseLayout`,
-//! stored as what it is built from), the runtime model, then the build report. The runtime decodes
-//! the first two and ignores the rest. The layout's stored form is mirrored here field for field
+//! stored as what it is built from), the runtime model, the feet for the foot lock, then the build
+//! report. The runtime decodes the first three and ignores the rest. The layout's stored form is mirrored here field for field
 //! (private types with the same serde shape), so the runtime reads files without the offline crates.
 
 use std::path::Path;
@@ -11,15 +11,17 @@ use glam::{DQuat, DVec3};
 use serde::Deserialize;
 
 use crate::file::{self, FileError, InvalidModel};
+use crate::footlock::FootRig;
 use crate::model::{ALWAYS_ROWS, LodModel, ROWS_PER_JOINT};
 use crate::rig::{JointRole, Rig, RigJoint};
 
-/// The runtime form of a model file: the skeleton with its forward kinematics, and the
-/// multilinear model at every accuracy level.
+/// The runtime form of a model file: the skeleton with its forward kinematics, the
+/// multilinear model at every accuracy level, and the feet for the foot lock.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RuntimeModel {
     rig: Rig,
     lod: LodModel,
+    feet: Option<FootRig>,
 }
 
 impl RuntimeModel {
@@ -41,11 +43,25 @@ impl RuntimeModel {
                 lod.p()
             )));
         }
-        Ok(RuntimeModel { rig, lod })
+        Ok(RuntimeModel {
+            rig,
+            lod,
+            feet: None,
+        })
+    }
+
+    /// The model with the feet of its rig for the foot lock ([`FootRig::check`]ed against the rig).
+    pub fn with_feet(mut self, feet: Option<FootRig>) -> Result<RuntimeModel, InvalidModel> {
+        if let Some(f) = &feet {
+            f.check(&self.rig).map_err(InvalidModel)?;
+        }
+        self.feet = feet;
+        Ok(self)
     }
 
     /// Decodes the bytes of a model file (framing and checksum as [`file::unframe`] checks them,
-    /// then the pose layout and the runtime model; the build report after them is not read).
+    /// then the pose layout, the runtime model and the feet; the build report after them is not
+    /// read).
     pub fn from_bytes(bytes: &[u8]) -> Result<RuntimeModel, FileError> {
         Self::decode_at(bytes, Path::new("<model bytes>"))
     }
@@ -57,7 +73,7 @@ impl RuntimeModel {
 
     fn decode_at(bytes: &[u8], path: &Path) -> Result<RuntimeModel, FileError> {
         let payload = file::unframe(bytes, path)?;
-        let ((layout, lod), _): ((LayoutParts, LodModel), usize) =
+        let ((layout, lod, feet), _): ((LayoutParts, LodModel, Option<FootRig>), usize) =
             file::decode_prefix(payload, path)?;
         let invalid = |source: InvalidModel| FileError::Invalid {
             path: path.to_path_buf(),
@@ -66,7 +82,9 @@ impl RuntimeModel {
         let rig = layout
             .rig()
             .map_err(|e| invalid(InvalidModel(format!("pose layout: {e}"))))?;
-        RuntimeModel::new(rig, lod).map_err(invalid)
+        RuntimeModel::new(rig, lod)
+            .and_then(|m| m.with_feet(feet))
+            .map_err(invalid)
     }
 
     /// The skeleton and its forward kinematics.
@@ -79,9 +97,15 @@ impl RuntimeModel {
         &self.lod
     }
 
+    /// The feet and floor the foot lock needs ([`crate::FootLock`]); `None` when the model's build
+    /// found no feet.
+    pub fn feet(&self) -> Option<&FootRig> {
+        self.feet.as_ref()
+    }
+
     /// The parts.
-    pub fn into_parts(self) -> (Rig, LodModel) {
-        (self.rig, self.lod)
+    pub fn into_parts(self) -> (Rig, LodModel, Option<FootRig>) {
+        (self.rig, self.lod, self.feet)
     }
 }
 

@@ -27,6 +27,7 @@ use serde_json::Value;
 struct RawModel {
     layout: motion_lod::motion_io::PoseLayoutParts,
     lod: motion_lod::lod_policy::ModelParts,
+    feet: Option<motion_lod::lod_policy::FootRig>,
     report: BuildReport,
 }
 

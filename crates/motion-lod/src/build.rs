@@ -664,6 +664,7 @@ impl Analysis {
         Ok(MotionModel {
             layout: self.layout.clone(),
             lod: LodModel::new(parts)?,
+            feet: None,
             report: BuildReport {
                 samples: s,
                 dims: [p, t, s],
@@ -707,6 +708,10 @@ impl MotionModel {
         let analysis = Analysis::run(set, config, progress)?;
         let mut model = analysis.runtime_model(config, progress)?;
         model.report.quality = set.quality.clone();
+        model.feet = set
+            .quality
+            .as_ref()
+            .and_then(|q| q.foot_rig(model.layout.rig()));
         // 6. Measured errors of every accuracy level and joint count.
         progress.stage("level errors", 1);
         let (level_errors, joint_errors) =

@@ -123,3 +123,100 @@ fn render_style<S: ClipSource>(_source: &S) -> RenderStyle {
 pub fn check_render_dir(dir: &Path) -> Result<(), RenderError> {
     Recorder::new(dir, RenderStyle::default()).map(|_| ())
 }
+
+/// What one crowd walker showed, frame by frame: the motion-quality meter's input
+/// ([`crate::quality::measure_track`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WalkerTrack {
+    /// The walker's index in the crowd.
+    pub walker: usize,
+    /// World-frame pose vectors, `frames x P` (metres, y up; rows the clip did not write hold the
+    /// layout's rest rotations, as the runtime's forward kinematics uses them).
+    pub poses: Vec<f64>,
+    /// Frames at which a new cycle started (the walker's cycle frame moved).
+    pub seams: Vec<usize>,
+    /// Accuracy level shown at every frame.
+    pub levels: Vec<usize>,
+    /// Active joints shown at every frame.
+    pub joints: Vec<usize>,
+}
+
+/// Runs a crowd of the model for `frames` frames of `1 / config.fps` s under `policy`, the camera
+/// on `scene`'s path, and records what `walkers` showed, as the crowd plays it: seams between
+/// cycles of changing controls, levels that change with distance, planted feet near the camera.
+/// Walker indices beyond the crowd are ignored.
+pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
+    model: &crate::MotionModel,
+    config: CrowdConfig,
+    scene: Scene,
+    policy: &P,
+    frames: usize,
+    walkers: &[usize],
+) -> Result<Vec<WalkerTrack>, CrowdError> {
+    let source = crate::LodSource::new(model);
+    let mut crowd = Crowd::new(&source, config)?;
+    let field = crowd.config().field_size_m;
+    let (path, lens) = (scene.path(field), scene.lens(Camera::default(), field));
+    let dt = 1.0 / config.fps;
+    let p = model.lod.p();
+    let rest = model.layout.rest_pose();
+    let mut tracks: Vec<WalkerTrack> = walkers
+        .iter()
+        .filter(|&&i| i < crowd.len())
+        .map(|&i| WalkerTrack {
+            walker: i,
+            poses: Vec::with_capacity(frames * p),
+            seams: Vec::new(),
+            levels: Vec::with_capacity(frames),
+            joints: Vec::with_capacity(frames),
+        })
+        .collect();
+    let mut frames_of: Vec<Option<(glam::Vec2, f32)>> = vec![None; tracks.len()];
+    let mut stats = FrameStats::default();
+    for f in 0..frames {
+        let camera = path.camera_at(f as f32 * dt, &lens);
+        crowd.step_into(&source, policy, &camera, dt, &mut stats)?;
+        for (track, last) in tracks.iter_mut().zip(&mut frames_of) {
+            let i = track.walker;
+            let (base, heading) = crowd.cycle_frame(i);
+            if last.is_some_and(|l| l != (base, heading)) {
+                track.seams.push(f);
+            }
+            *last = Some((base, heading));
+            let frame = lod_policy::CycleFrame {
+                x: base.x,
+                z: base.y,
+                heading,
+            };
+            let shown = crowd.pose(i);
+            if shown.len() < 6 {
+                // No pose this frame (a clip fault): the last one stays on screen.
+                let last = track
+                    .poses
+                    .len()
+                    .checked_sub(p)
+                    .map(|s| track.poses[s..].to_vec());
+                track.poses.extend(last.unwrap_or_else(|| rest.clone()));
+                let d = crowd.detail(i);
+                track.levels.push(d.accuracy);
+                track.joints.push(d.active_joints);
+                continue;
+            }
+            let mut pose: Vec<f64> = rest.clone();
+            for (v, &s) in pose.iter_mut().zip(shown) {
+                *v = f64::from(s);
+            }
+            let root = frame.to_world(glam::Vec3::from_slice(&shown[0..3]));
+            let orient = frame.rotation()
+                * lod_policy::chain::exp_map_to_quat(glam::Vec3::from_slice(&shown[3..6]));
+            let orient = lod_policy::chain::quat_to_exp_map(orient);
+            pose[0..3].copy_from_slice(&root.as_dvec3().to_array());
+            pose[3..6].copy_from_slice(&orient.as_dvec3().to_array());
+            track.poses.extend_from_slice(&pose);
+            let d = crowd.detail(i);
+            track.levels.push(d.accuracy);
+            track.joints.push(d.active_joints);
+        }
+    }
+    Ok(tracks)
+}

@@ -22,6 +22,11 @@
 //!    by the shortfall, a few millimetres, rather than the knee popping).
 //!
 //! Only the rotations of the thigh, knee and ankle joints change; the root does not move.
+//!
+//! The runtime's foot lock ([`lod_policy::footlock`]) is the causal counterpart for characters
+//! played frame by frame (crowds, engines): it cannot centre a contact it has not seen the end of,
+//! so it holds the foot where it landed and releases it with a decay. The thresholds are the same
+//! numbers (checked by a test); the arithmetic here is f64 over a whole walk.
 
 use glam::{DQuat, DVec3};
 use motion_io::expmap::{nearest_branch, quat_to_exp};
@@ -264,6 +269,15 @@ fn two_bone(hip: DVec3, knee: DVec3, ankle: DVec3, target: DVec3) -> (DQuat, DQu
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn thresholds_are_the_runtime_locks() {
+        use lod_policy::footlock as runtime;
+        assert_eq!(LOCK_HEIGHT_M as f32, runtime::LOCK_HEIGHT_M);
+        assert_eq!(LOCK_SPEED_M_S as f32, runtime::LOCK_SPEED_M_S);
+        assert_eq!(SOFT_REACH as f32, runtime::SOFT_REACH);
+        assert_eq!(MAX_REACH as f32, runtime::MAX_REACH);
+    }
 
     #[test]
     fn two_bone_reaches_the_target_and_keeps_lengths() {

@@ -131,6 +131,9 @@ pub struct MotionModel {
     pub layout: PoseLayout,
     /// The runtime model at every accuracy level.
     pub lod: LodModel,
+    /// The skeleton's feet and the data's floor, for the runtime foot lock
+    /// ([`lod_policy::footlock`]); `None` when the build found no feet.
+    pub feet: Option<lod_policy::FootRig>,
     /// What the build measured.
     pub report: BuildReport,
 }
@@ -208,11 +211,11 @@ impl MotionModel {
         Ok(model)
     }
 
-    /// The runtime form of this model ([`RuntimeModel`]): the pose layout's rig ([`PoseLayout::rig`])
-    /// and the runtime model, what [`RuntimeModel::load`] reads from this model's file. Fails only
-    /// when the layout's rows are not the runtime model's.
+    /// The runtime form of this model ([`RuntimeModel`]): the pose layout's rig ([`PoseLayout::rig`]),
+    /// the runtime model and the feet, what [`RuntimeModel::load`] reads from this model's file.
+    /// Fails only when the layout's rows are not the runtime model's or the feet do not fit the rig.
     pub fn runtime(&self) -> Result<RuntimeModel, InvalidModel> {
-        RuntimeModel::new(self.rig().clone(), self.lod.clone())
+        RuntimeModel::new(self.rig().clone(), self.lod.clone())?.with_feet(self.feet)
     }
 
     /// The skeleton and its f32 forward kinematics, as the runtime evaluates them.
@@ -251,6 +254,9 @@ impl MotionModel {
                 CONTROL_NAMES.len(),
                 CONTROL_NAMES.join(", ")
             ));
+        }
+        if let Some(feet) = &self.feet {
+            feet.check(self.layout.rig()).map_err(InvalidModel)?;
         }
         let r = &self.report;
         if r.samples != s || r.dims != [p, t, s] {

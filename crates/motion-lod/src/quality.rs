@@ -129,6 +129,25 @@ pub struct QualityReference {
 }
 
 impl QualityReference {
+    /// The runtime foot lock's feet and floor ([`lod_policy::FootRig`]) for `rig`: the ankle and
+    /// toe of each foot and the data's floor; `None` when they do not fit the rig (a foot without
+    /// a rotating knee and thigh above it).
+    pub fn foot_rig(&self, rig: &lod_policy::Rig) -> Option<lod_policy::FootRig> {
+        let foot = |points: &[usize]| lod_policy::Foot {
+            ankle: points[0],
+            toe: points.get(1).copied(),
+        };
+        if self.feet.left.is_empty() || self.feet.right.is_empty() {
+            return None;
+        }
+        let feet = lod_policy::FootRig {
+            left: foot(&self.feet.left),
+            right: foot(&self.feet.right),
+            floor_m: self.floor_m as f32,
+        };
+        feet.check(rig).is_ok().then_some(feet)
+    }
+
     /// Median duration of the data's cycles whose step length is within 10% of `step_m` (the 9 nearest
     /// when fewer are that close); `None` without cycles.
     pub fn duration_for_step(&self, step_m: f64) -> Option<f64> {
@@ -553,6 +572,42 @@ pub fn measure_walk(
         walk.frame_time,
         Some(reference.floor_m),
         walk.cycle_seconds,
+        &seams,
+    )
+}
+
+/// Measures what a crowd walker showed ([`crate::crowd::record_walkers`]) against the model's
+/// reference floor, with its seams; `frame_time`: the crowd's `1 / fps`. The cycle duration (the
+/// facing window) is the mean time between the track's seams, the track's length with fewer than
+/// two. The frames before the first seam are the crowd's start and are not measured: a new crowd's
+/// walkers begin root-only (drawn by nobody) and take their joints in the first cycle
+/// ([`crowd_sim::CrowdConfig::spread_first_builds`]), a switch from the rest pose.
+pub fn measure_track(
+    model: &crate::MotionModel,
+    track: &crate::crowd::WalkerTrack,
+    frame_time: f64,
+) -> Result<MotionQuality, QualityError> {
+    let reference = model
+        .report
+        .quality
+        .as_ref()
+        .ok_or(QualityError::NoReference)?;
+    let dof = model.layout.dof().max(1);
+    let start = track.seams.first().copied().unwrap_or(0);
+    let poses = track.poses.get(start * dof..).unwrap_or(&[]);
+    let seams: Vec<usize> = track.seams.iter().map(|&s| s - start).collect();
+    let frames = poses.len() / dof;
+    let cycle_s = match seams.last() {
+        Some(&b) if seams.len() >= 2 && b > 0 => b as f64 / (seams.len() - 1) as f64,
+        _ => frames as f64,
+    } * frame_time;
+    measure(
+        &model.layout,
+        &reference.feet,
+        poses,
+        frame_time,
+        Some(reference.floor_m),
+        cycle_s,
         &seams,
     )
 }

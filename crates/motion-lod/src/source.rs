@@ -7,7 +7,9 @@
 
 use crowd_sim::{ClipError, ClipSource, LevelTable};
 use glam::Vec3;
-use lod_policy::{ClipKernel, ControlRange, Controls, Detail, KernelScratch, RootMotion};
+use lod_policy::{
+    ClipKernel, ControlRange, Controls, CycleFrame, Detail, FootLock, KernelScratch, RootMotion,
+};
 use motion_io::PoseLayout;
 
 use crate::model::MotionModel;
@@ -229,6 +231,23 @@ impl ClipSource for LodSource<'_> {
 
     fn prefetch(&self, clip: &LodClip, t_seconds: f32) {
         clip.kernel.prefetch(f64::from(t_seconds));
+    }
+
+    /// The runtime foot lock ([`lod_policy::FootLock::apply`]) on the model's feet, for the joints
+    /// the clip evaluates; nothing when the model has no feet. The lock validates before it
+    /// writes, so a refused pose is shown as it is.
+    fn plant_feet(
+        &self,
+        clip: &LodClip,
+        frame: &CycleFrame,
+        dt: f32,
+        lock: &mut FootLock,
+        pose: &mut [f32],
+    ) {
+        if let Some(feet) = &self.model.feet {
+            let active = clip.kernel.detail().active_joints;
+            let _ = lock.apply(self.model.layout.rig(), feet, frame, active, dt, pose);
+        }
     }
 
     fn joints(&self, clip: &LodClip, pose: &[f32], out: &mut [Vec3]) -> usize {

@@ -299,6 +299,7 @@ fn real_model_file_is_checked_like_any_other() {
 struct RawModel {
     layout: motion_io::PoseLayoutParts,
     lod: lod_policy::ModelParts,
+    feet: Option<lod_policy::FootRig>,
     report: motion_lod::BuildReport,
 }
 
@@ -315,6 +316,7 @@ fn valid_checksum_broken_models_are_refused_by_every_command() {
         let raw = || RawModel {
             layout: model.layout.clone().into(),
             lod: model.lod.clone().into_parts(),
+            feet: model.feet,
             report: model.report.clone(),
         };
         let mut parent = raw();
@@ -325,11 +327,17 @@ fn valid_checksum_broken_models_are_refused_by_every_command() {
         nan.lod.keys[0].core[5] = f32::NAN;
         let mut report = raw();
         report.report.row_weights.pop();
+        let mut feet = raw();
+        let mut broken = model.feet.expect("the embedded data's model has feet");
+        // The hips as an ankle: its parent is the top joint, which has no parent (thigh).
+        broken.left.ankle = model.layout.root();
+        feet.feet = Some(broken);
         let cases = [
             ("parent.mlod", parent, "parent"),
             ("rank.mlod", rank, "rank"),
             ("nan.mlod", nan, "non-finite"),
             ("weights.mlod", report, "row weights"),
+            ("feet.mlod", feet, "left foot"),
         ];
         let exe = env!("CARGO_BIN_EXE_motion-lod");
         for (name, value, expected) in cases {

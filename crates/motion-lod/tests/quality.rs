@@ -270,3 +270,102 @@ fn planted_feet_skate_less_than_sliding_ones() {
         "locked feet skate {skate_locked:.2} against {skate_free:.2} free"
     );
 }
+
+/// What crowd walkers show as the crowd plays them: 8 walkers for 10 s at 30 fps on their curved
+/// paths (controls changing every cycle, seams inertialized), all at full detail, measured by the
+/// meter from each walker's first seam on ([`quality::measure_track`]); with the foot lock
+/// (`CrowdConfig::foot_lock_levels`, default) and without it (0).
+fn crowd_tracks(model: &MotionModel, foot_lock_levels: usize) -> Vec<MotionQuality> {
+    use motion_lod::crowd::record_walkers;
+    use motion_lod::crowd_sim::{CrowdConfig, Scene};
+    let config = CrowdConfig {
+        seed: 5,
+        foot_lock_levels,
+        ..CrowdConfig::with_density(8, 0.02)
+    };
+    let walkers: Vec<usize> = (0..8).collect();
+    let tracks = record_walkers(
+        model,
+        config,
+        Scene::Ground,
+        &lod_policy::FullDetail,
+        300,
+        &walkers,
+    )
+    .expect("crowd runs");
+    assert_eq!(tracks.len(), 8);
+    tracks
+        .iter()
+        .map(|t| {
+            assert!(
+                t.seams.len() >= 5,
+                "walker {}: seams {:?}",
+                t.walker,
+                t.seams
+            );
+            quality::measure_track(model, t, 1.0 / f64::from(config.fps)).expect("track measures")
+        })
+        .collect()
+}
+
+fn median_skate(qs: &[MotionQuality]) -> f64 {
+    let mut v: Vec<f64> = qs.iter().map(|q| q.skate_cm_s).collect();
+    quality::median(&mut v)
+}
+
+/// Issue 12, planted feet for near crowd walkers: on the embedded data the runtime foot lock
+/// halves the walkers' median foot skate at least.
+#[test]
+fn embedded_crowd_walkers_plant_their_feet() {
+    let (model, _) = common::built();
+    assert!(model.feet.is_some(), "the model records its feet");
+    let (locked, free) = (crowd_tracks(model, 3), crowd_tracks(model, 0));
+    let (l, f) = (median_skate(&locked), median_skate(&free));
+    eprintln!("embedded crowd: median skate {l:.2} cm/s locked, {f:.2} free");
+    assert!(
+        l < 0.5 * f,
+        "locked feet skate {l:.2} cm/s against {f:.2} free"
+    );
+}
+
+/// Issue 12's acceptance for crowd walkers on Bandai: near walkers as the crowd plays them pop at
+/// most 1.25x the data's median and skate at most 1.5x; the lock takes most of the free feet's
+/// skate away (a quarter of it at most remains).
+#[test]
+fn bandai_crowd_walkers_look_like_the_data() {
+    let Some((model, _)) = bandai() else {
+        return;
+    };
+    let data = model.report.quality.as_ref().expect("reference").median;
+    let (locked, free) = (crowd_tracks(model, 3), crowd_tracks(model, 0));
+    for (i, (q, f)) in locked.iter().zip(&free).enumerate() {
+        eprintln!(
+            "bandai crowd walker {i}: pop {:.2} (free {:.2}, data {:.2}), seam pop {:.2}, skate {:.2} (free {:.2}, data {:.2}), floor {:.2} cm",
+            q.pop_cm,
+            f.pop_cm,
+            data.pop_cm,
+            q.seam_pop_cm,
+            q.skate_cm_s,
+            f.skate_cm_s,
+            data.skate_cm_s,
+            q.floor_offset_cm
+        );
+        assert!(
+            q.pop_cm <= 1.25 * data.pop_cm,
+            "walker {i}: pop {:.2} cm/frame^2 > 1.25 x the data's {:.2}",
+            q.pop_cm,
+            data.pop_cm
+        );
+        assert!(
+            q.skate_cm_s <= 1.5 * data.skate_cm_s,
+            "walker {i}: skate {:.2} cm/s > 1.5 x the data's {:.2}",
+            q.skate_cm_s,
+            data.skate_cm_s
+        );
+    }
+    let (l, f) = (median_skate(&locked), median_skate(&free));
+    assert!(
+        l < 0.25 * f,
+        "locked feet skate {l:.2} cm/s against {f:.2} free"
+    );
+}

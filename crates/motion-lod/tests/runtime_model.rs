@@ -62,6 +62,14 @@ fn a_built_model_loads_in_the_runtime_with_the_same_poses_and_joints() {
     let runtime = RuntimeModel::from_bytes(&file_bytes()).unwrap();
     assert_eq!(runtime.lod(), &model.lod);
     assert_eq!(runtime.rig(), model.layout.rig());
+    // The feet for the foot lock: the skeleton's ankles and toes, read back from the file.
+    let feet = runtime.feet().expect("the embedded data's model has feet");
+    assert_eq!(Some(*feet), model.feet);
+    let name = |j: usize| runtime.rig().joints()[j].name.as_str();
+    assert_eq!(
+        (name(feet.left.ankle), name(feet.right.ankle)),
+        ("Foot_L", "Foot_R")
+    );
     assert_eq!(&model.runtime().unwrap(), &runtime);
     let (lod, rig) = (runtime.lod(), runtime.rig());
     assert_eq!(rig.dof(), lod.p());

@@ -9,16 +9,17 @@
 //! It walks one character for ten seconds at 60 frames per second, turning 20 degrees per gait
 //! cycle, 12 metres from the camera: the level of detail comes from the model's distance policy,
 //! each gait cycle is a clip built once, cycles are chained by their root motion into one
-//! continuous walk, and every frame gives the root's world transform and every joint's local
-//! rotation, which is what a skinned mesh takes. Units: metres, seconds, radians (the command line
+//! continuous walk, planted feet stay where they land (the runtime foot lock), and every frame
+//! gives the root's world transform and every joint's local rotation, which is what a skinned mesh
+//! takes. Units: metres, seconds, radians (the command line
 //! takes turns in degrees; the library never does).
 
 use std::error::Error;
 
 use motion_lod::glam::{Quat, Vec3};
 use motion_lod::lod_policy::{
-    ClipKernel, Controls, CycleFrame, DistancePolicy, KernelScratch, LevelPolicy, RuntimeModel,
-    ViewParams,
+    ClipKernel, Controls, CycleFrame, DistancePolicy, FootLock, KernelScratch, LevelPolicy,
+    RuntimeModel, ViewParams,
 };
 
 /// What one frame hands to the renderer.
@@ -54,6 +55,7 @@ pub fn walk(
     let mut kernel = ClipKernel::new(lod);
     let mut scratch = KernelScratch::new(lod);
     let mut pose = vec![0.0f32; lod.p()];
+    let mut lock = FootLock::new();
     let mut frame = Frame {
         time_s: 0.0,
         root_position: Vec3::ZERO,
@@ -83,6 +85,11 @@ pub fn walk(
         }
         // Per frame: the pose vector, then the root in the world and the joints' local rotations.
         lod.pose(&kernel, kernel.phase_at(t_in_cycle), &mut pose)?;
+        // Planted feet: the lock corrects the leg rows of the pose (when the model knows its feet).
+        if let Some(feet) = model.feet() {
+            let dt = (1.0 / fps) as f32;
+            lock.apply(rig, feet, &cycle_frame, detail.active_joints, dt, &mut pose)?;
+        }
         rig.local_rotations(&pose, detail.active_joints, &mut frame.local_rotations)?;
         let root_in_cycle = Vec3::new(pose[0], pose[1], pose[2]);
         frame.root_position = cycle_frame.to_world(root_in_cycle);

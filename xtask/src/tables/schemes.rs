@@ -20,6 +20,7 @@ pub fn with_lod(model: &MotionModel, lod: LodModel) -> MotionModel {
     MotionModel {
         layout: model.layout.clone(),
         lod,
+        feet: model.feet,
         report: model.report.clone(),
     }
 }

@@ -1,0 +1,691 @@
+//! Planted feet at run time: [`FootLock`], a causal foot lock over the poses a character shows, frame
+//! by frame, in f32, without allocation.
+//!
+//! A synthesized walk slides its stance foot a little (the root's path and the leg rotations are
+//! interpolated separately); coarse levels slide more. The offline walk writer (`motion_lod::footlock`)
+//! sees the whole walk and centres each contact; a character in an engine or a crowd only knows the
+//! frames shown so far. Per foot, each frame:
+//!
+//! 1. **Pivot and contact.** The pivot is the lower of the foot's points (ankle, and toe when the rig
+//!    has one), placed in the world by the cycle frame. The foot is in contact while the pivot is
+//!    within [`LOCK_HEIGHT_M`] of the floor ([`FootRig::floor_m`]) and its horizontal speed since
+//!    the previous frame is below [`LOCK_SPEED_M_S`].
+//! 2. **Correction.** In contact, the horizontal motion of the pivot is cancelled:
+//!    `d(f) = d(f - 1) - (x_j(f) - x_j(f - 1))_xz` (world frame; `j` the pivot of frame `f`, which
+//!    may pass from heel to toe). Contact starts from the correction held (0 after a full release),
+//!    so the foot never jumps. Out of contact the correction held at lift-off eases to zero over
+//!    [`RELEASE_S`] (`e(1 - r / RELEASE_S)` with the ease curve [`crate::ease_in_out`], `r` the
+//!    time since lift-off), while the foot is in the air.
+//!    **Clearance**: once a foot has risen above the lock height after lift-off, it is in the air
+//!    until its next contact; while in the air a pivot lower than [`LOCK_HEIGHT_M`] above the floor
+//!    (a swing toe scuffing the floor) is lifted to that height, `l(f) = max(0, floor + h - y_j(f))`,
+//!    which is continuous since it starts at 0; at touchdown the lift held eases out like the
+//!    horizontal correction.
+//! 3. **Two-bone IK.** The ankle is moved by the correction with the hip fixed ([`two_bone`]): the
+//!    knee stays in the leg's current bend plane, thigh and shin keep their lengths, and the foot keeps
+//!    its world orientation (its points move with the ankle). Beyond [`SOFT_REACH`] of the leg's length
+//!    the reach eases toward full length ([`soft_reach`]), so the knee never snaps straight. The new
+//!    rotations of the thigh, knee and ankle joints are written back into the pose rows, so forward
+//!    kinematics, local rotations for skinning and the C ABI all see the planted foot.
+//!
+//! A leg whose three joints are not all evaluated at the pose's detail (fewer active joints) is not
+//! locked, and its correction is released. [`FootLock::release`] forgets the anchors (a teleport).
+
+use glam::{Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::chain::{CycleFrame, nearest_branch, quat_to_exp_map};
+use crate::math::ease_in_out;
+use crate::model::{ALWAYS_ROWS, ROWS_PER_JOINT};
+use crate::rig::{JointRole, JointTransform, Rig, STACK_JOINTS};
+
+/// A foot point counts as planted within this height above the floor (m): the motion-quality meter's
+/// 2 cm contact height and a margin.
+pub const LOCK_HEIGHT_M: f32 = 0.03;
+/// A foot point counts as planted below this horizontal speed (m/s); a swing foot passes faster.
+pub const LOCK_SPEED_M_S: f32 = 0.8;
+/// The correction held at lift-off decays to zero over this time (s).
+pub const RELEASE_S: f32 = 0.3;
+/// At the start of a contact the lock's hold on the foot grows from none to full over this time
+/// (s), so the foot slows down instead of stopping dead.
+pub const ONSET_S: f32 = 0.1;
+/// Share of the leg's length (thigh plus shin) beyond which the IK reach is softened.
+pub const SOFT_REACH: f32 = 0.97;
+/// The IK never straightens the leg beyond this share of its length.
+pub const MAX_REACH: f32 = 0.9999;
+/// A pivot moving faster than this between two frames (m/s) has been moved, not walked: the lock
+/// forgets its anchor.
+pub const TELEPORT_SPEED_M_S: f32 = 20.0;
+
+/// One foot of a rig: the ankle joint (whose parent is the knee, whose parent is the thigh) and the
+/// toe joint below it when the skeleton has one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Foot {
+    /// Rig index of the ankle joint.
+    pub ankle: usize,
+    /// Rig index of the toe joint, below the ankle.
+    pub toe: Option<usize>,
+}
+
+/// The feet of a rig and the data's floor: what a foot lock needs beyond the [`Rig`]. Stored in the
+/// model file (format 6) when the build found the feet.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FootRig {
+    /// Left foot.
+    pub left: Foot,
+    /// Right foot.
+    pub right: Foot,
+    /// Height of the data's floor in the cycle frame (m), as the motion-quality meter measures it on
+    /// the training takes.
+    pub floor_m: f32,
+}
+
+/// One leg as the lock drives it: rig indices of thigh, knee, ankle, and the foot's points.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Leg {
+    thigh: usize,
+    knee: usize,
+    ankle: usize,
+    toe: Option<usize>,
+}
+
+impl FootRig {
+    /// Checks the feet against `rig`: the ankle's parent (knee) and grandparent (thigh) exist, the
+    /// three rotate, and the toe is below the ankle; the floor is finite. The message names the joint.
+    pub fn check(&self, rig: &Rig) -> Result<(), String> {
+        if !self.floor_m.is_finite() {
+            return Err(format!(
+                "feet: the floor height {} is not finite",
+                self.floor_m
+            ));
+        }
+        for (side, foot) in [("left", &self.left), ("right", &self.right)] {
+            leg(rig, foot).map_err(|e| format!("{side} foot: {e}"))?;
+        }
+        Ok(())
+    }
+
+    fn legs(&self, rig: &Rig) -> [Option<Leg>; 2] {
+        [leg(rig, &self.left).ok(), leg(rig, &self.right).ok()]
+    }
+}
+
+fn leg(rig: &Rig, foot: &Foot) -> Result<Leg, String> {
+    let joints = rig.joints();
+    let name = |j: usize| joints.get(j).map_or("?", |x| x.name.as_str());
+    let ankle = foot.ankle;
+    if ankle >= joints.len() {
+        return Err(format!(
+            "ankle joint {ankle} of a rig of {} joints",
+            joints.len()
+        ));
+    }
+    let knee = joints[ankle]
+        .parent
+        .ok_or_else(|| format!("ankle {} has no parent (knee)", name(ankle)))?;
+    let thigh = joints[knee]
+        .parent
+        .ok_or_else(|| format!("knee {} has no parent (thigh)", name(knee)))?;
+    for j in [thigh, knee, ankle] {
+        if !matches!(joints[j].role, JointRole::Rotating(_)) {
+            return Err(format!(
+                "joint {j} ({}) of the leg does not rotate",
+                name(j)
+            ));
+        }
+    }
+    if let Some(toe) = foot.toe {
+        let mut up = joints.get(toe).and_then(|t| t.parent);
+        while let Some(p) = up {
+            if p == ankle {
+                break;
+            }
+            up = joints[p].parent;
+        }
+        if up != Some(ankle) {
+            return Err(format!(
+                "toe joint {toe} is not below the ankle {}",
+                name(ankle)
+            ));
+        }
+    }
+    Ok(Leg {
+        thigh,
+        knee,
+        ankle,
+        toe: foot.toe,
+    })
+}
+
+/// Whether rotating joint `j` of `rig` is evaluated with `active` active joints.
+fn evaluated(rig: &Rig, j: usize, active: usize) -> bool {
+    matches!(rig.joints()[j].role, JointRole::Rotating(k) if k < active)
+}
+
+/// The lock state of one foot (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct FootState {
+    /// The previous frame's uncorrected foot points in the world (ankle, toe), once seen.
+    prev: Option<[Vec3; 2]>,
+    /// In contact at the previous frame.
+    planted: bool,
+    /// Seconds since the contact started.
+    since_contact: f32,
+    /// The horizontal correction shown at the previous frame (world).
+    offset: Vec3,
+    /// Its rate of change at the previous frame (m/s).
+    velocity: Vec3,
+    /// Correction and rate at lift-off, released from there.
+    lift_off: (Vec3, Vec3),
+    /// Seconds since lift-off.
+    since_lift: f32,
+    /// Risen above the lock height since the last contact.
+    airborne: bool,
+    /// The clearance lift shown at the previous frame (m).
+    lift: f32,
+    /// The lift at touchdown, easing out.
+    landing_lift: f32,
+    /// Seconds since touchdown.
+    since_landing: f32,
+}
+
+/// The horizontal correction `t` seconds after lift-off from `x0` changing at `v0`: a critically
+/// damped decay `(x0 + (v0 + g x0) t) e^(-g t)`, `g = 2 ln 2 / (RELEASE_S / 4)`, windowed by
+/// `e(1 - t / RELEASE_S)`: continuous in position and velocity at lift-off, zero from `RELEASE_S`.
+fn released(x0: Vec3, v0: Vec3, t: f32) -> Vec3 {
+    if t >= RELEASE_S {
+        return Vec3::ZERO;
+    }
+    let g = 2.0 * std::f32::consts::LN_2 / (0.25 * RELEASE_S);
+    (x0 + (v0 + g * x0) * t) * (-g * t).exp() * ease_in_out(1.0 - t / RELEASE_S)
+}
+
+/// The pivot height shown in the air for an uncorrected height `h` above the floor: `h` from
+/// `LOCK_HEIGHT_M + m` up, `LOCK_HEIGHT_M` from `LOCK_HEIGHT_M - m` down and
+/// `LOCK_HEIGHT_M + (h - LOCK_HEIGHT_M + m)^2 / (4 m)` between (`m = LOCK_HEIGHT_M / 2`): at least the
+/// lock height, with a continuous slope, so a swing foot is lifted without a kink.
+fn cleared(h: f32) -> f32 {
+    let m = 0.5 * LOCK_HEIGHT_M;
+    if h >= LOCK_HEIGHT_M + m {
+        h
+    } else if h <= LOCK_HEIGHT_M - m {
+        LOCK_HEIGHT_M
+    } else {
+        let u = h - LOCK_HEIGHT_M + m;
+        LOCK_HEIGHT_M + u * u / (4.0 * m)
+    }
+}
+
+impl FootState {
+    /// Advances the state by one frame with the foot's uncorrected world points; returns the world
+    /// correction to show.
+    fn step(&mut self, points: [Vec3; 2], floor: f32, dt: f32) -> Vec3 {
+        let pivot = usize::from(points[1].y < points[0].y);
+        let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
+        let moved = self.prev.map(|prev| flat(points[pivot] - prev[pivot]));
+        self.prev = Some(points);
+        let speed = moved.map(|m| m.length() / dt);
+        if speed.is_some_and(|s| s.is_nan() || s >= TELEPORT_SPEED_M_S) {
+            *self = FootState {
+                prev: Some(points),
+                ..FootState::default()
+            };
+            return Vec3::ZERO;
+        }
+        let height = points[pivot].y - floor;
+        let contact = height < LOCK_HEIGHT_M && speed.is_some_and(|s| s < LOCK_SPEED_M_S);
+        self.clear(height, contact, dt);
+        let before = self.offset;
+        if contact {
+            if !self.planted {
+                self.planted = true;
+                self.since_contact = 0.0;
+            }
+            self.since_contact += dt;
+            let w = ease_in_out((self.since_contact / ONSET_S).min(1.0));
+            self.offset -= w * moved.unwrap_or(Vec3::ZERO);
+        } else {
+            self.release(dt);
+        }
+        self.velocity = (self.offset - before) / dt;
+        self.offset + Vec3::new(0.0, self.lift, 0.0)
+    }
+
+    /// Out of contact: the horizontal correction released from lift-off.
+    fn release(&mut self, dt: f32) {
+        if self.planted {
+            self.planted = false;
+            self.lift_off = (self.offset, self.velocity);
+            self.since_lift = 0.0;
+        }
+        self.since_lift += dt;
+        self.offset = released(self.lift_off.0, self.lift_off.1, self.since_lift);
+    }
+
+    /// The clearance lift for a pivot `height` above the floor (module documentation, step 2).
+    fn clear(&mut self, height: f32, contact: bool, dt: f32) {
+        if contact {
+            self.land();
+        } else if height >= LOCK_HEIGHT_M {
+            self.airborne = true;
+        }
+        if self.airborne {
+            self.lift = cleared(height) - height;
+        } else {
+            self.ease_lift(dt);
+        }
+    }
+
+    /// Ends a flight: the lift held eases out from here.
+    fn land(&mut self) {
+        if self.airborne {
+            self.airborne = false;
+            self.landing_lift = self.lift;
+            self.since_landing = 0.0;
+        }
+    }
+
+    /// The lift held at touchdown easing out.
+    fn ease_lift(&mut self, dt: f32) {
+        self.since_landing += dt;
+        self.lift = if self.since_landing >= RELEASE_S {
+            0.0
+        } else {
+            self.landing_lift * ease_in_out(1.0 - self.since_landing / RELEASE_S)
+        };
+    }
+
+    /// Lets go of the foot (its leg is not evaluated): both corrections ease out from where they are.
+    fn let_go(&mut self, dt: f32) -> Vec3 {
+        self.prev = None;
+        self.land();
+        self.ease_lift(dt);
+        let before = self.offset;
+        self.release(dt);
+        self.velocity = (self.offset - before) / dt;
+        self.offset + Vec3::new(0.0, self.lift, 0.0)
+    }
+}
+
+/// Why [`FootLock::apply`] refused its inputs.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FootLockError {
+    /// The frame step is not a positive finite number of seconds.
+    #[error("foot lock: the frame step {0} s is not positive and finite")]
+    FrameStep(f32),
+    /// The feet do not fit the rig.
+    #[error("foot lock: {0}")]
+    Feet(String),
+    /// The pose or the rig (forward kinematics) refused.
+    #[error("foot lock: {0}")]
+    Rig(#[from] crate::error::RigError),
+}
+
+/// A character's foot lock state (module documentation): about 100 bytes, no heap.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FootLock {
+    feet: [FootState; 2],
+}
+
+impl FootLock {
+    /// A lock holding no foot.
+    pub fn new() -> FootLock {
+        FootLock::default()
+    }
+
+    /// Forgets both feet at once (the character was moved): no correction from the next frame on.
+    pub fn release(&mut self) {
+        *self = FootLock::default();
+    }
+
+    /// Whether either foot is planted or still easing out of a correction.
+    pub fn is_active(&self) -> bool {
+        self.feet
+            .iter()
+            .any(|f| f.planted || f.offset != Vec3::ZERO || f.lift != 0.0)
+    }
+
+    /// The world corrections shown at the last frame (left, right; metres): the horizontal lock
+    /// and the clearance lift.
+    pub fn offsets(&self) -> [Vec3; 2] {
+        self.feet.map(|f| f.offset + Vec3::new(0.0, f.lift, 0.0))
+    }
+
+    /// Plants the feet of `pose`, the pose shown this frame (the rows of `active_joints` rotating
+    /// joints; cycle frame `frame`), `dt` seconds after the previous call, and writes the corrected
+    /// rotations of each locked leg's thigh, knee and ankle into `pose` (module documentation).
+    ///
+    /// Validates and then runs: a non-positive `dt`, feet that do not fit the rig, or a pose shorter
+    /// than its active rows is an error and changes nothing. No allocation for rigs of up to
+    /// [`STACK_JOINTS`] joints.
+    pub fn apply(
+        &mut self,
+        rig: &Rig,
+        feet: &FootRig,
+        frame: &CycleFrame,
+        active_joints: usize,
+        dt: f32,
+        pose: &mut [f32],
+    ) -> Result<(), FootLockError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(FootLockError::FrameStep(dt));
+        }
+        feet.check(rig).map_err(FootLockError::Feet)?;
+        let nj = rig.joint_count();
+        let mut stack = [JointTransform::default(); STACK_JOINTS];
+        let mut heap = Vec::new();
+        let world: &mut [JointTransform] = if nj <= STACK_JOINTS {
+            &mut stack[..nj]
+        } else {
+            heap.resize(nj, JointTransform::default());
+            &mut heap
+        };
+        rig.joint_transforms(pose, active_joints, world)?;
+        let active = active_joints.min(rig.rotating_joints().len());
+        let to_frame = frame.rotation().inverse();
+        for (state, leg) in self.feet.iter_mut().zip(feet.legs(rig)) {
+            let leg = leg.filter(|l| {
+                [l.thigh, l.knee, l.ankle]
+                    .iter()
+                    .all(|&j| evaluated(rig, j, active))
+            });
+            let Some(leg) = leg else {
+                state.let_go(dt);
+                continue;
+            };
+            let ankle = world[leg.ankle].position;
+            let toe = leg.toe.map_or(ankle, |t| world[t].position);
+            let points = [frame.to_world(ankle), frame.to_world(toe)];
+            let d = to_frame * state.step(points, feet.floor_m, dt);
+            if d.length_squared() < 1e-12 {
+                continue;
+            }
+            bend_leg(rig, &leg, world, d, pose);
+        }
+        Ok(())
+    }
+}
+
+/// Moves the ankle of `leg` by `d` (cycle frame) with the thigh's position fixed and the foot's world
+/// orientation kept, and writes the three new local rotations into `pose`.
+fn bend_leg(rig: &Rig, leg: &Leg, world: &[JointTransform], d: Vec3, pose: &mut [f32]) {
+    let (thigh, knee, ankle) = (world[leg.thigh], world[leg.knee], world[leg.ankle]);
+    let parent_rot = rig.joints()[leg.thigh]
+        .parent
+        .map_or(Quat::IDENTITY, |p| world[p].rotation);
+    let (r_thigh, r_knee) = two_bone(
+        thigh.position,
+        knee.position,
+        ankle.position,
+        ankle.position + d,
+    );
+    let thigh_rot = (r_thigh * thigh.rotation).normalize();
+    let knee_rot = (r_knee * r_thigh * knee.rotation).normalize();
+    let locals = [
+        (leg.thigh, parent_rot.inverse() * thigh_rot),
+        (leg.knee, thigh_rot.inverse() * knee_rot),
+        (leg.ankle, knee_rot.inverse() * ankle.rotation),
+    ];
+    for (j, q) in locals {
+        if let JointRole::Rotating(k) = rig.joints()[j].role {
+            let r = ALWAYS_ROWS + ROWS_PER_JOINT * k;
+            let old = Vec3::new(pose[r], pose[r + 1], pose[r + 2]);
+            let v = nearest_branch(quat_to_exp_map(q.normalize()), old);
+            pose[r..r + 3].copy_from_slice(&v.to_array());
+        }
+    }
+}
+
+/// The reach the IK uses for a target `reach` away from the hip with a leg of length `len`: itself up
+/// to [`SOFT_REACH`]` len`, then `d_s + (len - d_s)(1 - exp(-(reach - d_s) / (len - d_s)))`
+/// (`d_s = SOFT_REACH len`, continuous slope at `d_s`), at most [`MAX_REACH`]` len`.
+pub fn soft_reach(reach: f32, len: f32) -> f32 {
+    let start = SOFT_REACH * len;
+    if reach <= start {
+        return reach;
+    }
+    let span = len - start;
+    (start + span * (1.0 - (-(reach - start) / span).exp())).min(MAX_REACH * len)
+}
+
+/// Two-bone IK with the hip fixed: the world rotations to apply to the thigh (`r_thigh`, about the
+/// hip) and then to the shin (`r_knee`, about the moved knee) so that the ankle reaches `target`
+/// (at the [`soft_reach`]), the knee staying on the side it bends to now.
+pub fn two_bone(hip: Vec3, knee: Vec3, ankle: Vec3, target: Vec3) -> (Quat, Quat) {
+    let (l1, l2) = ((knee - hip).length(), (ankle - knee).length());
+    let to_target = target - hip;
+    let reach = to_target.length();
+    if l1 < 1e-5 || l2 < 1e-5 || reach < 1e-5 {
+        return (Quat::IDENTITY, Quat::IDENTITY);
+    }
+    let d = soft_reach(reach, l1 + l2).max((l1 - l2).abs() + 1e-4);
+    let u = to_target / reach;
+    // The bend direction: the current knee's offset from the hip-target line.
+    let kh = knee - hip;
+    let mut w = kh - kh.dot(u) * u;
+    if w.length_squared() < 1e-10 {
+        w = (ankle - hip).cross(Vec3::Y).cross(u);
+    }
+    let w = w.normalize_or_zero();
+    let cos_a = ((l1 * l1 + d * d - l2 * l2) / (2.0 * l1 * d)).clamp(-1.0, 1.0);
+    let new_knee = hip + l1 * (cos_a * u + (1.0 - cos_a * cos_a).max(0.0).sqrt() * w);
+    let r_thigh = Quat::from_rotation_arc(kh / l1, (new_knee - hip) / l1);
+    let shin = r_thigh * (ankle - knee);
+    let goal = hip + d * u - new_knee;
+    let r_knee = Quat::from_rotation_arc(shin.normalize(), goal.normalize());
+    (r_thigh, r_knee)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rig::RigJoint;
+
+    fn joint(name: &str, parent: Option<usize>, offset: [f32; 3], role: JointRole) -> RigJoint {
+        RigJoint {
+            name: name.into(),
+            parent,
+            offset: Vec3::from_array(offset),
+            rest: Quat::IDENTITY,
+            role,
+        }
+    }
+
+    /// Hips (root, 0.9 m up) with two legs: thigh, knee (0.42 m down), ankle (0.42 m down), toe.
+    fn legs() -> (Rig, FootRig) {
+        let mut joints = vec![joint("hips", None, [0.0; 3], JointRole::Root)];
+        for (k, x) in [0.1f32, -0.1].into_iter().enumerate() {
+            let base = joints.len();
+            joints.push(joint(
+                "thigh",
+                Some(0),
+                [x, 0.0, 0.0],
+                JointRole::Rotating(3 * k),
+            ));
+            joints.push(joint(
+                "knee",
+                Some(base),
+                [0.0, -0.42, 0.0],
+                JointRole::Rotating(3 * k + 1),
+            ));
+            joints.push(joint(
+                "ankle",
+                Some(base + 1),
+                [0.0, -0.42, 0.0],
+                JointRole::Rotating(3 * k + 2),
+            ));
+            joints.push(joint(
+                "toe",
+                Some(base + 2),
+                [0.0, -0.04, 0.12],
+                JointRole::Static,
+            ));
+        }
+        let rig = Rig::new(joints).unwrap();
+        let feet = FootRig {
+            left: Foot {
+                ankle: 3,
+                toe: Some(4),
+            },
+            right: Foot {
+                ankle: 7,
+                toe: Some(8),
+            },
+            floor_m: 0.0,
+        };
+        (rig, feet)
+    }
+
+    fn positions(rig: &Rig, pose: &[f32]) -> Vec<Vec3> {
+        let mut out = vec![Vec3::ZERO; rig.joint_count()];
+        rig.joint_positions(pose, 6, &mut out).unwrap();
+        out
+    }
+
+    #[test]
+    fn two_bone_reaches_the_target_and_keeps_lengths() {
+        let hip = Vec3::new(0.1, 0.9, 0.0);
+        let knee = Vec3::new(0.1, 0.5, 0.05);
+        let ankle = Vec3::new(0.1, 0.1, 0.0);
+        let target = ankle + Vec3::new(0.0, 0.05, -0.08);
+        let (r_hip, r_knee) = two_bone(hip, knee, ankle, target);
+        let new_knee = hip + r_hip * (knee - hip);
+        let new_ankle = new_knee + r_knee * (r_hip * (ankle - knee));
+        assert!(new_ankle.distance(target) < 1e-5, "{new_ankle}");
+        assert!(((new_knee - hip).length() - (knee - hip).length()).abs() < 1e-5);
+        assert!(new_knee.z > hip.z.min(target.z));
+    }
+
+    #[test]
+    fn soft_reach_is_continuous_and_short_of_full_length() {
+        let len = 0.9;
+        let mut prev = (0.0f32, 1.0f32);
+        for i in 1..=2000 {
+            let r = i as f32 * 0.001;
+            let s = soft_reach(r, len);
+            assert!(s < len && s <= r + 1e-6, "{r}: {s}");
+            let slope = (s - prev.0) / 0.001;
+            assert!(
+                slope >= -1e-3 && (i <= 2 || (slope - prev.1).abs() < 0.06),
+                "{r}: {slope}"
+            );
+            prev = (s, slope);
+        }
+    }
+
+    /// A stance foot sliding 0.5 cm per frame at 30 fps (below the lock speed) on the floor stays
+    /// where it landed; once it lifts, the correction eases out within RELEASE_S.
+    #[test]
+    fn a_sliding_stance_foot_stays_where_it_landed_and_lets_go_smoothly() {
+        let (rig, feet) = legs();
+        let dt = 1.0 / 30.0;
+        let mut lock = FootLock::new();
+        let frame = CycleFrame::default();
+        // Thighs forward 0.3 rad, knees back 0.6, ankles forward 0.3 (feet flat): ankles 0.8025 m
+        // below the hips, toes 0.04 below the ankles. Hips at 0.83 m put the toes 1.25 cm under the
+        // floor, the ankles 2.75 cm above it. The walk slides 0.5 cm per frame (0.15 m/s).
+        let pose_at = |f: usize| {
+            let mut pose = vec![0.0f32; rig.dof()];
+            pose[..3].copy_from_slice(&[0.0, 0.83, 0.005 * f as f32]);
+            for leg in [7, 16] {
+                pose[leg] = 0.3;
+                pose[leg + 3] = -0.6;
+                pose[leg + 6] = 0.3;
+            }
+            if f >= 20 {
+                pose[1] += 0.05 * (f - 19) as f32;
+            }
+            pose
+        };
+        let mut anchor = None;
+        let mut prev_toe: Option<Vec3> = None;
+        for f in 0..40 {
+            let mut pose = pose_at(f);
+            lock.apply(&rig, &feet, &frame, 6, dt, &mut pose).unwrap();
+            let p = positions(&rig, &pose);
+            let toe = p[4];
+            if (1..20).contains(&f) {
+                let a = *anchor.get_or_insert(p[4]);
+                assert!(toe.distance(a) < 2e-3, "frame {f}: toe {toe} left {a}");
+            }
+            if f >= 20 + (RELEASE_S / dt).ceil() as usize {
+                let free = positions(&rig, &pose_at(f))[4];
+                assert!(toe.distance(free) < 1e-5, "frame {f}: still corrected");
+            }
+            if let Some(q) = prev_toe {
+                // No jump: the toe never moves more than the walk's 0.5 cm, the lift's 5 cm and
+                // the release's largest step (9.5 cm eased over 6 frames: under 3 cm) together.
+                assert!(
+                    toe.distance(q) < 0.09,
+                    "frame {f}: toe jumps {}",
+                    toe.distance(q)
+                );
+            }
+            prev_toe = Some(toe);
+        }
+        assert!(!lock.is_active());
+    }
+
+    #[test]
+    fn a_swing_foot_and_unevaluated_legs_are_not_touched() {
+        let (rig, feet) = legs();
+        let dt = 1.0 / 30.0;
+        let mut lock = FootLock::new();
+        for f in 0..10 {
+            // Fast (1 m/s): never planted.
+            let mut pose = vec![0.0f32; rig.dof()];
+            pose[..3].copy_from_slice(&[0.0, 0.86, 0.033 * f as f32]);
+            let before = pose.clone();
+            lock.apply(&rig, &feet, &CycleFrame::default(), 6, dt, &mut pose)
+                .unwrap();
+            assert_eq!(pose, before);
+        }
+        let mut lock = FootLock::new();
+        for f in 0..10 {
+            // Slow, on the floor, but only the first two joints evaluated: the legs are not driven.
+            let mut pose = vec![0.0f32; rig.dof()];
+            pose[..3].copy_from_slice(&[0.0, 0.86, 0.01 * f as f32]);
+            let before = pose.clone();
+            lock.apply(&rig, &feet, &CycleFrame::default(), 2, dt, &mut pose)
+                .unwrap();
+            assert_eq!(pose, before);
+        }
+    }
+
+    #[test]
+    fn bad_inputs_are_refused_without_change() {
+        let (rig, feet) = legs();
+        let mut lock = FootLock::new();
+        let mut pose = vec![0.0f32; rig.dof()];
+        let frame = CycleFrame::default();
+        assert!(matches!(
+            lock.apply(&rig, &feet, &frame, 6, 0.0, &mut pose),
+            Err(FootLockError::FrameStep(_))
+        ));
+        let bad = FootRig {
+            left: Foot {
+                ankle: 99,
+                toe: None,
+            },
+            ..feet
+        };
+        let e = lock
+            .apply(&rig, &bad, &frame, 6, 0.1, &mut pose)
+            .unwrap_err();
+        assert!(e.to_string().contains("left foot"), "{e}");
+        let not_below = FootRig {
+            left: Foot {
+                ankle: 3,
+                toe: Some(8),
+            },
+            ..feet
+        };
+        assert!(not_below.check(&rig).is_err());
+        let mut short = vec![0.0f32; 7];
+        assert!(matches!(
+            lock.apply(&rig, &feet, &frame, 6, 0.1, &mut short),
+            Err(FootLockError::Rig(_))
+        ));
+        assert_eq!(lock, FootLock::new());
+    }
+}
