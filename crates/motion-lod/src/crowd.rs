@@ -220,3 +220,116 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
     }
     Ok(tracks)
 }
+
+/// One crowd walker measured by the motion-quality meter as the crowd played it
+/// ([`crowd_quality`]).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct WalkerQuality {
+    /// The walker's index in the crowd.
+    pub walker: usize,
+    /// Frames measured: the walker's longest stretch drawn with joints after its first seam.
+    pub frames: usize,
+    /// Smallest and largest accuracy level shown in that stretch.
+    pub levels: (usize, usize),
+    /// Fewest and most joints shown in that stretch.
+    pub joints: (usize, usize),
+    /// Cycle seams in that stretch.
+    pub seams: usize,
+    /// The meter's figures.
+    pub quality: crate::quality::MotionQuality,
+}
+
+/// Why [`crowd_quality`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CrowdQualityError {
+    /// The crowd refused its settings or a frame.
+    #[error("crowd: {0}")]
+    Crowd(#[from] CrowdError),
+    /// The simulated time is not a positive number of seconds.
+    #[error("simulated time {0} s is not a positive number")]
+    Seconds(f32),
+    /// The meter refused a track.
+    #[error("walker {walker}: {source}")]
+    Quality {
+        /// The walker measured.
+        walker: usize,
+        /// The meter's error.
+        source: crate::quality::QualityError,
+    },
+}
+
+/// Runs a crowd of the model (`config`, camera on `scene`'s path, `policy`) for `seconds` and
+/// measures each walker as it was drawn: its longest stretch with joints after its first seam
+/// (a walker culled or beyond the last level is root-only, drawn by nobody), when that stretch
+/// holds at least two cycles' worth of frames (`2 x` the model's longest mean cycle, 1.2 s at 30
+/// fps for a 0.6 s cycle); shorter ones are left out. Near walkers change clips with inertialized
+/// seams and planted feet, farther ones switch as they are (`config.seam_levels`,
+/// `config.foot_lock_levels`), so the figures are the crowd's transitions as a viewer sees them.
+pub fn crowd_quality<P: LevelPolicy + Sync + ?Sized>(
+    model: &crate::MotionModel,
+    config: CrowdConfig,
+    scene: Scene,
+    policy: &P,
+    seconds: f32,
+) -> Result<Vec<WalkerQuality>, CrowdQualityError> {
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return Err(CrowdQualityError::Seconds(seconds));
+    }
+    let frames = (seconds * config.fps).round().max(1.0) as usize;
+    let all: Vec<usize> = (0..config.walkers).collect();
+    let tracks = record_walkers(model, config, scene, policy, frames, &all)?;
+    let dt = 1.0 / f64::from(config.fps);
+    let cycle_frames = model
+        .report
+        .quality
+        .as_ref()
+        .and_then(|q| q.cycle_steps.iter().map(|s| s.1).reduce(f64::max))
+        .unwrap_or(1.0)
+        / dt;
+    let min_frames = (2.0 * cycle_frames).ceil() as usize;
+    let mut out = Vec::new();
+    for t in &tracks {
+        let first = t.seams.first().copied().unwrap_or(t.joints.len());
+        // The longest run of frames drawn with joints, from the first seam on.
+        let (mut best, mut run_start) = (0..0, None);
+        for f in first..=t.joints.len() {
+            let drawn = f < t.joints.len() && t.joints[f] > 0;
+            match (drawn, run_start) {
+                (true, None) => run_start = Some(f),
+                (false, Some(s)) => {
+                    if f - s > best.len() {
+                        best = s..f;
+                    }
+                    run_start = None;
+                }
+                _ => {}
+            }
+        }
+        if best.len() < min_frames {
+            continue;
+        }
+        let quality =
+            crate::quality::measure_track_range(model, t, dt, best.clone()).map_err(|source| {
+                CrowdQualityError::Quality {
+                    walker: t.walker,
+                    source,
+                }
+            })?;
+        let span = |v: &[usize]| {
+            let v = &v[best.clone()];
+            (
+                v.iter().copied().min().unwrap_or(0),
+                v.iter().copied().max().unwrap_or(0),
+            )
+        };
+        out.push(WalkerQuality {
+            walker: t.walker,
+            frames: best.len(),
+            levels: span(&t.levels),
+            joints: span(&t.joints),
+            seams: t.seams.iter().filter(|s| best.contains(s)).count(),
+            quality,
+        });
+    }
+    Ok(out)
+}

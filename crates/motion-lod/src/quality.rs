@@ -587,18 +587,35 @@ pub fn measure_track(
     track: &crate::crowd::WalkerTrack,
     frame_time: f64,
 ) -> Result<MotionQuality, QualityError> {
+    let dof = model.layout.dof().max(1);
+    let start = track.seams.first().copied().unwrap_or(0);
+    measure_track_range(model, track, frame_time, start..track.poses.len() / dof)
+}
+
+/// [`measure_track`] over the frames `range` of the track only (its seams inside the range).
+pub fn measure_track_range(
+    model: &crate::MotionModel,
+    track: &crate::crowd::WalkerTrack,
+    frame_time: f64,
+    range: std::ops::Range<usize>,
+) -> Result<MotionQuality, QualityError> {
     let reference = model
         .report
         .quality
         .as_ref()
         .ok_or(QualityError::NoReference)?;
     let dof = model.layout.dof().max(1);
-    let start = track.seams.first().copied().unwrap_or(0);
-    let poses = track.poses.get(start * dof..).unwrap_or(&[]);
-    let seams: Vec<usize> = track.seams.iter().map(|&s| s - start).collect();
+    let (start, end) = (range.start, range.end.min(track.poses.len() / dof));
+    let poses = track.poses.get(start * dof..end * dof).unwrap_or(&[]);
+    let seams: Vec<usize> = track
+        .seams
+        .iter()
+        .filter(|&&s| s >= start && s < end)
+        .map(|&s| s - start)
+        .collect();
     let frames = poses.len() / dof;
-    let cycle_s = match seams.last() {
-        Some(&b) if seams.len() >= 2 && b > 0 => b as f64 / (seams.len() - 1) as f64,
+    let cycle_s = match (seams.first(), seams.last()) {
+        (Some(&a), Some(&b)) if b > a => (b - a) as f64 / (seams.len() - 1) as f64,
         _ => frames as f64,
     } * frame_time;
     measure(

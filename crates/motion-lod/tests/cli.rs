@@ -96,6 +96,10 @@ fn every_column_header_of_info_eval_and_quality_is_explained() {
         "float",
         "facing",
         "cycle/data",
+        "walker",
+        "frames",
+        "levels",
+        "seams",
         "--joints",
         "leave-one-out",
         "variogram",
@@ -161,4 +165,56 @@ fn eval_names_both_of_its_inputs_and_refuses_a_take_with_a_hint() {
         ),
         "{stderr}"
     );
+}
+
+/// `quality --crowd`: crowd walkers measured as the crowd plays them, each over a stretch drawn
+/// with joints of at least two cycles, with the levels it showed; a bad duration is refused.
+#[test]
+fn quality_measures_crowd_walkers_as_the_crowd_plays_them() {
+    let dir = std::env::temp_dir().join(format!("mlod-cli-crowd-quality-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("m.mlod");
+    let (ok, _, stderr) = run(&["build", "-o", model.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let m = model.to_str().unwrap();
+    let (ok, stdout, stderr) = run(&[
+        "quality",
+        m,
+        "--crowd",
+        "--walkers",
+        "30",
+        "--seconds",
+        "4",
+        "--camera",
+        "ground",
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let doc: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON document");
+    let walkers = doc["walkers"].as_array().expect("walkers");
+    assert!(!walkers.is_empty(), "{stdout}");
+    for w in walkers {
+        // 4 s at 30 fps, from the first seam on: at least two cycles of frames were drawn.
+        let frames = w["frames"].as_u64().unwrap();
+        assert!((40..=120).contains(&frames), "{w}");
+        let (lo, hi) = (
+            w["levels"][0].as_u64().unwrap(),
+            w["levels"][1].as_u64().unwrap(),
+        );
+        assert!(lo <= hi, "{w}");
+        for k in ["pop_cm", "seam_pop_cm", "skate_cm_s", "floor_offset_cm"] {
+            assert!(
+                w["quality"][k].as_f64().is_some_and(f64::is_finite),
+                "{k}: {w}"
+            );
+        }
+    }
+    let (ok, table, _) = run(&["quality", m, "--crowd", "--walkers", "30", "--seconds", "4"]);
+    assert!(
+        ok && table.contains("scene: 30 walkers") && table.contains("levels"),
+        "{table}"
+    );
+    let (ok, _, stderr) = run(&["quality", m, "--crowd", "--seconds", "0"]);
+    assert!(!ok && stderr.contains("(0, 3600]"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -295,6 +295,10 @@ pub fn run(config: &TablesConfig) -> Result<()> {
         progress,
     )?;
     let motion_quality = quality::measure(&model, progress)?;
+    let crowd_quality = match &motion_quality {
+        Some(_) => quality::measure_crowd(&model, progress)?,
+        None => Vec::new(),
+    };
     let crowds = crowd::measure(
         &model,
         &analysis,
@@ -428,6 +432,7 @@ pub fn run(config: &TablesConfig) -> Result<()> {
             points,
             &relative_link(out_dir, &path),
         ));
+        doc.push_str(&quality::crowd_section(reference, &crowd_quality));
     } else {
         let _ = writeln!(
             doc,

@@ -145,3 +145,88 @@ pub fn section(
     }
     doc
 }
+
+/// Walkers and simulated seconds of the crowd measurement (the `motion-lod quality --crowd`
+/// defaults).
+pub const CROWD_WALKERS: usize = 200;
+/// Walkers per square metre of the crowd measurement.
+pub const CROWD_DENSITY: f32 = 0.01;
+/// Simulated seconds of the crowd measurement.
+pub const CROWD_SECONDS: f32 = 10.0;
+
+/// Crowd walkers measured as the crowd plays them, per scene (ground, overview):
+/// [`motion_lod::crowd::crowd_quality`] under the distance policy.
+pub fn measure_crowd(
+    model: &MotionModel,
+    progress: &dyn motion_lod::progress::Progress,
+) -> Result<Vec<(&'static str, Vec<motion_lod::crowd::WalkerQuality>)>> {
+    use motion_lod::crowd_sim::{CrowdConfig, Scene};
+    progress.stage("motion quality of crowd walkers", 2);
+    let policy = lod_policy::DistancePolicy::for_model(&model.lod);
+    let mut out = Vec::new();
+    for (name, scene) in [("ground", Scene::Ground), ("overview", Scene::Overview)] {
+        let config = CrowdConfig::with_density(CROWD_WALKERS, CROWD_DENSITY);
+        let walkers =
+            motion_lod::crowd::crowd_quality(model, config, scene, &policy, CROWD_SECONDS)
+                .with_context(|| format!("measuring the crowd walkers ({name} camera)"))?;
+        out.push((name, walkers));
+        progress.inc(1);
+    }
+    Ok(out)
+}
+
+/// Whether a walker that showed levels `lo..=hi` belongs to a group, given the near levels.
+type GroupRule = fn(usize, usize, usize) -> bool;
+
+/// The markdown subsection of the crowd measurement: per scene, the walkers that stayed near
+/// (seams inertialized, feet planted: the first `seam_levels` levels), far (switched clips) or
+/// crossed between the two in their measured stretch.
+pub fn crowd_section(
+    reference: &QualityReference,
+    scenes: &[(&'static str, Vec<motion_lod::crowd::WalkerQuality>)],
+) -> String {
+    let m = &reference.median;
+    let near = motion_lod::crowd_sim::CrowdConfig::default().seam_levels;
+    let mut doc = String::new();
+    let _ = writeln!(
+        doc,
+        "\n### Crowd walkers as the crowd plays them\n\n\
+         {CROWD_WALKERS} walkers at {CROWD_DENSITY} per m² for {CROWD_SECONDS} s at 30 fps under the distance \
+         policy, each measured over its longest stretch drawn with joints (after its first seam, at \
+         least two cycles): controls change every cycle along the walkers' paths and levels change \
+         with distance. Walkers at levels 0-{} inertialize their seams and plant their feet (the \
+         runtime foot lock); farther ones switch clips as they are, where the policies keep their \
+         error and slide under a pixel. The same command: `motion-lod quality MODEL --crowd \
+         --camera ground|overview`.\n\n\
+         | camera | walkers | group | pop worst (x data) | pop median | seam pop worst | skate worst (x data) | skate median |\n\
+         | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: |",
+        near - 1
+    );
+    for (scene, walkers) in scenes {
+        // Which walkers a group holds, by the smallest and largest level they showed.
+        let groups: [(&str, GroupRule); 3] = [
+            ("near", |_, hi, near| hi < near),
+            ("far", |lo, _, near| lo >= near),
+            ("near and far", |lo, hi, near| lo < near && hi >= near),
+        ];
+        for (group, keep) in &groups {
+            let at: Vec<&MotionQuality> = walkers
+                .iter()
+                .filter(|w| keep(w.levels.0, w.levels.1, near))
+                .map(|w| &w.quality)
+                .collect();
+            if at.is_empty() {
+                continue;
+            }
+            let (pw, pm) = worst_median(at.iter().map(|q| q.pop_cm / m.pop_cm).collect());
+            let (seam, _) = worst_median(at.iter().map(|q| q.seam_pop_cm / m.pop_cm).collect());
+            let (sw, sm) = worst_median(at.iter().map(|q| q.skate_cm_s / m.skate_cm_s).collect());
+            let _ = writeln!(
+                doc,
+                "| {scene} | {} | {group} | {pw:.2} | {pm:.2} | {seam:.2} | {sw:.2} | {sm:.2} |",
+                at.len()
+            );
+        }
+    }
+    doc
+}

@@ -67,11 +67,12 @@ pub struct DataArgs {
     /// Time alignment method.
     #[arg(long, value_enum, default_value_t = AlignArg::Dtw)]
     pub align: AlignArg,
-    /// DTW band, as a fraction of the cycle length.
-    #[arg(long, default_value_t = DtwConfig::default().band)]
+    /// DTW band, as a fraction of the cycle length (0 = the diagonal only, 1 = no band; 0..=1).
+    #[arg(long, default_value_t = DtwConfig::default().band, value_parser = super::ranges::band)]
     pub band: f64,
-    /// DTW slope limit: at most this many consecutive steps along one cycle.
-    #[arg(long, default_value_t = DtwConfig::default().max_slope)]
+    /// DTW slope limit: at most this many consecutive steps along one cycle (0 = diagonal steps
+    /// only; 0..=100).
+    #[arg(long, default_value_t = DtwConfig::default().max_slope, value_parser = super::ranges::count(super::ranges::MAX_SLOPE))]
     pub max_slope: usize,
     /// Contact detection preset.
     #[arg(long, value_enum, default_value_t = PresetArg::Default)]
@@ -80,7 +81,8 @@ pub struct DataArgs {
     /// data gives: more is an error).
     #[arg(long, value_name = "N", value_parser = super::ranges::count(super::ranges::SAMPLES))]
     pub samples: Option<usize>,
-    /// Seed of the random subset.
+    /// Seed of the random subset (any integer 0..=18446744073709551615; the same seed picks the
+    /// same cycles).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Length units of the files.

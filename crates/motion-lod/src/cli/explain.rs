@@ -118,6 +118,19 @@ pub const GLOSSARY: &[Entry] = &[
         text: "Mean pelvis heading minus travel heading, degrees (+ = facing left of the path); the data's range is printed in the header. A sidestep facing far from its travel crabs.",
     },
     Entry {
+        term: "crowd walker",
+        aliases: &[
+            "quality --crowd",
+            "walker",
+            "frames",
+            "levels",
+            "seams",
+            "foot lock",
+            "planted feet",
+        ],
+        text: "`quality --crowd` measures crowd walkers as the crowd plays them: controls changing every cycle along their paths, levels changing with distance. Each walker is measured over its longest stretch drawn with joints after its first seam (`frames`, at 30 fps; culled and far walkers are root-only and drawn by nobody); `levels` and `joints` are the smallest and largest it showed there, `seams` the cycle seams in it. Walkers at the first three levels inertialize their seams and plant their feet (the runtime foot lock: a foot low and slow on the floor is held where it landed by two-bone IK); farther ones switch clips as they are.",
+    },
+    Entry {
         term: "cycle/data",
         aliases: &["cadence"],
         text: "The synthesized cycle's duration against the median of the data's cycles of about the same step length (within 10%), seconds.",

@@ -1,5 +1,7 @@
 //! `motion-lod quality MODEL`: the motion-quality meter over a grid of walks covering the data's
-//! controls, at every accuracy level (or one), beside the data's own takes.
+//! controls, at every accuracy level (or one), beside the data's own takes; with `--crowd`, over
+//! crowd walkers as the crowd plays them (transitions inertialized near, switched far; planted
+//! feet near).
 
 use std::path::PathBuf;
 
@@ -32,6 +34,24 @@ pub struct QualityArgs {
     /// Let feet slide as synthesized (no foot lock).
     #[arg(long)]
     pub no_foot_lock: bool,
+    /// Measure crowd walkers as the crowd plays them instead of the walk grid: the distance
+    /// policy, the camera of `--camera`, each walker's longest stretch drawn with joints (near
+    /// walkers inertialize their seams and plant their feet, far ones switch clips as they are;
+    /// `--no-blend` and `--no-foot-lock` turn those off for every walker).
+    #[arg(long)]
+    pub crowd: bool,
+    /// Walkers of `--crowd` (1..=10000).
+    #[arg(long, default_value_t = 200, value_parser = super::ranges::count((1, 10_000)))]
+    pub walkers: usize,
+    /// Walkers per square metre of `--crowd`, sets the field size (0 < d <= 10).
+    #[arg(long, default_value_t = 0.01, value_parser = super::ranges::density)]
+    pub density: f32,
+    /// Simulated seconds of `--crowd` (0 < s <= 3600).
+    #[arg(long, default_value_t = 10.0, value_parser = super::ranges::seconds)]
+    pub seconds: f32,
+    /// Camera of `--crowd`: `ground` walks inside the crowd, `overview` circles above it.
+    #[arg(long, value_enum, default_value_t = super::crowd::CameraArg::Overview)]
+    pub camera: super::crowd::CameraArg,
     /// Print one JSON document instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -61,6 +81,9 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             args.model.display()
         );
     };
+    if args.crowd {
+        return run_crowd(&args, &model, &reference);
+    }
     let levels = model.lod.levels().len();
     let chosen: Vec<usize> = match args.level {
         Some(l) if l >= levels => bail!("--level {l}: the model has levels 0..{}", levels - 1),
@@ -161,6 +184,99 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
                 .map(|d| format!("{:.2}/{:.2}", r.cycle_seconds, d))
                 .unwrap_or_default()
         );
+    }
+    Ok(())
+}
+
+/// `--crowd`: the meter over crowd walkers as the crowd plays them.
+fn run_crowd(
+    args: &QualityArgs,
+    model: &MotionModel,
+    reference: &quality::QualityReference,
+) -> anyhow::Result<()> {
+    use motion_lod::crowd_sim::CrowdConfig;
+    let defaults = CrowdConfig::default();
+    let config = CrowdConfig {
+        seam_levels: if args.no_blend {
+            0
+        } else {
+            defaults.seam_levels
+        },
+        foot_lock_levels: if args.no_foot_lock {
+            0
+        } else {
+            defaults.foot_lock_levels
+        },
+        ..CrowdConfig::with_density(args.walkers, args.density)
+    };
+    let policy = lod_policy::DistancePolicy::for_model(&model.lod);
+    let walkers =
+        motion_lod::crowd::crowd_quality(model, config, args.camera.into(), &policy, args.seconds)
+            .context("measuring the crowd")?;
+    if args.json {
+        #[derive(Serialize)]
+        struct Doc<'a> {
+            data: &'a MotionQuality,
+            walkers: &'a [motion_lod::crowd::WalkerQuality],
+        }
+        println!(
+            "{}",
+            serde_json::to_string(&Doc {
+                data: &reference.median,
+                walkers: &walkers
+            })?
+        );
+        return Ok(());
+    }
+    let m = &reference.median;
+    println!(
+        "scene: {} walkers, {} per m^2, {} camera, distance policy, {} s at 30 fps; each walker's \
+         longest stretch drawn with joints (after its first seam, at least two cycles)",
+        args.walkers,
+        args.density,
+        match args.camera {
+            super::crowd::CameraArg::Ground => "ground",
+            super::crowd::CameraArg::Overview => "overview",
+        },
+        args.seconds
+    );
+    println!(
+        "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s",
+        reference.takes, m.pop_cm, m.skate_cm_s
+    );
+    println!(
+        "{:>6} {:>7} {:>7} {:>7} {:>6} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "walker",
+        "frames",
+        "levels",
+        "joints",
+        "seams",
+        "pop",
+        "x data",
+        "seam",
+        "skate",
+        "x data",
+        "floor"
+    );
+    for w in &walkers {
+        let q = &w.quality;
+        println!(
+            "{:>6} {:>7} {:>7} {:>7} {:>6} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+            w.walker,
+            w.frames,
+            format!("{}-{}", w.levels.0, w.levels.1),
+            format!("{}-{}", w.joints.0, w.joints.1),
+            w.seams,
+            q.pop_cm,
+            q.pop_cm / m.pop_cm,
+            q.seam_pop_cm,
+            q.skate_cm_s,
+            q.skate_cm_s / m.skate_cm_s,
+            q.floor_offset_cm
+        );
+    }
+    if walkers.is_empty() {
+        println!("no walker was drawn with joints for two cycles; try more --seconds or --walkers");
     }
     Ok(())
 }

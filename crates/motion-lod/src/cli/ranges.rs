@@ -36,6 +36,8 @@ pub const LEVEL: (u64, u64) = (0, 10_000);
 pub const JOINTS: (u64, u64) = (0, 10_000);
 /// `--folds` of `eval`.
 pub const FOLDS: (u64, u64) = (2, 1_000);
+/// `--max-slope` of the DTW alignment (its memory grows with `2 max_slope + 2` per cell).
+pub const MAX_SLOPE: (u64, u64) = (0, 100);
 
 /// A `usize` option within `range` (inclusive).
 pub fn count(range: (u64, u64)) -> impl TypedValueParser<Value = usize> {
@@ -70,6 +72,19 @@ pub fn fps(s: &str) -> Result<f64, String> {
     positive_up_to(s, FPS_MAX)
 }
 
+/// `--band` of the DTW alignment: a fraction of the cycle length in `[0, 1]`.
+pub fn band(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|e| format!("`{s}` is not a number ({e})"))?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{s} is not in [0, 1]"))
+    }
+}
+
 /// `--density`: in `(0, DENSITY_MAX]`.
 pub fn density(s: &str) -> Result<f32, String> {
     positive_up_to(s, DENSITY_MAX).map(|v| v as f32)
@@ -90,5 +105,10 @@ mod tests {
         assert!(seconds("ten").unwrap_err().contains("not a number"));
         assert!(fps("0").is_err() && fps("1001").is_err() && fps("30").is_ok());
         assert!(density("0.05").is_ok() && density("11").is_err());
+        assert_eq!(band("0"), Ok(0.0));
+        assert_eq!(band("1"), Ok(1.0));
+        for bad in ["-0.1", "1.5", "NaN", "inf"] {
+            assert!(band(bad).unwrap_err().contains("[0, 1]"), "{bad}");
+        }
     }
 }
