@@ -72,7 +72,7 @@ pub struct CrowdConfig {
     pub seam_levels: usize,
     /// Half-life of a seam's offset (s).
     pub seam_halflife_s: f32,
-    /// Walkers at accuracy levels `0..foot_lock_levels` (with joints) keep planted feet planted: the
+    /// Visible walkers at accuracy levels `0..foot_lock_levels` (with joints) keep planted feet planted: the
     /// source's foot lock ([`ClipSource::plant_feet`], `lod_policy::footlock`) runs on their pose
     /// every frame. Farther walkers skate only as much as their level's measured slide, which the
     /// policies keep under a pixel. Default 3, the walkers whose seams are inertialized; 0 turns
@@ -444,7 +444,8 @@ impl<C: Send> Crowd<C> {
                             if let Some(ahead) = walkers.get(k + PREFETCH) {
                                 source.prefetch(&ahead.cur, ahead.t);
                             }
-                            walkers[k].pose(source, &params, dt, &mut poses[k * pl..(k + 1) * pl]);
+                            let pose = &mut poses[k * pl..(k + 1) * pl];
+                            walkers[k].pose(source, &params, dt, visible[k], pose);
                         }
                     }
                     let tc = Instant::now();

@@ -258,21 +258,23 @@ impl<C> Walker<C> {
     }
 
     /// Pose stage: the current clip's pose at `t` with the running seam applied (the seam ends
-    /// once its offset has decayed); then, for a walker at one of the first `foot_lock_levels`
-    /// accuracy levels with joints, planted feet ([`ClipSource::plant_feet`]; `dt` is the frame
-    /// step). A walker that leaves those levels drops its lock: its feet are let go at once, as its
-    /// clip is switched without a seam there.
+    /// once its offset has decayed); then, for a `visible` walker at one of the first
+    /// `foot_lock_levels` accuracy levels with joints, planted feet ([`ClipSource::plant_feet`];
+    /// `dt` is the frame step). A walker that leaves those levels or the view drops its lock: its
+    /// feet are let go at once (nobody sees it, or its clip switches without a seam there).
     pub fn pose<S: ClipSource<Clip = C>>(
         &mut self,
         src: &S,
         p: &StageParams,
         dt: f32,
+        visible: bool,
         out: &mut [f32],
     ) {
         self.rows = self.displayed(src, self.t, out);
         self.seam.finish_after(self.t - self.seam_start);
-        let near =
-            self.cur_detail.accuracy < p.foot_lock_levels && self.cur_detail.active_joints > 0;
+        let near = visible
+            && self.cur_detail.accuracy < p.foot_lock_levels
+            && self.cur_detail.active_joints > 0;
         if !near {
             self.lock = None;
             return;

@@ -272,7 +272,8 @@ fn planted_feet_skate_less_than_sliding_ones() {
 }
 
 /// What crowd walkers show as the crowd plays them: 8 walkers for 10 s at 30 fps on their curved
-/// paths (controls changing every cycle, seams inertialized), all at full detail, measured by the
+/// paths (controls changing every cycle, seams inertialized), all at full detail and in view of the
+/// overview camera (the lock runs for visible walkers), measured by the
 /// meter from each walker's first seam on ([`quality::measure_track`]); with the foot lock
 /// (`CrowdConfig::foot_lock_levels`, default) and without it (0).
 fn crowd_tracks(model: &MotionModel, foot_lock_levels: usize) -> Vec<MotionQuality> {
@@ -287,7 +288,7 @@ fn crowd_tracks(model: &MotionModel, foot_lock_levels: usize) -> Vec<MotionQuali
     let tracks = record_walkers(
         model,
         config,
-        Scene::Ground,
+        Scene::Overview,
         &lod_policy::FullDetail,
         300,
         &walkers,
