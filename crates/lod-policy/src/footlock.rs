@@ -380,7 +380,25 @@ impl FootLock {
             heap.resize(nj, JointTransform::default());
             &mut heap
         };
-        rig.joint_transforms(pose, active_joints, world)?;
+        // Forward kinematics of the legs' chains only (the feet's points and their ancestors).
+        let mut stack_needed = [false; STACK_JOINTS];
+        let mut heap_needed = Vec::new();
+        let needed: &mut [bool] = if nj <= STACK_JOINTS {
+            &mut stack_needed[..nj]
+        } else {
+            heap_needed.resize(nj, false);
+            &mut heap_needed
+        };
+        for foot in [&feet.left, &feet.right] {
+            for start in [Some(foot.ankle), foot.toe].into_iter().flatten() {
+                let mut j = Some(start);
+                while let Some(k) = j.filter(|&k| !needed[k]) {
+                    needed[k] = true;
+                    j = rig.joints()[k].parent;
+                }
+            }
+        }
+        rig.joint_transforms_of(pose, active_joints, needed, world)?;
         let active = active_joints.min(rig.rotating_joints().len());
         let to_frame = frame.rotation().inverse();
         for (state, leg) in self.feet.iter_mut().zip(feet.legs(rig)) {

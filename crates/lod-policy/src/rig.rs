@@ -300,7 +300,7 @@ impl Rig {
             positions: out,
             rotations,
         };
-        self.forward(pose, active, &mut split);
+        self.forward(pose, active, &mut split, |_| true);
         Ok(())
     }
 
@@ -314,7 +314,22 @@ impl Rig {
         out: &mut [JointTransform],
     ) -> Result<(), RigError> {
         let active = self.check(pose, active_joints, out.len())?;
-        self.forward(pose, active, out);
+        self.forward(pose, active, out, |_| true);
+        Ok(())
+    }
+
+    /// [`Rig::joint_transforms`] for the joints `needed` marks only (a marked joint's parent must
+    /// be marked too; `needed.len() >= joint_count`); the other slots of `out` are left as they
+    /// are. The marked transforms are those of [`Rig::joint_transforms`], bit for bit.
+    pub(crate) fn joint_transforms_of(
+        &self,
+        pose: &[f32],
+        active_joints: usize,
+        needed: &[bool],
+        out: &mut [JointTransform],
+    ) -> Result<(), RigError> {
+        let active = self.check(pose, active_joints, out.len())?;
+        self.forward(pose, active, out, |j| needed[j]);
         Ok(())
     }
 
@@ -352,10 +367,19 @@ impl Rig {
         }
     }
 
-    fn forward<O: FkOut + ?Sized>(&self, pose: &[f32], active: usize, out: &mut O) {
+    fn forward<O: FkOut + ?Sized>(
+        &self,
+        pose: &[f32],
+        active: usize,
+        out: &mut O,
+        keep: impl Fn(usize) -> bool,
+    ) {
         let root_pos = Vec3::new(pose[0], pose[1], pose[2]);
         let ground = Vec3::new(root_pos.x, 0.0, root_pos.z);
         for (j, joint) in self.joints.iter().enumerate() {
+            if !keep(j) {
+                continue;
+            }
             match joint.role {
                 JointRole::Outside => out.set(j, ground, Quat::IDENTITY),
                 JointRole::Root => out.set(j, root_pos, self.local_rotation(j, pose, active)),

@@ -334,6 +334,17 @@ impl ClipSource for PcaSource<'_> {
         clip.rows
     }
 
+    fn plant_feet(
+        &self,
+        clip: &PcaClip,
+        frame: &lod_policy::CycleFrame,
+        dt: f32,
+        lock: &mut lod_policy::FootLock,
+        pose: &mut [f32],
+    ) {
+        crate::source::plant_feet(self.model, clip.active_joints, frame, dt, lock, pose);
+    }
+
     fn joints(&self, clip: &PcaClip, pose: &[f32], out: &mut [Vec3]) -> usize {
         write_joints(&self.model.layout, pose, clip.active_joints, out)
     }

@@ -137,6 +137,23 @@ pub(crate) fn write_joints(
     1 + active
 }
 
+/// The runtime foot lock ([`lod_policy::FootLock::apply`]) on the model's feet for a pose of
+/// `active` joints, what every source of the model's data runs for near walkers (the model's, the
+/// naive and the PCA baselines: the same work, for a fair comparison); nothing when the model has
+/// no feet. The lock validates before it writes, so a refused pose is shown as it is.
+pub(crate) fn plant_feet(
+    model: &MotionModel,
+    active: usize,
+    frame: &CycleFrame,
+    dt: f32,
+    lock: &mut FootLock,
+    pose: &mut [f32],
+) {
+    if let Some(feet) = &model.feet {
+        let _ = lock.apply(model.layout.rig(), feet, frame, active, dt, pose);
+    }
+}
+
 /// The model's accuracy levels, joints and pose length, as a crowd sees them (also reported by the
 /// baselines, so that the crowd's policy applies to them unchanged).
 pub fn level_table(model: &MotionModel) -> LevelTable {
@@ -233,9 +250,6 @@ impl ClipSource for LodSource<'_> {
         clip.kernel.prefetch(f64::from(t_seconds));
     }
 
-    /// The runtime foot lock ([`lod_policy::FootLock::apply`]) on the model's feet, for the joints
-    /// the clip evaluates; nothing when the model has no feet. The lock validates before it
-    /// writes, so a refused pose is shown as it is.
     fn plant_feet(
         &self,
         clip: &LodClip,
@@ -244,10 +258,8 @@ impl ClipSource for LodSource<'_> {
         lock: &mut FootLock,
         pose: &mut [f32],
     ) {
-        if let Some(feet) = &self.model.feet {
-            let active = clip.kernel.detail().active_joints;
-            let _ = lock.apply(self.model.layout.rig(), feet, frame, active, dt, pose);
-        }
+        let active = clip.kernel.detail().active_joints;
+        plant_feet(self.model, active, frame, dt, lock, pose);
     }
 
     fn joints(&self, clip: &LodClip, pose: &[f32], out: &mut [Vec3]) -> usize {
