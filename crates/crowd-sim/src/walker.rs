@@ -55,8 +55,9 @@ pub(crate) struct Walker<C> {
     pub hold_s: f32,
     /// Clip time at which the running seam started (its clock is `t - seam_start`).
     pub seam_start: f32,
-    /// The walker's foot lock (`lod_policy::footlock`), allocated when it first comes near enough
-    /// to plant its feet; dropped back to `None` when it leaves, so far walkers hold no lock state.
+    /// The walker's foot lock (`lod_policy::footlock`, 200 bytes), allocated when it first comes
+    /// near enough to plant its feet and kept (released) when it leaves, so walkers never near
+    /// hold no lock state and the frame loop never allocates for one that returns.
     pub lock: Option<Box<FootLock>>,
     /// Rows of the pose vector written this frame.
     pub rows: usize,
@@ -260,7 +261,7 @@ impl<C> Walker<C> {
     /// Pose stage: the current clip's pose at `t` with the running seam applied (the seam ends
     /// once its offset has decayed); then, for a `visible` walker at one of the first
     /// `foot_lock_levels` accuracy levels with joints, planted feet ([`ClipSource::plant_feet`];
-    /// `dt` is the frame step). A walker that leaves those levels or the view drops its lock: its
+    /// `dt` is the frame step). A walker that leaves those levels or the view releases its lock: its
     /// feet are let go at once (nobody sees it, or its clip switches without a seam there).
     pub fn pose<S: ClipSource<Clip = C>>(
         &mut self,
@@ -276,7 +277,9 @@ impl<C> Walker<C> {
             && self.cur_detail.accuracy < p.foot_lock_levels
             && self.cur_detail.active_joints > 0;
         if !near {
-            self.lock = None;
+            if let Some(lock) = self.lock.as_deref_mut() {
+                lock.release();
+            }
             return;
         }
         let frame = CycleFrame {

@@ -74,6 +74,17 @@ impl CycleFrame {
         self.rotation() * p + Vec3::new(self.x, 0.0, self.z)
     }
 
+    /// Places the root of `pose` (a pose vector of this cycle frame, at least 6 rows) in the world:
+    /// rows `0..3` become the world position ([`CycleFrame::to_world`]), rows `3..6` the exponential
+    /// map of the world orientation (the frame's rotation times the root's). The other rows are
+    /// local and stay as they are.
+    pub fn place_root(&self, pose: &mut [f32]) {
+        let root = self.to_world(Vec3::from_slice(&pose[0..3]));
+        let orient = self.rotation() * exp_map_to_quat(Vec3::from_slice(&pose[3..6]));
+        pose[0..3].copy_from_slice(&root.to_array());
+        pose[3..6].copy_from_slice(&quat_to_exp_map(orient).to_array());
+    }
+
     /// The frame after `motion` (step 1 of the module documentation); the heading wraps to `(-pi, pi]`.
     pub fn next(&self, motion: &RootMotion) -> CycleFrame {
         let v = self.rotation() * Vec3::new(motion.dx, 0.0, motion.dz);

@@ -93,20 +93,21 @@ impl FootRig {
     /// Checks the feet against `rig`: the ankle's parent (knee) and grandparent (thigh) exist, the
     /// three rotate, and the toe is below the ankle; the floor is finite. The message names the joint.
     pub fn check(&self, rig: &Rig) -> Result<(), String> {
+        self.legs(rig).map(|_| ())
+    }
+
+    /// The two legs (left, right) of `rig`, checked as [`FootRig::check`] says.
+    fn legs(&self, rig: &Rig) -> Result<[Leg; 2], String> {
         if !self.floor_m.is_finite() {
             return Err(format!(
                 "feet: the floor height {} is not finite",
                 self.floor_m
             ));
         }
-        for (side, foot) in [("left", &self.left), ("right", &self.right)] {
-            leg(rig, foot).map_err(|e| format!("{side} foot: {e}"))?;
-        }
-        Ok(())
-    }
-
-    fn legs(&self, rig: &Rig) -> [Option<Leg>; 2] {
-        [leg(rig, &self.left).ok(), leg(rig, &self.right).ok()]
+        Ok([
+            leg(rig, &self.left).map_err(|e| format!("left foot: {e}"))?,
+            leg(rig, &self.right).map_err(|e| format!("right foot: {e}"))?,
+        ])
     }
 }
 
@@ -321,7 +322,7 @@ pub enum FootLockError {
     Rig(#[from] crate::error::RigError),
 }
 
-/// A character's foot lock state (module documentation): about 100 bytes, no heap.
+/// A character's foot lock state (module documentation): at most 256 bytes, no heap.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FootLock {
     feet: [FootState; 2],
@@ -345,12 +346,6 @@ impl FootLock {
             .any(|f| f.planted || f.offset != Vec3::ZERO || f.lift != 0.0)
     }
 
-    /// The world corrections shown at the last frame (left, right; metres): the horizontal lock
-    /// and the clearance lift.
-    pub fn offsets(&self) -> [Vec3; 2] {
-        self.feet.map(|f| f.offset + Vec3::new(0.0, f.lift, 0.0))
-    }
-
     /// Plants the feet of `pose`, the pose shown this frame (the rows of `active_joints` rotating
     /// joints; cycle frame `frame`), `dt` seconds after the previous call, and writes the corrected
     /// rotations of each locked leg's thigh, knee and ankle into `pose` (module documentation).
@@ -370,7 +365,7 @@ impl FootLock {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(FootLockError::FrameStep(dt));
         }
-        feet.check(rig).map_err(FootLockError::Feet)?;
+        let legs = feet.legs(rig).map_err(FootLockError::Feet)?;
         let nj = rig.joint_count();
         let mut stack = [JointTransform::default(); STACK_JOINTS];
         let mut heap = Vec::new();
@@ -389,8 +384,8 @@ impl FootLock {
             heap_needed.resize(nj, false);
             &mut heap_needed
         };
-        for foot in [&feet.left, &feet.right] {
-            for start in [Some(foot.ankle), foot.toe].into_iter().flatten() {
+        for leg in &legs {
+            for start in [Some(leg.ankle), leg.toe].into_iter().flatten() {
                 let mut j = Some(start);
                 while let Some(k) = j.filter(|&k| !needed[k]) {
                     needed[k] = true;
@@ -401,16 +396,14 @@ impl FootLock {
         rig.joint_transforms_of(pose, active_joints, needed, world)?;
         let active = active_joints.min(rig.rotating_joints().len());
         let to_frame = frame.rotation().inverse();
-        for (state, leg) in self.feet.iter_mut().zip(feet.legs(rig)) {
-            let leg = leg.filter(|l| {
-                [l.thigh, l.knee, l.ankle]
-                    .iter()
-                    .all(|&j| evaluated(rig, j, active))
-            });
-            let Some(leg) = leg else {
+        for (state, leg) in self.feet.iter_mut().zip(legs) {
+            if ![leg.thigh, leg.knee, leg.ankle]
+                .iter()
+                .all(|&j| evaluated(rig, j, active))
+            {
                 state.let_go(dt);
                 continue;
-            };
+            }
             let ankle = world[leg.ankle].position;
             let toe = leg.toe.map_or(ankle, |t| world[t].position);
             let points = [frame.to_world(ankle), frame.to_world(toe)];
@@ -668,6 +661,13 @@ mod tests {
                 .unwrap();
             assert_eq!(pose, before);
         }
+    }
+
+    #[test]
+    fn a_lock_is_small() {
+        let size = std::mem::size_of::<FootLock>();
+        eprintln!("FootLock: {size} bytes");
+        assert!(size <= 256, "{size} bytes");
     }
 
     #[test]

@@ -160,6 +160,7 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
     let dt = 1.0 / config.fps;
     let p = model.lod.p();
     let rest = model.layout.rest_pose();
+    let mut placed = vec![0.0f32; p];
     let mut tracks: Vec<WalkerTrack> = walkers
         .iter()
         .filter(|&&i| i < crowd.len())
@@ -189,30 +190,25 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
                 heading,
             };
             let shown = crowd.pose(i);
-            if shown.len() < 6 {
+            if shown.len() >= 6 {
+                // The rows the clip wrote, the root placed in the world; the rest at rest.
+                let placed = &mut placed[..shown.len()];
+                placed.copy_from_slice(shown);
+                frame.place_root(placed);
+                let tail = &rest[placed.len().min(rest.len())..];
+                track.poses.extend(
+                    placed
+                        .iter()
+                        .map(|&v| f64::from(v))
+                        .chain(tail.iter().copied()),
+                );
+            } else {
                 // No pose this frame (a clip fault): the last one stays on screen.
-                let last = track
-                    .poses
-                    .len()
-                    .checked_sub(p)
-                    .map(|s| track.poses[s..].to_vec());
-                track.poses.extend(last.unwrap_or_else(|| rest.clone()));
-                let d = crowd.detail(i);
-                track.levels.push(d.accuracy);
-                track.joints.push(d.active_joints);
-                continue;
+                match track.poses.len().checked_sub(p) {
+                    Some(last) => track.poses.extend_from_within(last..),
+                    None => track.poses.extend_from_slice(&rest),
+                }
             }
-            let mut pose: Vec<f64> = rest.clone();
-            for (v, &s) in pose.iter_mut().zip(shown) {
-                *v = f64::from(s);
-            }
-            let root = frame.to_world(glam::Vec3::from_slice(&shown[0..3]));
-            let orient = frame.rotation()
-                * lod_policy::chain::exp_map_to_quat(glam::Vec3::from_slice(&shown[3..6]));
-            let orient = lod_policy::chain::quat_to_exp_map(orient);
-            pose[0..3].copy_from_slice(&root.as_dvec3().to_array());
-            pose[3..6].copy_from_slice(&orient.as_dvec3().to_array());
-            track.poses.extend_from_slice(&pose);
             let d = crowd.detail(i);
             track.levels.push(d.accuracy);
             track.joints.push(d.active_joints);

@@ -548,17 +548,22 @@ pub fn walk_grid(model: &crate::MotionModel) -> Vec<GridWalk> {
         .collect()
 }
 
+/// The model's motion-quality reference, or [`QualityError::NoReference`].
+fn reference_of(model: &crate::MotionModel) -> Result<&QualityReference, QualityError> {
+    model
+        .report
+        .quality
+        .as_ref()
+        .ok_or(QualityError::NoReference)
+}
+
 /// Measures a synthesized walk against the model's reference floor (the walk's own without a
 /// reference), with its cycle seams.
 pub fn measure_walk(
     model: &crate::MotionModel,
     walk: &crate::synth::Walk,
 ) -> Result<MotionQuality, QualityError> {
-    let reference = model
-        .report
-        .quality
-        .as_ref()
-        .ok_or(QualityError::NoReference)?;
+    let reference = reference_of(model)?;
     let cycles = ((walk.poses.len() / model.layout.dof()) as f64 * walk.frame_time
         / walk.cycle_seconds)
         .floor() as usize;
@@ -599,11 +604,7 @@ pub fn measure_track_range(
     frame_time: f64,
     range: std::ops::Range<usize>,
 ) -> Result<MotionQuality, QualityError> {
-    let reference = model
-        .report
-        .quality
-        .as_ref()
-        .ok_or(QualityError::NoReference)?;
+    let reference = reference_of(model)?;
     let dof = model.layout.dof().max(1);
     let (start, end) = (range.start, range.end.min(track.poses.len() / dof));
     let poses = track.poses.get(start * dof..end * dof).unwrap_or(&[]);

@@ -7,7 +7,6 @@
 //! it, cycles are switched as they are (what the crowd does for distant walkers). With `plant_feet`,
 //! feet on the floor are held in place by two-bone IK ([`crate::footlock`]).
 
-use glam::Vec3;
 use lod_policy::chain::{self, CycleFrame, SeamScratch, SeamTransition};
 use lod_policy::{Controls, Detail};
 use motion_io::Motion;
@@ -149,10 +148,7 @@ impl MotionModel {
             let local = time - k as f64 * duration;
             displayed(local, &transition, &mut pose)?;
             // Place the cycle frame in the world: root position and orientation.
-            let root = frame.to_world(Vec3::from_slice(&pose[0..3]));
-            let orient = frame.rotation() * chain::exp_map_to_quat(Vec3::from_slice(&pose[3..6]));
-            pose[0..3].copy_from_slice(&root.to_array());
-            pose[3..6].copy_from_slice(&chain::quat_to_exp_map(orient).to_array());
+            frame.place_root(&mut pose);
             poses.extend(pose.iter().map(|&v| f64::from(v)));
             poses[f * p + TIME_ROW] /= lod.parts().time_scale;
         }
