@@ -85,9 +85,20 @@ pub trait ClipSource: Sync {
         let _ = (clip, frame, dt, lock, pose);
     }
 
-    /// Forward kinematics of `pose` (as written by `pose` for this clip) into cycle-frame joint
-    /// positions in metres, root first; `out.len() >= 1 + levels().joints`. Returns how many
-    /// positions were written (1 for a root-only clip).
+    /// The pose rows the source's forward kinematics takes for joints a clip does not evaluate (each
+    /// joint's rest rotation; the root rows are not read), `levels().pose_len` of them. With them, a
+    /// seam that changes the evaluated joints fades the joints dropped out to their rest rotation and
+    /// the joints added in from it ([`lod_policy::SeamScratch::start_from_rest`]); for a while the
+    /// walker then shows more rows than its clip writes, and `joints` draws them. Empty by default:
+    /// such joints switch at once.
+    fn rest_rows(&self) -> &[f32] {
+        &[]
+    }
+
+    /// Forward kinematics of `pose` into cycle-frame joint positions in metres, root first;
+    /// `out.len() >= 1 + levels().joints`. `pose` holds the rows written by `pose` for this clip, or
+    /// more while a seam fades dropped joints out (their rows follow the clip's: draw the joints of
+    /// every row given). Returns how many positions were written (1 for a root-only clip).
     fn joints(&self, clip: &Self::Clip, pose: &[f32], out: &mut [Vec3]) -> usize;
 
     /// Bones as pairs of indices into the joint positions, for drawing; a bone is drawn only when

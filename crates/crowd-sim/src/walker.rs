@@ -109,8 +109,10 @@ impl<C> Walker<C> {
 
     /// The pose the walker shows at clip time `t`: the current clip's pose with the running seam
     /// applied. Returns the rows written.
+    /// Joints the seam fades out (dropped by the current clip) are shown beyond the clip's rows.
     fn displayed<S: ClipSource<Clip = C>>(&self, src: &S, t: f32, out: &mut [f32]) -> usize {
         let rows = src.pose(&self.cur, t, out).min(out.len());
+        let rows = self.seam.fill_beyond(rows, out);
         self.seam.apply(t - self.seam_start, &mut out[..rows]);
         rows
     }
@@ -173,10 +175,11 @@ impl<C> Walker<C> {
                 }
                 let t_in = phase * self.cur_dur;
                 let cur = &self.cur;
-                let started = scratch.start(
+                let started = scratch.start_from_rest(
                     t_in,
                     self.cur_dur,
                     |t, out| Ok::<usize, std::convert::Infallible>(src.pose(cur, t, out)),
+                    src.rest_rows(),
                     &mut self.seam,
                 );
                 let Ok(()) = started;

@@ -27,7 +27,7 @@ use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::math::wrap_angle;
-use crate::model::TIME_ROW;
+use crate::model::{ALWAYS_ROWS, TIME_ROW};
 
 /// Default half-life of a seam offset (s), chosen with the motion-quality meter (`motion-lod
 /// quality`): the offset is under 5% of its start 0.5 s after the seam, inside the first half of a
@@ -199,6 +199,9 @@ impl PoseState {
 pub struct SeamTransition {
     offset: Vec<f32>,
     velocity: Vec<f32>,
+    /// The incoming side's rows at the seam: for rows the incoming clip does not evaluate (a joint
+    /// fading out), the rest rotation the transition decays to ([`SeamTransition::fill_beyond`]).
+    base: Vec<f32>,
     rows: usize,
     decay: f32,
     active: bool,
@@ -210,6 +213,7 @@ impl SeamTransition {
         SeamTransition {
             offset: vec![0.0; p],
             velocity: vec![0.0; p],
+            base: vec![0.0; p],
             rows: 0,
             decay: 2.0 * std::f32::consts::LN_2 / halflife_s.max(1e-3),
             active: false,
@@ -256,6 +260,7 @@ impl SeamTransition {
             self.offset[r] = x;
             self.velocity[r] = v;
         }
+        self.base[..rows].copy_from_slice(&next.pose[..rows]);
         if rows >= 6 {
             let qp = exp_map_to_quat(Vec3::from_slice(&prev.pose[3..6]));
             let qn = exp_map_to_quat(Vec3::from_slice(&next.pose[3..6]));
@@ -266,6 +271,25 @@ impl SeamTransition {
         }
         self.rows = rows;
         self.active = rows > 0;
+    }
+
+    /// Rows the running transition covers (0 when none runs). More than the incoming clip evaluates
+    /// while joints it dropped fade out ([`SeamScratch::start_from_rest`]).
+    pub fn rows(&self) -> usize {
+        if self.active { self.rows } else { 0 }
+    }
+
+    /// Completes a pose whose first `from` rows the incoming clip wrote: rows `from..` up to the
+    /// transition's rows (and `pose.len()`) get the values the transition decays to there, the rest
+    /// rotations of joints fading out, so that [`SeamTransition::apply`] fades them. Returns the
+    /// rows to show: `from`, or more while joints fade out.
+    pub fn fill_beyond(&self, from: usize, pose: &mut [f32]) -> usize {
+        let to = self.rows().min(pose.len());
+        if to <= from {
+            return from;
+        }
+        pose[from..to].copy_from_slice(&self.base[from..to]);
+        to
     }
 
     /// Applies the transition `t` seconds after the seam to the next clip's pose (its first `rows`
@@ -407,6 +431,29 @@ impl SeamScratch {
     where
         F: FnMut(f32, &mut [f32]) -> Result<usize, E>,
     {
+        self.start_from_rest(t, duration, pose_at, &[], transition)
+    }
+
+    /// [`SeamScratch::start`] across a change of evaluated joints: `rest` holds the rows forward
+    /// kinematics takes for joints a clip does not evaluate (their rest rotations; the root rows are
+    /// not read). A joint the captured pose did not show but the incoming clip evaluates fades in
+    /// from its rest rotation (what was drawn for it); a joint the captured pose showed but the
+    /// incoming clip drops fades out to its rest rotation instead of snapping to it, and the
+    /// transition then covers more rows than the clip writes: the caller completes each pose with
+    /// [`SeamTransition::fill_beyond`] and draws those joints until the transition finishes. Each
+    /// rest rotation is taken on the exponential-map branch nearest the other side's rows. With
+    /// `rest` shorter than the larger side, only the rows both clips hold are blended.
+    pub fn start_from_rest<E, F>(
+        &mut self,
+        t: f32,
+        duration: f32,
+        pose_at: F,
+        rest: &[f32],
+        transition: &mut SeamTransition,
+    ) -> Result<(), E>
+    where
+        F: FnMut(f32, &mut [f32]) -> Result<usize, E>,
+    {
         let h = SEAM_STEP_S;
         let rows = Self::sample(
             &mut self.next,
@@ -417,7 +464,31 @@ impl SeamScratch {
             h,
             pose_at,
         )?;
-        transition.start(&self.prev, &self.next, rows.min(self.rows));
+        let (shown, incoming) = (self.rows, rows);
+        let wide = shown.max(incoming).min(self.prev.pose.len());
+        let rows = if rest.len() >= wide && shown.min(incoming) >= ALWAYS_ROWS {
+            // The side that lacks rows [narrow, wide) takes the rest rotations there, still.
+            let narrow = shown.min(incoming);
+            let (lacking, other) = if shown < incoming {
+                (&mut self.prev, &self.next)
+            } else {
+                (&mut self.next, &self.prev)
+            };
+            let mut r = narrow;
+            while r + 3 <= wide {
+                let v = nearest_branch(
+                    Vec3::from_slice(&rest[r..r + 3]),
+                    Vec3::from_slice(&other.pose[r..r + 3]),
+                );
+                lacking.pose[r..r + 3].copy_from_slice(&v.to_array());
+                lacking.velocity[r..r + 3].fill(0.0);
+                r += 3;
+            }
+            r
+        } else {
+            shown.min(incoming)
+        };
+        transition.start(&self.prev, &self.next, rows);
         Ok(())
     }
 }
@@ -476,6 +547,77 @@ mod tests {
         pose[TIME_ROW] = 0.5;
         s.apply(0.0, &mut pose);
         assert_eq!(pose[TIME_ROW], 0.5);
+    }
+
+    /// A seam that drops a joint fades it from its shown rotation to its rest rotation (taken on
+    /// the branch near the shown one) over more rows than the incoming clip writes; a seam that adds
+    /// one fades it in from its rest rotation, what was drawn for it.
+    #[test]
+    fn joints_dropped_or_added_at_a_seam_fade_to_and_from_rest() {
+        let p = 13; // the root rows and two joints
+        let mut rest = vec![0.0f32; p];
+        rest[10..13].copy_from_slice(&[0.2, 0.0, 0.0]);
+        // The shown clip moves joint 1 (rows 10-12) at 0.5 + t about x; near the branch of rest +
+        // 2 pi, to check the branch is chosen near the shown rows.
+        let tau = std::f32::consts::TAU;
+        let wide = |t: f32, out: &mut [f32]| -> Result<usize, ()> {
+            out[..p].fill(0.0);
+            out[10] = 0.5 + t - tau;
+            Ok(p)
+        };
+        let narrow = |_: f32, out: &mut [f32]| -> Result<usize, ()> {
+            out[..10].fill(0.0);
+            Ok(10)
+        };
+        let mut scratch = SeamScratch::new(p);
+        let mut seam = SeamTransition::new(p, 0.15);
+        // Dropped: 13 rows shown, 10 in the incoming clip.
+        scratch.capture(0.5, 1.0, None, wide).unwrap();
+        scratch
+            .start_from_rest(0.0, 1.0, narrow, &rest, &mut seam)
+            .unwrap();
+        assert_eq!(seam.rows(), p);
+        let shown = |seam: &SeamTransition, t: f32, written: usize| {
+            let mut out = vec![f32::NAN; p];
+            out[..written].fill(0.0);
+            let rows = seam.fill_beyond(written, &mut out);
+            seam.apply(t, &mut out[..rows]);
+            (rows, out)
+        };
+        let (rows, at0) = shown(&seam, 0.0, 10);
+        assert_eq!(rows, p);
+        assert!(
+            (at0[10] - (1.0 - tau)).abs() < 1e-5,
+            "continuous: {}",
+            at0[10]
+        );
+        let (_, late) = shown(&seam, 2.0, 10);
+        assert!(
+            (late[10] - (0.2 - tau)).abs() < 1e-3,
+            "decays to rest: {}",
+            late[10]
+        );
+        // Without rest rows the joint is not blended: only the rows both clips hold.
+        scratch.capture(0.5, 1.0, None, wide).unwrap();
+        scratch
+            .start_from_rest(0.0, 1.0, narrow, &[], &mut seam)
+            .unwrap();
+        assert_eq!(seam.rows(), 10);
+        // Added: 10 rows shown, 13 in the incoming clip; the new joint starts at rest.
+        scratch.capture(0.5, 1.0, None, narrow).unwrap();
+        scratch
+            .start_from_rest(0.0, 1.0, wide, &rest, &mut seam)
+            .unwrap();
+        assert_eq!(seam.rows(), p);
+        let mut out = vec![0.0f32; p];
+        wide(0.0, &mut out).unwrap();
+        assert_eq!(seam.fill_beyond(p, &mut out), p);
+        seam.apply(0.0, &mut out);
+        assert!(
+            (out[10] - (0.2 - tau)).abs() < 1e-5,
+            "fades in from rest: {}",
+            out[10]
+        );
     }
 
     #[test]

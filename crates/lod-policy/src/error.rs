@@ -202,4 +202,7 @@ pub enum RigError {
         /// Slots given.
         found: usize,
     },
+    /// The body scale is not a finite positive number.
+    #[error("body scale {0} is not a finite positive number")]
+    Scale(f32),
 }

@@ -26,7 +26,7 @@ use serde::de::DeserializeOwned;
 /// The eight bytes every model file starts with.
 pub const MAGIC: [u8; 8] = *b"MLOD\r\n\x1a\n";
 /// The format version this build writes and the only one it reads.
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
 
 // Version history: 1 (first release); 2 (the build report records the DOF row weights and the build
 // settings their choice); 3 (the kriging rows of the controls, `C A^-1`, are stored once in the control
@@ -37,7 +37,9 @@ pub const FORMAT_VERSION: u32 = 6;
 // joint-order note); 5 (every level and joint-count error records the foot slide, for the policies'
 // screen check; the recorded data folders are relative to the model file, and the data
 // specification records the units, up axis and joint map); 6 (the feet and floor for the runtime foot
-// lock, `FootRig`, after the runtime model). Files of an older version are refused
+// lock, `FootRig`, after the runtime model); 7 (the rig's stature after the feet, for the body
+// scale of each character, and the data's takes measured with their own body scale). Files of an
+// older version are refused
 // with a request to rebuild: a model is
 // rebuilt from its data in seconds, and a converter would carry guesses.
 /// Bytes before the payload: magic, version, length, checksum.

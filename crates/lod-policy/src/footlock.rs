@@ -53,6 +53,9 @@ pub const ONSET_S: f32 = 0.1;
 pub const SOFT_REACH: f32 = 0.97;
 /// The IK never straightens the leg beyond this share of its length.
 pub const MAX_REACH: f32 = 0.9999;
+/// Weight of the pole (the character's forward, in thigh lengths) in the IK's bend plane
+/// ([`two_bone`]): small against the offset of a bent knee, decisive for a straight leg.
+pub const POLE_WEIGHT: f32 = 0.1;
 /// A pivot moving faster than this between two frames (m/s) has been moved, not walked: the lock
 /// forgets its anchor.
 pub const TELEPORT_SPEED_M_S: f32 = 20.0;
@@ -347,18 +350,22 @@ impl FootLock {
     }
 
     /// Plants the feet of `pose`, the pose shown this frame (the rows of `active_joints` rotating
-    /// joints; cycle frame `frame`), `dt` seconds after the previous call, and writes the corrected
-    /// rotations of each locked leg's thigh, knee and ankle into `pose` (module documentation).
+    /// joints; cycle frame `frame`; a body `scale` times the rig's size, as
+    /// [`Rig::joint_positions_scaled`] draws it, 1 for the rig's own), `dt` seconds after the
+    /// previous call, and writes the corrected rotations of each locked leg's thigh, knee and ankle
+    /// into `pose` (module documentation).
     ///
-    /// Validates and then runs: a non-positive `dt`, feet that do not fit the rig, or a pose shorter
-    /// than its active rows is an error and changes nothing. No allocation for rigs of up to
-    /// [`STACK_JOINTS`] joints.
+    /// Validates and then runs: a non-positive `dt`, a body scale that is not finite and positive,
+    /// feet that do not fit the rig, or a pose shorter than its active rows is an error and changes
+    /// nothing. No allocation for rigs of up to [`STACK_JOINTS`] joints.
+    #[allow(clippy::too_many_arguments)]
     pub fn apply(
         &mut self,
         rig: &Rig,
         feet: &FootRig,
         frame: &CycleFrame,
         active_joints: usize,
+        scale: f32,
         dt: f32,
         pose: &mut [f32],
     ) -> Result<(), FootLockError> {
@@ -393,7 +400,7 @@ impl FootLock {
                 }
             }
         }
-        rig.joint_transforms_of(pose, active_joints, needed, world)?;
+        rig.joint_transforms_of(pose, active_joints, scale, needed, world)?;
         let active = active_joints.min(rig.rotating_joints().len());
         let to_frame = frame.rotation().inverse();
         for (state, leg) in self.feet.iter_mut().zip(legs) {
@@ -424,11 +431,16 @@ fn bend_leg(rig: &Rig, leg: &Leg, world: &[JointTransform], d: Vec3, pose: &mut 
     let parent_rot = rig.joints()[leg.thigh]
         .parent
         .map_or(Quat::IDENTITY, |p| world[p].rotation);
+    // The character's forward direction (its root's heading in the cycle frame): where a knee
+    // points when the leg is nearly straight.
+    let root = world[rig.root()].rotation * Vec3::Z;
+    let pole = Vec3::new(root.x, 0.0, root.z).normalize_or(Vec3::Z);
     let (r_thigh, r_knee) = two_bone(
         thigh.position,
         knee.position,
         ankle.position,
         ankle.position + d,
+        pole,
     );
     let thigh_rot = (r_thigh * thigh.rotation).normalize();
     let knee_rot = (r_knee * r_thigh * knee.rotation).normalize();
@@ -447,33 +459,45 @@ fn bend_leg(rig: &Rig, leg: &Leg, world: &[JointTransform], d: Vec3, pose: &mut 
     }
 }
 
-/// The reach the IK uses for a target `reach` away from the hip with a leg of length `len`: itself up
-/// to [`SOFT_REACH`]` len`, then `d_s + (len - d_s)(1 - exp(-(reach - d_s) / (len - d_s)))`
-/// (`d_s = SOFT_REACH len`, continuous slope at `d_s`), at most [`MAX_REACH`]` len`.
-pub fn soft_reach(reach: f32, len: f32) -> f32 {
-    let start = SOFT_REACH * len;
+/// The reach the IK uses for a target `reach` away from the hip with a leg of length `len` whose
+/// ankle is `current` away from the hip now: itself up to `d_s = max(SOFT_REACH len, current)`, then
+/// `d_s + (len - d_s)(1 - exp(-(reach - d_s) / (len - d_s)))` (continuous slope at `d_s`), at most
+/// `max(MAX_REACH len, current)`. The current reach is kept as it is, so a correction of zero leaves
+/// the leg unchanged even when the data straighten it beyond [`SOFT_REACH`] (a heel strike), and a
+/// growing correction bends it continuously.
+pub fn soft_reach(reach: f32, current: f32, len: f32) -> f32 {
+    let start = (SOFT_REACH * len).max(current);
     if reach <= start {
         return reach;
     }
     let span = len - start;
-    (start + span * (1.0 - (-(reach - start) / span).exp())).min(MAX_REACH * len)
+    if span <= 0.0 {
+        return start;
+    }
+    (start + span * (1.0 - (-(reach - start) / span).exp())).min((MAX_REACH * len).max(current))
 }
 
 /// Two-bone IK with the hip fixed: the world rotations to apply to the thigh (`r_thigh`, about the
 /// hip) and then to the shin (`r_knee`, about the moved knee) so that the ankle reaches `target`
 /// (at the [`soft_reach`]), the knee staying on the side it bends to now.
-pub fn two_bone(hip: Vec3, knee: Vec3, ankle: Vec3, target: Vec3) -> (Quat, Quat) {
+///
+/// The bend plane holds the hip-target line and the knee's offset from it, plus [`POLE_WEIGHT`]
+/// times the thigh's length along `pole` (a unit direction, the character's forward): a bent knee
+/// keeps its side, and a nearly straight leg, whose knee offset says little about its side, bends
+/// toward the pole instead of flipping around the line from one frame to the next.
+pub fn two_bone(hip: Vec3, knee: Vec3, ankle: Vec3, target: Vec3, pole: Vec3) -> (Quat, Quat) {
     let (l1, l2) = ((knee - hip).length(), (ankle - knee).length());
     let to_target = target - hip;
     let reach = to_target.length();
     if l1 < 1e-5 || l2 < 1e-5 || reach < 1e-5 {
         return (Quat::IDENTITY, Quat::IDENTITY);
     }
-    let d = soft_reach(reach, l1 + l2).max((l1 - l2).abs() + 1e-4);
+    let d = soft_reach(reach, (ankle - hip).length(), l1 + l2).max((l1 - l2).abs() + 1e-4);
     let u = to_target / reach;
     // The bend direction: the current knee's offset from the hip-target line.
     let kh = knee - hip;
-    let mut w = kh - kh.dot(u) * u;
+    let side = kh + POLE_WEIGHT * l1 * pole;
+    let mut w = side - side.dot(u) * u;
     if w.length_squared() < 1e-10 {
         w = (ankle - hip).cross(Vec3::Y).cross(u);
     }
@@ -490,6 +514,7 @@ pub fn two_bone(hip: Vec3, knee: Vec3, ankle: Vec3, target: Vec3) -> (Quat, Quat
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::RigError;
     use crate::rig::RigJoint;
 
     fn joint(name: &str, parent: Option<usize>, offset: [f32; 3], role: JointRole) -> RigJoint {
@@ -559,12 +584,31 @@ mod tests {
         let knee = Vec3::new(0.1, 0.5, 0.05);
         let ankle = Vec3::new(0.1, 0.1, 0.0);
         let target = ankle + Vec3::new(0.0, 0.05, -0.08);
-        let (r_hip, r_knee) = two_bone(hip, knee, ankle, target);
+        let (r_hip, r_knee) = two_bone(hip, knee, ankle, target, Vec3::Z);
         let new_knee = hip + r_hip * (knee - hip);
         let new_ankle = new_knee + r_knee * (r_hip * (ankle - knee));
         assert!(new_ankle.distance(target) < 1e-5, "{new_ankle}");
         assert!(((new_knee - hip).length() - (knee - hip).length()).abs() < 1e-5);
         assert!(new_knee.z > hip.z.min(target.z));
+    }
+
+    /// A nearly straight leg whose knee sits a millimetre behind or ahead of the hip-ankle line
+    /// bends forward (toward the pole) either way: the knee does not flip sides between frames.
+    /// A clearly bent knee keeps its side even against the pole.
+    #[test]
+    fn a_straight_leg_bends_toward_the_pole() {
+        let (hip, ankle) = (Vec3::new(0.1, 0.9, 0.0), Vec3::new(0.1, 0.1, 0.0));
+        let target = ankle + Vec3::new(0.0, 0.1, 0.0);
+        for (z, forward) in [(0.001, true), (-0.001, true), (-0.08, false)] {
+            let knee = Vec3::new(0.1, 0.5, z);
+            let (r_hip, _) = two_bone(hip, knee, ankle, target, Vec3::Z);
+            let new_knee = hip + r_hip * (knee - hip);
+            assert_eq!(
+                new_knee.z > 0.0,
+                forward,
+                "knee at z {z}: moved to {new_knee}"
+            );
+        }
     }
 
     #[test]
@@ -573,7 +617,7 @@ mod tests {
         let mut prev = (0.0f32, 1.0f32);
         for i in 1..=2000 {
             let r = i as f32 * 0.001;
-            let s = soft_reach(r, len);
+            let s = soft_reach(r, 0.5, len);
             assert!(s < len && s <= r + 1e-6, "{r}: {s}");
             let slope = (s - prev.0) / 0.001;
             assert!(
@@ -582,6 +626,11 @@ mod tests {
             );
             prev = (s, slope);
         }
+        // No correction, no change, even for a leg the data straighten beyond the soft start.
+        let straight = 0.995 * len;
+        assert_eq!(soft_reach(straight, straight, len), straight);
+        let further = soft_reach(straight + 0.01, straight, len);
+        assert!(further > straight && further < len, "{further}");
     }
 
     /// A stance foot sliding 0.5 cm per frame at 30 fps (below the lock speed) on the floor stays
@@ -612,7 +661,8 @@ mod tests {
         let mut prev_toe: Option<Vec3> = None;
         for f in 0..40 {
             let mut pose = pose_at(f);
-            lock.apply(&rig, &feet, &frame, 6, dt, &mut pose).unwrap();
+            lock.apply(&rig, &feet, &frame, 6, 1.0, dt, &mut pose)
+                .unwrap();
             let p = positions(&rig, &pose);
             let toe = p[4];
             if (1..20).contains(&f) {
@@ -637,6 +687,72 @@ mod tests {
         assert!(!lock.is_active());
     }
 
+    /// A body 1.25 times the rig's size (hips 1.25 times as high) plants its feet where the scaled
+    /// forward kinematics draws them, with the scaled leg lengths; the same walk locked as if it had
+    /// the rig's size finds no foot on the floor and leaves the drawn toe sliding.
+    #[test]
+    fn a_scaled_body_plants_the_feet_it_draws() {
+        let (rig, feet) = legs();
+        let (dt, scale) = (1.0 / 30.0, 1.25f32);
+        let pose_at = |f: usize| {
+            let mut pose = vec![0.0f32; rig.dof()];
+            pose[..3].copy_from_slice(&[0.0, 0.83 * scale, 0.005 * f as f32]);
+            for leg in [7, 16] {
+                pose[leg] = 0.3;
+                pose[leg + 3] = -0.6;
+                pose[leg + 6] = 0.3;
+            }
+            pose
+        };
+        let drawn = |pose: &[f32]| {
+            let mut out = vec![Vec3::ZERO; rig.joint_count()];
+            rig.joint_positions_scaled(pose, 6, scale, &mut out)
+                .unwrap();
+            out
+        };
+        for (lock_scale, planted) in [(scale, true), (1.0, false)] {
+            let mut lock = FootLock::new();
+            let mut first = None;
+            for f in 0..15 {
+                let mut pose = pose_at(f);
+                lock.apply(
+                    &rig,
+                    &feet,
+                    &CycleFrame::default(),
+                    6,
+                    lock_scale,
+                    dt,
+                    &mut pose,
+                )
+                .unwrap();
+                let p = drawn(&pose);
+                let shin = p[3].distance(p[2]);
+                assert!((shin - 0.42 * scale).abs() < 1e-4, "frame {f}: shin {shin}");
+                // The anchor once the lock holds (the onset ramp eases the first frame).
+                if f >= 1 {
+                    let a = *first.get_or_insert(p[4]);
+                    let moved = p[4].distance(a);
+                    if planted {
+                        assert!(moved < 2e-3, "frame {f}: toe left its anchor by {moved}");
+                    } else {
+                        let walked = 0.005 * (f - 1) as f32;
+                        assert!((moved - walked).abs() < 1e-4, "frame {f}: {moved}");
+                    }
+                }
+            }
+        }
+        let mut pose = pose_at(0);
+        let mut lock = FootLock::new();
+        for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert!(matches!(
+                lock.apply(&rig, &feet, &CycleFrame::default(), 6, bad, dt, &mut pose),
+                Err(FootLockError::Rig(RigError::Scale(_)))
+            ));
+        }
+        assert_eq!(pose, pose_at(0));
+        assert_eq!(lock, FootLock::new());
+    }
+
     #[test]
     fn a_swing_foot_and_unevaluated_legs_are_not_touched() {
         let (rig, feet) = legs();
@@ -647,7 +763,7 @@ mod tests {
             let mut pose = vec![0.0f32; rig.dof()];
             pose[..3].copy_from_slice(&[0.0, 0.86, 0.033 * f as f32]);
             let before = pose.clone();
-            lock.apply(&rig, &feet, &CycleFrame::default(), 6, dt, &mut pose)
+            lock.apply(&rig, &feet, &CycleFrame::default(), 6, 1.0, dt, &mut pose)
                 .unwrap();
             assert_eq!(pose, before);
         }
@@ -657,7 +773,7 @@ mod tests {
             let mut pose = vec![0.0f32; rig.dof()];
             pose[..3].copy_from_slice(&[0.0, 0.86, 0.01 * f as f32]);
             let before = pose.clone();
-            lock.apply(&rig, &feet, &CycleFrame::default(), 2, dt, &mut pose)
+            lock.apply(&rig, &feet, &CycleFrame::default(), 2, 1.0, dt, &mut pose)
                 .unwrap();
             assert_eq!(pose, before);
         }
@@ -677,7 +793,7 @@ mod tests {
         let mut pose = vec![0.0f32; rig.dof()];
         let frame = CycleFrame::default();
         assert!(matches!(
-            lock.apply(&rig, &feet, &frame, 6, 0.0, &mut pose),
+            lock.apply(&rig, &feet, &frame, 6, 1.0, 0.0, &mut pose),
             Err(FootLockError::FrameStep(_))
         ));
         let bad = FootRig {
@@ -688,7 +804,7 @@ mod tests {
             ..feet
         };
         let e = lock
-            .apply(&rig, &bad, &frame, 6, 0.1, &mut pose)
+            .apply(&rig, &bad, &frame, 6, 1.0, 0.1, &mut pose)
             .unwrap_err();
         assert!(e.to_string().contains("left foot"), "{e}");
         let not_below = FootRig {
@@ -701,7 +817,7 @@ mod tests {
         assert!(not_below.check(&rig).is_err());
         let mut short = vec![0.0f32; 7];
         assert!(matches!(
-            lock.apply(&rig, &feet, &frame, 6, 0.1, &mut short),
+            lock.apply(&rig, &feet, &frame, 6, 1.0, 0.1, &mut short),
             Err(FootLockError::Rig(_))
         ));
         assert_eq!(lock, FootLock::new());

@@ -95,8 +95,8 @@ pub use glam;
 pub use kernel::{ClipKernel, KernelScratch, TURN_CONTROL};
 pub use math::{ease_in_out, wrap_angle};
 pub use model::{
-    ALWAYS_ROWS, AccuracyLevel, ControlSpace, KeyTensor, LevelError, LodModel, ModelParts,
-    Precision, ROWS_PER_JOINT, Ranks, TIME_ROW, Variogram, VariogramModel,
+    ALWAYS_ROWS, AccuracyLevel, ControlSpace, HEIGHT_CONTROL, KeyTensor, LevelError, LodModel,
+    ModelParts, Precision, ROWS_PER_JOINT, Ranks, TIME_ROW, Variogram, VariogramModel,
 };
 pub use policy::{
     DistanceConfig, DistancePolicy, ERROR_MARGIN, ErrorMetric, FullDetail, LevelPolicy,

@@ -88,6 +88,10 @@ pub struct AccuracyLevel {
     pub ranks: Ranks,
 }
 
+/// Index of the control that is the character's standing height (m), the last of
+/// [`crate::Controls`]' four.
+pub const HEIGHT_CONTROL: usize = 3;
+
 /// The control space of the kriging interpolation.
 ///
 /// A raw control `c` (length `d`) is clamped to `[min, max]` per dimension and scaled as
@@ -139,6 +143,26 @@ impl ControlSpace {
             dz: end[2] - start[2],
             turn,
         }
+    }
+
+    /// The body scale of a character with raw controls `c` (length `d`): the standing height the
+    /// controls give ([`ControlSpace::implied`] of [`HEIGHT_CONTROL`]: the height control clamped
+    /// to the data's range, or the height the data imply from the other controls when the kriging
+    /// ignores it) over `stature_m`, the rig's standing height measured the same way. The bones
+    /// below the root then have the length of a performer of that height (the root's position is
+    /// the pose's, kriged in metres). Exactly 1 when the data hold one height (the rig is theirs),
+    /// the control space has no height dimension, `stature_m` is `None`, or the ratio is not finite
+    /// and positive.
+    pub fn body_scale(&self, stature_m: Option<f32>, c: &[f32]) -> f32 {
+        let k = HEIGHT_CONTROL;
+        let Some(stature) = stature_m else {
+            return 1.0;
+        };
+        if self.scale.len() <= k || c.len() < self.scale.len() || self.min[k] == self.max[k] {
+            return 1.0;
+        }
+        let s = self.implied(k, c) / stature;
+        if s.is_finite() && s > 0.0 { s } else { 1.0 }
     }
 
     /// The value of dimension `k` that the controls `c` (raw, length `d`, each clamped to the data's

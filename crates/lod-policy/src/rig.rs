@@ -59,6 +59,15 @@ pub enum JointRole {
     Static,
 }
 
+/// A body scale must be finite and positive.
+fn check_scale(scale: f32) -> Result<(), RigError> {
+    if scale.is_finite() && scale > 0.0 {
+        Ok(())
+    } else {
+        Err(RigError::Scale(scale))
+    }
+}
+
 /// One joint of a [`Rig`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct RigJoint {
@@ -286,6 +295,22 @@ impl Rig {
         active_joints: usize,
         out: &mut [Vec3],
     ) -> Result<(), RigError> {
+        self.joint_positions_scaled(pose, active_joints, 1.0, out)
+    }
+
+    /// [`Rig::joint_positions`] of a body `scale` times the rig's size: every bone below the root
+    /// (each joint's [`RigJoint::offset`]) is multiplied by `scale`, the root's position and every
+    /// rotation are the pose's. A character whose standing height is `scale` times the rig's (see
+    /// [`crate::ControlSpace::body_scale`]); `scale = 1` gives [`Rig::joint_positions`] bit for bit.
+    /// Errors as [`Rig::joint_positions`], and a `scale` that is not finite and positive.
+    pub fn joint_positions_scaled(
+        &self,
+        pose: &[f32],
+        active_joints: usize,
+        scale: f32,
+        out: &mut [Vec3],
+    ) -> Result<(), RigError> {
+        check_scale(scale)?;
         let active = self.check(pose, active_joints, out.len())?;
         let nj = self.joints.len();
         let mut stack = [Quat::IDENTITY; STACK_JOINTS];
@@ -300,7 +325,7 @@ impl Rig {
             positions: out,
             rotations,
         };
-        self.forward(pose, active, &mut split, |_| true);
+        self.forward(pose, active, scale, &mut split, |_| true);
         Ok(())
     }
 
@@ -313,23 +338,38 @@ impl Rig {
         active_joints: usize,
         out: &mut [JointTransform],
     ) -> Result<(), RigError> {
+        self.joint_transforms_scaled(pose, active_joints, 1.0, out)
+    }
+
+    /// [`Rig::joint_transforms`] of a body `scale` times the rig's size (as
+    /// [`Rig::joint_positions_scaled`]; positions are its, bit for bit). Never allocates.
+    pub fn joint_transforms_scaled(
+        &self,
+        pose: &[f32],
+        active_joints: usize,
+        scale: f32,
+        out: &mut [JointTransform],
+    ) -> Result<(), RigError> {
+        check_scale(scale)?;
         let active = self.check(pose, active_joints, out.len())?;
-        self.forward(pose, active, out, |_| true);
+        self.forward(pose, active, scale, out, |_| true);
         Ok(())
     }
 
-    /// [`Rig::joint_transforms`] for the joints `needed` marks only (a marked joint's parent must
-    /// be marked too; `needed.len() >= joint_count`); the other slots of `out` are left as they
-    /// are. The marked transforms are those of [`Rig::joint_transforms`], bit for bit.
+    /// [`Rig::joint_transforms_scaled`] for the joints `needed` marks only (a marked joint's parent
+    /// must be marked too; `needed.len() >= joint_count`); the other slots of `out` are left as
+    /// they are. The marked transforms are those of [`Rig::joint_transforms_scaled`], bit for bit.
     pub(crate) fn joint_transforms_of(
         &self,
         pose: &[f32],
         active_joints: usize,
+        scale: f32,
         needed: &[bool],
         out: &mut [JointTransform],
     ) -> Result<(), RigError> {
+        check_scale(scale)?;
         let active = self.check(pose, active_joints, out.len())?;
-        self.forward(pose, active, out, |j| needed[j]);
+        self.forward(pose, active, scale, out, |j| needed[j]);
         Ok(())
     }
 
@@ -371,6 +411,7 @@ impl Rig {
         &self,
         pose: &[f32],
         active: usize,
+        scale: f32,
         out: &mut O,
         keep: impl Fn(usize) -> bool,
     ) {
@@ -388,7 +429,7 @@ impl Rig {
                     let local = self.local_rotation(j, pose, active);
                     out.set(
                         j,
-                        parent_pos + parent_rot * joint.offset,
+                        parent_pos + parent_rot * (joint.offset * scale),
                         parent_rot * local,
                     );
                 }
@@ -422,6 +463,45 @@ mod tests {
             joint("leg", Some(1), [0.1, -0.5, 0.0], JointRole::Rotating(0)),
         ])
         .unwrap()
+    }
+
+    /// A scaled body: every joint below the root moves away from the root by the scale (the root
+    /// and the ground joint stay where the pose puts them); scale 1 is the plain forward kinematics
+    /// bit for bit; a scale that is not finite and positive is refused.
+    #[test]
+    fn a_scaled_body_stretches_every_bone_below_the_root() {
+        let rig = rig();
+        let mut pose = vec![0.0f32; rig.dof()];
+        pose[..6].copy_from_slice(&[0.3, 0.9, -0.2, 0.1, 0.7, -0.2]);
+        pose[7..13].copy_from_slice(&[0.4, -0.1, 0.2, -0.3, 0.2, 0.5]);
+        let fk = |scale: f32| {
+            let mut out = vec![Vec3::ZERO; rig.joint_count()];
+            rig.joint_positions_scaled(&pose, 2, scale, &mut out)
+                .unwrap();
+            let mut tr = vec![JointTransform::default(); rig.joint_count()];
+            rig.joint_transforms_scaled(&pose, 2, scale, &mut tr)
+                .unwrap();
+            assert!(out.iter().zip(&tr).all(|(p, t)| *p == t.position));
+            out
+        };
+        let mut plain = vec![Vec3::ZERO; rig.joint_count()];
+        rig.joint_positions(&pose, 2, &mut plain).unwrap();
+        assert_eq!(fk(1.0), plain);
+        let big = fk(1.25);
+        let root = plain[1];
+        assert_eq!(big[0], plain[0]);
+        assert_eq!(big[1], root);
+        for j in 2..rig.joint_count() {
+            let expected = root + 1.25 * (plain[j] - root);
+            assert!(big[j].distance(expected) < 1e-6, "joint {j}");
+        }
+        let mut out = vec![Vec3::ZERO; rig.joint_count()];
+        for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert!(matches!(
+                rig.joint_positions_scaled(&pose, 2, bad, &mut out),
+                Err(RigError::Scale(_))
+            ));
+        }
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! [`RuntimeModel`]: what an engine loads from a model file: the [`Rig`] and the [`LodModel`].
 //!
 //! A model file's payload is the offline `MotionModel`: the pose layout (`motion_io::PoseLayout`,
-//! stored as what it is built from), the runtime model, the feet for the foot lock, then the build
-//! report. The runtime decodes the first three and ignores the rest. The layout's stored form is mirrored here field for field
+//! stored as what it is built from), the runtime model, the feet for the foot lock, the rig's
+//! stature, then the build report. The runtime decodes the first four and ignores the rest. The layout's stored form is mirrored here field for field
 //! (private types with the same serde shape), so the runtime reads files without the offline crates.
 
 use std::path::Path;
@@ -10,18 +10,21 @@ use std::path::Path;
 use glam::{DQuat, DVec3};
 use serde::Deserialize;
 
+use crate::controls::Controls;
 use crate::file::{self, FileError, InvalidModel};
 use crate::footlock::FootRig;
 use crate::model::{ALWAYS_ROWS, LodModel, ROWS_PER_JOINT};
 use crate::rig::{JointRole, Rig, RigJoint};
 
 /// The runtime form of a model file: the skeleton with its forward kinematics, the
-/// multilinear model at every accuracy level, and the feet for the foot lock.
+/// multilinear model at every accuracy level, the feet for the foot lock, and the rig's stature
+/// for the body scale of each character.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RuntimeModel {
     rig: Rig,
     lod: LodModel,
     feet: Option<FootRig>,
+    stature_m: Option<f32>,
 }
 
 impl RuntimeModel {
@@ -47,7 +50,19 @@ impl RuntimeModel {
             rig,
             lod,
             feet: None,
+            stature_m: None,
         })
+    }
+
+    /// The model with its rig's stature: the standing height (m) of the rig's skeleton, measured as
+    /// the height control measures the data's performers ([`crate::ControlSpace::body_scale`]). Must be
+    /// finite and positive; `None` draws every character at the rig's size.
+    pub fn with_stature(mut self, stature_m: Option<f32>) -> Result<RuntimeModel, InvalidModel> {
+        if let Some(h) = stature_m {
+            check_stature(h).map_err(InvalidModel)?;
+        }
+        self.stature_m = stature_m;
+        Ok(self)
     }
 
     /// The model with the feet of its rig for the foot lock ([`FootRig::check`]ed against the rig).
@@ -73,7 +88,8 @@ impl RuntimeModel {
 
     fn decode_at(bytes: &[u8], path: &Path) -> Result<RuntimeModel, FileError> {
         let payload = file::unframe(bytes, path)?;
-        let ((layout, lod, feet), _): ((LayoutParts, LodModel, Option<FootRig>), usize) =
+        type Prefix = (LayoutParts, LodModel, Option<FootRig>, Option<f32>);
+        let ((layout, lod, feet, stature), _): (Prefix, usize) =
             file::decode_prefix(payload, path)?;
         let invalid = |source: InvalidModel| FileError::Invalid {
             path: path.to_path_buf(),
@@ -84,6 +100,7 @@ impl RuntimeModel {
             .map_err(|e| invalid(InvalidModel(format!("pose layout: {e}"))))?;
         RuntimeModel::new(rig, lod)
             .and_then(|m| m.with_feet(feet))
+            .and_then(|m| m.with_stature(stature))
             .map_err(invalid)
     }
 
@@ -103,9 +120,36 @@ impl RuntimeModel {
         self.feet.as_ref()
     }
 
+    /// The standing height (m) of the rig's skeleton, as the height control measures it; `None`
+    /// when the build could not measure it (no feet or head found).
+    pub fn stature_m(&self) -> Option<f32> {
+        self.stature_m
+    }
+
+    /// The body scale of a character with `controls`: its height over the rig's stature
+    /// ([`crate::ControlSpace::body_scale`]); what [`Rig::joint_positions_scaled`],
+    /// [`Rig::joint_transforms_scaled`] and [`crate::FootLock::apply`] take, and what an engine
+    /// scales the skeleton's bone translations by. 1 when the data hold one height.
+    pub fn body_scale(&self, controls: &Controls) -> f32 {
+        self.lod
+            .controls()
+            .body_scale(self.stature_m, &controls.to_array())
+    }
+
     /// The parts.
     pub fn into_parts(self) -> (Rig, LodModel, Option<FootRig>) {
         (self.rig, self.lod, self.feet)
+    }
+}
+
+/// A stature must be a finite height between 1 cm and 100 m.
+pub(crate) fn check_stature(h: f32) -> Result<(), String> {
+    if h.is_finite() && (0.01..=100.0).contains(&h) {
+        Ok(())
+    } else {
+        Err(format!(
+            "stature {h} m is not a standing height (finite, 0.01 to 100 m)"
+        ))
     }
 }
 

@@ -536,6 +536,48 @@ impl PoseLayout {
         Ok(self)
     }
 
+    /// The same layout with a body `scale` times as large: every bone below the root (OFFSETs, End
+    /// Sites and the template's position channels of those joints) is multiplied by `scale`; the root
+    /// and what lies above it are unchanged, and so are the rows (the root position stays the pose's).
+    /// The offline form of the runtime's scaled forward kinematics
+    /// ([`Rig::joint_positions_scaled`]): a character whose standing height is `scale` times the
+    /// skeleton's. `scale == 1` is a plain copy.
+    ///
+    /// Fails when `scale` is not finite and positive.
+    pub fn scaled(&self, scale: f64) -> Result<PoseLayout, PoseError> {
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(PoseError::BadLayout(format!(
+                "body scale {scale} is not a finite positive number"
+            )));
+        }
+        let mut out = self.clone();
+        if scale == 1.0 {
+            return Ok(out);
+        }
+        for j in 0..out.skeleton.joints.len() {
+            if j == out.root || !out.skeleton.is_ancestor_or_self(out.root, j) {
+                continue;
+            }
+            let start = out.channel_starts[j];
+            let joint = &mut out.skeleton.joints[j];
+            joint.offset *= scale;
+            if let Some(e) = joint.end_site.as_mut() {
+                *e *= scale;
+            }
+            for (c, ch) in joint.channels.iter().enumerate() {
+                if ch.is_position() {
+                    out.template[start + c] *= scale;
+                }
+            }
+            out.offset_m[j] *= scale;
+        }
+        if let Some(e) = out.skeleton.joints[out.root].end_site.as_mut() {
+            *e *= scale;
+        }
+        out.refresh_rig()?;
+        Ok(out)
+    }
+
     /// The skeleton this layout was built for.
     pub fn skeleton(&self) -> &Skeleton {
         &self.skeleton

@@ -112,6 +112,12 @@ typedef struct MlodCycle {
    Change of heading over the cycle, radians.
    */
   float turn;
+  /*
+   The character's body scale: its height over the skeleton's stature (1 when the data hold
+   one height). `mlod_walker_joint_transforms` draws the bones below the root this many times
+   as long; an engine skinning from local rotations scales the bone translations likewise.
+   */
+  float body_scale;
 } MlodCycle;
 
 /*
@@ -258,8 +264,9 @@ enum MlodStatus mlod_walker_pose(struct MlodWalker *walker,
 
 /*
  The world transforms (cycle frame) of every joint for the pose last evaluated by
- `mlod_walker_pose`, into `out` (`len >=` the `joints` of `mlod_model_sizes`, in joint order). Joints
- beyond the prepared detail's count keep the mean pose's rotations.
+ `mlod_walker_pose`, into `out` (`len >=` the `joints` of `mlod_model_sizes`, in joint order), for a
+ body of the prepared cycle's `body_scale`. Joints beyond the prepared detail's count keep the mean
+ pose's rotations.
 
  # Safety
  `walker` and `model` are live and belong together; `out` holds `len` elements.

@@ -35,8 +35,8 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use lod_policy::{
-    ClipKernel, Detail, DistancePolicy, FileError, JointTransform, KernelScratch, LevelPolicy,
-    RuntimeModel, ViewParams,
+    ClipKernel, Controls, Detail, DistancePolicy, FileError, JointTransform, KernelScratch,
+    LevelPolicy, RuntimeModel, ViewParams,
 };
 
 /// Outcome of every call.
@@ -99,6 +99,10 @@ pub struct MlodCycle {
     pub dz: f32,
     /// Change of heading over the cycle, radians.
     pub turn: f32,
+    /// The character's body scale: its height over the skeleton's stature (1 when the data hold
+    /// one height). `mlod_walker_joint_transforms` draws the bones below the root this many times
+    /// as long; an engine skinning from local rotations scales the bone translations likewise.
+    pub body_scale: f32,
 }
 
 /// One joint's transform in the cycle frame.
@@ -125,6 +129,8 @@ pub struct MlodWalker {
     scratch: KernelScratch,
     pose: Vec<f32>,
     transforms: Vec<JointTransform>,
+    /// The prepared cycle's body scale.
+    body_scale: f32,
     prepared: bool,
     posed: bool,
 }
@@ -462,6 +468,7 @@ pub unsafe extern "C" fn mlod_walker_new(
             scratch: KernelScratch::new(lod),
             pose: vec![0.0; lod.p()],
             transforms: vec![JointTransform::default(); m.model.rig().joint_count()],
+            body_scale: 1.0,
             prepared: false,
             posed: false,
         };
@@ -542,6 +549,7 @@ pub unsafe extern "C" fn mlod_walker_prepare(
         let d = Detail::new(detail.level as usize, detail.joints as usize);
         lod.build_kernel(&values, d, &mut w.scratch, &mut w.kernel)
             .map_err(|e| Failure::invalid(e.to_string()))?;
+        w.body_scale = m.model.body_scale(&Controls::from_array(values));
         w.prepared = true;
         // SAFETY: null or writable per the contract.
         if let Some(out) = unsafe { cycle.as_mut() } {
@@ -551,6 +559,7 @@ pub unsafe extern "C" fn mlod_walker_prepare(
                 dx: motion.dx,
                 dz: motion.dz,
                 turn: motion.turn,
+                body_scale: w.body_scale,
             };
         }
         Ok(())
@@ -598,8 +607,9 @@ pub unsafe extern "C" fn mlod_walker_pose(
 }
 
 /// The world transforms (cycle frame) of every joint for the pose last evaluated by
-/// `mlod_walker_pose`, into `out` (`len >=` the `joints` of `mlod_model_sizes`, in joint order). Joints
-/// beyond the prepared detail's count keep the mean pose's rotations.
+/// `mlod_walker_pose`, into `out` (`len >=` the `joints` of `mlod_model_sizes`, in joint order), for a
+/// body of the prepared cycle's `body_scale`. Joints beyond the prepared detail's count keep the mean
+/// pose's rotations.
 ///
 /// # Safety
 /// `walker` and `model` are live and belong together; `out` holds `len` elements.
@@ -622,7 +632,8 @@ pub unsafe extern "C" fn mlod_walker_joint_transforms(
         let rig = &m.model.rig();
         // SAFETY: per this function's contract.
         let out = unsafe { out_slice(out, len, rig.joint_count(), "out") }?;
-        rig.joint_transforms(&w.pose, w.kernel.detail().active_joints, &mut w.transforms)
+        let active = w.kernel.detail().active_joints;
+        rig.joint_transforms_scaled(&w.pose, active, w.body_scale, &mut w.transforms)
             .map_err(|e| Failure::invalid(e.to_string()))?;
         for (o, t) in out.iter_mut().zip(&w.transforms) {
             *o = MlodJointTransform {

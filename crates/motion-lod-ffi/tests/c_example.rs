@@ -110,9 +110,10 @@ fn rust_dump(model: &RuntimeModel) -> String {
             }
             lod.pose(&kernel, kernel.phase_at(t), &mut pose)
                 .expect("pose");
+            let scale = model.body_scale(&lod_policy::Controls::from_array(controls));
             model
                 .rig()
-                .joint_transforms(&pose, active, &mut transforms)
+                .joint_transforms_scaled(&pose, active, scale, &mut transforms)
                 .expect("transforms");
             let flat: Vec<f32> = transforms
                 .iter()

@@ -28,6 +28,7 @@ struct RawModel {
     layout: motion_lod::motion_io::PoseLayoutParts,
     lod: motion_lod::lod_policy::ModelParts,
     feet: Option<motion_lod::lod_policy::FootRig>,
+    stature_m: Option<f32>,
     report: BuildReport,
 }
 

@@ -665,6 +665,7 @@ impl Analysis {
             layout: self.layout.clone(),
             lod: LodModel::new(parts)?,
             feet: None,
+            stature_m: None,
             report: BuildReport {
                 samples: s,
                 dims: [p, t, s],
@@ -712,6 +713,11 @@ impl MotionModel {
             .quality
             .as_ref()
             .and_then(|q| q.foot_rig(model.layout.rig()));
+        model.stature_m = set
+            .quality
+            .as_ref()
+            .and_then(|q| q.stature_m)
+            .map(|h| h as f32);
         // 6. Measured errors of every accuracy level and joint count.
         progress.stage("level errors", 1);
         let (level_errors, joint_errors) =

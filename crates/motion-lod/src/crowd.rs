@@ -139,6 +139,11 @@ pub struct WalkerTrack {
     pub levels: Vec<usize>,
     /// Active joints shown at every frame.
     pub joints: Vec<usize>,
+    /// The walker's body scale ([`crate::MotionModel::body_scale`] of its height): its bones are
+    /// the skeleton's times this.
+    pub body_scale: f64,
+    /// Whether the walker was in the camera's view at every frame.
+    pub visible: Vec<bool>,
 }
 
 /// Runs a crowd of the model for `frames` frames of `1 / config.fps` s under `policy`, the camera
@@ -170,6 +175,8 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
             seams: Vec::new(),
             levels: Vec::with_capacity(frames),
             joints: Vec::with_capacity(frames),
+            body_scale: f64::from(model.body_scale(&crowd.controls(i))),
+            visible: Vec::with_capacity(frames),
         })
         .collect();
     let mut frames_of: Vec<Option<(glam::Vec2, f32)>> = vec![None; tracks.len()];
@@ -212,6 +219,7 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
             let d = crowd.detail(i);
             track.levels.push(d.accuracy);
             track.joints.push(d.active_joints);
+            track.visible.push(crowd.is_visible(i));
         }
     }
     Ok(tracks)
@@ -223,7 +231,8 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
 pub struct WalkerQuality {
     /// The walker's index in the crowd.
     pub walker: usize,
-    /// Frames measured: the walker's longest stretch drawn with joints after its first seam.
+    /// Frames measured: the walker's longest stretch drawn (in view, with joints) after its first
+    /// seam.
     pub frames: usize,
     /// Smallest and largest accuracy level shown in that stretch.
     pub levels: (usize, usize),
@@ -255,7 +264,7 @@ pub enum CrowdQualityError {
 }
 
 /// Runs a crowd of the model (`config`, camera on `scene`'s path, `policy`) for `seconds` and
-/// measures each walker as it was drawn: its longest stretch with joints after its first seam
+/// measures each walker as it was drawn: its longest stretch in view with joints after its first seam
 /// (a walker culled or beyond the last level is root-only, drawn by nobody), when that stretch
 /// holds at least two cycles' worth of frames (`2 x` the model's longest mean cycle, 1.2 s at 30
 /// fps for a 0.6 s cycle); shorter ones are left out. Near walkers change clips with inertialized
@@ -286,10 +295,11 @@ pub fn crowd_quality<P: LevelPolicy + Sync + ?Sized>(
     let mut out = Vec::new();
     for t in &tracks {
         let first = t.seams.first().copied().unwrap_or(t.joints.len());
-        // The longest run of frames drawn with joints, from the first seam on.
+        // The longest run of frames drawn (in view, with joints), from the first seam on: a culled
+        // walker still evaluated with joints until its cycle ends is seen by nobody.
         let (mut best, mut run_start) = (0..0, None);
         for f in first..=t.joints.len() {
-            let drawn = f < t.joints.len() && t.joints[f] > 0;
+            let drawn = f < t.joints.len() && t.joints[f] > 0 && t.visible[f];
             match (drawn, run_start) {
                 (true, None) => run_start = Some(f),
                 (false, Some(s)) => {

@@ -19,7 +19,7 @@ use motion_io::pose::TIME_ROW;
 use motion_io::{
     Conventions, CycleConfig, DropReason, DroppedCycle, FootNames, GaitCycle, MeasuredControls,
     Motion, NormalizeOptions, NormalizedTake, PoseError, PoseLayout, SignedAxis, SkippedFrames,
-    Units, align_sequence, find_feet, normalize_take, read_bvh, segment_take,
+    Units, align_sequence, find_feet, normalize_take, read_bvh, segment_take, standing_height,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -555,15 +555,23 @@ fn cycles_from_takes(
         .collect();
     let mut cycles = Vec::new();
     let mut dropped = Vec::new();
-    let feet = find_feet(layout.skeleton(), &cycle_config.feet)
-        .ok()
-        .map(|f| FootJoints::from_feet(&f));
+    let found = find_feet(layout.skeleton(), &cycle_config.feet).ok();
+    let feet = found.as_ref().map(FootJoints::from_feet);
+    // The layout's skeleton is the first take's: its standing height, measured as each cycle's
+    // height control is, scales the bones of every other take's body (the meter draws each take
+    // as the model draws a character of that height).
+    let stature_m = found
+        .as_ref()
+        .map(|f| standing_height(layout.skeleton(), f) / layout.units_per_metre())
+        .filter(|h| h.is_finite() && *h > 0.0);
     let measured: Vec<Option<(MotionQuality, f64)>> = motions
         .par_iter()
         .zip(&segmented)
         .map(|((_, n), r)| {
             let (feet, report) = (feet.as_ref()?, r.as_ref().ok()?);
-            take_quality(&layout, feet, &n.motion, &report.cycles)
+            let height = report.cycles.first()?.controls.height;
+            let scale = stature_m.map_or(1.0, |s| height / s);
+            take_quality(&layout.scaled(scale).ok()?, feet, &n.motion, &report.cycles)
         })
         .collect();
     let takes_quality: Vec<(MotionQuality, f64)> = measured.into_iter().flatten().collect();
@@ -637,7 +645,7 @@ fn cycles_from_takes(
         .collect();
     let quality = feet
         .as_ref()
-        .and_then(|f| quality::reference_from_takes(f, &takes_quality, steps));
+        .and_then(|f| quality::reference_from_takes(f, stature_m, &takes_quality, steps));
     Ok(CycleSet {
         layout,
         cycles,

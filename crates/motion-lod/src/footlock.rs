@@ -106,11 +106,15 @@ pub fn plant_feet(
             }
             let parent_rot = parent(leg.hip).map_or(DQuat::IDENTITY, |p| t[p].rotation);
             let (hip, knee, ankle) = (t[leg.hip], t[leg.knee], t[leg.ankle]);
+            // The character's forward (its root's heading): where a straight leg's knee points.
+            let ahead = t[layout.root()].rotation * DVec3::Z;
+            let pole = DVec3::new(ahead.x, 0.0, ahead.z).normalize_or(DVec3::Z);
             let (r_hip, r_knee) = two_bone(
                 hip.position,
                 knee.position,
                 ankle.position,
                 ankle.position + d[f],
+                pole,
             );
             let hip_rot = r_hip * hip.rotation;
             let knee_rot = r_knee * r_hip * knee.rotation;
@@ -222,17 +226,22 @@ fn correction(world: &[Transform], nj: usize, points: &[usize], floor: f64, dt: 
     d
 }
 
-/// The reach the IK uses for a target `reach` away from the hip with a leg of length `len`: itself up
-/// to [`SOFT_REACH`]` len`, then easing toward `len` (C1 at the joint), at most `0.9999 len`.
-fn soft_reach(reach: f64, len: f64) -> f64 {
-    let start = SOFT_REACH * len;
+/// The reach the IK uses for a target `reach` away from the hip with a leg of length `len` whose
+/// ankle is `current` away now: itself up to `max(SOFT_REACH len, current)`, then easing toward `len`
+/// (C1 at the joint), at most `max(0.9999 len, current)` (the runtime's rule,
+/// [`lod_policy::footlock::soft_reach`]: no correction, no change).
+fn soft_reach(reach: f64, current: f64, len: f64) -> f64 {
+    let start = (SOFT_REACH * len).max(current);
     if reach <= start {
         return reach;
     }
     let span = len - start;
+    if span <= 0.0 {
+        return start;
+    }
     // Capped just short of full length, where the slope is already below 0.004, so that far
     // targets never straighten the leg exactly (a degenerate knee plane).
-    (start + span * (1.0 - (-(reach - start) / span).exp())).min(MAX_REACH * len)
+    (start + span * (1.0 - (-(reach - start) / span).exp())).min((MAX_REACH * len).max(current))
 }
 
 /// The IK never straightens the leg beyond this share of its length.
@@ -240,19 +249,21 @@ const MAX_REACH: f64 = 0.9999;
 
 /// Two-bone IK with the hip fixed: the world rotations to apply to the thigh (`r_hip`, about the hip)
 /// and then to the shin (`r_knee`, about the moved knee) so that the ankle reaches `target`, the knee
-/// staying on the side it bends to now.
-fn two_bone(hip: DVec3, knee: DVec3, ankle: DVec3, target: DVec3) -> (DQuat, DQuat) {
+/// staying on the side it bends to now; a nearly straight leg bends toward `pole` (the runtime's
+/// rule, [`lod_policy::footlock::two_bone`], with its [`lod_policy::footlock::POLE_WEIGHT`]).
+fn two_bone(hip: DVec3, knee: DVec3, ankle: DVec3, target: DVec3, pole: DVec3) -> (DQuat, DQuat) {
     let (l1, l2) = ((knee - hip).length(), (ankle - knee).length());
     let to_target = target - hip;
     let reach = to_target.length();
     if l1 < 1e-6 || l2 < 1e-6 || reach < 1e-6 {
         return (DQuat::IDENTITY, DQuat::IDENTITY);
     }
-    let d = soft_reach(reach, l1 + l2).max((l1 - l2).abs() + 1e-4);
+    let d = soft_reach(reach, (ankle - hip).length(), l1 + l2).max((l1 - l2).abs() + 1e-4);
     let u = to_target / reach;
     // The bend direction: the current knee's offset from the hip-target line.
     let kh = knee - hip;
-    let mut w = kh - kh.dot(u) * u;
+    let side = kh + f64::from(lod_policy::footlock::POLE_WEIGHT) * l1 * pole;
+    let mut w = side - side.dot(u) * u;
     if w.length_squared() < 1e-12 {
         w = (ankle - hip).cross(DVec3::Y).cross(u);
     }
@@ -286,7 +297,7 @@ mod tests {
         let ankle = DVec3::new(0.1, 0.1, 0.0);
         // Within the unsoftened reach (0.94 of the leg's length).
         let target = ankle + DVec3::new(0.0, 0.05, -0.08);
-        let (r_hip, r_knee) = two_bone(hip, knee, ankle, target);
+        let (r_hip, r_knee) = two_bone(hip, knee, ankle, target, DVec3::Z);
         let new_knee = hip + r_hip * (knee - hip);
         let new_ankle = new_knee + r_knee * (r_hip * (ankle - knee));
         assert!(new_ankle.distance(target) < 1e-6, "{new_ankle}");
@@ -301,7 +312,7 @@ mod tests {
         let mut prev = (0.0, 1.0);
         for i in 0..=2000 {
             let r = i as f64 * 0.001;
-            let s = soft_reach(r, len);
+            let s = soft_reach(r, 0.5, len);
             assert!(s < len, "{r}: {s}");
             assert!(s <= r + 1e-15, "{r}: {s} beyond the target");
             let slope = (s - prev.0) / 0.001;
@@ -314,7 +325,13 @@ mod tests {
             );
             prev = (s, slope);
         }
-        assert_eq!(soft_reach(0.5, len), 0.5);
+        assert_eq!(soft_reach(0.5, 0.5, len), 0.5);
+        // A leg the data straighten beyond the soft start keeps its reach without a correction,
+        // and a longer target eases on from there.
+        let straight = 0.995 * len;
+        assert_eq!(soft_reach(straight, straight, len), straight);
+        let further = soft_reach(straight + 0.01, straight, len);
+        assert!(further > straight && further < len, "{further}");
     }
 
     #[test]
@@ -327,7 +344,7 @@ mod tests {
         let mut prev: Option<DVec3> = None;
         for i in 0..60 {
             let target = ankle + DVec3::new(0.0, 0.0, -0.002 * i as f64);
-            let (r_hip, _) = two_bone(hip, knee, ankle, target);
+            let (r_hip, _) = two_bone(hip, knee, ankle, target, DVec3::Z);
             let new_knee = hip + r_hip * (knee - hip);
             assert!((target - hip).length() < len || i > 20);
             if let Some(p) = prev {

@@ -134,6 +134,10 @@ pub struct MotionModel {
     /// The skeleton's feet and the data's floor, for the runtime foot lock
     /// ([`lod_policy::footlock`]); `None` when the build found no feet.
     pub feet: Option<lod_policy::FootRig>,
+    /// Standing height (m) of the layout's skeleton, measured as the height control measures the
+    /// data's performers: a character's body scale is its height over this
+    /// ([`MotionModel::body_scale`]); `None` when the build found no feet.
+    pub stature_m: Option<f32>,
     /// What the build measured.
     pub report: BuildReport,
 }
@@ -212,10 +216,22 @@ impl MotionModel {
     }
 
     /// The runtime form of this model ([`RuntimeModel`]): the pose layout's rig ([`PoseLayout::rig`]),
-    /// the runtime model and the feet, what [`RuntimeModel::load`] reads from this model's file.
-    /// Fails only when the layout's rows are not the runtime model's or the feet do not fit the rig.
+    /// the runtime model, the feet and the stature, what [`RuntimeModel::load`] reads from this
+    /// model's file. Fails only when the layout's rows are not the runtime model's, the feet do not
+    /// fit the rig or the stature is not a height.
     pub fn runtime(&self) -> Result<RuntimeModel, InvalidModel> {
-        RuntimeModel::new(self.rig().clone(), self.lod.clone())?.with_feet(self.feet)
+        RuntimeModel::new(self.rig().clone(), self.lod.clone())?
+            .with_feet(self.feet)?
+            .with_stature(self.stature_m)
+    }
+
+    /// The body scale of a character with `controls`: the height they give over the skeleton's
+    /// stature ([`lod_policy::ControlSpace::body_scale`]); 1 when the data hold one height. The
+    /// runtime's [`RuntimeModel::body_scale`].
+    pub fn body_scale(&self, controls: &lod_policy::Controls) -> f32 {
+        self.lod
+            .controls()
+            .body_scale(self.stature_m, &controls.to_array())
     }
 
     /// The skeleton and its f32 forward kinematics, as the runtime evaluates them.
@@ -257,6 +273,13 @@ impl MotionModel {
         }
         if let Some(feet) = &self.feet {
             feet.check(self.layout.rig()).map_err(InvalidModel)?;
+        }
+        if let Some(h) = self.stature_m {
+            if !(h.is_finite() && (0.01..=100.0).contains(&h)) {
+                return bad(format!(
+                    "stature {h} m is not a standing height (finite, 0.01 to 100 m)"
+                ));
+            }
         }
         let r = &self.report;
         if r.samples != s || r.dims != [p, t, s] {

@@ -38,6 +38,8 @@ pub struct NaiveClip {
     active_joints: usize,
     times: TimeTable,
     root_motion: RootMotion,
+    /// The body scale of the clip's controls ([`crate::MotionModel::body_scale`]).
+    body_scale: f32,
 }
 
 impl NaiveClip {
@@ -58,6 +60,8 @@ pub struct NaiveSource<'m> {
     model: &'m MotionModel,
     /// The samples' universal kriging in dual form, outputs ordered row by row (`r T + frame`).
     blend: DualBlend,
+    /// The rest rows joints fade to and from at seams ([`ClipSource::rest_rows`]).
+    rest: Vec<f32>,
     bones: Vec<(usize, usize)>,
 }
 
@@ -92,6 +96,7 @@ impl<'m> NaiveSource<'m> {
             model,
             blend: DualBlend::new(&analysis.kriging, &values)?,
             bones: bones_of(&model.layout),
+            rest: crate::source::rest_rows_of(model),
         })
     }
 
@@ -133,6 +138,7 @@ impl ClipSource for NaiveSource<'_> {
             active_joints: 0,
             times: TimeTable::with_capacity(t),
             root_motion: RootMotion::default(),
+            body_scale: 1.0,
         }
     }
 
@@ -165,6 +171,7 @@ impl ClipSource for NaiveSource<'_> {
         clip.root_motion = lod
             .controls()
             .root_motion(&controls.to_array(), &start, &end);
+        clip.body_scale = self.model.body_scale(controls);
         Ok(())
     }
 
@@ -191,11 +198,29 @@ impl ClipSource for NaiveSource<'_> {
         lock: &mut lod_policy::FootLock,
         pose: &mut [f32],
     ) {
-        crate::source::plant_feet(self.model, clip.active_joints, frame, dt, lock, pose);
+        crate::source::plant_feet(
+            self.model,
+            clip.active_joints,
+            clip.body_scale,
+            frame,
+            dt,
+            lock,
+            pose,
+        );
     }
 
     fn joints(&self, clip: &NaiveClip, pose: &[f32], out: &mut [Vec3]) -> usize {
-        write_joints(&self.model.layout, pose, clip.active_joints, out)
+        write_joints(
+            &self.model.layout,
+            pose,
+            clip.active_joints,
+            clip.body_scale,
+            out,
+        )
+    }
+
+    fn rest_rows(&self) -> &[f32] {
+        &self.rest
     }
 
     fn bones(&self) -> &[(usize, usize)] {

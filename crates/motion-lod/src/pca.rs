@@ -65,6 +65,8 @@ pub struct PcaClip {
     active_joints: usize,
     times: TimeTable,
     root_motion: RootMotion,
+    /// The body scale of the clip's controls ([`crate::MotionModel::body_scale`]).
+    body_scale: f32,
 }
 
 impl PcaClip {
@@ -100,6 +102,8 @@ pub struct PcaSource<'m> {
     rank: usize,
     /// `r_l` per accuracy level.
     level_ranks: Vec<usize>,
+    /// The rest rows joints fade to and from at seams ([`ClipSource::rest_rows`]).
+    rest: Vec<f32>,
     bones: Vec<(usize, usize)>,
 }
 
@@ -178,6 +182,7 @@ impl<'m> PcaSource<'m> {
             rank: r,
             level_ranks: level_schedule(r, r_last, lod.levels().len()),
             bones: bones_of(&model.layout),
+            rest: crate::source::rest_rows_of(model),
         })
     }
 
@@ -247,6 +252,7 @@ impl ClipSource for PcaSource<'_> {
             active_joints: self.model.lod.joints(),
             times: TimeTable::with_capacity(t),
             root_motion: RootMotion::default(),
+            body_scale: 1.0,
         }
     }
 
@@ -296,6 +302,7 @@ impl ClipSource for PcaSource<'_> {
         clip.root_motion = lod
             .controls()
             .root_motion(&controls.to_array(), &start, &end);
+        clip.body_scale = self.model.body_scale(controls);
         Ok(())
     }
 
@@ -342,11 +349,29 @@ impl ClipSource for PcaSource<'_> {
         lock: &mut lod_policy::FootLock,
         pose: &mut [f32],
     ) {
-        crate::source::plant_feet(self.model, clip.active_joints, frame, dt, lock, pose);
+        crate::source::plant_feet(
+            self.model,
+            clip.active_joints,
+            clip.body_scale,
+            frame,
+            dt,
+            lock,
+            pose,
+        );
     }
 
     fn joints(&self, clip: &PcaClip, pose: &[f32], out: &mut [Vec3]) -> usize {
-        write_joints(&self.model.layout, pose, clip.active_joints, out)
+        write_joints(
+            &self.model.layout,
+            pose,
+            clip.active_joints,
+            clip.body_scale,
+            out,
+        )
+    }
+
+    fn rest_rows(&self) -> &[f32] {
+        &self.rest
     }
 
     fn bones(&self) -> &[(usize, usize)] {

@@ -115,6 +115,10 @@ pub struct MotionQuality {
 pub struct QualityReference {
     /// The feet and hips of the data's skeleton the meter reads.
     pub feet: FootJoints,
+    /// Standing height (m) of the layout's skeleton (the first take's), measured as the height
+    /// control is; each take is measured with its bones scaled by its own height over this (the
+    /// body scale the model draws a character of that height with). `None` without feet.
+    pub stature_m: Option<f64>,
     /// Takes measured.
     pub takes: usize,
     /// The floor height (m) in the data's frame: median over takes of each take's floor.
@@ -411,6 +415,7 @@ pub fn measure(
 /// `(step length, duration)`.
 pub fn reference_from_takes(
     feet: &FootJoints,
+    stature_m: Option<f64>,
     takes: &[(MotionQuality, f64)],
     mut cycle_steps: Vec<(f64, f64)>,
 ) -> Option<QualityReference> {
@@ -434,6 +439,7 @@ pub fn reference_from_takes(
     cycle_steps.sort_by(|a, b| a.0.total_cmp(&b.0));
     Some(QualityReference {
         feet: feet.clone(),
+        stature_m,
         takes: takes.len(),
         floor_m: median(&mut floors),
         median: MotionQuality {
@@ -570,8 +576,15 @@ pub fn measure_walk(
     let seams: Vec<usize> = (1..=cycles)
         .map(|c| (c as f64 * walk.cycle_seconds / walk.frame_time).round() as usize)
         .collect();
+    let layout = model
+        .layout
+        .scaled(walk.body_scale)
+        .map_err(|_| QualityError::Bad {
+            what: "body scale",
+            value: walk.body_scale,
+        })?;
     measure(
-        &model.layout,
+        &layout,
         &reference.feet,
         &walk.poses,
         walk.frame_time,
@@ -619,8 +632,15 @@ pub fn measure_track_range(
         (Some(&a), Some(&b)) if b > a => (b - a) as f64 / (seams.len() - 1) as f64,
         _ => frames as f64,
     } * frame_time;
+    let layout = model
+        .layout
+        .scaled(track.body_scale)
+        .map_err(|_| QualityError::Bad {
+            what: "body scale",
+            value: track.body_scale,
+        })?;
     measure(
-        &model.layout,
+        &layout,
         &reference.feet,
         poses,
         frame_time,

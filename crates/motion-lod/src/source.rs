@@ -47,6 +47,8 @@ pub struct LodClip {
     kernel: ClipKernel,
     duration: f32,
     root_motion: RootMotion,
+    /// The body scale of the clip's controls ([`MotionModel::body_scale`]).
+    body_scale: f32,
 }
 
 /// The multilinear model as a crowd clip source.
@@ -62,6 +64,8 @@ pub struct LodClip {
 pub struct LodSource<'m> {
     model: &'m MotionModel,
     bones: Vec<(usize, usize)>,
+    /// [`rest_rows_of`] the model.
+    rest: Vec<f32>,
     /// Kernels sized per level and poses limited to the evaluated rows.
     compact: bool,
 }
@@ -77,6 +81,7 @@ impl<'m> LodSource<'m> {
         LodSource {
             model,
             bones: bones_of(&model.layout),
+            rest: rest_rows_of(model),
             compact: true,
         }
     }
@@ -106,16 +111,26 @@ impl<'m> LodSource<'m> {
     }
 }
 
+/// The rows the runtime's forward kinematics takes for joints a clip does not evaluate: the layout's
+/// rest pose ([`PoseLayout::rest_pose`]) in f32, what every source of the model's data fades joints
+/// to and from at seams ([`ClipSource::rest_rows`]).
+pub(crate) fn rest_rows_of(model: &MotionModel) -> Vec<f32> {
+    model.layout.rest_pose().iter().map(|&v| v as f32).collect()
+}
+
 /// Forward kinematics of `pose` into the crowd's joint list: the root, then the first `active` rotating
-/// joints in row order (cycle-frame positions in metres); returns how many were written. Allocation-free
-/// for skeletons up to 128 joints.
+/// joints in row order (more when `pose` holds more joint rows: joints a seam fades out) (cycle-frame positions in metres) of a body `scale` times the skeleton's size
+/// ([`lod_policy::Rig::joint_positions_scaled`]); returns how many were written (the root alone when
+/// the rig refuses the pose). Allocation-free for skeletons up to 128 joints.
 pub(crate) fn write_joints(
     layout: &PoseLayout,
     pose: &[f32],
     active: usize,
+    scale: f32,
     out: &mut [Vec3],
 ) -> usize {
-    let active = active.min(layout.joint_count());
+    let shown = pose.len().saturating_sub(lod_policy::ALWAYS_ROWS) / lod_policy::ROWS_PER_JOINT;
+    let active = active.max(shown).min(layout.joint_count());
     if active == 0 {
         out[0] = Vec3::new(pose[0], pose[1], pose[2]);
         return 1;
@@ -129,7 +144,14 @@ pub(crate) fn write_joints(
         heap.resize(nj, Vec3::ZERO);
         &mut heap
     };
-    layout.joint_positions(pose, active, world);
+    if layout
+        .rig()
+        .joint_positions_scaled(pose, active, scale, world)
+        .is_err()
+    {
+        out[0] = Vec3::new(pose[0], pose[1], pose[2]);
+        return 1;
+    }
     out[0] = world[layout.root()];
     for (k, &j) in layout.joint_order().iter().take(active).enumerate() {
         out[1 + k] = world[j];
@@ -138,19 +160,22 @@ pub(crate) fn write_joints(
 }
 
 /// The runtime foot lock ([`lod_policy::FootLock::apply`]) on the model's feet for a pose of
-/// `active` joints, what every source of the model's data runs for near walkers (the model's, the
-/// naive and the PCA baselines: the same work, for a fair comparison); nothing when the model has
-/// no feet. The lock validates before it writes, so a refused pose is shown as it is.
+/// `active` joints of a body `scale` times the skeleton's size, what every source of the model's
+/// data runs for near walkers (the model's, the naive and the PCA baselines: the same work, for a
+/// fair comparison); nothing when the model has no feet. The lock validates before it writes, so a
+/// refused pose is shown as it is.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn plant_feet(
     model: &MotionModel,
     active: usize,
+    scale: f32,
     frame: &CycleFrame,
     dt: f32,
     lock: &mut FootLock,
     pose: &mut [f32],
 ) {
     if let Some(feet) = &model.feet {
-        let _ = lock.apply(model.layout.rig(), feet, frame, active, dt, pose);
+        let _ = lock.apply(model.layout.rig(), feet, frame, active, scale, dt, pose);
     }
 }
 
@@ -193,6 +218,7 @@ impl ClipSource for LodSource<'_> {
             },
             duration: 1.0,
             root_motion: RootMotion::default(),
+            body_scale: 1.0,
         }
     }
 
@@ -220,6 +246,7 @@ impl ClipSource for LodSource<'_> {
         // Root motion of the clip: ground displacement and travel turn, the runtime's one chaining
         // rule (lod_policy::chain), as `synth` uses it.
         clip.root_motion = clip.kernel.root_motion();
+        clip.body_scale = self.model.body_scale(controls);
         Ok(())
     }
 
@@ -259,7 +286,7 @@ impl ClipSource for LodSource<'_> {
         pose: &mut [f32],
     ) {
         let active = clip.kernel.detail().active_joints;
-        plant_feet(self.model, active, frame, dt, lock, pose);
+        plant_feet(self.model, active, clip.body_scale, frame, dt, lock, pose);
     }
 
     fn joints(&self, clip: &LodClip, pose: &[f32], out: &mut [Vec3]) -> usize {
@@ -267,8 +294,13 @@ impl ClipSource for LodSource<'_> {
             &self.model.layout,
             pose,
             clip.kernel.detail().active_joints,
+            clip.body_scale,
             out,
         )
+    }
+
+    fn rest_rows(&self) -> &[f32] {
+        &self.rest
     }
 
     fn bones(&self) -> &[(usize, usize)] {

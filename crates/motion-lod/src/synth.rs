@@ -64,6 +64,9 @@ pub struct Walk {
     pub cycle_seconds: f64,
     /// True when a control was outside the data's range and was clamped.
     pub clamped: bool,
+    /// The character's body scale ([`MotionModel::body_scale`]): its bones are the skeleton's
+    /// times this ([`MotionModel::walk_layout`]).
+    pub body_scale: f64,
 }
 
 impl MotionModel {
@@ -153,10 +156,11 @@ impl MotionModel {
             poses[f * p + TIME_ROW] /= lod.parts().time_scale;
         }
         motion_io::unwrap_exp_maps(&mut poses, p)?;
+        let body_scale = f64::from(self.body_scale(&req.controls));
         if req.plant_feet {
             if let Some(reference) = &self.report.quality {
                 crate::footlock::plant_feet(
-                    &self.layout,
+                    &self.layout.scaled(body_scale)?,
                     &reference.feet,
                     reference.floor_m,
                     &mut poses,
@@ -169,13 +173,21 @@ impl MotionModel {
             frame_time,
             cycle_seconds: duration,
             clamped: kernel.clamped(),
+            body_scale,
         })
     }
 
-    /// The walk as a BVH motion of the model's skeleton (in the skeleton's file units).
+    /// The pose layout a walk is drawn with: the model's, its bones scaled by the walk's body scale
+    /// ([`PoseLayout::scaled`](motion_io::PoseLayout::scaled)).
+    pub fn walk_layout(&self, walk: &Walk) -> Result<motion_io::PoseLayout, SynthError> {
+        Ok(self.layout.scaled(walk.body_scale)?)
+    }
+
+    /// The walk as a BVH motion of the model's skeleton scaled by the walk's body scale (in the
+    /// skeleton's file units).
     pub fn walk_motion(&self, walk: &Walk) -> Result<Motion, SynthError> {
         Ok(self
-            .layout
+            .walk_layout(walk)?
             .motion_from_poses(&walk.poses, walk.frame_time)?)
     }
 }

@@ -200,8 +200,10 @@ fn check_walk(what: &str, model: &MotionModel, controls: [f32; 4]) {
     let units = model.layout.units_per_metre();
     let sk = &bvh.skeleton;
     let root = model.layout.root();
-    // BVH rest pose: the root's OFFSET is over the origin, every other OFFSET is the skeleton's.
-    let original = model.layout.skeleton();
+    // BVH rest pose: the root's OFFSET is over the origin, every other OFFSET is the skeleton's
+    // scaled by the walk's body scale.
+    let drawn = model.walk_layout(&walk).unwrap();
+    let original = drawn.skeleton();
     for (j, (a, b)) in sk.joints.iter().zip(&original.joints).enumerate() {
         if j != root {
             // The writer's 6 decimals.
@@ -253,9 +255,7 @@ fn check_walk(what: &str, model: &MotionModel, controls: [f32; 4]) {
     for f in 0..bvh.frame_count() {
         let world = rb.world(Some(f));
         let bvh_pos = sk.joint_positions(bvh.frame(f));
-        model
-            .layout
-            .joint_positions_f64(&walk.poses[f * p..(f + 1) * p], &mut fk);
+        drawn.joint_positions_f64(&walk.poses[f * p..(f + 1) * p], &mut fk);
         for (j, joint) in sk.joints.iter().enumerate() {
             let node = node_of[joint.name.as_str()];
             let e = world[node].0.distance(bvh_pos[j] / units);

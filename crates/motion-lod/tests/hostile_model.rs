@@ -300,6 +300,7 @@ struct RawModel {
     layout: motion_io::PoseLayoutParts,
     lod: lod_policy::ModelParts,
     feet: Option<lod_policy::FootRig>,
+    stature_m: Option<f32>,
     report: motion_lod::BuildReport,
 }
 
@@ -317,6 +318,7 @@ fn valid_checksum_broken_models_are_refused_by_every_command() {
             layout: model.layout.clone().into(),
             lod: model.lod.clone().into_parts(),
             feet: model.feet,
+            stature_m: model.stature_m,
             report: model.report.clone(),
         };
         let mut parent = raw();
@@ -332,12 +334,15 @@ fn valid_checksum_broken_models_are_refused_by_every_command() {
         // The hips as an ankle: its parent is the top joint, which has no parent (thigh).
         broken.left.ankle = model.layout.root();
         feet.feet = Some(broken);
+        let mut stature = raw();
+        stature.stature_m = Some(f32::NAN);
         let cases = [
             ("parent.mlod", parent, "parent"),
             ("rank.mlod", rank, "rank"),
             ("nan.mlod", nan, "non-finite"),
             ("weights.mlod", report, "row weights"),
             ("feet.mlod", feet, "left foot"),
+            ("stature.mlod", stature, "stature"),
         ];
         let exe = env!("CARGO_BIN_EXE_motion-lod");
         for (name, value, expected) in cases {

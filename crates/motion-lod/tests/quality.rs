@@ -329,6 +329,50 @@ fn embedded_crowd_walkers_plant_their_feet() {
     );
 }
 
+/// The embedded data's performers are 1.60 to 1.90 m tall and the model has one skeleton (the first
+/// take's): every walker is drawn at its height's body scale, so near walkers (levels 0-2, both legs
+/// and feet evaluated) stand on the data's floor within 1.5 cm (drawn at the skeleton's size they
+/// floated or sank by up to 10 cm). Under the distance policy in the overview, joint counts change
+/// at seams: the joints dropped fade out and the joints added fade in, so no seam pops more than
+/// 1.25x the data's median (a switch snapped them: 2.7x).
+#[test]
+fn embedded_crowd_walkers_stand_on_the_floor_and_fade_joints_at_seams() {
+    use motion_lod::crowd_sim::{CrowdConfig, Scene};
+    let (model, _) = common::built();
+    let data = model.report.quality.as_ref().expect("reference").median;
+    let policy = DistancePolicy::for_model(&model.lod);
+    let config = CrowdConfig::with_density(200, 0.01);
+    let walkers = motion_lod::crowd::crowd_quality(model, config, Scene::Overview, &policy, 10.0)
+        .expect("crowd measures");
+    let joint_changes = walkers.iter().filter(|w| w.joints.0 != w.joints.1).count();
+    assert!(joint_changes >= 10, "{joint_changes} walkers change joints");
+    let mut near = 0;
+    for w in &walkers {
+        let q = &w.quality;
+        assert!(
+            q.seam_pop_cm <= 1.25 * data.pop_cm,
+            "walker {} (levels {:?}, joints {:?}): seam pop {:.2} > 1.25 x the data's {:.2}",
+            w.walker,
+            w.levels,
+            w.joints,
+            q.seam_pop_cm,
+            data.pop_cm
+        );
+        if w.levels.1 <= 2 && w.joints.0 >= 8 {
+            near += 1;
+            assert!(
+                q.floor_offset_cm.abs() <= 1.5,
+                "walker {} (levels {:?}, joints {:?}): floor offset {:.2} cm",
+                w.walker,
+                w.levels,
+                w.joints,
+                q.floor_offset_cm
+            );
+        }
+    }
+    assert!(near >= 20, "{near} near walkers");
+}
+
 /// Issue 12's acceptance for crowd walkers on Bandai: near walkers as the crowd plays them pop at
 /// most 1.25x the data's median and skate at most 1.5x; the lock takes most of the free feet's
 /// skate away (a quarter of it at most remains).

@@ -70,6 +70,23 @@ fn a_built_model_loads_in_the_runtime_with_the_same_poses_and_joints() {
         (name(feet.left.ankle), name(feet.right.ankle)),
         ("Foot_L", "Foot_R")
     );
+    // The stature: the first take's performer (1.60 m in the fixtures' controls.csv, measured from
+    // the skeleton's chains), and the body scale of each performer height the data hold.
+    let stature = runtime
+        .stature_m()
+        .expect("the embedded data's model has a stature");
+    assert_eq!(Some(stature), model.stature_m);
+    assert!((stature - 1.60).abs() < 0.03, "stature {stature} m");
+    let range = runtime.lod().controls().range().unwrap();
+    for height in [range.min.height, 1.75, range.max.height] {
+        let c = lod_policy::Controls {
+            height,
+            ..range.min
+        };
+        let s = runtime.body_scale(&c);
+        assert_eq!(s, model.body_scale(&c));
+        assert!((s - height / stature).abs() < 1e-6, "{height} m: scale {s}");
+    }
     assert_eq!(&model.runtime().unwrap(), &runtime);
     let (lod, rig) = (runtime.lod(), runtime.rig());
     assert_eq!(rig.dof(), lod.p());

@@ -38,6 +38,9 @@ pub struct Frame {
     pub cycle: usize,
     /// Heading of that cycle's frame (radians about +y, 0 = +z): the cycles' root motion summed.
     pub cycle_heading: f32,
+    /// The character's body scale (`RuntimeModel::body_scale` of its height): the skeleton's bone
+    /// translations below the root are drawn this many times as long.
+    pub body_scale: f32,
 }
 
 /// Walks `seconds` at `fps` frames per second with `controls` for every cycle, `distance_m` from
@@ -63,6 +66,7 @@ pub fn walk(
         local_rotations: vec![Quat::IDENTITY; rig.joint_count()],
         cycle: 0,
         cycle_heading: 0.0,
+        body_scale: model.body_scale(&controls),
     };
     // The level of detail for this distance (in a crowd: per character, re-asked per cycle).
     let detail = DistancePolicy::for_model(lod).detail(distance_m, true, &ViewParams::default());
@@ -88,7 +92,8 @@ pub fn walk(
         // Planted feet: the lock corrects the leg rows of the pose (when the model knows its feet).
         if let Some(feet) = model.feet() {
             let dt = (1.0 / fps) as f32;
-            lock.apply(rig, feet, &cycle_frame, detail.active_joints, dt, &mut pose)?;
+            let (active, scale) = (detail.active_joints, frame.body_scale);
+            lock.apply(rig, feet, &cycle_frame, active, scale, dt, &mut pose)?;
         }
         rig.local_rotations(&pose, detail.active_joints, &mut frame.local_rotations)?;
         let root_in_cycle = Vec3::new(pose[0], pose[1], pose[2]);
@@ -119,12 +124,14 @@ fn main() -> Result<(), Box<dyn Error>> {
         height: 1.75,
     });
     println!(
-        "{path}: {} joints, {} accuracy levels; walking dx {:.2} m, dz {:.2} m, turn {:.1} deg per cycle",
+        "{path}: {} joints, {} accuracy levels; walking dx {:.2} m, dz {:.2} m, turn {:.1} deg per cycle, {:.2} m tall (body scale {:.3})",
         model.rig().joint_count(),
         model.lod().levels().len(),
         controls.dx,
         controls.dz,
-        controls.turn.to_degrees()
+        controls.turn.to_degrees(),
+        controls.height,
+        model.body_scale(&controls)
     );
     // A control the data did not vary (or that carried no signal) is ignored by the model.
     let scale = &model.lod().controls().scale;

@@ -192,7 +192,7 @@ pub fn crowd_section(
         doc,
         "\n### Crowd walkers as the crowd plays them\n\n\
          {CROWD_WALKERS} walkers at {CROWD_DENSITY} per m² for {CROWD_SECONDS} s at 30 fps under the distance \
-         policy, each measured over its longest stretch drawn with joints (after its first seam, at \
+         policy, each measured over its longest stretch drawn (in view, with joints; after its first seam, at \
          least two cycles): controls change every cycle along the walkers' paths and levels change \
          with distance. Walkers at levels 0-{} inertialize their seams and plant their feet (the \
          runtime foot lock); farther ones switch clips as they are, where the policies keep their \

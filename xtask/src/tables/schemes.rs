@@ -21,6 +21,7 @@ pub fn with_lod(model: &MotionModel, lod: LodModel) -> MotionModel {
         layout: model.layout.clone(),
         lod,
         feet: model.feet,
+        stature_m: model.stature_m,
         report: model.report.clone(),
     }
 }

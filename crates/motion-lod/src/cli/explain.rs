@@ -128,7 +128,7 @@ pub const GLOSSARY: &[Entry] = &[
             "foot lock",
             "planted feet",
         ],
-        text: "`quality --crowd` measures crowd walkers as the crowd plays them: controls changing every cycle along their paths, levels changing with distance. Each walker is measured over its longest stretch drawn with joints after its first seam (`frames`, at 30 fps; culled and far walkers are root-only and drawn by nobody); `levels` and `joints` are the smallest and largest it showed there, `seams` the cycle seams in it. Walkers at the first three levels inertialize their seams and plant their feet (the runtime foot lock: a foot low and slow on the floor is held where it landed by two-bone IK); farther ones switch clips as they are.",
+        text: "`quality --crowd` measures crowd walkers as the crowd plays them: controls changing every cycle along their paths, levels changing with distance. Each walker is measured over its longest stretch drawn (in view, with joints) after its first seam (`frames`, at 30 fps; culled and far walkers are root-only and drawn by nobody); `levels` and `joints` are the smallest and largest it showed there, `seams` the cycle seams in it. Walkers at the first three levels inertialize their seams and plant their feet (the runtime foot lock: a foot low and slow on the floor is held where it landed by two-bone IK); farther ones switch clips as they are.",
     },
     Entry {
         term: "cycle/data",

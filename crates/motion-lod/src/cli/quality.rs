@@ -35,7 +35,7 @@ pub struct QualityArgs {
     #[arg(long)]
     pub no_foot_lock: bool,
     /// Measure crowd walkers as the crowd plays them instead of the walk grid: the distance
-    /// policy, the camera of `--camera`, each walker's longest stretch drawn with joints (near
+    /// policy, the camera of `--camera`, each walker's longest stretch drawn, in view with joints (near
     /// walkers inertialize their seams and plant their feet, far ones switch clips as they are;
     /// `--no-blend` and `--no-foot-lock` turn those off for every walker).
     #[arg(long)]
@@ -231,7 +231,7 @@ fn run_crowd(
     let m = &reference.median;
     println!(
         "scene: {} walkers, {} per m^2, {} camera, distance policy, {} s at 30 fps; each walker's \
-         longest stretch drawn with joints (after its first seam, at least two cycles)",
+         longest stretch drawn (in view, with joints; after its first seam, at least two cycles)",
         args.walkers,
         args.density,
         match args.camera {

@@ -132,6 +132,7 @@ pub fn export_crowd<P: LevelPolicy + Sync>(
     let dt = 1.0 / fps;
     let start_camera = path.camera_at(0.0, &clip.lens);
     let mut picked = Vec::new();
+    let mut scales: Vec<f64> = Vec::new();
     let layout = &model.layout;
     let rest_rows = layout.rest_pose();
     let exported = clip.exported.clamp(1, walkers);
@@ -143,6 +144,10 @@ pub fn export_crowd<P: LevelPolicy + Sync>(
         pool.install(|| crowd.step_into(&source, policy, &camera, dt, &mut stats))?;
         if f == 0 {
             picked = pick_walkers(&crowd, start_camera.position, clip.exported);
+            scales = picked
+                .iter()
+                .map(|&i| f64::from(model.body_scale(&crowd.controls(i))))
+                .collect();
         }
         for (k, &i) in picked.iter().enumerate() {
             let pose = crowd.pose(i);
@@ -165,16 +170,34 @@ pub fn export_crowd<P: LevelPolicy + Sync>(
             bins[k].push(crowd.level_bin(i));
         }
     }
-    // One rest pose for all: the model's straight walk at the middle of its controls, its first
-    // frame, facing +Z; every walker shares it and so the body mesh.
-    let rest = Arc::new(reference_rest(model)?);
+    // The rest pose: the model's straight walk at the middle of its controls, its first frame,
+    // facing +Z, drawn at each walker's body scale; walkers of one scale share it and so the body
+    // mesh (every walker, when the data hold one height).
+    let reference = reference_walk(model)?;
+    let mut rests: Vec<(u64, PoseLayout, Arc<Rest>)> = Vec::new();
     let levels = model.lod.levels().len();
     let mut scene = Scene::new();
     let mut material_of_bin: Vec<Option<usize>> = vec![None; levels + 1];
     let mut level_counts = vec![0usize; levels + 1];
     for (k, &i) in picked.iter().enumerate() {
         let name = format!("walker {i:03}");
-        let character = Character::from_poses(layout, &rest, &poses[k], f64::from(dt), &name)?;
+        let scale = scales.get(k).copied().unwrap_or(1.0);
+        let at = match rests
+            .iter()
+            .position(|(bits, _, _)| *bits == scale.to_bits())
+        {
+            Some(at) => at,
+            None => {
+                let scaled = layout
+                    .scaled(scale)
+                    .map_err(|e| GltfError::Poses(format!("walker {i}: {e}")))?;
+                let rest = Arc::new(super::walk_rest(&scaled, &reference)?);
+                rests.push((scale.to_bits(), scaled, rest));
+                rests.len() - 1
+            }
+        };
+        let (_, scaled, rest) = &rests[at];
+        let character = Character::from_poses(scaled, rest, &poses[k], f64::from(dt), &name)?;
         let bin = most_frequent(&bins[k], levels + 1);
         level_counts[bin] += 1;
         let material = match material_of_bin[bin] {
@@ -228,9 +251,9 @@ fn most_frequent(bins: &[usize], n: usize) -> usize {
     count.iter().position(|&c| c == best).unwrap_or(0)
 }
 
-/// The rest pose every crowd character shares: the first frame of a one-cycle straight walk at the
-/// middle of the model's controls, facing its direction of travel.
-fn reference_rest(model: &MotionModel) -> Result<Rest, GltfError> {
+/// The walk whose first frame, facing its direction of travel, is every crowd character's rest pose: a
+/// one-cycle straight walk at the middle of the model's controls.
+fn reference_walk(model: &MotionModel) -> Result<crate::synth::Walk, GltfError> {
     let range = model.control_range();
     let mid = |k: usize| 0.5 * (range[k].0 + range[k].1);
     let req = WalkRequest {
@@ -246,8 +269,7 @@ fn reference_rest(model: &MotionModel) -> Result<Rest, GltfError> {
         blend: false,
         plant_feet: false,
     };
-    let walk = model
+    model
         .synthesize_walk(&req)
-        .map_err(|e| GltfError::Poses(format!("reference walk: {e}")))?;
-    super::walk_rest(&model.layout, &walk)
+        .map_err(|e| GltfError::Poses(format!("reference walk: {e}")))
 }

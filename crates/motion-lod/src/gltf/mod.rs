@@ -92,7 +92,8 @@ pub fn level_label(level: usize, accuracy_levels: usize) -> String {
     }
 }
 
-/// One synthesized walk as a `.glb` scene: the model's skeleton, its rest pose from the walk's
+/// One synthesized walk as a `.glb` scene: the model's skeleton (scaled by the walk's body scale,
+/// [`MotionModel::walk_layout`]), its rest pose from the walk's
 /// first frame (hips over the origin, facing +Z), the body, and the walk as the animation `walk`,
 /// coloured as its accuracy level `level` is in the crowd renderer.
 pub fn export_walk(
@@ -101,7 +102,9 @@ pub fn export_walk(
     level: usize,
     name: &str,
 ) -> Result<Scene, GltfError> {
-    let layout = &model.layout;
+    let layout = &model
+        .walk_layout(walk)
+        .map_err(|e| GltfError::Poses(e.to_string()))?;
     let p = layout.dof();
     if walk.poses.len() < p {
         return Err(GltfError::Poses("the walk has no frame".into()));
