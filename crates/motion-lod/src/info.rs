@@ -117,6 +117,19 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
     for line in control_notes(r) {
         writeln!(out, "{line}")?;
     }
+    if let Some(stature) = model.stature_m {
+        let scale = |h: f32| {
+            let mut c = lod_policy::Controls::from_array(range.map(|(lo, _)| lo));
+            c.height = h;
+            model.body_scale(&c)
+        };
+        writeln!(
+            out,
+            "skeleton: stature {stature:.3} m; characters drawn at body scale {:.3} to {:.3} (their height over it)",
+            scale(range[3].0),
+            scale(range[3].1)
+        )?;
+    }
     writeln!(
         out,
         "variogram: {:?}, nugget {:.4}, sill {:.4}, range {:.3}",

@@ -102,6 +102,8 @@ fn every_column_header_of_info_eval_and_quality_is_explained() {
         "seams",
         "--joints",
         "leave-one-out",
+        "stature",
+        "body scale",
         "variogram",
         "naive-kriging",
         "rbf-smoothed",

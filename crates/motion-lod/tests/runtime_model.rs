@@ -87,6 +87,13 @@ fn a_built_model_loads_in_the_runtime_with_the_same_poses_and_joints() {
         assert_eq!(s, model.body_scale(&c));
         assert!((s - height / stature).abs() < 1e-6, "{height} m: scale {s}");
     }
+    let mut report = Vec::new();
+    motion_lod::info::write_report(&mut report, model).unwrap();
+    let report = String::from_utf8(report).unwrap();
+    assert!(
+        report.contains(&format!("skeleton: stature {stature:.3} m")),
+        "{report}"
+    );
     assert_eq!(&model.runtime().unwrap(), &runtime);
     let (lod, rig) = (runtime.lod(), runtime.rig());
     assert_eq!(rig.dof(), lod.p());

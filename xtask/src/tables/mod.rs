@@ -432,7 +432,7 @@ pub fn run(config: &TablesConfig) -> Result<()> {
             points,
             &relative_link(out_dir, &path),
         ));
-        doc.push_str(&quality::crowd_section(reference, &crowd_quality));
+        doc.push_str(&quality::crowd_section(&model, reference, &crowd_quality));
     } else {
         let _ = writeln!(
             doc,

@@ -175,18 +175,44 @@ pub fn measure_crowd(
     Ok(out)
 }
 
-/// Whether a walker that showed levels `lo..=hi` belongs to a group, given the near levels.
-type GroupRule = fn(usize, usize, usize) -> bool;
+/// Whether a walker belongs to a group: its `(smallest, largest)` level shown, its fewest joints
+/// shown, the near levels and the joints that evaluate both legs.
+type GroupRule = fn((usize, usize), usize, usize, usize) -> bool;
+
+/// The joint count from which both legs (thigh, knee and ankle of each foot) are evaluated, the
+/// joints the foot lock needs; the model's joint count without feet.
+pub fn leg_joints(model: &MotionModel) -> usize {
+    let order = model.layout.joint_order();
+    let sk = model.layout.skeleton();
+    let Some(feet) = model.feet else {
+        return order.len();
+    };
+    let mut needed = 0;
+    for foot in [feet.left, feet.right] {
+        let mut j = Some(foot.ankle);
+        for _ in 0..3 {
+            let Some(k) = j else { break };
+            if let Some(at) = order.iter().position(|&o| o == k) {
+                needed = needed.max(at + 1);
+            }
+            j = sk.joints[k].parent;
+        }
+    }
+    needed
+}
 
 /// The markdown subsection of the crowd measurement: per scene, the walkers that stayed near
-/// (seams inertialized, feet planted: the first `seam_levels` levels), far (switched clips) or
-/// crossed between the two in their measured stretch.
+/// (seams inertialized, feet planted: the first `seam_levels` levels) with both legs evaluated or
+/// with fewer joints, far (switched clips) or crossed between near and far in their measured
+/// stretch.
 pub fn crowd_section(
+    model: &MotionModel,
     reference: &QualityReference,
     scenes: &[(&'static str, Vec<motion_lod::crowd::WalkerQuality>)],
 ) -> String {
     let m = &reference.median;
     let near = motion_lod::crowd_sim::CrowdConfig::default().seam_levels;
+    let legs = leg_joints(model);
     let mut doc = String::new();
     let _ = writeln!(
         doc,
@@ -196,23 +222,32 @@ pub fn crowd_section(
          least two cycles): controls change every cycle along the walkers' paths and levels change \
          with distance. Walkers at levels 0-{} inertialize their seams and plant their feet (the \
          runtime foot lock); farther ones switch clips as they are, where the policies keep their \
-         error and slide under a pixel. The same command: `motion-lod quality MODEL --crowd \
-         --camera ground|overview`.\n\n\
-         | camera | walkers | group | pop worst (x data) | pop median | seam pop worst | skate worst (x data) | skate median |\n\
-         | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: |",
+         error and slide under a pixel. *Legs evaluated*: the walker showed at least the {legs} joints \
+         that evaluate both legs (the foot lock's); with fewer, the legs hold their mean rotation. \
+         *Floor worst*: the largest floor offset (cm, + = above). The same command: `motion-lod \
+         quality MODEL --crowd --camera ground|overview`.\n\n\
+         | camera | walkers | group | pop worst (x data) | pop median | seam pop worst | skate worst (x data) | skate median | floor worst |\n\
+         | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |",
         near - 1
     );
     for (scene, walkers) in scenes {
         // Which walkers a group holds, by the smallest and largest level they showed.
-        let groups: [(&str, GroupRule); 3] = [
-            ("near", |_, hi, near| hi < near),
-            ("far", |lo, _, near| lo >= near),
-            ("near and far", |lo, hi, near| lo < near && hi >= near),
+        let groups: [(&str, GroupRule); 4] = [
+            ("near, legs evaluated", |(_, hi), j, near, legs| {
+                hi < near && j >= legs
+            }),
+            ("near, fewer joints", |(_, hi), j, near, legs| {
+                hi < near && j < legs
+            }),
+            ("far", |(lo, _), _, near, _| lo >= near),
+            ("near and far", |(lo, hi), _, near, _| {
+                lo < near && hi >= near
+            }),
         ];
         for (group, keep) in &groups {
             let at: Vec<&MotionQuality> = walkers
                 .iter()
-                .filter(|w| keep(w.levels.0, w.levels.1, near))
+                .filter(|w| keep(w.levels, w.joints.0, near, legs))
                 .map(|w| &w.quality)
                 .collect();
             if at.is_empty() {
@@ -221,9 +256,13 @@ pub fn crowd_section(
             let (pw, pm) = worst_median(at.iter().map(|q| q.pop_cm / m.pop_cm).collect());
             let (seam, _) = worst_median(at.iter().map(|q| q.seam_pop_cm / m.pop_cm).collect());
             let (sw, sm) = worst_median(at.iter().map(|q| q.skate_cm_s / m.skate_cm_s).collect());
+            let floor = at
+                .iter()
+                .map(|q| q.floor_offset_cm)
+                .fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
             let _ = writeln!(
                 doc,
-                "| {scene} | {} | {group} | {pw:.2} | {pm:.2} | {seam:.2} | {sw:.2} | {sm:.2} |",
+                "| {scene} | {} | {group} | {pw:.2} | {pm:.2} | {seam:.2} | {sw:.2} | {sm:.2} | {floor:.2} |",
                 at.len()
             );
         }

@@ -36,6 +36,11 @@ pub const GLOSSARY: &[Entry] = &[
         text: "The parameters a walk is synthesized for, per cycle: dx (sideways root displacement, metres, + = the character's left), dz (forward root displacement, metres), turn (heading change, radians in files and the library, degrees on the command line), height (the performer's standing height, metres). A control constant over the data, or carrying no signal (see `leave-one-out`), is ignored by the model and reported by `build` and `info`.",
     },
     Entry {
+        term: "body scale",
+        aliases: &["stature", "skeleton", "scale"],
+        text: "A model keeps one skeleton (the first take's); its stature is that skeleton's standing height, measured as the height control measures each performer (leg length plus the pelvis-to-head chain). A character is drawn at its body scale, its height over the stature: every bone below the root is that many times as long (crowd, foot lock, `synth` BVH and glTF, the C ABI). 1 when the data hold one height; `info` prints the stature and the range of body scales.",
+    },
+    Entry {
         term: "DOF",
         aliases: &["P", "rows", "pose vector", "rotating joints"],
         text: "Rows of the pose vector: root position (3, metres), root orientation (3, exponential map), the time increment to the next aligned frame (1, seconds), then 3 exponential-map rows per rotating joint, joints in evaluation order. P is their number.",
