@@ -387,6 +387,9 @@ impl<C: Send> Crowd<C> {
             return Err(CrowdError::BadTimeStep { dt });
         }
         let frustum = Frustum::from_camera(camera)?;
+        // Vector code run before on this thread (a model build) may have left the AVX upper state
+        // dirty, which slows every SSE instruction after it.
+        lod_policy::clear_avx_upper_state();
 
         // (1) Culling.
         let t0 = Instant::now();
@@ -419,6 +422,7 @@ impl<C: Send> Crowd<C> {
             .enumerate()
             .map(
                 |(c, (((((walkers, visible), scratch), poses), joints), bins))| {
+                    lod_policy::clear_avx_upper_state();
                     let mut out = ChunkOutcome::default();
                     let ta = Instant::now();
                     for (k, (w, &vis)) in walkers.iter_mut().zip(visible).enumerate() {

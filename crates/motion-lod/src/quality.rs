@@ -563,6 +563,14 @@ fn reference_of(model: &crate::MotionModel) -> Result<&QualityReference, Quality
         .ok_or(QualityError::NoReference)
 }
 
+/// The model's layout at a character's body `scale` (as the model draws it).
+fn drawn_layout(model: &crate::MotionModel, scale: f64) -> Result<PoseLayout, QualityError> {
+    model.layout.scaled(scale).map_err(|_| QualityError::Bad {
+        what: "body scale",
+        value: scale,
+    })
+}
+
 /// Measures a synthesized walk against the model's reference floor (the walk's own without a
 /// reference), with its cycle seams.
 pub fn measure_walk(
@@ -576,13 +584,7 @@ pub fn measure_walk(
     let seams: Vec<usize> = (1..=cycles)
         .map(|c| (c as f64 * walk.cycle_seconds / walk.frame_time).round() as usize)
         .collect();
-    let layout = model
-        .layout
-        .scaled(walk.body_scale)
-        .map_err(|_| QualityError::Bad {
-            what: "body scale",
-            value: walk.body_scale,
-        })?;
+    let layout = drawn_layout(model, walk.body_scale)?;
     measure(
         &layout,
         &reference.feet,
@@ -632,13 +634,7 @@ pub fn measure_track_range(
         (Some(&a), Some(&b)) if b > a => (b - a) as f64 / (seams.len() - 1) as f64,
         _ => frames as f64,
     } * frame_time;
-    let layout = model
-        .layout
-        .scaled(track.body_scale)
-        .map_err(|_| QualityError::Bad {
-            what: "body scale",
-            value: track.body_scale,
-        })?;
+    let layout = drawn_layout(model, track.body_scale)?;
     measure(
         &layout,
         &reference.feet,
