@@ -494,7 +494,8 @@ pub fn two_bone(hip: Vec3, knee: Vec3, ankle: Vec3, target: Vec3, pole: Vec3) ->
     }
     let d = soft_reach(reach, (ankle - hip).length(), l1 + l2).max((l1 - l2).abs() + 1e-4);
     let u = to_target / reach;
-    // The bend direction: the current knee's offset from the hip-target line.
+    // The bend direction: the current knee's offset from the hip-target line, leaning toward the
+    // pole (decisive only when the leg is nearly straight).
     let kh = knee - hip;
     let side = kh + POLE_WEIGHT * l1 * pole;
     let mut w = side - side.dot(u) * u;

@@ -142,8 +142,9 @@ impl RuntimeModel {
     }
 }
 
-/// A stature must be a finite height between 1 cm and 100 m.
-pub(crate) fn check_stature(h: f32) -> Result<(), String> {
+/// Checks a stature (the standing height of a model's skeleton, m): a finite height between 1 cm and
+/// 100 m. The one check the runtime and the offline model use.
+pub fn check_stature(h: f32) -> Result<(), String> {
     if h.is_finite() && (0.01..=100.0).contains(&h) {
         Ok(())
     } else {

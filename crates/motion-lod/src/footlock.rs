@@ -260,7 +260,8 @@ fn two_bone(hip: DVec3, knee: DVec3, ankle: DVec3, target: DVec3, pole: DVec3) -
     }
     let d = soft_reach(reach, (ankle - hip).length(), l1 + l2).max((l1 - l2).abs() + 1e-4);
     let u = to_target / reach;
-    // The bend direction: the current knee's offset from the hip-target line.
+    // The bend direction: the current knee's offset from the hip-target line, leaning toward the
+    // pole (decisive only when the leg is nearly straight).
     let kh = knee - hip;
     let side = kh + f64::from(lod_policy::footlock::POLE_WEIGHT) * l1 * pole;
     let mut w = side - side.dot(u) * u;

@@ -275,11 +275,7 @@ impl MotionModel {
             feet.check(self.layout.rig()).map_err(InvalidModel)?;
         }
         if let Some(h) = self.stature_m {
-            if !(h.is_finite() && (0.01..=100.0).contains(&h)) {
-                return bad(format!(
-                    "stature {h} m is not a standing height (finite, 0.01 to 100 m)"
-                ));
-            }
+            lod_policy::runtime::check_stature(h).map_err(InvalidModel)?;
         }
         let r = &self.report;
         if r.samples != s || r.dims != [p, t, s] {

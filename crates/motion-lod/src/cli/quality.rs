@@ -276,7 +276,9 @@ fn run_crowd(
         );
     }
     if walkers.is_empty() {
-        println!("no walker was drawn with joints for two cycles; try more --seconds or --walkers");
+        println!(
+            "no walker was drawn (in view, with joints) for two cycles; try more --seconds or --walkers"
+        );
     }
     Ok(())
 }
