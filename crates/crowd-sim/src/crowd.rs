@@ -19,6 +19,9 @@ use std::time::{Duration, Instant};
 const CHUNK: usize = 64;
 /// Walkers ahead whose clips are prefetched ([`ClipSource::prefetch`]) in the pose stage.
 const PREFETCH: usize = 12;
+
+/// Walkers ahead whose own memory the kernel stage hints the CPU to fetch.
+const PREFETCH_WALKERS: usize = 4;
 /// Largest accepted time step (s).
 const MAX_DT: f32 = 10.0;
 
@@ -425,7 +428,11 @@ impl<C: Send> Crowd<C> {
                     lod_policy::clear_avx_upper_state();
                     let mut out = ChunkOutcome::default();
                     let ta = Instant::now();
-                    for (k, (w, &vis)) in walkers.iter_mut().zip(visible).enumerate() {
+                    for k in 0..walkers.len() {
+                        if let Some(ahead) = walkers.get(k + PREFETCH_WALKERS) {
+                            lod_policy::prefetch(ahead);
+                        }
+                        let (w, vis) = (&mut walkers[k], visible[k]);
                         let d = policy.detail(w.root.distance(eye), vis, &view);
                         let i = c * CHUNK + k;
                         match w.advance(source, &params, d, dt, scratch) {

@@ -11,6 +11,7 @@ use bvh::aabb::{Aabb, Bounded, IntersectsAabb};
 use bvh::bounding_hierarchy::{BHShape, BoundingHierarchy};
 use bvh::bvh::{Bvh, BvhNode};
 use nalgebra::Point3;
+use rayon::prelude::*;
 
 impl IntersectsAabb<f32, 3> for Frustum {
     fn intersects_aabb(&self, aabb: &Aabb<f32, 3>) -> bool {
@@ -50,6 +51,78 @@ fn to_aabb(b: &Bounds) -> Aabb<f32, 3> {
     )
 }
 
+/// Levels of the tree below which [`WalkerAabbTree::refit`] stops splitting work between threads
+/// (`2^4 = 16` subtrees, enough to balance two to eight threads).
+const REFIT_SPLIT_DEPTH: u32 = 4;
+
+/// Subtrees smaller than this many nodes are swept on one thread.
+const REFIT_SPLIT_NODES: usize = 8192;
+
+/// Refits the subtree stored in `nodes` (its root first, global index `base`), with `boxes` the
+/// matching run of node boxes: splits into the two child subtrees in parallel while `depth > 0`.
+fn refit_subtree(
+    nodes: &mut [BvhNode<f32, 3>],
+    boxes: &mut [Aabb<f32, 3>],
+    base: usize,
+    shapes: &[BoxShape],
+    depth: u32,
+) {
+    let BvhNode::Node { child_r_index, .. } = nodes[0] else {
+        sweep(nodes, boxes, base, shapes);
+        return;
+    };
+    if depth == 0 || nodes.len() < REFIT_SPLIT_NODES {
+        sweep(nodes, boxes, base, shapes);
+        return;
+    }
+    let r = child_r_index - base;
+    let (root, rest) = nodes.split_at_mut(1);
+    let (left, right) = rest.split_at_mut(r - 1);
+    let (root_box, rest_boxes) = boxes.split_at_mut(1);
+    let (left_boxes, right_boxes) = rest_boxes.split_at_mut(r - 1);
+    rayon::join(
+        || refit_subtree(left, left_boxes, base + 1, shapes, depth - 1),
+        || refit_subtree(right, right_boxes, base + r, shapes, depth - 1),
+    );
+    if let BvhNode::Node {
+        child_l_aabb,
+        child_r_aabb,
+        ..
+    } = &mut root[0]
+    {
+        *child_l_aabb = left_boxes[0];
+        *child_r_aabb = right_boxes[0];
+        root_box[0] = child_l_aabb.join(child_r_aabb);
+    }
+}
+
+/// Recomputes the boxes of `nodes` (global indices from `base`; every child of a node in the run
+/// is in the run after it) in one reverse sweep.
+fn sweep(
+    nodes: &mut [BvhNode<f32, 3>],
+    boxes: &mut [Aabb<f32, 3>],
+    base: usize,
+    shapes: &[BoxShape],
+) {
+    for i in (0..nodes.len()).rev() {
+        let bx = match &mut nodes[i] {
+            BvhNode::Leaf { shape_index, .. } => shapes[*shape_index].aabb,
+            BvhNode::Node {
+                child_l_index,
+                child_l_aabb,
+                child_r_index,
+                child_r_aabb,
+                ..
+            } => {
+                *child_l_aabb = boxes[*child_l_index - base];
+                *child_r_aabb = boxes[*child_r_index - base];
+                child_l_aabb.join(child_r_aabb)
+            }
+        };
+        boxes[i] = bx;
+    }
+}
+
 /// An AABB tree over walker boxes that can be rebuilt or refitted, and queried with a frustum.
 #[derive(Debug, Clone)]
 pub struct WalkerAabbTree {
@@ -57,6 +130,8 @@ pub struct WalkerAabbTree {
     shapes: Vec<BoxShape>,
     node_boxes: Vec<Aabb<f32, 3>>,
     stack: Vec<usize>,
+    /// Nodes stored depth first ([`WalkerAabbTree::is_depth_first`]): `refit` may split subtrees.
+    depth_first: bool,
 }
 
 impl WalkerAabbTree {
@@ -67,6 +142,7 @@ impl WalkerAabbTree {
             shapes: Vec::new(),
             node_boxes: Vec::new(),
             stack: Vec::new(),
+            depth_first: false,
         };
         s.rebuild(bounds);
         s
@@ -96,6 +172,30 @@ impl WalkerAabbTree {
         self.stack.clear();
         self.stack.reserve(64);
         debug_assert!(self.children_follow_parents());
+        self.depth_first = self.is_depth_first();
+    }
+
+    /// Whether the nodes are stored depth first: every node's left child follows it and its right
+    /// child follows the left subtree (so every subtree is one contiguous run).
+    fn is_depth_first(&self) -> bool {
+        let nodes = &self.tree.nodes;
+        let mut size = vec![0usize; nodes.len()];
+        for i in (0..nodes.len()).rev() {
+            size[i] = match nodes[i] {
+                BvhNode::Leaf { .. } => 1,
+                BvhNode::Node {
+                    child_l_index: l,
+                    child_r_index: r,
+                    ..
+                } => {
+                    if l != i + 1 || r <= l || r >= nodes.len() || r != l + size[l] {
+                        return false;
+                    }
+                    1 + size[l] + size[r]
+                }
+            };
+        }
+        nodes.is_empty() || size[0] == nodes.len()
     }
 
     /// Every child node index is larger than its parent's (true for trees from `Bvh::build`),
@@ -113,30 +213,27 @@ impl WalkerAabbTree {
 
     /// Replaces the leaf boxes and recomputes every inner box bottom-up, keeping the topology
     /// (no allocation). Falls back to `rebuild` when the number of boxes changed.
+    ///
+    /// The tree's nodes are stored depth first (each subtree one contiguous run, checked by
+    /// `rebuild`), so the two subtrees of a node are refitted in parallel down to
+    /// [`REFIT_SPLIT_DEPTH`] levels, each then swept in reverse; a box is the union of the same
+    /// boxes whichever thread computes it, so the tree is the same for any thread count.
     pub fn refit(&mut self, bounds: &[Bounds]) {
         if bounds.len() != self.shapes.len() {
             self.rebuild(bounds);
             return;
         }
-        for (s, b) in self.shapes.iter_mut().zip(bounds) {
-            s.aabb = to_aabb(b);
-        }
-        for i in (0..self.tree.nodes.len()).rev() {
-            let bx = match &mut self.tree.nodes[i] {
-                BvhNode::Leaf { shape_index, .. } => self.shapes[*shape_index].aabb,
-                BvhNode::Node {
-                    child_l_index,
-                    child_l_aabb,
-                    child_r_index,
-                    child_r_aabb,
-                    ..
-                } => {
-                    *child_l_aabb = self.node_boxes[*child_l_index];
-                    *child_r_aabb = self.node_boxes[*child_r_index];
-                    child_l_aabb.join(child_r_aabb)
-                }
-            };
-            self.node_boxes[i] = bx;
+        self.shapes
+            .par_iter_mut()
+            .zip(bounds.par_iter())
+            .with_min_len(4096)
+            .for_each(|(s, b)| s.aabb = to_aabb(b));
+        let shapes = &self.shapes;
+        let (nodes, boxes) = (&mut self.tree.nodes[..], &mut self.node_boxes[..]);
+        if self.depth_first && !nodes.is_empty() {
+            refit_subtree(nodes, boxes, 0, shapes, REFIT_SPLIT_DEPTH);
+        } else {
+            sweep(nodes, boxes, 0, shapes);
         }
     }
 
@@ -265,6 +362,65 @@ mod tests {
         tree.query(&f, &mut vis);
         assert_eq!(flags_to_idx(&vis), brute(&f, &b));
         assert_eq!(tree.query_with_crate(&f), brute(&f, &b));
+    }
+
+    #[test]
+    fn parallel_refit_equals_one_reverse_sweep_and_the_brute_force() {
+        // Enough boxes for the refit to split subtrees across threads.
+        let mut b = random_bounds(20_000, 3);
+        let mut tree = WalkerAabbTree::new(&b);
+        assert!(
+            tree.is_depth_first(),
+            "bvh 0.13 stores its nodes depth first"
+        );
+        assert!(tree.tree.nodes.len() > 2 * REFIT_SPLIT_NODES);
+        for (i, x) in b.iter_mut().enumerate() {
+            let d = Vec3::new(
+                (i % 13) as f32 * 3.0 - 18.0,
+                0.0,
+                (i % 11) as f32 * 2.0 - 9.0,
+            );
+            x.min += d;
+            x.max += d;
+        }
+        let mut serial = tree.clone();
+        tree.refit(&b);
+        serial.depth_first = false;
+        serial.refit(&b);
+        assert_eq!(tree.node_boxes, serial.node_boxes);
+        let same_children = tree
+            .tree
+            .nodes
+            .iter()
+            .zip(&serial.tree.nodes)
+            .all(|(a, c)| match (a, c) {
+                (
+                    BvhNode::Node {
+                        child_l_aabb: la,
+                        child_r_aabb: ra,
+                        ..
+                    },
+                    BvhNode::Node {
+                        child_l_aabb: lc,
+                        child_r_aabb: rc,
+                        ..
+                    },
+                ) => la == lc && ra == rc,
+                (BvhNode::Leaf { .. }, BvhNode::Leaf { .. }) => true,
+                _ => false,
+            });
+        assert!(same_children);
+        let cam = Camera {
+            position: Vec3::new(0.0, 1.7, -120.0),
+            target: Vec3::new(5.0, 1.0, 0.0),
+            ..Camera::default()
+        };
+        let f = Frustum::from_camera(&cam).unwrap();
+        let mut vis = vec![false; b.len()];
+        tree.query(&f, &mut vis);
+        let expected = brute(&f, &b);
+        assert!(!expected.is_empty());
+        assert_eq!(flags_to_idx(&vis), expected);
     }
 
     #[test]

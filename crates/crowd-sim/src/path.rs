@@ -38,15 +38,29 @@ pub struct EllipsePath {
     pub dir: f32,
 }
 
+/// `v` rotated by the angle whose `(sin, cos)` is `sc`.
+fn rotate_by((s, c): (f32, f32), v: Vec2) -> Vec2 {
+    Vec2::new(c * v.x - s * v.y, s * v.x + c * v.y)
+}
+
 impl EllipsePath {
     fn rotate(&self, v: Vec2) -> Vec2 {
-        let (s, c) = self.rot.sin_cos();
-        Vec2::new(c * v.x - s * v.y, s * v.x + c * v.y)
+        rotate_by(self.rot.sin_cos(), v)
     }
 
     /// Point at parameter `s`.
     pub fn point(&self, s: f32) -> Vec2 {
-        self.centre + self.rotate(Vec2::new(self.axes.x * s.cos(), self.axes.y * s.sin()))
+        self.point_rotated(self.rot.sin_cos(), s)
+    }
+
+    /// [`EllipsePath::point`] with `rot_sc = self.rot.sin_cos()` given (the same bits; a search
+    /// that evaluates many points computes it once).
+    fn point_rotated(&self, rot_sc: (f32, f32), s: f32) -> Vec2 {
+        self.centre
+            + rotate_by(
+                rot_sc,
+                Vec2::new(self.axes.x * s.cos(), self.axes.y * s.sin()),
+            )
     }
 
     /// Derivative `dp/ds` times `dir` (the direction of travel, not normalised).
@@ -63,7 +77,8 @@ impl EllipsePath {
     /// (17 samples, then golden-section refinement). Walkers stay close to their path, so the
     /// local search suffices.
     pub fn closest_param_near(&self, p: Vec2, s_guess: f32) -> f32 {
-        let d2 = |s: f32| self.point(s).distance_squared(p);
+        let rot_sc = self.rot.sin_cos();
+        let d2 = |s: f32| self.point_rotated(rot_sc, s).distance_squared(p);
         let step = 0.1;
         let mut best = s_guess;
         let mut best_d = d2(s_guess);

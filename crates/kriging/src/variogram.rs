@@ -203,12 +203,11 @@ pub fn shape(model: VariogramModel, h: f64, range: f64, exponent: f64) -> f64 {
         VariogramModel::Linear => h,
         VariogramModel::Power => h.powf(exponent),
         VariogramModel::Spherical => {
-            if h >= range {
-                1.0
-            } else {
-                let t = h / range;
-                1.5 * t - 0.5 * t * t * t
-            }
+            // `t = min(h / a, 1)` with the division taken as a product by `1 / a` (the form the
+            // runtime evaluates over many distances at once, bit for bit): at and beyond the range
+            // `1.5 - 0.5 = 1` exactly.
+            let t = (h * (1.0 / range)).min(1.0);
+            1.5 * t - 0.5 * t * t * t
         }
         VariogramModel::Exponential => 1.0 - (-3.0 * h / range).exp(),
         VariogramModel::Gaussian => {

@@ -33,6 +33,32 @@ pub fn yaw_of_exp_map(v: &[f32]) -> f32 {
     f.x.atan2(f.z)
 }
 
+/// The instruction-set build the kernel and pose loops run: the baseline (x86-64 SSE2, or any other
+/// target) or, where the CPU has it, AVX2. Both builds perform the same floating-point operations in
+/// the same order (no fused multiply-add is enabled), so they give the same bits; only the width of
+/// the vector registers differs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Isa {
+    Baseline,
+    Avx2,
+}
+
+impl Isa {
+    /// The best build the running CPU can take (detected once by the standard library, then a load).
+    #[inline]
+    fn current() -> Isa {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            return Isa::Avx2;
+        }
+        Isa::Baseline
+    }
+}
+
+/// Most bytes of `G(c)` [`ClipKernel::prefetch`] hints at: a root-only or far clip's whole `G`; the
+/// first rows of a full-detail one (its pose streams through the rest).
+pub const PREFETCH_G_BYTES: usize = 1024;
+
 /// Caller-owned working memory for [`LodModel::build_kernel`], sized for the largest level.
 #[derive(Debug, Clone)]
 pub struct KernelScratch {
@@ -215,17 +241,16 @@ impl ClipKernel {
     pub fn duration(&self) -> f64 {
         self.times.duration()
     }
-    /// Reads the first value of `G(c)` and the time-table entry near `seconds`, the memory
-    /// [`ClipKernel::phase_at`] and [`LodModel::pose_rows`] read first, so that a caller can
-    /// start those cache misses early (a crowd touches the walkers a few ahead). No effect on any
-    /// result.
-    pub fn prefetch(&self, seconds: f64) {
-        let times = self.times.times();
-        if let (Some(&g), Some(&last)) = (self.g.first(), times.last()) {
-            let guess = (seconds.max(0.0).min(last) / last * (times.len() - 1) as f64) as usize;
-            let near = times.get(guess).copied().unwrap_or(last);
-            std::hint::black_box((g, near));
-        }
+    /// Hints the CPU to fetch the memory [`ClipKernel::phase_at`] and [`LodModel::pose_rows`] read
+    /// (the time table and the evaluated `G(c)`, at most [`PREFETCH_G_BYTES`] of it) without waiting
+    /// for it ([`crate::math::prefetch_bytes`]), so that a caller can start those cache misses a few
+    /// walkers ahead. `seconds` is unused (the whole table is fetched; kept for callers). No effect on
+    /// any result.
+    pub fn prefetch(&self, _seconds: f64) {
+        crate::math::prefetch_slice(self.times.times());
+        let g = &self.g[..(self.rows * self.ranks.t).min(self.g.len())];
+        let bytes = std::mem::size_of_val(g).min(PREFETCH_G_BYTES);
+        crate::math::prefetch_bytes(g.as_ptr().cast::<u8>(), bytes);
     }
 
     /// Phase (fractional aligned frame in `[0, T - 1]`) at playback time `seconds` (clamped to
@@ -265,22 +290,125 @@ fn add_squared_differences(h2: &mut [f64], c: f64, samples: &[f32]) {
     }
 }
 
-/// `a . x` in f64 with eight partial sums (vectorised; a fixed order, so deterministic).
-#[inline]
-fn dot(a: &[f32], x: &[f64]) -> f64 {
+/// Partial sums per row of [`dot_rows`]: element `i` goes to sum `i % LANES`.
+const LANES: usize = 4;
+
+/// `a . x` in f64 with [`LANES`] partial sums, combined as `(s0 + s2) + (s1 + s3)` after the
+/// elements beyond the last full group of `LANES` were added to their sums (a fixed order, so
+/// deterministic).
+#[inline(always)]
+fn dot_row(a: &[f64], x: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), x.len());
-    let mut acc = [0.0f64; 8];
-    let (ca, cx) = (a.chunks_exact(8), x.chunks_exact(8));
-    let mut tail = 0.0;
-    for (&p, &q) in ca.remainder().iter().zip(cx.remainder()) {
-        tail += f64::from(p) * q;
-    }
+    let mut acc = [0.0f64; LANES];
+    let (ca, cx) = (a.chunks_exact(LANES), x.chunks_exact(LANES));
+    let (ra, rx) = (ca.remainder(), cx.remainder());
     for (p, q) in ca.zip(cx) {
-        for i in 0..8 {
-            acc[i] += f64::from(p[i]) * q[i];
+        for i in 0..LANES {
+            acc[i] += p[i] * q[i];
         }
     }
-    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
+    for i in 0..ra.len() {
+        acc[i] += ra[i] * rx[i];
+    }
+    (acc[0] + acc[2]) + (acc[1] + acc[3])
+}
+
+/// `out[l] = a_l . x` for the rows `a_l = a[l n..(l + 1) n]`, `n = x.len()`: four rows per pass
+/// (each element of `x` is loaded once for four rows), each row summed exactly as [`dot_row`] sums
+/// it, so a row's result does not depend on the rows beside it.
+#[inline(always)]
+fn dot_rows(a: &[f64], x: &[f64], out: &mut [f64]) {
+    let n = x.len();
+    debug_assert!(a.len() >= n * out.len());
+    let mut groups = out.chunks_exact_mut(4);
+    let mut l = 0;
+    for o in groups.by_ref() {
+        let rows: [&[f64]; 4] = std::array::from_fn(|r| &a[(l + r) * n..(l + r + 1) * n]);
+        let mut acc = [[0.0f64; LANES]; 4];
+        let full = n - n % LANES;
+        let mut j = 0;
+        while j < full {
+            let q = &x[j..j + LANES];
+            for r in 0..4 {
+                let p = &rows[r][j..j + LANES];
+                for i in 0..LANES {
+                    acc[r][i] += p[i] * q[i];
+                }
+            }
+            j += LANES;
+        }
+        for r in 0..4 {
+            for i in 0..n - full {
+                acc[r][i] += rows[r][full + i] * x[full + i];
+            }
+            o[r] = (acc[r][0] + acc[r][2]) + (acc[r][1] + acc[r][3]);
+        }
+        l += 4;
+    }
+    for o in groups.into_remainder() {
+        *o = dot_row(&a[l * n..(l + 1) * n], x);
+        l += 1;
+    }
+}
+
+/// Rows of a root-only pose: root position, root orientation, time increment.
+const ROOT_ROWS: usize = 7;
+
+/// Largest `r_T` whose time weights a pose holds on the stack (larger ones take the column loop).
+const POSE_COLUMNS: usize = 128;
+
+/// Outputs per block of [`combine_columns`] (held in registers while every column is added).
+const COMBINE_BLOCK: usize = 32;
+
+/// `out[i] = sum_j coef(j) col(j)[i]` for `j = 0..n` in order, starting from `0.0` (so each entry
+/// is bitwise the plain loop `out.fill(0.0); for j { out[i] += coef(j) * col(j)[i] }`). Blocks of
+/// [`COMBINE_BLOCK`] outputs stay in registers over all `n` columns instead of being loaded and
+/// stored once per column. Every `col(j)` has at least `out.len()` entries.
+#[inline(always)]
+fn combine_columns<'a>(
+    out: &mut [f32],
+    n: usize,
+    coef: impl Fn(usize) -> f32,
+    col: impl Fn(usize) -> &'a [f32],
+) {
+    let len = out.len();
+    let mut start = 0;
+    while start + COMBINE_BLOCK <= len {
+        let mut acc = [0.0f32; COMBINE_BLOCK];
+        for j in 0..n {
+            let (c, v) = (coef(j), &col(j)[start..start + COMBINE_BLOCK]);
+            for i in 0..COMBINE_BLOCK {
+                acc[i] += c * v[i];
+            }
+        }
+        out[start..start + COMBINE_BLOCK].copy_from_slice(&acc);
+        start += COMBINE_BLOCK;
+    }
+    // The last partial block: eight at a time, then one at a time.
+    while start < len {
+        let width = (len - start).min(8);
+        let mut acc = [0.0f32; 8];
+        if width == 8 {
+            for j in 0..n {
+                let (c, v) = (coef(j), &col(j)[start..start + 8]);
+                for i in 0..8 {
+                    acc[i] += c * v[i];
+                }
+            }
+        } else {
+            // One entry at a time (a partial vector held across columns would be spilled with
+            // masked stores, which stall the loads after them).
+            for (i, a) in acc.iter_mut().enumerate().take(width) {
+                let mut sum = 0.0f32;
+                for j in 0..n {
+                    sum += coef(j) * col(j)[start + i];
+                }
+                *a = sum;
+            }
+        }
+        out[start..start + width].copy_from_slice(&acc[..width]);
+        start += width;
+    }
 }
 
 /// `y += M[:y.len(), :] x` for `M` column-major with column stride `stride` (f32, one column per
@@ -352,6 +480,20 @@ impl LodModel {
         out: &mut ClipKernel,
     ) -> Result<(), KernelError> {
         self.build_kernel_in(controls, detail, scratch, out, false)
+    }
+
+    /// [`LodModel::build_kernel`] run by the baseline build of its loops (x86-64 SSE2) whatever the
+    /// CPU. `build_kernel` runs an AVX2 build where the CPU has it; both perform the same
+    /// floating-point operations in the same order (no fused multiply-add), so they give the same
+    /// bits. This one exists to check that, and for callers that want the baseline code path.
+    pub fn build_kernel_baseline(
+        &self,
+        controls: &[f32],
+        detail: Detail,
+        scratch: &mut KernelScratch,
+        out: &mut ClipKernel,
+    ) -> Result<(), KernelError> {
+        self.build_kernel_isa(Isa::Baseline, controls, detail, scratch, out, false)
     }
 
     /// [`LodModel::build_kernel`] with the kriging projections accumulated column by column, in
@@ -443,8 +585,40 @@ impl LodModel {
 
     /// Steps 1-4 for checked `controls`, key `key_index` and `r_s <= R_S` of that key into
     /// `scratch.w[..r_s]` (and `scratch.c` the scaled controls); returns whether a control was
-    /// clamped.
+    /// clamped. Runs the AVX2 build of [`LodModel::weights_body`] where the CPU has it.
     fn weights_in(
+        &self,
+        controls: &[f32],
+        key_index: usize,
+        r_s: usize,
+        scratch: &mut KernelScratch,
+        column_order: bool,
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if Isa::current() == Isa::Avx2 {
+            // SAFETY: the CPU has AVX2 (`Isa::current`).
+            return unsafe { self.weights_avx2(controls, key_index, r_s, scratch, column_order) };
+        }
+        self.weights_body(controls, key_index, r_s, scratch, column_order)
+    }
+
+    /// [`LodModel::weights_body`] compiled for AVX2 (no FMA: the same operations, so the same bits).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn weights_avx2(
+        &self,
+        controls: &[f32],
+        key_index: usize,
+        r_s: usize,
+        scratch: &mut KernelScratch,
+        column_order: bool,
+    ) -> bool {
+        self.weights_body(controls, key_index, r_s, scratch, column_order)
+    }
+
+    /// Steps 1-4 (see [`LodModel::weights_in`]), inlined into each instruction-set build.
+    #[inline(always)]
+    fn weights_body(
         &self,
         controls: &[f32],
         key_index: usize,
@@ -515,36 +689,87 @@ impl LodModel {
 
         // 3. y = [U_S^T b (first r_S rows) ; C b] = [Q x ; P_C x], Q column-major R_S x (S + 1) (the
         //    key's), P_C column-major (d + 1) x (S + 1) (the control space's, shared by every key).
-        let y = &mut scratch.y[..r_s + d + 1];
-        y.fill(0.0);
-        let (y_top, y_c) = y.split_at_mut(r_s);
         if column_order {
+            let y = &mut scratch.y[..r_s + d + 1];
+            y.fill(0.0);
+            let (y_top, y_c) = y.split_at_mut(r_s);
             accumulate_columns(y_top, &key.projection, big.s, &scratch.x);
             accumulate_columns(y_c, &cs.projection, d + 1, &scratch.x);
+            // 4. w = U_S^T b + V ([c' ; 1] - C b), V column-major R_S x (d + 1).
+            for l in 0..r_s {
+                let mut acc = y[l];
+                for m in 0..=d {
+                    acc += f64::from(key.trend[l + big.s * m]) * (scratch.c[m] - y[r_s + m]);
+                }
+                scratch.w[l] = acc as f32;
+            }
         } else {
-            let rm = self.row_major();
-            let x = &scratch.x[..=s];
-            for (yl, row) in y_top.iter_mut().zip(rm.q[key_index].chunks_exact(s + 1)) {
-                *yl = dot(row, x);
+            // 3-4 folded: w = A x + V [c' ; 1], A = Q_top - V P_C row-major f64
+            //    ([`crate::model::FoldedProjections`]).
+            let a = &self.folded().a[key_index];
+            let y = &mut scratch.y[..r_s];
+            dot_rows(a, &scratch.x[..=s], y);
+            for (l, (&yl, wl)) in y.iter().zip(&mut scratch.w[..r_s]).enumerate() {
+                let mut acc = yl;
+                for m in 0..=d {
+                    acc += f64::from(key.trend[l + big.s * m]) * scratch.c[m];
+                }
+                *wl = acc as f32;
             }
-            for (ym, row) in y_c.iter_mut().zip(rm.pc.chunks_exact(s + 1)) {
-                *ym = dot(row, x);
-            }
-        }
-
-        // 4. w = U_S^T b + V ([c' ; 1] - C b), V column-major R_S x (d + 1).
-        for l in 0..r_s {
-            let mut acc = y[l];
-            for m in 0..=d {
-                acc += f64::from(key.trend[l + big.s * m]) * (scratch.c[m] - y[r_s + m]);
-            }
-            scratch.w[l] = acc as f32;
         }
 
         clamped
     }
 
     fn build_kernel_in(
+        &self,
+        controls: &[f32],
+        detail: Detail,
+        scratch: &mut KernelScratch,
+        out: &mut ClipKernel,
+        column_order: bool,
+    ) -> Result<(), KernelError> {
+        self.build_kernel_isa(Isa::current(), controls, detail, scratch, out, column_order)
+    }
+
+    /// [`LodModel::build_kernel_in`] with the instruction-set build chosen by the caller (tests
+    /// compare the two; [`Isa::Avx2`] falls back to the baseline where the CPU lacks AVX2).
+    fn build_kernel_isa(
+        &self,
+        isa: Isa,
+        controls: &[f32],
+        detail: Detail,
+        scratch: &mut KernelScratch,
+        out: &mut ClipKernel,
+        column_order: bool,
+    ) -> Result<(), KernelError> {
+        #[cfg(target_arch = "x86_64")]
+        if isa == Isa::Avx2 && Isa::current() == Isa::Avx2 {
+            // SAFETY: the CPU has AVX2 (`Isa::current`).
+            return unsafe { self.build_kernel_avx2(controls, detail, scratch, out, column_order) };
+        }
+        let _ = isa;
+        self.build_kernel_body(controls, detail, scratch, out, column_order)
+    }
+
+    /// [`LodModel::build_kernel_body`] compiled for AVX2 (no FMA: the same operations, so the same
+    /// bits).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn build_kernel_avx2(
+        &self,
+        controls: &[f32],
+        detail: Detail,
+        scratch: &mut KernelScratch,
+        out: &mut ClipKernel,
+        column_order: bool,
+    ) -> Result<(), KernelError> {
+        self.build_kernel_body(controls, detail, scratch, out, column_order)
+    }
+
+    /// Steps 1-8 of the module documentation, inlined into each instruction-set build.
+    #[inline(always)]
+    fn build_kernel_body(
         &self,
         controls: &[f32],
         detail: Detail,
@@ -569,22 +794,30 @@ impl LodModel {
         debug_assert!(rows <= p && r.fits_in(&big));
 
         // 1-4. The sample-mode kriging weights w (first r_S) into scratch.w.
-        let clamped = self.weights_in(controls, lv.key, r.s, scratch, column_order);
+        let clamped = self.weights_body(controls, lv.key, r.s, scratch, column_order);
 
-        // 5. K(c) = Z[:r_P, :r_T, :r_S] x_3 w, stored r_P x r_T column-major.
+        // 5. K(c) = Z[:r_P, :r_T, :r_S] x_3 w, stored r_P x r_T column-major: each entry sums its
+        //    `r_S` terms in order from 0. When the level keeps the key's whole `r_P x r_T` slab (a
+        //    contiguous run of `Z` per sample component), the slab is one long combination.
         let kmat = &mut scratch.k[..r.p * r.t];
-        kmat.fill(0.0);
-        for (l, &wl) in scratch.w[..r.s].iter().enumerate() {
-            for b in 0..r.t {
-                let zcol = &key.core[big.p * (b + big.t * l)..][..r.p];
-                let kcol = &mut kmat[r.p * b..][..r.p];
-                for (kv, &z) in kcol.iter_mut().zip(zcol) {
-                    *kv += wl * z;
-                }
+        let w = &scratch.w[..r.s];
+        if r.p == big.p && r.t == big.t {
+            let slab = big.p * big.t;
+            combine_columns(kmat, w.len(), |l| w[l], |l| &key.core[slab * l..][..slab]);
+        } else {
+            for (b, kcol) in kmat.chunks_exact_mut(r.p).enumerate() {
+                combine_columns(
+                    kcol,
+                    w.len(),
+                    |l| w[l],
+                    |l| &key.core[big.p * (b + big.t * l)..][..r.p],
+                );
             }
         }
+        let kmat = &*kmat;
 
-        // 6. G(c) = U_P[:rows, :r_P] K(c), rows x r_T column-major.
+        // 6. G(c) = U_P[:rows, :r_P] K(c), rows x r_T column-major (each entry sums its `r_P` terms
+        //    in order from 0).
         if out.compact {
             let need = rows * r.t;
             if out.g.capacity() < need || out.g.capacity() > 2 * need {
@@ -593,16 +826,9 @@ impl LodModel {
             out.g.resize(need, 0.0);
         }
         let g = &mut out.g[..rows * r.t];
-        g.fill(0.0);
-        for b in 0..r.t {
-            let gcol = &mut g[rows * b..][..rows];
-            for a in 0..r.p {
-                let kab = kmat[a + r.p * b];
-                let ucol = &key.u_p[p * a..][..rows];
-                for (gv, &u) in gcol.iter_mut().zip(ucol) {
-                    *gv += kab * u;
-                }
-            }
+        for (b, gcol) in g.chunks_exact_mut(rows).enumerate() {
+            let kcol = &kmat[r.p * b..][..r.p];
+            combine_columns(gcol, r.p, |a| kcol[a], |a| &key.u_p[p * a..][..rows]);
         }
 
         // 7. Time table from the time-increment row at every aligned frame:
@@ -628,7 +854,7 @@ impl LodModel {
         //    without a turn dimension).
         let mut ends = [[0.0f32; 6]; 2];
         for (e, phase) in ends.iter_mut().zip([0.0, (t - 1) as f32]) {
-            self.pose_rows(out, phase, e)?;
+            self.pose_rows_body(out, phase, e)?;
         }
         let [start, end] = ends;
         out.root_motion = self.controls().root_motion(controls, &start, &end);
@@ -657,7 +883,58 @@ impl LodModel {
     /// Writes the first `out.len()` rows (at most `P`) of the pose at `phase`, as [`LodModel::pose`]
     /// does for all of them: rows the kernel evaluated from `G w_T`, later rows from the mean pose.
     /// With `out.len() = 7` it evaluates only the root and the time increment, `O(7 r_T)`.
+    ///
+    /// Runs an AVX2 build of the same operations where the CPU has AVX2 (the same bits).
     pub fn pose_rows(
+        &self,
+        kernel: &ClipKernel,
+        phase: f32,
+        out: &mut [f32],
+    ) -> Result<(), KernelError> {
+        self.pose_rows_isa(Isa::current(), kernel, phase, out)
+    }
+
+    /// [`LodModel::pose_rows`] run by the baseline build (x86-64 SSE2) whatever the CPU: the same
+    /// bits as `pose_rows` (see [`LodModel::build_kernel_baseline`]).
+    pub fn pose_rows_baseline(
+        &self,
+        kernel: &ClipKernel,
+        phase: f32,
+        out: &mut [f32],
+    ) -> Result<(), KernelError> {
+        self.pose_rows_isa(Isa::Baseline, kernel, phase, out)
+    }
+
+    /// [`LodModel::pose_rows`] with the instruction-set build chosen by the caller.
+    fn pose_rows_isa(
+        &self,
+        isa: Isa,
+        kernel: &ClipKernel,
+        phase: f32,
+        out: &mut [f32],
+    ) -> Result<(), KernelError> {
+        #[cfg(target_arch = "x86_64")]
+        if isa == Isa::Avx2 && Isa::current() == Isa::Avx2 {
+            // SAFETY: the CPU has AVX2 (`Isa::current`).
+            return unsafe { self.pose_rows_avx2(kernel, phase, out) };
+        }
+        let _ = isa;
+        self.pose_rows_body(kernel, phase, out)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn pose_rows_avx2(
+        &self,
+        kernel: &ClipKernel,
+        phase: f32,
+        out: &mut [f32],
+    ) -> Result<(), KernelError> {
+        self.pose_rows_body(kernel, phase, out)
+    }
+
+    #[inline(always)]
+    fn pose_rows_body(
         &self,
         kernel: &ClipKernel,
         phase: f32,
@@ -683,12 +960,37 @@ impl LodModel {
         let i1 = (i + 1).min(t - 1);
         let a = ph - i as f32;
         let (head, tail) = out.split_at_mut(used);
-        head.fill(0.0);
-        for b in 0..rt {
-            let wb = (1.0 - a) * key.u_t[i + t * b] + a * key.u_t[i1 + t * b];
-            let gcol = &kernel.g[rows * b..][..used];
-            for (o, &gv) in head.iter_mut().zip(gcol) {
-                *o += wb * gv;
+        let wb = |b: usize| (1.0 - a) * key.u_t[i + t * b] + a * key.u_t[i1 + t * b];
+        if used >= COMBINE_BLOCK && rt <= POSE_COLUMNS {
+            // Many rows: blocks of rows held in registers over the `r_T` columns.
+            let mut w = [0.0f32; POSE_COLUMNS];
+            for (b, v) in w[..rt].iter_mut().enumerate() {
+                *v = wb(b);
+            }
+            combine_columns(head, rt, |b| w[b], |b| &kernel.g[rows * b..][..used]);
+        } else if used == ROOT_ROWS {
+            // Root only: the seven sums held in registers over the columns (the same sums in the
+            // same order as the column loop below).
+            let mut acc = [0.0f32; ROOT_ROWS];
+            for b in 0..rt {
+                let w = wb(b);
+                let gcol: &[f32; ROOT_ROWS] = kernel.g[rows * b..][..ROOT_ROWS]
+                    .try_into()
+                    .expect("seven rows");
+                for r in 0..ROOT_ROWS {
+                    acc[r] += w * gcol[r];
+                }
+            }
+            head.copy_from_slice(&acc);
+        } else {
+            // A few rows: one pass per column (the same sums in the same order).
+            head.fill(0.0);
+            for b in 0..rt {
+                let w = wb(b);
+                let gcol = &kernel.g[rows * b..][..used];
+                for (o, &gv) in head.iter_mut().zip(gcol) {
+                    *o += w * gv;
+                }
             }
         }
         let n = tail.len();
@@ -719,14 +1021,68 @@ mod tests {
             }
         }
         assert_eq!(blocked, plain);
-        // The dot product agrees to rounding.
-        for l in 0..n {
-            let row: Vec<f32> = (0..cols).map(|j| m[stride * j + l]).collect();
-            let d = dot(&row, &x);
-            assert!(
-                (d - (plain[l] - 0.5)).abs() <= 1e-12 * (1.0 + d.abs()),
-                "{d}"
-            );
+    }
+
+    #[test]
+    fn combined_columns_equal_the_plain_column_loop_bitwise() {
+        for (len, n) in [
+            (986usize, 60usize),
+            (67, 29),
+            (7, 5),
+            (29, 9),
+            (40, 1),
+            (0, 3),
+        ] {
+            let cols: Vec<Vec<f32>> = (0..n)
+                .map(|j| {
+                    (0..len + 3)
+                        .map(|i| (((i + 1) * (j + 7) * 7919) % 1000) as f32 / 300.0 - 1.6)
+                        .collect()
+                })
+                .collect();
+            let coefs: Vec<f32> = (0..n)
+                .map(|j| ((j * 31) % 97) as f32 / 13.0 - 3.0)
+                .collect();
+            let mut got = vec![f32::NAN; len];
+            combine_columns(&mut got, n, |j| coefs[j], |j| &cols[j][..]);
+            let mut want = vec![0.0f32; len];
+            for j in 0..n {
+                for i in 0..len {
+                    want[i] += coefs[j] * cols[j][i];
+                }
+            }
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&got), bits(&want), "len {len}, {n} columns");
+        }
+    }
+
+    #[test]
+    fn rows_dotted_four_at_a_time_equal_single_row_dots_bitwise() {
+        // 11 rows (two groups of four and three single rows), lengths with and without a tail.
+        for n in [801usize, 800, 3, 4] {
+            let rows = 11;
+            let a: Vec<f64> = (0..rows * n)
+                .map(|i| ((i * 7919) % 1000) as f64 / 300.0 - 1.6)
+                .collect();
+            let x: Vec<f64> = (0..n)
+                .map(|j| ((j * 31) % 97) as f64 / 13.0 - 3.0)
+                .collect();
+            let mut grouped = vec![0.0; rows];
+            dot_rows(&a, &x, &mut grouped);
+            for l in 0..rows {
+                let row = &a[l * n..(l + 1) * n];
+                assert_eq!(
+                    grouped[l].to_bits(),
+                    dot_row(row, &x).to_bits(),
+                    "n {n} row {l}"
+                );
+                let plain: f64 = row.iter().zip(&x).map(|(p, q)| p * q).sum();
+                assert!(
+                    (grouped[l] - plain).abs() <= 1e-12 * (1.0 + plain.abs()),
+                    "n {n} row {l}: {} vs {plain}",
+                    grouped[l]
+                );
+            }
         }
     }
 }

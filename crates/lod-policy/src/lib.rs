@@ -93,7 +93,9 @@ pub use footlock::{Foot, FootLock, FootLockError, FootRig};
 /// The math types of the runtime API (`Vec3`, `Quat`), so an engine uses the same version.
 pub use glam;
 pub use kernel::{ClipKernel, KernelScratch, TURN_CONTROL};
-pub use math::{clear_avx_upper_state, ease_in_out, wrap_angle};
+pub use math::{
+    clear_avx_upper_state, ease_in_out, prefetch, prefetch_bytes, prefetch_slice, wrap_angle,
+};
 pub use model::{
     ALWAYS_ROWS, AccuracyLevel, ControlSpace, HEIGHT_CONTROL, KeyTensor, LevelError, LodModel,
     ModelParts, Precision, ROWS_PER_JOINT, Ranks, TIME_ROW, Variogram, VariogramModel,

@@ -281,29 +281,43 @@ pub struct LodModel {
     parts: ModelParts,
     /// Largest ranks over all keys, per mode (for preallocation).
     max_ranks: Ranks,
-    /// The kriging projections again, row-major, for the kernels' dot products (derived from
-    /// `parts` by [`LodModel::new`]; not stored in the model file).
-    rows: RowMajorProjections,
+    /// The kriging weights' projection with the trend folded in, row-major f64, for the kernels'
+    /// dot products (derived from `parts` by [`LodModel::new`]; not stored in the model file).
+    rows: FoldedProjections,
 }
 
-/// Row-major copies of the kriging projections: row `l` of key `k`'s `Q` is
-/// `q[k][l (S + 1)..(l + 1) (S + 1)]`, row `m` of the controls' `C A^{-1}[:S, :]` is
-/// `pc[m (S + 1)..]`. A kernel reads each used row as one contiguous run (a dot product over the
-/// samples) instead of striding across columns.
+/// Each key's kriging projection with the trend folded in, row-major in f64: row `l` of key `k` is
+/// `a[k][l (S + 1)..(l + 1) (S + 1)]`, with
+///
+/// `A = Q_top - V P_C` (`Q_top` the key's `R_S x (S + 1)` part of `Q`, `V` its trend, `P_C` the
+/// control space's `(d + 1) x (S + 1)` projection),
+///
+/// so that the sample-mode weights of module `kernel`, `w = Q_top x + V ([c' ; 1] - P_C x)`, are
+/// `w = A x + V [c' ; 1]`: `r_S` dot products over the samples instead of `r_S + d + 1`, each one
+/// contiguous run of f64 (no conversion in the loop). Truncating to the first `r_S` rows of `Q_top`
+/// and `V` truncates `A` the same way. The fold is exact up to the rounding of `d + 1` products per
+/// entry.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub(crate) struct RowMajorProjections {
-    pub q: Vec<Vec<f32>>,
-    pub pc: Vec<f32>,
+pub(crate) struct FoldedProjections {
+    pub a: Vec<Vec<f64>>,
 }
 
-fn transpose(col_major: &[f32], rows: usize, cols: usize) -> Vec<f32> {
-    let mut out = vec![0.0; rows * cols];
-    for (j, col) in col_major.chunks_exact(rows).enumerate().take(cols) {
-        for (i, &v) in col.iter().enumerate() {
-            out[i * cols + j] = v;
+/// `A = Q_top - V P_C` row-major (see [`FoldedProjections`]) for one key of `R_S` rows.
+fn fold_projection(key: &KeyTensor, pc: &[f32], s: usize, d: usize) -> Vec<f64> {
+    let r_s = key.ranks.s;
+    let n = s + 1;
+    let mut a = vec![0.0f64; r_s * n];
+    for l in 0..r_s {
+        let row = &mut a[l * n..(l + 1) * n];
+        for (j, v) in row.iter_mut().enumerate() {
+            let mut acc = f64::from(key.projection[l + r_s * j]);
+            for m in 0..=d {
+                acc -= f64::from(key.trend[l + r_s * m]) * f64::from(pc[m + (d + 1) * j]);
+            }
+            *v = acc;
         }
     }
-    out
+    a
 }
 
 impl TryFrom<ModelParts> for LodModel {
@@ -487,13 +501,12 @@ impl LodModel {
         let joints = (p - always_rows) / rows_per_joint;
         Self::check_errors("level_errors", &parts.level_errors, parts.levels.len())?;
         Self::check_errors("joint_errors", &parts.joint_errors, joints + 1)?;
-        let rows = RowMajorProjections {
-            q: parts
+        let rows = FoldedProjections {
+            a: parts
                 .keys
                 .iter()
-                .map(|k| transpose(&k.projection, k.ranks.s, s + 1))
+                .map(|k| fold_projection(k, &parts.controls.projection, s, d))
                 .collect(),
-            pc: transpose(&parts.controls.projection, d + 1, s + 1),
         };
         Ok(LodModel {
             parts,
@@ -652,8 +665,8 @@ impl LodModel {
         self.parts.joint_errors = joint_errors;
         Ok(())
     }
-    /// The kriging projections in row-major order (derived by [`LodModel::new`]).
-    pub(crate) fn row_major(&self) -> &RowMajorProjections {
+    /// The kriging projections with the trend folded in (derived by [`LodModel::new`]).
+    pub(crate) fn folded(&self) -> &FoldedProjections {
         &self.rows
     }
 

@@ -341,3 +341,66 @@ fn k_fold_refits_per_fold_and_holds_out_whole_takes() {
         "multilinear {multi} cm, naive {naive} cm"
     );
 }
+
+/// The AVX2 build of the kernel and pose loops (chosen at run time where the CPU has it) gives the
+/// same bits as the baseline build, on the embedded model at every accuracy level, for all joints,
+/// a few joints and root only (covering the blocked K, G and pose paths and the short ones).
+#[test]
+fn avx2_and_baseline_builds_of_the_kernels_give_the_same_bits() {
+    if !std::arch::is_x86_feature_detected!("avx2") {
+        eprintln!(
+            "note: this CPU has no AVX2: both builds are the baseline and are compared as such"
+        );
+    }
+    let (model, analysis) = built();
+    let lod = &model.lod;
+    let mut scratch = lod_policy::KernelScratch::new(lod);
+    let (mut fast, mut base) = (
+        lod_policy::ClipKernel::compact(lod),
+        lod_policy::ClipKernel::compact(lod),
+    );
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let levels = lod.levels().len();
+    let mut compared = 0;
+    for (i, c) in analysis.controls.iter().step_by(7).enumerate() {
+        let c: Vec<f32> = c.iter().map(|&v| v as f32).collect();
+        for level in 0..levels {
+            for joints in [usize::MAX, 3, 0] {
+                let detail = if joints == 0 {
+                    Detail::root_only()
+                } else {
+                    Detail::new(level, joints)
+                };
+                lod.build_kernel(&c, detail, &mut scratch, &mut fast)
+                    .unwrap();
+                lod.build_kernel_baseline(&c, detail, &mut scratch, &mut base)
+                    .unwrap();
+                let what = format!("controls {i}, level {level}, {joints} joints");
+                assert_eq!(bits(fast.g()), bits(base.g()), "G, {what}");
+                let times = |k: &lod_policy::ClipKernel| {
+                    k.time_table()
+                        .times()
+                        .iter()
+                        .map(|t| t.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(times(&fast), times(&base), "time table, {what}");
+                let (a, b) = (fast.root_motion(), base.root_motion());
+                assert_eq!(
+                    [a.dx, a.dz, a.turn].map(f32::to_bits),
+                    [b.dx, b.dz, b.turn].map(f32::to_bits),
+                    "root motion, {what}"
+                );
+                let rows = fast.rows();
+                let (mut pa, mut pb) = (vec![0.0f32; rows], vec![0.0f32; rows]);
+                for phase in [0.0, 0.37, 5.5, (lod.t() - 1) as f32] {
+                    lod.pose_rows(&fast, phase, &mut pa).unwrap();
+                    lod.pose_rows_baseline(&base, phase, &mut pb).unwrap();
+                    assert_eq!(bits(&pa), bits(&pb), "pose at {phase}, {what}");
+                }
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared >= 3 * levels, "{compared} kernels compared");
+}
