@@ -138,6 +138,9 @@ pub struct ClipKernel {
     times: TimeTable,
     /// Root motion from the first to the last aligned frame ([`crate::chain`]).
     root_motion: RootMotion,
+    /// `(T - 1) / duration`: scales a playback time to the aligned frame a uniform table would put
+    /// it at, [`ClipKernel::phase_at`]'s first guess (a product instead of a division per frame).
+    guess_scale: f64,
 }
 
 impl ClipKernel {
@@ -158,6 +161,7 @@ impl ClipKernel {
             g: vec![0.0; model.p() * r.t],
             times: TimeTable::with_capacity(model.t()),
             root_motion: RootMotion::default(),
+            guess_scale: 0.0,
         }
     }
 
@@ -183,6 +187,7 @@ impl ClipKernel {
             rows,
             clamped: false,
             root_motion: RootMotion::default(),
+            guess_scale: 0.0,
         }
     }
 
@@ -267,7 +272,8 @@ impl ClipKernel {
         }
         let duration = times[n - 1];
         let t = seconds.max(0.0).min(duration);
-        let guess = (t / duration * (n - 1) as f64) as usize;
+        // The guess only picks where the walk starts (NaN or out of range gives 0 or the end).
+        let guess = (t * self.guess_scale) as usize;
         // The last k <= n - 2 with times[k] <= t (or 0), as the binary search finds it.
         let mut k = guess.min(n - 2);
         while k > 0 && times[k] > t {
@@ -841,6 +847,7 @@ impl LodModel {
                     .map(|b| f64::from(g[TIME_ROW + rows * b]) * f64::from(key.u_t[j + t * b]))
                     .sum::<f64>()
         }));
+        out.guess_scale = (t.max(1) - 1) as f64 / out.times.duration();
 
         out.detail = detail;
         out.level = level;
