@@ -83,8 +83,33 @@ impl DualBlend {
     }
 
     /// The first `out.len()` outputs (at most `D`) at raw controls `c`. Allocation-free once the
-    /// thread's scratch has grown.
+    /// thread's scratch has grown. Runs an AVX2 build of the same operations where the CPU has it
+    /// (no fused multiply-add, so the same bits), as the model's kernels do
+    /// ([`lod_policy::LodModel::build_kernel`]): the baselines get the same instruction set.
     pub(crate) fn eval(&self, c: &[f64; 4], out: &mut [f32]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            unsafe { self.eval_avx2(c, out) };
+            return;
+        }
+        self.eval_body(c, out);
+    }
+
+    /// [`DualBlend::eval`] by the baseline build (x86-64 SSE2) whatever the CPU.
+    #[cfg(test)]
+    pub(crate) fn eval_baseline(&self, c: &[f64; 4], out: &mut [f32]) {
+        self.eval_body(c, out);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn eval_avx2(&self, c: &[f64; 4], out: &mut [f32]) {
+        self.eval_body(c, out);
+    }
+
+    #[inline(always)]
+    fn eval_body(&self, c: &[f64; 4], out: &mut [f32]) {
         let n = out.len().min(self.outputs);
         let s = self.samples;
         let dims = self.scaling.offset.len().min(c.len());
@@ -124,5 +149,43 @@ impl DualBlend {
                 *v = (a + t) as f32;
             }
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The baselines' AVX2 build gives the same bits as their baseline build (prefixes of every
+    /// length, controls inside and beyond the data).
+    #[test]
+    fn avx2_and_baseline_blends_give_the_same_bits() {
+        let (s, d, outputs) = (150usize, 4usize, 70usize);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        // The last control is constant (as the Bandai height is), so it is dropped.
+        let params = Mat::from_fn(s, d, |_, k| if k == 3 { 1.3 } else { 2.0 * next() - 1.0 });
+        let values = Mat::from_fn(s, outputs, |i, o| {
+            (params[(i, 0)] * (o as f64 + 1.0)).sin() + params[(i, 1)] * 0.3 + 0.1 * next()
+        });
+        let kriging = Kriging::fit(params.as_ref(), values.as_ref(), &Default::default())
+            .expect("kriging fits");
+        let blend = DualBlend::new(&kriging, &values).expect("dual form");
+        for q in 0..20 {
+            let c = [2.4 * next() - 1.2, 2.4 * next() - 1.2, 2.0 * next() - 1.0, 1.3];
+            for n in [outputs, 38, 7, 1] {
+                let (mut a, mut b) = (vec![0.0f32; n], vec![0.0f32; n]);
+                blend.eval(&c, &mut a);
+                blend.eval_baseline(&c, &mut b);
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&a), bits(&b), "query {q}, {n} outputs");
+                assert!(a.iter().all(|v| v.is_finite()));
+            }
+        }
     }
 }
