@@ -159,6 +159,16 @@ impl CrowdConfig {
 
 /// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
 ///
+/// Culling box of a walker: root ground position +-(0.4 height + margin) horizontally,
+/// `[-margin, 1.1 height + margin]` vertically.
+fn walker_bounds<C>(w: &Walker<C>, m: f32) -> Bounds {
+    let r = 0.4 * w.height + m;
+    Bounds {
+        min: Vec3::new(w.root.x - r, -m, w.root.z - r),
+        max: Vec3::new(w.root.x + r, 1.1 * w.height + m, w.root.z + r),
+    }
+}
+
 /// All per-frame buffers are allocated by `new`; `step_into` allocates only when the culling tree
 /// is rebuilt (every `tree_rebuild_interval` frames), when a walker starts its first inertialized seam
 /// (its seam buffers, `2 P` floats, are allocated then, so far and culled walkers never hold them),
@@ -175,6 +185,8 @@ pub struct Crowd<C> {
     seam_scratch: Vec<SeamScratch>,
     joints: Vec<Vec3>,
     bounds: Vec<Bounds>,
+    /// The boxes the FK stage writes as it places each walker: the next step's `bounds` (swapped in).
+    placed_bounds: Vec<Bounds>,
     visible: Vec<bool>,
     tree: WalkerAabbTree,
     bones: Vec<(usize, usize)>,
@@ -316,6 +328,13 @@ impl<C: Send> Crowd<C> {
                 };
                 n
             ],
+            placed_bounds: vec![
+                Bounds {
+                    min: Vec3::ZERO,
+                    max: Vec3::ZERO
+                };
+                n
+            ],
             visible: vec![false; n],
             tree: WalkerAabbTree::new(&[]),
             bones: source.bones().to_vec(),
@@ -323,24 +342,22 @@ impl<C: Send> Crowd<C> {
             time_s: 0.0,
         };
         crowd.update_bounds();
+        crowd.bounds.clone_from(&crowd.placed_bounds);
         crowd.tree.rebuild(&crowd.bounds);
         Ok(crowd)
     }
 
-    /// Culling box of every walker: root ground position +-(0.4 height + margin) horizontally,
-    /// `[-margin, 1.1 height + margin]` vertically.
+    /// Culling box of every walker ([`walker_bounds`]) into `placed_bounds`, the boxes the next step
+    /// culls with. The frame's FK stage writes each walker's box there as it places it (while the
+    /// walker is in cache), so this full pass runs only for a new crowd or after a failed step.
     fn update_bounds(&mut self) {
         let m = self.config.cull_margin_m;
         // Walkers are borrowed mutably (clips need only be `Send`, not `Sync`).
-        self.bounds
+        self.placed_bounds
             .par_iter_mut()
             .zip(self.walkers.par_iter_mut())
             .with_min_len(4 * CHUNK)
-            .for_each(|(b, w)| {
-                let r = 0.4 * w.height + m;
-                b.min = Vec3::new(w.root.x - r, -m, w.root.z - r);
-                b.max = Vec3::new(w.root.x + r, 1.1 * w.height + m, w.root.z + r);
-            });
+            .for_each(|(b, w)| *b = walker_bounds(w, m));
     }
 
     /// Advances the crowd by `dt` seconds seen from `camera` and returns the frame's statistics.
@@ -394,9 +411,9 @@ impl<C: Send> Crowd<C> {
         // dirty, which slows every SSE instruction after it.
         lod_policy::clear_avx_upper_state();
 
-        // (1) Culling.
+        // (1) Culling, over the boxes the last frame's FK stage left (or `new`'s).
         let t0 = Instant::now();
-        self.update_bounds();
+        std::mem::swap(&mut self.bounds, &mut self.placed_bounds);
         if self.frame % u64::from(self.config.tree_rebuild_interval) == 0 {
             self.tree.rebuild(&self.bounds);
         } else {
@@ -409,6 +426,7 @@ impl<C: Send> Crowd<C> {
         // stage times are summed over threads and the pass's wall time is split in proportion.
         let t1 = Instant::now();
         let params = self.params;
+        let margin = self.config.cull_margin_m;
         let eye = camera.position;
         let view = camera.view();
         let pl = params.levels.pose_len;
@@ -422,9 +440,10 @@ impl<C: Send> Crowd<C> {
             .zip(self.poses.par_chunks_mut(CHUNK * pl))
             .zip(self.joints.par_chunks_mut(CHUNK * npos))
             .zip(self.bins.par_chunks_mut(CHUNK))
+            .zip(self.placed_bounds.par_chunks_mut(CHUNK))
             .enumerate()
             .map(
-                |(c, (((((walkers, visible), scratch), poses), joints), bins))| {
+                |(c, ((((((walkers, visible), scratch), poses), joints), bins), bounds))| {
                     lod_policy::clear_avx_upper_state();
                     let mut out = ChunkOutcome::default();
                     let ta = Instant::now();
@@ -454,6 +473,11 @@ impl<C: Send> Crowd<C> {
                         for k in 0..walkers.len() {
                             if let Some(ahead) = walkers.get(k + PREFETCH) {
                                 source.prefetch(&ahead.cur, ahead.t);
+                                // The first line of its pose and joint slots, which this pass
+                                // and the next write (a root-only walker writes nothing more).
+                                let j = k + PREFETCH;
+                                lod_policy::prefetch_bytes(poses[j * pl..].as_ptr().cast(), 1);
+                                lod_policy::prefetch_bytes(joints[j * npos..].as_ptr().cast(), 1);
                             }
                             let pose = &mut poses[k * pl..(k + 1) * pl];
                             walkers[k].pose(source, &params, dt, visible[k], pose);
@@ -461,13 +485,15 @@ impl<C: Send> Crowd<C> {
                     }
                     let tc = Instant::now();
                     if out.fault.is_none() {
-                        for (((w, pose), joints), bin) in walkers
+                        for ((((w, pose), joints), bin), bounds) in walkers
                             .iter_mut()
                             .zip(poses.chunks(pl))
                             .zip(joints.chunks_mut(npos))
                             .zip(bins.iter_mut())
+                            .zip(bounds.iter_mut())
                         {
                             w.place(source, pose, joints);
+                            *bounds = walker_bounds(w, margin);
                             *bin = params.levels.bin(&w.cur_detail) as u32;
                             out.in_transition += usize::from(w.seam.is_active());
                         }
@@ -479,6 +505,8 @@ impl<C: Send> Crowd<C> {
             )
             .reduce(ChunkOutcome::default, ChunkOutcome::merge);
         if let Some((walker, e)) = pass.fault {
+            // Chunks after the fault placed nobody: recompute every box from the roots.
+            self.update_bounds();
             return Err(match e {
                 WalkerFault::Duration(duration) => CrowdError::BadClipDuration { walker, duration },
                 WalkerFault::Level(level) => CrowdError::BadLevel {

@@ -177,7 +177,12 @@ mod tests {
             .expect("kriging fits");
         let blend = DualBlend::new(&kriging, &values).expect("dual form");
         for q in 0..20 {
-            let c = [2.4 * next() - 1.2, 2.4 * next() - 1.2, 2.0 * next() - 1.0, 1.3];
+            let c = [
+                2.4 * next() - 1.2,
+                2.4 * next() - 1.2,
+                2.0 * next() - 1.0,
+                1.3,
+            ];
             for n in [outputs, 38, 7, 1] {
                 let (mut a, mut b) = (vec![0.0f32; n], vec![0.0f32; n]);
                 blend.eval(&c, &mut a);
