@@ -859,7 +859,8 @@ impl LodModel {
         //    the travel turn (the clamped turn control; when the model ignores turn, the turn the data
         //    imply for the other controls, `ControlSpace::implied`; the pelvis's yaw change for a model
         //    without a turn dimension).
-        let mut ends = [[0.0f32; 6]; 2];
+        // The seven root rows (the register path of `pose_rows`; root motion reads the first six).
+        let mut ends = [[0.0f32; ROOT_ROWS]; 2];
         for (e, phase) in ends.iter_mut().zip([0.0, (t - 1) as f32]) {
             self.pose_rows_body(out, phase, e)?;
         }
