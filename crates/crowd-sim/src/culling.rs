@@ -216,7 +216,7 @@ impl WalkerAabbTree {
     ///
     /// The tree's nodes are stored depth first (each subtree one contiguous run, checked by
     /// `rebuild`), so the two subtrees of a node are refitted in parallel down to
-    /// [`REFIT_SPLIT_DEPTH`] levels, each then swept in reverse; a box is the union of the same
+    /// four levels, each then swept in reverse; a box is the union of the same
     /// boxes whichever thread computes it, so the tree is the same for any thread count.
     pub fn refit(&mut self, bounds: &[Bounds]) {
         if bounds.len() != self.shapes.len() {

@@ -801,6 +801,10 @@ fn write_benches(doc: &mut String) {
             "one crowd frame with the procedural source, BVH culling",
         ),
         ("timewarp", "DTW and alignment"),
+        (
+            "model_file",
+            "clip kernels, kriging weights and poses of a model file (`MOTION_LOD_BENCH_MODEL=FILE`, e.g. the Bandai model)",
+        ),
     ] {
         t.row(&[format!("`{name}`"), what.to_string()]);
     }
