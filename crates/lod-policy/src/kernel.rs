@@ -55,6 +55,19 @@ impl Isa {
     }
 }
 
+/// Defines the method `$avx2`, the AVX2 build of the `#[inline(always)]` method `$body` with the same
+/// arguments: the body is compiled again with AVX2 enabled (no FMA: the same operations in the same
+/// order, so the same bits; see [`Isa`]). Callers check [`Isa::current`] before calling it.
+macro_rules! avx2_build {
+    (fn $avx2:ident = $body:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty) => {
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        fn $avx2(&self, $($arg: $ty),*) -> $ret {
+            self.$body($($arg),*)
+        }
+    };
+}
+
 /// Most bytes of `G(c)` [`ClipKernel::prefetch`] hints at: a root-only or far clip's whole `G`; the
 /// first rows of a full-detail one (its pose streams through the rest).
 pub const PREFETCH_G_BYTES: usize = 1024;
@@ -608,19 +621,13 @@ impl LodModel {
         self.weights_body(controls, key_index, r_s, scratch, column_order)
     }
 
-    /// [`LodModel::weights_body`] compiled for AVX2 (no FMA: the same operations, so the same bits).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn weights_avx2(
-        &self,
+    avx2_build!(fn weights_avx2 = weights_body(
         controls: &[f32],
         key_index: usize,
         r_s: usize,
         scratch: &mut KernelScratch,
-        column_order: bool,
-    ) -> bool {
-        self.weights_body(controls, key_index, r_s, scratch, column_order)
-    }
+        column_order: bool
+    ) -> bool);
 
     /// Steps 1-4 (see [`LodModel::weights_in`]), inlined into each instruction-set build.
     #[inline(always)]
@@ -758,20 +765,13 @@ impl LodModel {
         self.build_kernel_body(controls, detail, scratch, out, column_order)
     }
 
-    /// [`LodModel::build_kernel_body`] compiled for AVX2 (no FMA: the same operations, so the same
-    /// bits).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn build_kernel_avx2(
-        &self,
+    avx2_build!(fn build_kernel_avx2 = build_kernel_body(
         controls: &[f32],
         detail: Detail,
         scratch: &mut KernelScratch,
         out: &mut ClipKernel,
-        column_order: bool,
-    ) -> Result<(), KernelError> {
-        self.build_kernel_body(controls, detail, scratch, out, column_order)
-    }
+        column_order: bool
+    ) -> Result<(), KernelError>);
 
     /// Steps 1-8 of the module documentation, inlined into each instruction-set build.
     #[inline(always)]
@@ -930,16 +930,11 @@ impl LodModel {
         self.pose_rows_body(kernel, phase, out)
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn pose_rows_avx2(
-        &self,
+    avx2_build!(fn pose_rows_avx2 = pose_rows_body(
         kernel: &ClipKernel,
         phase: f32,
-        out: &mut [f32],
-    ) -> Result<(), KernelError> {
-        self.pose_rows_body(kernel, phase, out)
-    }
+        out: &mut [f32]
+    ) -> Result<(), KernelError>);
 
     #[inline(always)]
     fn pose_rows_body(
