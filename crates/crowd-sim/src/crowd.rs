@@ -157,8 +157,6 @@ impl CrowdConfig {
     }
 }
 
-/// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
-///
 /// Culling box of a walker: root ground position +-(0.4 height + margin) horizontally,
 /// `[-margin, 1.1 height + margin]` vertically.
 fn walker_bounds<C>(w: &Walker<C>, m: f32) -> Bounds {
@@ -169,6 +167,8 @@ fn walker_bounds<C>(w: &Walker<C>, m: f32) -> Bounds {
     }
 }
 
+/// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
+///
 /// All per-frame buffers are allocated by `new`; `step_into` allocates only when the culling tree
 /// is rebuilt (every `tree_rebuild_interval` frames), when a walker starts its first inertialized seam
 /// (its seam buffers, `2 P` floats, are allocated then, so far and culled walkers never hold them),
@@ -321,13 +321,7 @@ impl<C: Send> Crowd<C> {
                 .map(|_| SeamScratch::new(levels.pose_len))
                 .collect(),
             joints: vec![Vec3::ZERO; n * npos],
-            bounds: vec![
-                Bounds {
-                    min: Vec3::ZERO,
-                    max: Vec3::ZERO
-                };
-                n
-            ],
+            bounds: Vec::new(),
             placed_bounds: vec![
                 Bounds {
                     min: Vec3::ZERO,

@@ -67,15 +67,12 @@ fn refit_subtree(
     shapes: &[BoxShape],
     depth: u32,
 ) {
-    let BvhNode::Node { child_r_index, .. } = nodes[0] else {
+    let split = depth > 0 && nodes.len() >= REFIT_SPLIT_NODES;
+    let (BvhNode::Node { child_r_index, .. }, true) = (&nodes[0], split) else {
         sweep(nodes, boxes, base, shapes);
         return;
     };
-    if depth == 0 || nodes.len() < REFIT_SPLIT_NODES {
-        sweep(nodes, boxes, base, shapes);
-        return;
-    }
-    let r = child_r_index - base;
+    let r = *child_r_index - base;
     let (root, rest) = nodes.split_at_mut(1);
     let (left, right) = rest.split_at_mut(r - 1);
     let (root_box, rest_boxes) = boxes.split_at_mut(1);

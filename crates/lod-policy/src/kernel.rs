@@ -151,9 +151,6 @@ pub struct ClipKernel {
     times: TimeTable,
     /// Root motion from the first to the last aligned frame ([`crate::chain`]).
     root_motion: RootMotion,
-    /// `(T - 1) / duration`: scales a playback time to the aligned frame a uniform table would put
-    /// it at, [`ClipKernel::phase_at`]'s first guess (a product instead of a division per frame).
-    guess_scale: f64,
 }
 
 impl ClipKernel {
@@ -174,7 +171,6 @@ impl ClipKernel {
             g: vec![0.0; model.p() * r.t],
             times: TimeTable::with_capacity(model.t()),
             root_motion: RootMotion::default(),
-            guess_scale: 0.0,
         }
     }
 
@@ -200,7 +196,6 @@ impl ClipKernel {
             rows,
             clamped: false,
             root_motion: RootMotion::default(),
-            guess_scale: 0.0,
         }
     }
 
@@ -262,9 +257,8 @@ impl ClipKernel {
     /// Hints the CPU to fetch the memory [`ClipKernel::phase_at`] and [`LodModel::pose_rows`] read
     /// (the time table and the evaluated `G(c)`, at most [`PREFETCH_G_BYTES`] of it) without waiting
     /// for it ([`crate::math::prefetch_bytes`]), so that a caller can start those cache misses a few
-    /// walkers ahead. `seconds` is unused (the whole table is fetched; kept for callers). No effect on
-    /// any result.
-    pub fn prefetch(&self, _seconds: f64) {
+    /// walkers ahead. No effect on any result.
+    pub fn prefetch(&self) {
         crate::math::prefetch_slice(self.times.times());
         let g = &self.g[..(self.rows * self.ranks.t).min(self.g.len())];
         let bytes = std::mem::size_of_val(g).min(PREFETCH_G_BYTES);
@@ -285,8 +279,7 @@ impl ClipKernel {
         }
         let duration = times[n - 1];
         let t = seconds.max(0.0).min(duration);
-        // The guess only picks where the walk starts (NaN or out of range gives 0 or the end).
-        let guess = (t * self.guess_scale) as usize;
+        let guess = (t / duration * (n - 1) as f64) as usize;
         // The last k <= n - 2 with times[k] <= t (or 0), as the binary search finds it.
         let mut k = guess.min(n - 2);
         while k > 0 && times[k] > t {
@@ -498,7 +491,7 @@ impl LodModel {
         scratch: &mut KernelScratch,
         out: &mut ClipKernel,
     ) -> Result<(), KernelError> {
-        self.build_kernel_in(controls, detail, scratch, out, false)
+        self.build_kernel_isa(Isa::current(), controls, detail, scratch, out, false)
     }
 
     /// [`LodModel::build_kernel`] run by the baseline build of its loops (x86-64 SSE2) whatever the
@@ -527,7 +520,7 @@ impl LodModel {
         scratch: &mut KernelScratch,
         out: &mut ClipKernel,
     ) -> Result<(), KernelError> {
-        self.build_kernel_in(controls, detail, scratch, out, true)
+        self.build_kernel_isa(Isa::current(), controls, detail, scratch, out, true)
     }
 
     /// The sample-mode kriging weights `w` of key `key` for raw `controls` (length `d`), truncated
@@ -700,9 +693,9 @@ impl LodModel {
         cs.variogram.eval_squared(x);
         scratch.x[s] = 1.0;
 
-        // 3. y = [U_S^T b (first r_S rows) ; C b] = [Q x ; P_C x], Q column-major R_S x (S + 1) (the
-        //    key's), P_C column-major (d + 1) x (S + 1) (the control space's, shared by every key).
         if column_order {
+            // 3. y = [U_S^T b (first r_S rows) ; C b] = [Q x ; P_C x], Q column-major R_S x (S + 1)
+            //    (the key's), P_C column-major (d + 1) x (S + 1) (the control space's, every key's).
             let y = &mut scratch.y[..r_s + d + 1];
             y.fill(0.0);
             let (y_top, y_c) = y.split_at_mut(r_s);
@@ -734,19 +727,8 @@ impl LodModel {
         clamped
     }
 
-    fn build_kernel_in(
-        &self,
-        controls: &[f32],
-        detail: Detail,
-        scratch: &mut KernelScratch,
-        out: &mut ClipKernel,
-        column_order: bool,
-    ) -> Result<(), KernelError> {
-        self.build_kernel_isa(Isa::current(), controls, detail, scratch, out, column_order)
-    }
-
-    /// [`LodModel::build_kernel_in`] with the instruction-set build chosen by the caller (tests
-    /// compare the two; [`Isa::Avx2`] falls back to the baseline where the CPU lacks AVX2).
+    /// Steps 1-8 with the instruction-set build chosen by the caller ([`Isa::Avx2`] falls back to
+    /// the baseline where the CPU lacks AVX2) and the kriging sums in stored column order or folded.
     fn build_kernel_isa(
         &self,
         isa: Isa,
@@ -847,7 +829,6 @@ impl LodModel {
                     .map(|b| f64::from(g[TIME_ROW + rows * b]) * f64::from(key.u_t[j + t * b]))
                     .sum::<f64>()
         }));
-        out.guess_scale = (t.max(1) - 1) as f64 / out.times.duration();
 
         out.detail = detail;
         out.level = level;

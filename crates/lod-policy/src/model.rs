@@ -283,7 +283,7 @@ pub struct LodModel {
     max_ranks: Ranks,
     /// The kriging weights' projection with the trend folded in, row-major f64, for the kernels'
     /// dot products (derived from `parts` by [`LodModel::new`]; not stored in the model file).
-    rows: FoldedProjections,
+    folded: FoldedProjections,
 }
 
 /// Each key's kriging projection with the trend folded in, row-major in f64: row `l` of key `k` is
@@ -501,7 +501,7 @@ impl LodModel {
         let joints = (p - always_rows) / rows_per_joint;
         Self::check_errors("level_errors", &parts.level_errors, parts.levels.len())?;
         Self::check_errors("joint_errors", &parts.joint_errors, joints + 1)?;
-        let rows = FoldedProjections {
+        let folded = FoldedProjections {
             a: parts
                 .keys
                 .iter()
@@ -511,7 +511,7 @@ impl LodModel {
         Ok(LodModel {
             parts,
             max_ranks,
-            rows,
+            folded,
         })
     }
 
@@ -667,7 +667,7 @@ impl LodModel {
     }
     /// The kriging projections with the trend folded in (derived by [`LodModel::new`]).
     pub(crate) fn folded(&self) -> &FoldedProjections {
-        &self.rows
+        &self.folded
     }
 
     /// Largest ranks over all keys, per mode.

@@ -1,26 +1,16 @@
 //! The crowd's fast paths against the reference path, in both scenes, and the same bytes for any
 //! thread count (embedded data set).
 
-use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, Scene};
+use crowd_sim::{ClipSource, CrowdConfig, Scene};
 use lod_policy::DistancePolicy;
 use motion_lod::LodSource;
 
 mod common;
 
-use common::built;
-
-/// Everything a step leaves per walker: rows of the pose, joint positions, level bin.
-#[derive(Debug, PartialEq)]
-struct Frame {
-    poses: Vec<Vec<f32>>,
-    joints: Vec<Vec<[f32; 3]>>,
-    bins: Vec<usize>,
-    visible: usize,
-}
+use common::{Frame, built, crowd_frames};
 
 fn simulate<S: ClipSource>(source: &S, scene: Scene, frames: usize) -> Vec<Frame> {
     let (model, _) = built();
-    let lod = &model.lod;
     // The paper's schedule as published (no screen check): this test is about the arithmetic of the
     // fast path at every kind of detail, and the published schedule uses root-only walkers in view
     // and several levels in the 300-walker overview.
@@ -28,34 +18,12 @@ fn simulate<S: ClipSource>(source: &S, scene: Scene, frames: usize) -> Vec<Frame
         screen_budget_px: None,
         ..lod_policy::DistanceConfig::default()
     };
-    let policy = DistancePolicy::new(lod, published).unwrap();
+    let policy = DistancePolicy::new(&model.lod, published).unwrap();
     let config = CrowdConfig {
         seed: 11,
         ..CrowdConfig::with_density(300, 0.01)
     };
-    let path = scene.path(config.field_size_m);
-    let lens = scene.lens(Camera::default(), config.field_size_m);
-    let mut crowd = Crowd::new(source, config).unwrap();
-    let mut out = Vec::new();
-    for f in 0..frames {
-        let cam = path.camera_at(f as f32 / 30.0, &lens);
-        let stats = crowd.step(source, &policy, &cam, 1.0 / 30.0).unwrap();
-        out.push(Frame {
-            poses: (0..crowd.len()).map(|i| crowd.pose(i).to_vec()).collect(),
-            joints: (0..crowd.len())
-                .map(|i| {
-                    crowd
-                        .joint_positions(i)
-                        .iter()
-                        .map(|p| p.to_array())
-                        .collect()
-                })
-                .collect(),
-            bins: (0..crowd.len()).map(|i| crowd.level_bin(i)).collect(),
-            visible: stats.visible,
-        });
-    }
-    out
+    crowd_frames(source, &policy, config, scene, frames)
 }
 
 #[test]

@@ -479,51 +479,24 @@ fn bandai_crowd_walkers_look_like_the_data() {
 #[test]
 fn bandai_crowd_fast_path_matches_the_reference_path() {
     use motion_lod::LodSource;
-    use motion_lod::crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, Scene};
+    use motion_lod::crowd_sim::{CrowdConfig, Scene};
     let Some((model, _)) = bandai() else {
         return;
     };
     let policy = DistancePolicy::for_model(&model.lod);
-    type Frames = Vec<(Vec<usize>, Vec<Vec<[f32; 3]>>)>;
-    fn simulate<S: ClipSource>(
-        source: &S,
-        policy: &DistancePolicy,
-        scene: Scene,
-        frames: usize,
-    ) -> Frames {
-        let config = CrowdConfig {
-            seed: 5,
-            ..CrowdConfig::with_density(300, 0.01)
-        };
-        let path = scene.path(config.field_size_m);
-        let lens = scene.lens(Camera::default(), config.field_size_m);
-        let mut crowd = Crowd::new(source, config).expect("crowd");
-        (0..frames)
-            .map(|f| {
-                let cam = path.camera_at(f as f32 / 30.0, &lens);
-                crowd.step(source, policy, &cam, 1.0 / 30.0).expect("step");
-                let bins = (0..crowd.len()).map(|i| crowd.level_bin(i)).collect();
-                let joints = (0..crowd.len())
-                    .map(|i| {
-                        crowd
-                            .joint_positions(i)
-                            .iter()
-                            .map(|p| p.to_array())
-                            .collect()
-                    })
-                    .collect();
-                (bins, joints)
-            })
-            .collect()
-    }
+    let config = CrowdConfig {
+        seed: 5,
+        ..CrowdConfig::with_density(300, 0.01)
+    };
     for scene in [Scene::Ground, Scene::Overview] {
-        let fast = simulate(&LodSource::new(model), &policy, scene, 90);
-        let reference = simulate(&LodSource::reference(model), &policy, scene, 90);
+        let fast = common::crowd_frames(&LodSource::new(model), &policy, config, scene, 90);
+        let reference =
+            common::crowd_frames(&LodSource::reference(model), &policy, config, scene, 90);
         let mut worst = 0.0f32;
         let mut placed = 0usize;
-        for (f, ((bins_a, ja), (bins_b, jb))) in fast.iter().zip(&reference).enumerate() {
-            assert_eq!(bins_a, bins_b, "{scene:?} frame {f}: levels differ");
-            for (a, b) in ja.iter().zip(jb) {
+        for (f, (a, b)) in fast.iter().zip(&reference).enumerate() {
+            assert_eq!(a.bins, b.bins, "{scene:?} frame {f}: levels differ");
+            for (a, b) in a.joints.iter().zip(&b.joints) {
                 assert_eq!(a.len(), b.len(), "{scene:?} frame {f}: joints shown");
                 for (p, q) in a.iter().zip(b) {
                     for k in 0..3 {

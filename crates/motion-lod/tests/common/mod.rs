@@ -19,3 +19,53 @@ pub fn built() -> &'static (MotionModel, Analysis) {
             .expect("model builds")
     })
 }
+
+/// Everything a crowd step leaves per walker: rows of the pose, joint positions, level bin; and the
+/// frame's visible count.
+#[derive(Debug, PartialEq)]
+#[allow(dead_code)] // not every test binary that includes this module runs crowds
+pub struct Frame {
+    pub poses: Vec<Vec<f32>>,
+    pub joints: Vec<Vec<[f32; 3]>>,
+    pub bins: Vec<usize>,
+    pub visible: usize,
+}
+
+/// `frames` steps at 30 fps of a crowd of `source` under `policy` with `config`, the camera of
+/// `scene`: what every step left.
+#[allow(dead_code)] // not every test binary that includes this module runs crowds
+pub fn crowd_frames<S, P>(
+    source: &S,
+    policy: &P,
+    config: crowd_sim::CrowdConfig,
+    scene: crowd_sim::Scene,
+    frames: usize,
+) -> Vec<Frame>
+where
+    S: crowd_sim::ClipSource,
+    P: lod_policy::LevelPolicy + Sync,
+{
+    let path = scene.path(config.field_size_m);
+    let lens = scene.lens(crowd_sim::Camera::default(), config.field_size_m);
+    let mut crowd = crowd_sim::Crowd::new(source, config).expect("crowd");
+    (0..frames)
+        .map(|f| {
+            let cam = path.camera_at(f as f32 / 30.0, &lens);
+            let stats = crowd.step(source, policy, &cam, 1.0 / 30.0).expect("step");
+            Frame {
+                poses: (0..crowd.len()).map(|i| crowd.pose(i).to_vec()).collect(),
+                joints: (0..crowd.len())
+                    .map(|i| {
+                        crowd
+                            .joint_positions(i)
+                            .iter()
+                            .map(|p| p.to_array())
+                            .collect()
+                    })
+                    .collect(),
+                bins: (0..crowd.len()).map(|i| crowd.level_bin(i)).collect(),
+                visible: stats.visible,
+            }
+        })
+        .collect()
+}
