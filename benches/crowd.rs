@@ -107,6 +107,17 @@ fn bvh(c: &mut Criterion) {
         g.bench_function(BenchmarkId::new("query", n), |b| {
             b.iter(|| tree.query(black_box(&fr), &mut vis))
         });
+        // What `Culling::Scan` does instead of refit + query: every box against the frustum.
+        g.bench_function(BenchmarkId::new("scan", n), |b| {
+            b.iter(|| {
+                let mut count = 0usize;
+                for (v, bx) in vis.iter_mut().zip(black_box(&moved)) {
+                    *v = fr.intersects(bx);
+                    count += usize::from(*v);
+                }
+                count
+            })
+        });
     }
     g.finish();
 }

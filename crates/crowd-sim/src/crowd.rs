@@ -9,7 +9,7 @@ use crate::source::ClipSource;
 use crate::stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
 use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
 use glam::{Vec2, Vec3};
-use lod_policy::chain::{SeamScratch, SeamTransition};
+use lod_policy::chain::SeamScratch;
 use lod_policy::rng::SplitMix64;
 use lod_policy::{Controls, Detail, LevelPolicy};
 use rayon::prelude::*;
@@ -25,17 +25,35 @@ const PREFETCH_WALKERS: usize = 4;
 /// Largest accepted time step (s).
 const MAX_DT: f32 = 10.0;
 
-/// What one chunk of walkers reports from the fused kernel, pose and FK pass.
+/// How a crowd finds the walkers in view each frame. Both give the same flags (a walker is visible
+/// when its culling box, from the previous frame's placement, intersects the frustum:
+/// [`Frustum::intersects`]), so the same frames; they differ in cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Culling {
+    /// Every walker's box is tested against the frustum inside the frame's parallel pass, just
+    /// before its kernel stage, while the chunk's boxes are in cache: `n` box tests on every
+    /// thread, nothing to maintain. The default: the pass visits every walker anyway.
+    #[default]
+    Scan,
+    /// An AABB tree over the boxes ([`WalkerAabbTree`]), refitted every frame, rebuilt every
+    /// [`CrowdConfig::tree_rebuild_interval`] frames and queried with the frustum before the pass:
+    /// queries cost in proportion to the walkers in view, but the refit visits every box.
+    Tree,
+}
+
+/// What one chunk of walkers reports from the fused cull, kernel, pose and FK pass.
 #[derive(Debug, Default)]
 struct ChunkOutcome {
+    /// Walkers in view ([`Culling::Scan`]; 0 under the tree, which counts them itself).
+    visible: usize,
     built: usize,
     in_transition: usize,
     /// Clips the source could not build (the walkers kept their previous clips).
     clip_faults: ClipFaults,
     /// The first failing walker (lowest index) and its fault.
     fault: Option<(usize, WalkerFault)>,
-    /// Time spent in the kernel, pose and FK stages, summed over chunks.
-    cpu: [Duration; 3],
+    /// Time spent in the cull (scan), kernel, pose and FK stages, summed over chunks.
+    cpu: [Duration; 4],
 }
 
 impl ChunkOutcome {
@@ -45,15 +63,12 @@ impl ChunkOutcome {
             (x, y) => x.or(y),
         };
         ChunkOutcome {
+            visible: a.visible + b.visible,
             built: a.built + b.built,
             in_transition: a.in_transition + b.in_transition,
             clip_faults: ClipFaults::merge(a.clip_faults, b.clip_faults),
             fault,
-            cpu: [
-                a.cpu[0] + b.cpu[0],
-                a.cpu[1] + b.cpu[1],
-                a.cpu[2] + b.cpu[2],
-            ],
+            cpu: std::array::from_fn(|i| a.cpu[i] + b.cpu[i]),
         }
     }
 }
@@ -85,9 +100,11 @@ pub struct CrowdConfig {
     pub border_m: f32,
     /// Growth of each walker's culling box beyond its body, covering one frame of motion (m).
     pub cull_margin_m: f32,
-    /// Rebuild the culling tree ([`WalkerAabbTree`]) every this many frames; refit it in between
-    /// (1 = rebuild every frame). Default 240: a rebuild costs ~20 refits at 10k walkers, and
-    /// walkers move little per frame.
+    /// How the walkers in view are found ([`Culling`]; default [`Culling::Scan`]).
+    pub culling: Culling,
+    /// Under [`Culling::Tree`], rebuild the culling tree ([`WalkerAabbTree`]) every this many
+    /// frames; refit it in between (1 = rebuild every frame). Default 240: a rebuild costs ~20
+    /// refits at 10k walkers, and walkers move little per frame.
     pub tree_rebuild_interval: u32,
     /// Spread the clip builds of the first frames over the first cycle: a new walker that the
     /// policy wants finer than its starting root-only clip waits a seeded fraction of that clip
@@ -108,6 +125,7 @@ impl Default for CrowdConfig {
             foot_lock_levels: 3,
             border_m: 2.0,
             cull_margin_m: 0.25,
+            culling: Culling::Scan,
             tree_rebuild_interval: 240,
             spread_first_builds: true,
         }
@@ -170,8 +188,9 @@ fn walker_bounds<C>(w: &Walker<C>, m: f32) -> Bounds {
 /// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
 ///
 /// All per-frame buffers are allocated by `new`; `step_into` allocates only when the culling tree
-/// is rebuilt (every `tree_rebuild_interval` frames), when a walker starts its first inertialized seam
-/// (its seam buffers, `2 P` floats, are allocated then, so far and culled walkers never hold them),
+/// ([`Culling::Tree`]) is rebuilt (every `tree_rebuild_interval` frames), when a walker starts its
+/// first inertialized seam (its seam transition, `3 P` floats, is allocated then, so far and culled
+/// walkers never hold one),
 /// and when a source sizes a clip for its level (the model's source does, see
 /// `lod_policy::ClipKernel::compact`).
 pub struct Crowd<C> {
@@ -293,8 +312,7 @@ impl<C: Send> Crowd<C> {
                 cur_detail: root_only,
                 cur_dur: dur,
                 cur_motion,
-                seam: SeamTransition::new(0, config.seam_halflife_s),
-                seam_sized: false,
+                seam: None,
                 hold_s,
                 seam_start: 0.0,
                 lock: None,
@@ -337,7 +355,9 @@ impl<C: Send> Crowd<C> {
         };
         crowd.update_bounds();
         crowd.bounds.clone_from(&crowd.placed_bounds);
-        crowd.tree.rebuild(&crowd.bounds);
+        if config.culling == Culling::Tree {
+            crowd.tree.rebuild(&crowd.bounds);
+        }
         Ok(crowd)
     }
 
@@ -374,8 +394,9 @@ impl<C: Send> Crowd<C> {
     /// [`Crowd::step`] writing into a caller-owned `stats` (no allocation once its histogram has
     /// the right length).
     ///
-    /// Stages: (1) cull: boxes from last frame's roots, culling tree refit (or rebuild), frustum
-    /// query;
+    /// Stages: (1) cull: the boxes left by the last frame's placement against the frustum, scanned
+    /// chunk by chunk inside the parallel pass ([`Culling::Scan`]) or through the culling tree,
+    /// refitted (or rebuilt) and queried before it ([`Culling::Tree`]);
     /// (2) kernels: per walker, detail from `policy` (distance from the camera to the root,
     /// visibility), cycle scheduling and clip builds; (3) poses with the running seam transitions;
     /// (4) forward kinematics into world positions. Stages 2-4 run as one parallel pass over chunks
@@ -405,19 +426,26 @@ impl<C: Send> Crowd<C> {
         // dirty, which slows every SSE instruction after it.
         lod_policy::clear_avx_upper_state();
 
-        // (1) Culling, over the boxes the last frame's FK stage left (or `new`'s).
+        // (1) Culling, over the boxes the last frame's FK stage left (or `new`'s): by the tree here,
+        // or by a scan of each chunk's boxes in the pass below.
         let t0 = Instant::now();
         std::mem::swap(&mut self.bounds, &mut self.placed_bounds);
-        if self.frame % u64::from(self.config.tree_rebuild_interval) == 0 {
-            self.tree.rebuild(&self.bounds);
+        let scan = self.config.culling == Culling::Scan;
+        let tree_visible = if scan {
+            0
         } else {
-            self.tree.refit(&self.bounds);
-        }
-        let visible = self.tree.query(&frustum, &mut self.visible);
+            if self.frame % u64::from(self.config.tree_rebuild_interval) == 0 {
+                self.tree.rebuild(&self.bounds);
+            } else {
+                self.tree.refit(&self.bounds);
+            }
+            self.tree.query(&frustum, &mut self.visible)
+        };
 
-        // (2)-(4) Kernels, poses, forward kinematics: one parallel pass over chunks of walkers, each
-        // chunk running the three stages in turn while its walkers are in cache. Every chunk's
-        // stage times are summed over threads and the pass's wall time is split in proportion.
+        // (1 scan)-(4) Culling scan, kernels, poses, forward kinematics: one parallel pass over chunks
+        // of walkers, each chunk running the stages in turn while its walkers are in cache. Every
+        // chunk's stage times are summed over threads and the pass's wall time is split in
+        // proportion.
         let t1 = Instant::now();
         let params = self.params;
         let margin = self.config.cull_margin_m;
@@ -429,7 +457,8 @@ impl<C: Send> Crowd<C> {
         let pass = self
             .walkers
             .par_chunks_mut(CHUNK)
-            .zip(self.visible.par_chunks(CHUNK))
+            .zip(self.visible.par_chunks_mut(CHUNK))
+            .zip(self.bounds.par_chunks(CHUNK))
             .zip(self.seam_scratch.par_iter_mut())
             .zip(self.poses.par_chunks_mut(CHUNK * pl))
             .zip(self.joints.par_chunks_mut(CHUNK * npos))
@@ -437,9 +466,19 @@ impl<C: Send> Crowd<C> {
             .zip(self.placed_bounds.par_chunks_mut(CHUNK))
             .enumerate()
             .map(
-                |(c, ((((((walkers, visible), scratch), poses), joints), bins), bounds))| {
+                |(
+                    c,
+                    (((((((walkers, visible), boxes), scratch), poses), joints), bins), bounds),
+                )| {
                     lod_policy::clear_avx_upper_state();
                     let mut out = ChunkOutcome::default();
+                    let t_scan = Instant::now();
+                    if scan {
+                        for (v, b) in visible.iter_mut().zip(boxes) {
+                            *v = frustum.intersects(b);
+                            out.visible += usize::from(*v);
+                        }
+                    }
                     let ta = Instant::now();
                     for k in 0..walkers.len() {
                         if let Some(ahead) = walkers.get(k + PREFETCH_WALKERS) {
@@ -489,11 +528,11 @@ impl<C: Send> Crowd<C> {
                             w.place(source, pose, joints);
                             *bounds = walker_bounds(w, margin);
                             *bin = params.levels.bin(&w.cur_detail) as u32;
-                            out.in_transition += usize::from(w.seam.is_active());
+                            out.in_transition += usize::from(w.in_transition());
                         }
                     }
                     let td = Instant::now();
-                    out.cpu = [tb - ta, tc - tb, td - tc];
+                    out.cpu = [ta - t_scan, tb - ta, tc - tb, td - tc];
                     out
                 },
             )
@@ -515,18 +554,18 @@ impl<C: Send> Crowd<C> {
         let cpu: Duration = pass.cpu.iter().sum();
         let share = |d: Duration| {
             if cpu.is_zero() {
-                wall / 3
+                wall / 4
             } else {
                 wall.mul_f64(d.as_secs_f64() / cpu.as_secs_f64())
             }
         };
-        let (kernels, poses) = (share(pass.cpu[0]), share(pass.cpu[1]));
+        let [scanned, kernels, poses] = [0, 1, 2].map(|i| share(pass.cpu[i]));
 
         stats.timings = StageTimings {
-            cull: t1 - t0,
+            cull: (t1 - t0) + scanned,
             kernels,
             poses,
-            fk: wall.saturating_sub(kernels + poses),
+            fk: wall.saturating_sub(scanned + kernels + poses),
         };
         stats.level_histogram.clear();
         stats
@@ -536,7 +575,7 @@ impl<C: Send> Crowd<C> {
             stats.level_histogram[b as usize] += 1;
         }
         stats.in_transition = pass.in_transition;
-        stats.visible = visible;
+        stats.visible = if scan { pass.visible } else { tree_visible };
         stats.kernels_built = pass.built;
         stats.clip_faults = pass.clip_faults;
         self.frame += 1;
@@ -679,6 +718,6 @@ impl<C> Crowd<C> {
 
     /// Whether walker `i` is inside a seam transition.
     pub fn in_transition(&self, i: usize) -> bool {
-        self.walkers[i].seam.is_active()
+        self.walkers[i].in_transition()
     }
 }

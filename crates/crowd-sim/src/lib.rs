@@ -1,7 +1,8 @@
 //! Crowds of walking characters over a field.
 //!
 //! This crate is for: walkers with paths, clip scheduling and transitions, a camera with frustum
-//! culling over a bounding volume hierarchy, parallel per-frame updates, timings and PNG rendering.
+//! culling (a scan of every walker box, or a bounding volume hierarchy), parallel per-frame
+//! updates, timings and PNG rendering.
 //! It knows nothing of tensors: clips come from a `ClipSource` implementation. It is not for:
 //! synthesising motion itself.
 //!
@@ -17,9 +18,9 @@
 //! ([`FrameStats::clip_faults`]) and the walker keeps its previous clip. Cycles chain through their root motion with the runtime's one
 //! chaining routine ([`lod_policy::chain`]): changes of clip are inertialized at the first levels
 //! (continuous in position and velocity) and switched as they are beyond. Each frame
-//! culls walker boxes against the camera frustum through an AABB tree ([`culling`]), then runs
-//! kernels, poses and
-//! forward kinematics in parallel over walkers (rayon), with the same result for any thread
+//! culls walker boxes against the camera frustum ([`Culling`]: a scan of every box inside the
+//! frame's parallel pass, or an AABB tree, [`culling`]), then runs kernels, poses and forward
+//! kinematics in parallel over walkers (rayon), with the same result for any thread
 //! count, and reports per-stage timings and a level histogram. [`render`] draws stick figures
 //! coloured by level (paper Figure 6), a top-down map and an animated GIF.
 //!
@@ -54,7 +55,7 @@ pub mod testing;
 mod walker;
 
 pub use camera::{Bounds, Camera, CameraPath, Frustum, Scene};
-pub use crowd::{Crowd, CrowdConfig};
+pub use crowd::{Crowd, CrowdConfig, Culling};
 pub use error::{ClipError, CrowdError, RenderError};
 pub use levels::{LevelTable, check_control_range};
 pub use source::ClipSource;

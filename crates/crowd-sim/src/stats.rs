@@ -40,7 +40,8 @@ impl ClipFaults {
 /// Wall-clock time of each stage of one crowd frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimings {
-    /// Bounds update, culling tree refit or rebuild, frustum query.
+    /// Culling: the frustum test of every walker box ([`Culling::Scan`](crate::Culling)), or the
+    /// culling tree refit or rebuild and its query ([`Culling::Tree`](crate::Culling)).
     pub cull: Duration,
     /// Detail choice, cycle scheduling and clip kernels (`ClipSource::build_clip`).
     pub kernels: Duration,

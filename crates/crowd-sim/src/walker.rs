@@ -23,48 +23,52 @@ pub(crate) struct StageParams {
 }
 
 /// One walker: its path, cycle base frame, current clip and the seam transition into it.
+///
+/// Laid out in declaration order (`repr(C)`) so that what every frame reads of a walker far
+/// away or out of view (its clock, placement, detail and clip handles) shares the first cache
+/// lines; what only a cycle end reads (path, controls, root motion) comes last.
 #[derive(Debug, Clone)]
+#[repr(C)]
 pub(crate) struct Walker<C> {
-    pub path: EllipsePath,
-    /// Path parameter closest to the current cycle's base.
-    pub s: f32,
-    /// Preferred forward displacement per cycle (m).
-    pub stride: f32,
-    pub height: f32,
-    /// Ground position of the current cycle frame's origin.
-    pub base: Vec2,
-    /// Heading of the current cycle frame.
-    pub heading: f32,
-    /// `heading.sin_cos()`, kept with it (the FK stage places every walker every frame).
-    pub heading_sc: (f32, f32),
     /// Seconds into the current cycle.
     pub t: f32,
-    pub controls: Controls,
-    pub cur: C,
-    pub cur_detail: Detail,
     pub cur_dur: f32,
-    pub cur_motion: RootMotion,
-    /// The inertialized seam into the current clip (`lod_policy::chain`), inactive when none runs.
-    /// Empty (no heap) until the walker's first inertialized seam: far and culled walkers never
-    /// need its `2 P` floats.
-    pub seam: SeamTransition,
-    /// Whether `seam` has been sized for the pose vector.
-    pub seam_sized: bool,
     /// Seconds left before a mid-cycle refinement is allowed: spreads the clip builds of a new
     /// crowd's first frames over its first cycle (0 once the walker has switched clips).
     pub hold_s: f32,
     /// Clip time at which the running seam started (its clock is `t - seam_start`).
     pub seam_start: f32,
-    /// The walker's foot lock (`lod_policy::footlock`, 200 bytes), allocated when it first comes
-    /// near enough to plant its feet and kept (released) when it leaves, so walkers never near
-    /// hold no lock state and the frame loop never allocates for one that returns.
-    pub lock: Option<Box<FootLock>>,
+    /// World root position after the last frame.
+    pub root: Vec3,
+    pub height: f32,
+    /// Ground position of the current cycle frame's origin.
+    pub base: Vec2,
+    /// `heading.sin_cos()`, kept with it (the FK stage places every walker every frame).
+    pub heading_sc: (f32, f32),
     /// Rows of the pose vector written this frame.
     pub rows: usize,
     /// Joint positions written this frame.
     pub n_joints: usize,
-    /// World root position after the last frame.
-    pub root: Vec3,
+    /// The walker's foot lock (`lod_policy::footlock`, 200 bytes), allocated when it first comes
+    /// near enough to plant its feet and kept (released) when it leaves, so walkers never near
+    /// hold no lock state and the frame loop never allocates for one that returns.
+    pub lock: Option<Box<FootLock>>,
+    /// The inertialized seam into the current clip (`lod_policy::chain`), inactive when none runs.
+    /// `None` until the walker's first inertialized seam: far and culled walkers never need its
+    /// `3 P` floats.
+    pub seam: Option<Box<SeamTransition>>,
+    pub cur_detail: Detail,
+    pub cur: C,
+    // Read at cycle ends only.
+    pub path: EllipsePath,
+    /// Path parameter closest to the current cycle's base.
+    pub s: f32,
+    /// Preferred forward displacement per cycle (m).
+    pub stride: f32,
+    /// Heading of the current cycle frame.
+    pub heading: f32,
+    pub controls: Controls,
+    pub cur_motion: RootMotion,
 }
 
 /// Duration check: finite and at least 1 ms.
@@ -112,9 +116,25 @@ impl<C> Walker<C> {
     /// Joints the seam fades out (dropped by the current clip) are shown beyond the clip's rows.
     fn displayed<S: ClipSource<Clip = C>>(&self, src: &S, t: f32, out: &mut [f32]) -> usize {
         let rows = src.pose(&self.cur, t, out).min(out.len());
-        let rows = self.seam.fill_beyond(rows, out);
-        self.seam.apply(t - self.seam_start, &mut out[..rows]);
+        let Some(seam) = self.seam.as_deref() else {
+            return rows;
+        };
+        let rows = seam.fill_beyond(rows, out);
+        seam.apply(t - self.seam_start, &mut out[..rows]);
         rows
+    }
+
+    /// Ends the running seam, if any (the transition's buffers are kept for the next one).
+    fn clear_seam(&mut self) {
+        if let Some(seam) = self.seam.as_deref_mut() {
+            seam.clear();
+        }
+        self.seam_start = 0.0;
+    }
+
+    /// Whether a seam transition is running.
+    pub fn in_transition(&self) -> bool {
+        self.seam.as_deref().is_some_and(SeamTransition::is_active)
     }
 
     /// Rebuilds `cur` for `self.controls` at `d` (in place: the outgoing clip's state has been
@@ -157,10 +177,6 @@ impl<C> Walker<C> {
     ) -> Result<Option<ClipError>, WalkerFault> {
         let failed = match seam {
             Some((scratch, p)) => {
-                if !self.seam_sized {
-                    self.seam = SeamTransition::new(p.levels.pose_len, p.seam_halflife_s);
-                    self.seam_sized = true;
-                }
                 let (dur_out, this) = (self.cur_dur, &*self);
                 let captured = scratch.capture(t_out, dur_out, motion, |t, out| {
                     Ok::<usize, std::convert::Infallible>(this.displayed(src, t, out))
@@ -168,19 +184,22 @@ impl<C> Walker<C> {
                 let Ok(()) = captured;
                 if let Some(e) = self.rebuild(src, d)? {
                     if motion.is_some() {
-                        self.seam.clear();
-                        self.seam_start = 0.0;
+                        self.clear_seam();
                     }
                     return Ok(Some(e));
                 }
                 let t_in = phase * self.cur_dur;
                 let cur = &self.cur;
+                // The walker's first inertialized seam allocates its transition.
+                let transition = self.seam.get_or_insert_with(|| {
+                    Box::new(SeamTransition::new(p.levels.pose_len, p.seam_halflife_s))
+                });
                 let started = scratch.start_from_rest(
                     t_in,
                     self.cur_dur,
                     |t, out| Ok::<usize, std::convert::Infallible>(src.pose(cur, t, out)),
                     src.rest_rows(),
-                    &mut self.seam,
+                    transition,
                 );
                 let Ok(()) = started;
                 self.seam_start = t_in;
@@ -189,8 +208,7 @@ impl<C> Walker<C> {
             None => {
                 let failed = self.rebuild(src, d)?;
                 if failed.is_none() || motion.is_some() {
-                    self.seam.clear();
-                    self.seam_start = 0.0;
+                    self.clear_seam();
                 }
                 failed
             }
@@ -275,7 +293,9 @@ impl<C> Walker<C> {
         out: &mut [f32],
     ) {
         self.rows = self.displayed(src, self.t, out);
-        self.seam.finish_after(self.t - self.seam_start);
+        if let Some(seam) = self.seam.as_deref_mut() {
+            seam.finish_after(self.t - self.seam_start);
+        }
         let near = visible
             && self.cur_detail.accuracy < p.foot_lock_levels
             && self.cur_detail.active_joints > 0;

@@ -2,7 +2,8 @@
 
 use crowd_sim::testing::{ProceduralClip, ProceduralSource, paper_distance_policy};
 use crowd_sim::{
-    Camera, CameraPath, ClipError, ClipSource, Crowd, CrowdConfig, CrowdError, Frustum, LevelTable,
+    Camera, CameraPath, ClipError, ClipSource, Crowd, CrowdConfig, CrowdError, Culling, Frustum,
+    LevelTable,
 };
 use glam::{Vec2, Vec3};
 use lod_policy::{ControlRange, Controls, Detail, RootMotion, ViewParams};
@@ -222,9 +223,16 @@ fn seams_happen_only_at_the_first_levels_and_are_smooth() {
 
 #[test]
 fn culled_walkers_are_exactly_those_whose_bounds_miss_the_frustum() {
+    for culling in [Culling::Scan, Culling::Tree] {
+        culled_walkers_are_exact(culling);
+    }
+}
+
+fn culled_walkers_are_exact(culling: Culling) {
     let source = ProceduralSource::new();
     let policy = paper_distance_policy(source.levels());
     let cfg = CrowdConfig {
+        culling,
         tree_rebuild_interval: 7,
         ..config(800, 80.0)
     };
@@ -236,7 +244,7 @@ fn culled_walkers_are_exactly_those_whose_bounds_miss_the_frustum() {
         let stats = crowd.step(&source, &policy, &cam, DT).unwrap();
         let fr = Frustum::from_camera(&cam).unwrap();
         let brute: Vec<bool> = crowd.bounds().iter().map(|b| fr.intersects(b)).collect();
-        assert_eq!(crowd.visible_flags(), &brute[..], "frame {f}");
+        assert_eq!(crowd.visible_flags(), &brute[..], "{culling:?} frame {f}");
         let n = brute.iter().filter(|v| **v).count();
         assert_eq!(stats.visible, n);
         assert!(n > 0 && n < crowd.len(), "frame {f}: {n} visible");
@@ -377,7 +385,7 @@ fn bad_input_gives_clear_errors() {
         .unwrap();
 }
 
-fn run_in_pool(threads: usize) -> (Vec<Vec3>, Vec<bool>, Vec<u32>) {
+fn run_in_pool(threads: usize, culling: Culling) -> (Vec<Vec3>, Vec<bool>, Vec<u32>) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -386,6 +394,7 @@ fn run_in_pool(threads: usize) -> (Vec<Vec3>, Vec<bool>, Vec<u32>) {
         let source = ProceduralSource::new();
         let policy = paper_distance_policy(source.levels());
         let cfg = CrowdConfig {
+            culling,
             tree_rebuild_interval: 5,
             ..config(700, 70.0)
         };
@@ -407,21 +416,24 @@ fn run_in_pool(threads: usize) -> (Vec<Vec3>, Vec<bool>, Vec<u32>) {
 }
 
 #[test]
-fn results_are_identical_for_one_and_four_threads() {
-    let (a, va, ha) = run_in_pool(1);
-    let (b, vb, hb) = run_in_pool(4);
-    assert_eq!(a.len(), b.len());
+fn results_are_identical_for_one_and_four_threads_and_both_cullings() {
+    let (a, va, ha) = run_in_pool(1, Culling::Scan);
     let bits = |v: &[Vec3]| {
         v.iter()
             .flat_map(|p| p.to_array().map(f32::to_bits))
             .collect::<Vec<u32>>()
     };
-    assert!(
-        bits(&a) == bits(&b),
-        "joint positions differ between thread counts"
-    );
-    assert_eq!(va, vb);
-    assert_eq!(ha, hb);
+    assert!(va.iter().any(|&v| v) && !va.iter().all(|&v| v));
+    for (threads, culling) in [(4, Culling::Scan), (1, Culling::Tree), (4, Culling::Tree)] {
+        let (b, vb, hb) = run_in_pool(threads, culling);
+        assert_eq!(a.len(), b.len());
+        assert!(
+            bits(&a) == bits(&b),
+            "joint positions differ: {threads} threads, {culling:?}"
+        );
+        assert_eq!(va, vb);
+        assert_eq!(ha, hb);
+    }
 }
 
 #[test]

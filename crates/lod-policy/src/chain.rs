@@ -18,7 +18,7 @@
 //!    applied as `exp(o(t)) q_next(t)`. The time-increment row is not touched.
 //!
 //! The result is continuous in position and velocity for every row, whatever the controls of the two
-//! clips (changing controls and levels between cycles included), and costs `2 P` floats per character.
+//! clips (changing controls and levels between cycles included), and costs `3 P` floats per character.
 //! A transition started while another is running starts from the displayed pose, so the offsets never
 //! jump. The paper's ease-in/out blend of the overlapping halves (section 5) only hides the jump in
 //! position and leaves a kink in velocity; [`SeamTransition`] replaces it.
@@ -193,7 +193,7 @@ impl PoseState {
 }
 
 /// The inertialized seam between two clips (module documentation): offsets that decay from the
-/// previous clip's displayed state to the next clip's own motion. Holds `2 P` floats; starting and
+/// previous clip's displayed state to the next clip's own motion. Holds `3 P` floats; starting and
 /// applying allocate nothing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SeamTransition {

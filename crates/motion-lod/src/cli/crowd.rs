@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context as _, bail};
 use clap::{Args, ValueEnum};
-use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport, Scene};
+use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport, Culling, Scene};
 use lod_policy::{DistancePolicy, FullDetail, LodModel, ScreenSpacePolicy};
 use motion_lod::build::Analysis;
 use motion_lod::crowd::{CrowdOutcome, CrowdRun, check_render_dir, run_crowd};
@@ -43,6 +43,24 @@ impl From<CameraArg> for Scene {
     }
 }
 
+/// How the walkers in view are found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CullingArg {
+    /// Every walker's box tested against the frustum in the frame's parallel pass.
+    Scan,
+    /// An AABB tree over the boxes, refitted every frame and queried with the frustum.
+    Tree,
+}
+
+impl From<CullingArg> for Culling {
+    fn from(c: CullingArg) -> Culling {
+        match c {
+            CullingArg::Scan => Culling::Scan,
+            CullingArg::Tree => Culling::Tree,
+        }
+    }
+}
+
 /// Arguments of `motion-lod crowd`.
 #[derive(Debug, Args)]
 pub struct CrowdArgs {
@@ -73,6 +91,10 @@ pub struct CrowdArgs {
     /// Camera: `ground` walks inside the crowd, `overview` circles above it.
     #[arg(long, value_enum, default_value_t = CameraArg::Ground)]
     pub camera: CameraArg,
+    /// Culling: `scan` tests every walker's box in the frame's pass, `tree` queries an AABB tree
+    /// (the same walkers in view either way).
+    #[arg(long, value_enum, default_value_t = CullingArg::Scan)]
+    pub culling: CullingArg,
     /// Animate with naive interpolation instead of the model (the same culling, root-only walkers and
     /// joint counts; no cheaper accuracy level).
     #[arg(long, conflicts_with_all = ["compare_naive", "pca"])]
@@ -223,6 +245,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         config: CrowdConfig {
             seed: args.seed,
             fps: args.fps,
+            culling: args.culling.into(),
             ..CrowdConfig::with_density(args.walkers, args.density)
         },
         seconds: args.seconds,

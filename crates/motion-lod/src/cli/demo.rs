@@ -36,6 +36,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         seed: 1,
         policy: PolicyArg::Distance,
         camera: super::crowd::CameraArg::Ground,
+        culling: super::crowd::CullingArg::Scan,
         no_lod: false,
         naive: false,
         compare_naive: true,
