@@ -85,6 +85,8 @@ pub struct KernelScratch {
     w: Vec<f32>,
     /// Blended core `K(c)`, `r_P x r_T` column-major.
     k: Vec<f32>,
+    /// Time increments of the `T` aligned frames.
+    dt: Vec<f64>,
 }
 
 impl KernelScratch {
@@ -97,6 +99,7 @@ impl KernelScratch {
             c: vec![0.0; model.d() + 1],
             w: vec![0.0; r.s],
             k: vec![0.0; r.p * r.t],
+            dt: vec![0.0; model.t()],
         }
     }
 
@@ -112,7 +115,8 @@ impl KernelScratch {
             && self.y.len() > r.s + model.d()
             && self.c.len() == model.d() + 1
             && self.w.len() >= r.s
-            && self.k.len() >= r.p * r.t;
+            && self.k.len() >= r.p * r.t
+            && self.dt.len() == model.t();
         if ok {
             Ok(())
         } else {
@@ -412,26 +416,27 @@ fn combine_columns<'a>(
     // The last partial block: eight at a time, then one at a time.
     while start < len {
         let width = (len - start).min(8);
-        let mut acc = [0.0f32; 8];
         if width == 8 {
+            let mut acc = [0.0f32; 8];
             for j in 0..n {
                 let (c, v) = (coef(j), &col(j)[start..start + 8]);
                 for i in 0..8 {
                     acc[i] += c * v[i];
                 }
             }
+            out[start..start + 8].copy_from_slice(&acc);
         } else {
             // One entry at a time (a partial vector held across columns would be spilled with
-            // masked stores, which stall the loads after them).
-            for (i, a) in acc.iter_mut().enumerate().take(width) {
+            // masked stores, which stall the loads after them), each stored as it is summed (a
+            // copy of a variable-length run would be a `memmove` call).
+            for (i, o) in out[start..start + width].iter_mut().enumerate() {
                 let mut sum = 0.0f32;
                 for j in 0..n {
                     sum += coef(j) * col(j)[start + i];
                 }
-                *a = sum;
+                *o = sum;
             }
         }
-        out[start..start + width].copy_from_slice(&acc[..width]);
         start += width;
     }
 }
@@ -834,14 +839,19 @@ impl LodModel {
 
         // 7. Time table from the time-increment row at every aligned frame:
         //    dt_j = G[6, :] . U_T[j, :r_T] / time_scale.
+        //    Summed one column of U_T at a time over all frames (contiguous, vectorised), each dt_j
+        //    adding its r_T terms in order from -0.0 as `Iterator::sum` does: the same bits.
         let g = &*g;
         let inv_scale = 1.0 / self.parts().time_scale;
-        out.times.fill_from_iter((0..t).map(|j| {
-            inv_scale
-                * (0..r.t)
-                    .map(|b| f64::from(g[TIME_ROW + rows * b]) * f64::from(key.u_t[j + t * b]))
-                    .sum::<f64>()
-        }));
+        let dt = &mut scratch.dt[..t];
+        dt.fill(-0.0);
+        for b in 0..r.t {
+            let gb = f64::from(g[TIME_ROW + rows * b]);
+            for (d, &u) in dt.iter_mut().zip(&key.u_t[t * b..t * (b + 1)]) {
+                *d += gb * f64::from(u);
+            }
+        }
+        out.times.fill_from_iter(dt.iter().map(|&d| inv_scale * d));
 
         out.detail = detail;
         out.level = level;

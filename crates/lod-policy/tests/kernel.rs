@@ -536,3 +536,40 @@ fn kriging_weights_refuse_a_missing_key_or_rank() {
         Err(KernelError::ControlLength { .. })
     ));
 }
+
+#[test]
+fn time_table_is_the_per_frame_sum_of_the_time_row() {
+    // dt_j = G[6, :] . U_T[j, :r_T] / time_scale, each summed over the columns in order
+    // (`Iterator::sum`), then accumulated into playback times: the kernel's vectorised loop over
+    // frames must give exactly these bits.
+    let truth = random_truth(5, 0.03);
+    let model = build_model(&truth);
+    let mut scratch = KernelScratch::new(&model);
+    let mut kernel = ClipKernel::compact(&model);
+    let mut rng = Rng::new(9);
+    let t = model.t();
+    for level in 0..model.levels().len() {
+        for joints in [0, usize::MAX] {
+            let c: Vec<f32> = (0..truth.d)
+                .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
+                .collect();
+            model
+                .build_kernel(&c, Detail::new(level, joints), &mut scratch, &mut kernel)
+                .unwrap();
+            let key = &model.keys()[model.levels()[level].key];
+            let (g, rows, rt) = (kernel.g(), kernel.rows(), kernel.ranks().t);
+            let inv_scale = 1.0 / model.parts().time_scale;
+            let increments: Vec<f64> = (0..t)
+                .map(|j| {
+                    inv_scale
+                        * (0..rt)
+                            .map(|b| f64::from(g[6 + rows * b]) * f64::from(key.u_t[j + t * b]))
+                            .sum::<f64>()
+                })
+                .collect();
+            let expected = TimeTable::from_increments(&increments);
+            let bits = |tt: &TimeTable| tt.times().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(kernel.time_table()), bits(&expected), "level {level}");
+        }
+    }
+}
