@@ -24,12 +24,6 @@ const NEWTON_STEPS: usize = 8;
 /// Newton step (rad) below which the closest-point search has converged.
 const NEWTON_TOLERANCE: f64 = 1e-9;
 
-/// `a` wrapped into `[-pi, pi]` (f64).
-fn wrap_angle_f64(a: f64) -> f64 {
-    let tau = std::f64::consts::TAU;
-    a - tau * (a / tau).round()
-}
-
 /// Heading of a non-zero ground direction `d`: `atan2(d.x, d.z)`.
 pub fn heading_of(d: Vec2) -> f32 {
     d.x.atan2(d.y)
@@ -94,7 +88,8 @@ impl EllipsePath {
     /// `s <- s - g / g'` in f64 starts at `atan2(a y, b x)`, exact on a circle and close for points
     /// near the ellipse, and converges in a few steps (a few `sin_cos` where a sampled search takes
     /// fifty). Where it cannot (`g' <= 0` on the way, no convergence, or an answer more than
-    /// 0.9 rad from `s_guess`), the sampled search runs instead ([`EllipsePath::closest_param_sampled`]).
+    /// 0.9 rad from `s_guess`), the sampled search runs instead: 17 samples within `+-0.8` rad of
+    /// `s_guess`, then golden-section refinement (to about `1e-4` rad).
     pub fn closest_param_near(&self, p: Vec2, s_guess: f32) -> f32 {
         let (a, b) = (f64::from(self.axes.x), f64::from(self.axes.y));
         let (sr, cr) = f64::from(self.rot).sin_cos();
@@ -120,17 +115,16 @@ impl EllipsePath {
                 break;
             }
         }
-        let delta = wrap_angle_f64(theta - f64::from(s_guess));
+        let delta = wrap_angle((theta - f64::from(s_guess)) as f32);
         if converged && delta.abs() <= 0.9 {
-            s_guess + delta as f32
+            s_guess + delta
         } else {
             self.closest_param_sampled(p, s_guess)
         }
     }
 
-    /// The sampled search [`EllipsePath::closest_param_near`] falls back on: 17 samples within
-    /// `+-0.8` rad of `s_guess`, then golden-section refinement (to about `1e-4` rad).
-    pub fn closest_param_sampled(&self, p: Vec2, s_guess: f32) -> f32 {
+    /// The sampled search [`EllipsePath::closest_param_near`] falls back on.
+    fn closest_param_sampled(&self, p: Vec2, s_guess: f32) -> f32 {
         let rot_sc = self.rot.sin_cos();
         let d2 = |s: f32| self.point_rotated(rot_sc, s).distance_squared(p);
         let step = 0.1;

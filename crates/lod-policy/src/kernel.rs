@@ -258,29 +258,15 @@ impl ClipKernel {
     pub fn duration(&self) -> f64 {
         self.times.duration()
     }
-    /// Hints the CPU to fetch the memory [`ClipKernel::phase_at`]`(seconds)` and
-    /// [`LodModel::pose_rows`] read (the time-table entries around `seconds` and the evaluated
-    /// `G(c)`, at most [`PREFETCH_G_BYTES`] of it) without waiting for it
-    /// ([`crate::math::prefetch_bytes`]), so that a caller can start those cache misses a few
+    /// Hints the CPU to fetch the memory [`ClipKernel::phase_at`] and [`LodModel::pose_rows`] read
+    /// (the time table and the evaluated `G(c)`, at most [`PREFETCH_G_BYTES`] of it) without waiting
+    /// for it ([`crate::math::prefetch_bytes`]), so that a caller can start those cache misses a few
     /// walkers ahead. No effect on any result.
-    pub fn prefetch(&self, seconds: f64) {
-        let times = self.times.times();
-        let n = times.len();
-        if n >= 2 {
-            let k = Self::phase_guess(seconds, self.times.duration(), n);
-            crate::math::prefetch_slice(&times[k..k + 2]);
-        }
+    pub fn prefetch(&self) {
+        crate::math::prefetch_slice(self.times.times());
         let g = &self.g[..(self.rows * self.ranks.t).min(self.g.len())];
         let bytes = std::mem::size_of_val(g).min(PREFETCH_G_BYTES);
         crate::math::prefetch_bytes(g.as_ptr().cast::<u8>(), bytes);
-    }
-
-    /// The table interval `k <= n - 2` at which [`ClipKernel::phase_at`] starts its walk: where
-    /// `seconds` (clamped to `[0, duration]`) falls with the `n` entries spaced uniformly.
-    #[inline]
-    fn phase_guess(seconds: f64, duration: f64, n: usize) -> usize {
-        let t = seconds.max(0.0).min(duration);
-        ((t / duration * (n - 1) as f64) as usize).min(n - 2)
     }
 
     /// Phase (fractional aligned frame in `[0, T - 1]`) at playback time `seconds` (clamped to
@@ -295,10 +281,11 @@ impl ClipKernel {
         if n < 2 {
             return 0.0;
         }
-        let duration = self.times.duration();
+        let duration = times[n - 1];
         let t = seconds.max(0.0).min(duration);
+        let guess = (t / duration * (n - 1) as f64) as usize;
         // The last k <= n - 2 with times[k] <= t (or 0), as the binary search finds it.
-        let mut k = Self::phase_guess(t, duration, n);
+        let mut k = guess.min(n - 2);
         while k > 0 && times[k] > t {
             k -= 1;
         }

@@ -17,9 +17,6 @@ pub const MIN_INCREMENT: f64 = 1e-6;
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct TimeTable {
     times: Vec<f64>,
-    /// `times`' last entry (0 when empty), kept beside it: playback reads it every frame, and
-    /// then needs only the entries around the time it looks up.
-    duration: f64,
 }
 
 impl TimeTable {
@@ -33,7 +30,6 @@ impl TimeTable {
     pub fn with_capacity(frames: usize) -> Self {
         Self {
             times: Vec::with_capacity(frames),
-            duration: 0.0,
         }
     }
 
@@ -62,7 +58,6 @@ impl TimeTable {
             self.times.push(t);
             pending = Some(dt);
         }
-        self.duration = self.times.last().copied().unwrap_or(0.0);
     }
 
     /// Number of entries `T`.
@@ -82,11 +77,7 @@ impl TimeTable {
 
     /// Duration `t_{T-1}` in seconds (0 for an empty table).
     pub fn duration(&self) -> f64 {
-        debug_assert_eq!(
-            self.duration.to_bits(),
-            self.times.last().copied().unwrap_or(0.0).to_bits()
-        );
-        self.duration
+        self.times.last().copied().unwrap_or(0.0)
     }
 
     /// Fractional aligned frame `phi` in `[0, T - 1]` at playback time `t` seconds (clamped to

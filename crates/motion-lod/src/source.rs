@@ -273,8 +273,8 @@ impl ClipSource for LodSource<'_> {
         }
     }
 
-    fn prefetch(&self, clip: &LodClip, t_seconds: f32) {
-        clip.kernel.prefetch(f64::from(t_seconds));
+    fn prefetch(&self, clip: &LodClip, _t_seconds: f32) {
+        clip.kernel.prefetch();
     }
 
     fn plant_feet(

@@ -798,7 +798,7 @@ fn write_benches(doc: &mut String) {
         ("motion_io", "forward kinematics and pose vectors"),
         (
             "crowd",
-            "one crowd frame with the procedural source, BVH culling",
+            "one crowd frame with the procedural source; the culling tree's rebuild, refit and query beside a scan of every box",
         ),
         ("timewarp", "DTW and alignment"),
         (
