@@ -1,14 +1,17 @@
 //! Clip kernels and poses of a model FILE (`MOTION_LOD_BENCH_MODEL=path.mlod`, for example a model
 //! built from the Bandai data with `motion-lod build`): root-only, the last accuracy level and full
 //! detail, so the runtime's costs are measured at a real sample count (S = 800 for Bandai) rather
-//! than the embedded fixtures'. Without the variable it prints how to set it and measures nothing.
+//! than the embedded fixtures'. Also one frame of a crowd of 100,000 walkers that are all root only,
+//! on one thread (time per walker-frame = frame time / walkers; criterion prints the walkers per
+//! second). Without the variable it prints how to set it and measures nothing.
 
 use std::hint::black_box;
 use std::path::PathBuf;
 
-use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use lod_policy::{ClipKernel, Detail, KernelScratch};
-use motion_lod::MotionModel;
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use crowd_sim::{Camera, Crowd, CrowdConfig, FrameStats, Scene};
+use lod_policy::{ClipKernel, Detail, KernelScratch, ViewParams};
+use motion_lod::{LodSource, MotionModel};
 
 fn bench(c: &mut Criterion) {
     let Some(path) = std::env::var_os("MOTION_LOD_BENCH_MODEL").map(PathBuf::from) else {
@@ -83,6 +86,50 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    g.finish();
+    root_only_crowd(c, &model, &name);
+}
+
+/// One frame of 100,000 walkers held root only whatever their distance or visibility (ground
+/// scene, 0.01 walkers per m², after a 1.5 s warm-up) on a one-thread pool: the per-walker cost of
+/// a far or culled walker, clip builds at its cycle ends included.
+fn root_only_crowd(c: &mut Criterion, model: &MotionModel, name: &str) {
+    let walkers = 100_000;
+    let config = CrowdConfig {
+        seed: 7,
+        ..CrowdConfig::with_density(walkers, 0.01)
+    };
+    let source = LodSource::new(model);
+    let policy = |_: f32, _: bool, _: &ViewParams| Detail::root_only();
+    let scene = Scene::Ground;
+    let path = scene.path(config.field_size_m);
+    let lens = scene.lens(Camera::default(), config.field_size_m);
+    let dt = 1.0 / config.fps;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread pool");
+    let mut g = c.benchmark_group(format!("model_file/{name}"));
+    g.sample_size(20);
+    g.throughput(Throughput::Elements(walkers as u64));
+    let mut crowd = Crowd::new(&source, config).expect("the crowd builds");
+    let mut stats = FrameStats::default();
+    let mut f = 0u32;
+    let mut step = || {
+        let cam = path.camera_at(f as f32 * dt, &lens);
+        crowd
+            .step_into(&source, &policy, &cam, dt, &mut stats)
+            .expect("a frame");
+        f += 1;
+        stats.kernels_built
+    };
+    for _ in 0..45 {
+        pool.install(&mut step);
+    }
+    g.bench_function(
+        BenchmarkId::new("crowd_root_only_one_thread", walkers),
+        |b| b.iter(|| black_box(pool.install(&mut step))),
+    );
     g.finish();
 }
 

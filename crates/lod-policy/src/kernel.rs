@@ -311,8 +311,8 @@ const LANES: usize = 4;
 
 /// `a . x` in f64 with [`LANES`] partial sums, combined as `(s0 + s2) + (s1 + s3)` after the
 /// elements beyond the last full group of `LANES` were added to their sums (a fixed order, so
-/// deterministic).
-#[inline(always)]
+/// deterministic): the sum of each row of [`dot_rows`], which is tested against it.
+#[cfg(test)]
 fn dot_row(a: &[f64], x: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), x.len());
     let mut acc = [0.0f64; LANES];
@@ -329,41 +329,65 @@ fn dot_row(a: &[f64], x: &[f64]) -> f64 {
     (acc[0] + acc[2]) + (acc[1] + acc[3])
 }
 
-/// `out[l] = a_l . x` for the rows `a_l = a[l n..(l + 1) n]`, `n = x.len()`: four rows per pass
-/// (each element of `x` is loaded once for four rows), each row summed exactly as [`dot_row`] sums
-/// it, so a row's result does not depend on the rows beside it.
+/// Most rows [`dot_rows`] sums in one pass (their `LANES`-wide sums stay in registers).
+const MAX_ROW_GROUP: usize = 8;
+
+/// `out[r] = a_r . x` for `R` consecutive rows `a_r = a[(l + r) n..(l + r + 1) n]` in one pass
+/// over `x` (each element of `x` loaded once for `R` rows), each row summed exactly as [`dot_row`]
+/// sums it.
+#[inline(always)]
+fn dot_row_group<const R: usize>(a: &[f64], x: &[f64], l: usize, out: &mut [f64]) {
+    let n = x.len();
+    debug_assert!(out.len() == R && a.len() >= (l + R) * n);
+    let rows: [&[f64]; R] = std::array::from_fn(|r| &a[(l + r) * n..(l + r + 1) * n]);
+    let mut acc = [[0.0f64; LANES]; R];
+    let full = n - n % LANES;
+    let mut j = 0;
+    while j < full {
+        let q = &x[j..j + LANES];
+        for r in 0..R {
+            let p = &rows[r][j..j + LANES];
+            for i in 0..LANES {
+                acc[r][i] += p[i] * q[i];
+            }
+        }
+        j += LANES;
+    }
+    for r in 0..R {
+        for i in 0..n - full {
+            acc[r][i] += rows[r][full + i] * x[full + i];
+        }
+        out[r] = (acc[r][0] + acc[r][2]) + (acc[r][1] + acc[r][3]);
+    }
+}
+
+/// `out[l] = a_l . x` for the rows `a_l = a[l n..(l + 1) n]`, `n = x.len()`, each row summed
+/// exactly as [`dot_row`] sums it, so a row's result does not depend on the rows beside it.
+/// The rows are taken in passes of between four and [`MAX_ROW_GROUP`] (fewer only when there are
+/// fewer rows): one pass loads `x` once for all its rows, and keeps at least four independent sums
+/// in flight, so that no pass waits on a single chain of additions (nine rows: five and four,
+/// not four, four and one).
 #[inline(always)]
 fn dot_rows(a: &[f64], x: &[f64], out: &mut [f64]) {
-    let n = x.len();
-    debug_assert!(a.len() >= n * out.len());
-    let mut groups = out.chunks_exact_mut(4);
+    let rows = out.len();
+    debug_assert!(a.len() >= x.len() * rows);
+    let passes = rows.div_ceil(MAX_ROW_GROUP);
     let mut l = 0;
-    for o in groups.by_ref() {
-        let rows: [&[f64]; 4] = std::array::from_fn(|r| &a[(l + r) * n..(l + r + 1) * n]);
-        let mut acc = [[0.0f64; LANES]; 4];
-        let full = n - n % LANES;
-        let mut j = 0;
-        while j < full {
-            let q = &x[j..j + LANES];
-            for r in 0..4 {
-                let p = &rows[r][j..j + LANES];
-                for i in 0..LANES {
-                    acc[r][i] += p[i] * q[i];
-                }
-            }
-            j += LANES;
+    for pass in 0..passes {
+        // Balanced sizes: the first `rows % passes` passes take one row more.
+        let size = rows / passes + usize::from(pass < rows % passes);
+        let o = &mut out[l..l + size];
+        match size {
+            1 => dot_row_group::<1>(a, x, l, o),
+            2 => dot_row_group::<2>(a, x, l, o),
+            3 => dot_row_group::<3>(a, x, l, o),
+            4 => dot_row_group::<4>(a, x, l, o),
+            5 => dot_row_group::<5>(a, x, l, o),
+            6 => dot_row_group::<6>(a, x, l, o),
+            7 => dot_row_group::<7>(a, x, l, o),
+            _ => dot_row_group::<MAX_ROW_GROUP>(a, x, l, o),
         }
-        for r in 0..4 {
-            for i in 0..n - full {
-                acc[r][i] += rows[r][full + i] * x[full + i];
-            }
-            o[r] = (acc[r][0] + acc[r][2]) + (acc[r][1] + acc[r][3]);
-        }
-        l += 4;
-    }
-    for o in groups.into_remainder() {
-        *o = dot_row(&a[l * n..(l + 1) * n], x);
-        l += 1;
+        l += size;
     }
 }
 
@@ -373,58 +397,73 @@ const ROOT_ROWS: usize = 7;
 /// Largest `r_T` whose time weights a pose holds on the stack (larger ones take the column loop).
 const POSE_COLUMNS: usize = 128;
 
-/// Outputs per block of [`combine_columns`] (held in registers while every column is added).
-const COMBINE_BLOCK: usize = 32;
+/// Outputs per wide block of [`combine_columns`]: eight 256-bit registers of sums, enough
+/// independent additions to keep both of a core's vector adders busy while each waits on its own
+/// previous sum.
+const COMBINE_BLOCK: usize = 64;
 
-/// `out[i] = sum_j coef(j) col(j)[i]` for `j = 0..n` in order, starting from `0.0` (so each entry
-/// is bitwise the plain loop `out.fill(0.0); for j { out[i] += coef(j) * col(j)[i] }`). Blocks of
-/// [`COMBINE_BLOCK`] outputs stay in registers over all `n` columns instead of being loaded and
-/// stored once per column. Every `col(j)` has at least `out.len()` entries.
+/// `out[start..start + B] = sum_j coef[j] col_j[start..start + B]` over the columns
+/// `col_j = cols[stride j..]` in order from `0.0`, the `B` sums held in registers over all columns.
 #[inline(always)]
-fn combine_columns<'a>(
+fn combine_block<const B: usize>(
     out: &mut [f32],
-    n: usize,
-    coef: impl Fn(usize) -> f32,
-    col: impl Fn(usize) -> &'a [f32],
+    start: usize,
+    coef: &[f32],
+    cols: &[f32],
+    stride: usize,
 ) {
+    let mut acc = [0.0f32; B];
+    let cols = &cols[start..];
+    for (j, &c) in coef.iter().enumerate() {
+        let v: &[f32; B] = cols[stride * j..stride * j + B]
+            .try_into()
+            .expect("a block of B entries");
+        for i in 0..B {
+            acc[i] += c * v[i];
+        }
+    }
+    out[start..start + B].copy_from_slice(&acc);
+}
+
+/// `out[i] = sum_j coef[j] cols[stride j + i]` for `j = 0..coef.len()` in order, starting from
+/// `0.0` (so each entry is bitwise the plain loop `out.fill(0.0); for j { out[i] += coef[j] *
+/// col_j[i] }`, `col_j = cols[stride j..]`). Blocks of [`COMBINE_BLOCK`] outputs (then 32, then 8)
+/// stay in registers over all columns instead of being loaded and stored once per column. The last
+/// few outputs are the last eight recomputed as one block: the outputs it shares with the blocks
+/// before get the same sums, so the same bits (only an output shorter than eight is summed one
+/// entry at a time). Every column has at least `out.len()` entries.
+#[inline(always)]
+fn combine_columns(out: &mut [f32], coef: &[f32], cols: &[f32], stride: usize) {
     let len = out.len();
+    debug_assert!(coef.is_empty() || cols.len() >= stride * (coef.len() - 1) + len);
     let mut start = 0;
     while start + COMBINE_BLOCK <= len {
-        let mut acc = [0.0f32; COMBINE_BLOCK];
-        for j in 0..n {
-            let (c, v) = (coef(j), &col(j)[start..start + COMBINE_BLOCK]);
-            for i in 0..COMBINE_BLOCK {
-                acc[i] += c * v[i];
-            }
-        }
-        out[start..start + COMBINE_BLOCK].copy_from_slice(&acc);
+        combine_block::<COMBINE_BLOCK>(out, start, coef, cols, stride);
         start += COMBINE_BLOCK;
     }
-    // The last partial block: eight at a time, then one at a time.
-    while start < len {
-        let width = (len - start).min(8);
-        if width == 8 {
-            let mut acc = [0.0f32; 8];
-            for j in 0..n {
-                let (c, v) = (coef(j), &col(j)[start..start + 8]);
-                for i in 0..8 {
-                    acc[i] += c * v[i];
-                }
+    if start + 32 <= len {
+        combine_block::<32>(out, start, coef, cols, stride);
+        start += 32;
+    }
+    while start + 8 <= len {
+        combine_block::<8>(out, start, coef, cols, stride);
+        start += 8;
+    }
+    if start == len {
+        return;
+    }
+    if len >= 8 {
+        combine_block::<8>(out, len - 8, coef, cols, stride);
+    } else {
+        // One entry at a time (a partial vector held across columns would be spilled with masked
+        // stores, which stall the loads after them), each stored as it is summed.
+        for (i, o) in out.iter_mut().enumerate() {
+            let mut sum = 0.0f32;
+            for (j, &c) in coef.iter().enumerate() {
+                sum += c * cols[stride * j + i];
             }
-            out[start..start + 8].copy_from_slice(&acc);
-        } else {
-            // One entry at a time (a partial vector held across columns would be spilled with
-            // masked stores, which stall the loads after them), each stored as it is summed (a
-            // copy of a variable-length run would be a `memmove` call).
-            for (i, o) in out[start..start + width].iter_mut().enumerate() {
-                let mut sum = 0.0f32;
-                for j in 0..n {
-                    sum += coef(j) * col(j)[start + i];
-                }
-                *o = sum;
-            }
+            *o = sum;
         }
-        start += width;
     }
 }
 
@@ -796,15 +835,10 @@ impl LodModel {
         let w = &scratch.w[..r.s];
         if r.p == big.p && r.t == big.t {
             let slab = big.p * big.t;
-            combine_columns(kmat, w.len(), |l| w[l], |l| &key.core[slab * l..][..slab]);
+            combine_columns(kmat, w, &key.core, slab);
         } else {
             for (b, kcol) in kmat.chunks_exact_mut(r.p).enumerate() {
-                combine_columns(
-                    kcol,
-                    w.len(),
-                    |l| w[l],
-                    |l| &key.core[big.p * (b + big.t * l)..][..r.p],
-                );
+                combine_columns(kcol, w, &key.core[big.p * b..], big.p * big.t);
             }
         }
         let kmat = &*kmat;
@@ -821,7 +855,7 @@ impl LodModel {
         let g = &mut out.g[..rows * r.t];
         for (b, gcol) in g.chunks_exact_mut(rows).enumerate() {
             let kcol = &kmat[r.p * b..][..r.p];
-            combine_columns(gcol, r.p, |a| kcol[a], |a| &key.u_p[p * a..][..rows]);
+            combine_columns(gcol, kcol, &key.u_p, p);
         }
 
         // 7. Time table from the time-increment row at every aligned frame:
@@ -945,7 +979,8 @@ impl LodModel {
         if !phase.is_finite() {
             return Err(KernelError::NonFinitePhase { phase });
         }
-        let key = &self.keys()[self.levels()[kernel.level].key];
+        let key_index = self.levels()[kernel.level].key;
+        let key = &self.keys()[key_index];
         let rows = kernel.rows;
         let used = rows.min(out.len());
         let rt = kernel.ranks.t;
@@ -954,14 +989,18 @@ impl LodModel {
         let i1 = (i + 1).min(t - 1);
         let a = ph - i as f32;
         let (head, tail) = out.split_at_mut(used);
-        let wb = |b: usize| (1.0 - a) * key.u_t[i + t * b] + a * key.u_t[i1 + t * b];
-        if used >= COMBINE_BLOCK && rt <= POSE_COLUMNS {
+        // Rows i and i1 of U_T, contiguous (row-major copy).
+        let big_t = key.ranks.t;
+        let u = self.time_rows(key_index);
+        let (u0, u1) = (&u[i * big_t..][..rt], &u[i1 * big_t..][..rt]);
+        let wb = |b: usize| (1.0 - a) * u0[b] + a * u1[b];
+        if used >= 8 && rt <= POSE_COLUMNS {
             // Many rows: blocks of rows held in registers over the `r_T` columns.
             let mut w = [0.0f32; POSE_COLUMNS];
             for (b, v) in w[..rt].iter_mut().enumerate() {
                 *v = wb(b);
             }
-            combine_columns(head, rt, |b| w[b], |b| &kernel.g[rows * b..][..used]);
+            combine_columns(head, &w[..rt], &kernel.g, rows);
         } else if used == ROOT_ROWS {
             // Root only: the seven sums held in registers over the columns (the same sums in the
             // same order as the column loop below).
@@ -1019,14 +1058,13 @@ mod tests {
 
     #[test]
     fn combined_columns_equal_the_plain_column_loop_bitwise() {
-        for (len, n) in [
-            (986usize, 60usize),
-            (67, 29),
-            (7, 5),
-            (29, 9),
-            (40, 1),
-            (0, 3),
-        ] {
+        // Every length up to 140 (wide blocks, a 32-block, 8-blocks, the overlapping last eight
+        // and lengths under eight) and the model's shapes.
+        let cases = (0..=140usize)
+            .flat_map(|len| [(len, 1usize), (len, 9)])
+            .chain([(986, 60), (67, 29), (7, 5), (29, 34)]);
+        for (len, n) in cases {
+            // Columns of `len + 3` entries one after the other (stride `len + 3`).
             let cols: Vec<Vec<f32>> = (0..n)
                 .map(|j| {
                     (0..len + 3)
@@ -1034,11 +1072,12 @@ mod tests {
                         .collect()
                 })
                 .collect();
+            let flat: Vec<f32> = cols.concat();
             let coefs: Vec<f32> = (0..n)
                 .map(|j| ((j * 31) % 97) as f32 / 13.0 - 3.0)
                 .collect();
             let mut got = vec![f32::NAN; len];
-            combine_columns(&mut got, n, |j| coefs[j], |j| &cols[j][..]);
+            combine_columns(&mut got, &coefs, &flat, len + 3);
             let mut want = vec![0.0f32; len];
             for j in 0..n {
                 for i in 0..len {
@@ -1051,10 +1090,13 @@ mod tests {
     }
 
     #[test]
-    fn rows_dotted_four_at_a_time_equal_single_row_dots_bitwise() {
-        // 11 rows (two groups of four and three single rows), lengths with and without a tail.
-        for n in [801usize, 800, 3, 4] {
-            let rows = 11;
+    fn rows_dotted_in_groups_equal_single_row_dots_bitwise() {
+        // Every row count from 1 to 20 (passes of one to eight rows), lengths with and without a
+        // tail.
+        for (n, rows) in [801usize, 800, 3, 4]
+            .into_iter()
+            .flat_map(|n| (1..=20).map(move |r| (n, r)))
+        {
             let a: Vec<f64> = (0..rows * n)
                 .map(|i| ((i * 7919) % 1000) as f64 / 300.0 - 1.6)
                 .collect();

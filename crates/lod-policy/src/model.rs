@@ -284,6 +284,9 @@ pub struct LodModel {
     /// The kriging weights' projection with the trend folded in, row-major f64, for the kernels'
     /// dot products (derived from `parts` by [`LodModel::new`]; not stored in the model file).
     folded: FoldedProjections,
+    /// Each key's `U_T` row-major (`T x R_T`, row `i` at `[i R_T..(i + 1) R_T]`): the two rows a
+    /// pose blends are contiguous runs (derived by [`LodModel::new`]; not stored in the model file).
+    time_rows: Vec<Vec<f32>>,
 }
 
 /// Each key's kriging projection with the trend folded in, row-major in f64: row `l` of key `k` is
@@ -508,10 +511,25 @@ impl LodModel {
                 .map(|k| fold_projection(k, &parts.controls.projection, s, d))
                 .collect(),
         };
+        let time_rows = parts
+            .keys
+            .iter()
+            .map(|k| {
+                let r_t = k.ranks.t;
+                let mut rows = vec![0.0f32; t * r_t];
+                for (i, row) in rows.chunks_exact_mut(r_t).enumerate() {
+                    for (b, v) in row.iter_mut().enumerate() {
+                        *v = k.u_t[i + t * b];
+                    }
+                }
+                rows
+            })
+            .collect();
         Ok(LodModel {
             parts,
             max_ranks,
             folded,
+            time_rows,
         })
     }
 
@@ -668,6 +686,11 @@ impl LodModel {
     /// The kriging projections with the trend folded in (derived by [`LodModel::new`]).
     pub(crate) fn folded(&self) -> &FoldedProjections {
         &self.folded
+    }
+
+    /// `U_T` of key `k` row-major, `T x R_T` (derived by [`LodModel::new`]).
+    pub(crate) fn time_rows(&self, k: usize) -> &[f32] {
+        &self.time_rows[k]
     }
 
     /// Largest ranks over all keys, per mode.
