@@ -21,7 +21,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, CrowdReport, FrameStats, Scene};
-use lod_policy::{DistancePolicy, FullDetail, LevelPolicy};
+use lod_policy::{Detail, DistancePolicy, FullDetail, LevelPolicy, ViewParams};
 use motion_lod::progress::Progress;
 use motion_lod::{Analysis, LodSource, MotionModel, NaiveSource, PcaSource};
 
@@ -73,6 +73,20 @@ pub enum PolicyKind {
     Lod,
     /// Every walker at full detail.
     Full,
+    /// Every walker root only whatever its distance or visibility: the cost of a far or culled
+    /// walker (issue 16's first deliverable), run on one thread in the ground scene.
+    RootOnly,
+}
+
+impl PolicyKind {
+    /// The policy's name in the tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            PolicyKind::Lod => "LOD",
+            PolicyKind::Full => "no LOD",
+            PolicyKind::RootOnly => "root only",
+        }
+    }
 }
 
 /// The measurement of one crowd.
@@ -108,6 +122,11 @@ impl CrowdRow {
     pub fn walkers_per_thread_s(&self) -> Option<f64> {
         self.fps()
             .map(|f| self.walkers as f64 * f / self.threads.max(1) as f64)
+    }
+
+    /// Thread time per walker and frame (ns): the inverse of [`CrowdRow::walkers_per_thread_s`].
+    pub fn ns_per_walker_frame(&self) -> Option<f64> {
+        self.walkers_per_thread_s().map(|w| 1e9 / w)
     }
 }
 
@@ -218,8 +237,9 @@ pub const MAIN_THREADS: usize = 2;
 
 /// Measures, in both scenes and at every size: the three sources under the LOD policy and at full
 /// detail on [`MAIN_THREADS`] threads, and the model under the LOD policy on each of `threads`
-/// (its walkers per second per thread). A baseline or full-detail run whose warm-up is predicted to
-/// exceed `max_warmup_s` is skipped and says so.
+/// (its walkers per second per thread), and, in the ground scene at the largest size, the model with
+/// every walker root only on one thread ([`PolicyKind::RootOnly`]). A baseline or full-detail run
+/// whose warm-up is predicted to exceed `max_warmup_s` is skipped and says so.
 pub fn measure(
     model: &MotionModel,
     analysis: &Analysis,
@@ -236,7 +256,7 @@ pub fn measure(
     let runs_per_size = 6 + threads.iter().filter(|&&t| t != MAIN_THREADS).count();
     progress.stage(
         "crowds (2 scenes; LOD, naive, PCA; LOD policy and full detail; threads)",
-        (Scene::ALL.len() * sizes.len() * runs_per_size) as u64,
+        (Scene::ALL.len() * sizes.len() * runs_per_size + 1) as u64,
     );
     let mut rows = Vec::new();
     for scene in Scene::ALL {
@@ -259,25 +279,13 @@ pub fn measure(
                         max_warmup_s
                     };
                     let w = &mut warm[k][p];
-                    let row = match (k, policy) {
-                        (0, PolicyKind::Lod) => {
-                            timed_or_skipped(spec, &lod, &lod_policy, size, limit, w)
-                        }
-                        (0, PolicyKind::Full) => {
-                            timed_or_skipped(spec, &lod, &full, size, limit, w)
-                        }
-                        (1, PolicyKind::Lod) => {
-                            timed_or_skipped(spec, &pca, &lod_policy, size, limit, w)
-                        }
-                        (1, PolicyKind::Full) => {
-                            timed_or_skipped(spec, &pca, &full, size, limit, w)
-                        }
-                        (_, PolicyKind::Lod) => {
-                            timed_or_skipped(spec, &naive, &lod_policy, size, limit, w)
-                        }
-                        (_, PolicyKind::Full) => {
-                            timed_or_skipped(spec, &naive, &full, size, limit, w)
-                        }
+                    let row = match (k, policy == PolicyKind::Lod) {
+                        (0, true) => timed_or_skipped(spec, &lod, &lod_policy, size, limit, w),
+                        (0, false) => timed_or_skipped(spec, &lod, &full, size, limit, w),
+                        (1, true) => timed_or_skipped(spec, &pca, &lod_policy, size, limit, w),
+                        (1, false) => timed_or_skipped(spec, &pca, &full, size, limit, w),
+                        (_, true) => timed_or_skipped(spec, &naive, &lod_policy, size, limit, w),
+                        (_, false) => timed_or_skipped(spec, &naive, &full, size, limit, w),
                     }?;
                     rows.push(row);
                     progress.inc(1);
@@ -304,6 +312,25 @@ pub fn measure(
                 progress.inc(1);
             }
         }
+    }
+    if let Some(&size) = sizes.iter().max_by_key(|s| s.walkers) {
+        let spec = RunSpec {
+            scene: Scene::Ground,
+            source: "lod",
+            policy: PolicyKind::RootOnly,
+            threads: 1,
+        };
+        let root_only = |_: f32, _: bool, _: &ViewParams| Detail::root_only();
+        let mut warm = None;
+        rows.push(timed_or_skipped(
+            spec,
+            &lod,
+            &root_only,
+            size,
+            f64::INFINITY,
+            &mut warm,
+        )?);
+        progress.inc(1);
     }
     Ok(rows)
 }
