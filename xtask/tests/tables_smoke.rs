@@ -34,7 +34,7 @@ fn tables_pipeline_writes_every_section_and_figure() {
     assert!(!doc.contains("NaN"), "a measured value is NaN:\n{doc}");
     // The quick crowds are 50 and 200 walkers in both scenes, each with LOD, naive and PCA rows under
     // the LOD policy and at full detail, the model on one and two threads, and every walker root
-    // only on one thread at the largest size on the ground.
+    // only on one thread at the largest size on the ground, and that crowd culled by the tree.
     assert!(
         doc.contains("### ground camera")
             && doc.contains("### overview camera")
@@ -43,7 +43,8 @@ fn tables_pipeline_writes_every_section_and_figure() {
             && doc.contains("| overview | 200 | pca | no LOD |")
             && doc.contains("| overview | 200 | LOD | 1 |")
             && doc.contains("| overview | 200 | LOD | 2 |")
-            && doc.contains("| ground | 200 | root only | 1 |"),
+            && doc.contains("| ground | 200 | root only | 1 |")
+            && doc.contains("| ground | 200 | lod | LOD, tree culling |"),
         "{doc}"
     );
     for f in ["figure4.svg", "figure5.svg", "quality.svg"] {

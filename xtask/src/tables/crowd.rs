@@ -20,7 +20,7 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, CrowdReport, FrameStats, Scene};
+use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, CrowdReport, Culling, FrameStats, Scene};
 use lod_policy::{Detail, DistancePolicy, FullDetail, LevelPolicy, ViewParams};
 use motion_lod::progress::Progress;
 use motion_lod::{Analysis, LodSource, MotionModel, NaiveSource, PcaSource};
@@ -102,6 +102,8 @@ pub struct CrowdRow {
     pub policy: PolicyKind,
     /// Rayon threads.
     pub threads: usize,
+    /// How the crowd found the walkers in view.
+    pub culling: Culling,
     /// Frame rates and stage timings of the timed frames; `None` when the run was skipped.
     pub report: Option<CrowdReport>,
     /// Seconds of the warm-up ([`WARMUP_S`] of simulated time).
@@ -124,6 +126,14 @@ impl CrowdRow {
             .map(|f| self.walkers as f64 * f / self.threads.max(1) as f64)
     }
 
+    /// The policy's name, with the culling when it is not the default scan.
+    pub fn label(&self) -> String {
+        match self.culling {
+            Culling::Scan => self.policy.label().to_string(),
+            Culling::Tree => format!("{}, tree culling", self.policy.label()),
+        }
+    }
+
     /// Thread time per walker and frame (ns): the inverse of [`CrowdRow::walkers_per_thread_s`].
     pub fn ns_per_walker_frame(&self) -> Option<f64> {
         self.walkers_per_thread_s().map(|w| 1e9 / w)
@@ -136,9 +146,13 @@ fn run_one<S: ClipSource, P: LevelPolicy + Sync>(
     source: &S,
     policy: &P,
     scene: Scene,
+    culling: Culling,
     size: CrowdSize,
 ) -> Result<(CrowdReport, f64, f64)> {
-    let config = CrowdConfig::with_density(size.walkers, DENSITY);
+    let config = CrowdConfig {
+        culling,
+        ..CrowdConfig::with_density(size.walkers, DENSITY)
+    };
     let mut crowd = Crowd::new(source, config).context("creating the crowd")?;
     let path = scene.path(config.field_size_m);
     let lens = scene.lens(Camera::default(), config.field_size_m);
@@ -179,6 +193,7 @@ struct RunSpec {
     source: &'static str,
     policy: PolicyKind,
     threads: usize,
+    culling: Culling,
 }
 
 /// A run of `source` at `size`, or a skipped row when its warm-up is predicted (linearly in walkers
@@ -197,6 +212,7 @@ fn timed_or_skipped<S: ClipSource, P: LevelPolicy + Sync>(
         source: spec.source,
         policy: spec.policy,
         threads: spec.threads,
+        culling: spec.culling,
         report,
         warmup_s,
         warmup_worst_s,
@@ -218,7 +234,7 @@ fn timed_or_skipped<S: ClipSource, P: LevelPolicy + Sync>(
         .build()
         .context("thread pool")?;
     let (report, warmup_s, worst) = pool
-        .install(|| run_one(source, policy, spec.scene, size))
+        .install(|| run_one(source, policy, spec.scene, spec.culling, size))
         .with_context(|| {
             format!(
                 "{} crowd of {} walkers ({}, {} threads)",
@@ -238,7 +254,8 @@ pub const MAIN_THREADS: usize = 2;
 /// Measures, in both scenes and at every size: the three sources under the LOD policy and at full
 /// detail on [`MAIN_THREADS`] threads, and the model under the LOD policy on each of `threads`
 /// (its walkers per second per thread), and, in the ground scene at the largest size, the model with
-/// every walker root only on one thread ([`PolicyKind::RootOnly`]). A baseline or full-detail run
+/// every walker root only on one thread ([`PolicyKind::RootOnly`]) and the model under the LOD
+/// policy with the culling tree ([`Culling::Tree`]) instead of the scan. A baseline or full-detail run
 /// whose warm-up is predicted to exceed `max_warmup_s` is skipped and says so.
 pub fn measure(
     model: &MotionModel,
@@ -256,7 +273,7 @@ pub fn measure(
     let runs_per_size = 6 + threads.iter().filter(|&&t| t != MAIN_THREADS).count();
     progress.stage(
         "crowds (2 scenes; LOD, naive, PCA; LOD policy and full detail; threads)",
-        (Scene::ALL.len() * sizes.len() * runs_per_size + 1) as u64,
+        (Scene::ALL.len() * sizes.len() * runs_per_size + 2) as u64,
     );
     let mut rows = Vec::new();
     for scene in Scene::ALL {
@@ -271,6 +288,7 @@ pub fn measure(
                         source: name,
                         policy,
                         threads: MAIN_THREADS,
+                        culling: Culling::Scan,
                     };
                     // The model under its own policy is always run (it is what the tables are about).
                     let limit = if (k, p) == (0, 0) {
@@ -300,6 +318,7 @@ pub fn measure(
                     source: "lod",
                     policy: PolicyKind::Lod,
                     threads: t,
+                    culling: Culling::Scan,
                 };
                 rows.push(timed_or_skipped(
                     spec,
@@ -319,6 +338,7 @@ pub fn measure(
             source: "lod",
             policy: PolicyKind::RootOnly,
             threads: 1,
+            culling: Culling::Scan,
         };
         let root_only = |_: f32, _: bool, _: &ViewParams| Detail::root_only();
         let mut warm = None;
@@ -326,6 +346,22 @@ pub fn measure(
             spec,
             &lod,
             &root_only,
+            size,
+            f64::INFINITY,
+            &mut warm,
+        )?);
+        progress.inc(1);
+        let spec = RunSpec {
+            policy: PolicyKind::Lod,
+            threads: MAIN_THREADS,
+            culling: Culling::Tree,
+            ..spec
+        };
+        let mut warm = None;
+        rows.push(timed_or_skipped(
+            spec,
+            &lod,
+            &lod_policy,
             size,
             f64::INFINITY,
             &mut warm,
@@ -349,6 +385,7 @@ pub fn find<'a>(
             && r.source == source
             && r.policy == policy
             && r.threads == MAIN_THREADS
+            && r.culling == Culling::Scan
     })
 }
 
