@@ -1,9 +1,9 @@
 //! Clip kernels and poses of a model FILE (`MOTION_LOD_BENCH_MODEL=path.mlod`, for example a model
 //! built from the Bandai data with `motion-lod build`): root-only, the last accuracy level and full
 //! detail, so the runtime's costs are measured at a real sample count (S = 800 for Bandai) rather
-//! than the embedded fixtures'. Also one frame of a crowd of 100,000 walkers that are all root only,
-//! on one thread (time per walker-frame = frame time / walkers; criterion prints the walkers per
-//! second). Without the variable it prints how to set it and measures nothing.
+//! than the embedded fixtures'. Also one frame of a crowd of walkers that are all root only, on one
+//! thread, at 2,000 walkers (which stay in cache) and at 100,000 (time per walker-frame = frame
+//! time / walkers; criterion prints the walkers per second). Without the variable it prints how to set it and measures nothing.
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -87,14 +87,15 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.finish();
-    root_only_crowd(c, &model, &name);
+    for walkers in [2_000, 100_000] {
+        root_only_crowd(c, &model, &name, walkers);
+    }
 }
 
-/// One frame of 100,000 walkers held root only whatever their distance or visibility (ground
+/// One frame of `walkers` walkers held root only whatever their distance or visibility (ground
 /// scene, 0.01 walkers per m², after a 1.5 s warm-up) on a one-thread pool: the per-walker cost of
 /// a far or culled walker, clip builds at its cycle ends included.
-fn root_only_crowd(c: &mut Criterion, model: &MotionModel, name: &str) {
-    let walkers = 100_000;
+fn root_only_crowd(c: &mut Criterion, model: &MotionModel, name: &str, walkers: usize) {
     let config = CrowdConfig {
         seed: 7,
         ..CrowdConfig::with_density(walkers, 0.01)
