@@ -21,6 +21,12 @@
 //!    (a swing toe scuffing the floor) is lifted to that height, `l(f) = max(0, floor + h - y_j(f))`,
 //!    which is continuous since it starts at 0; at touchdown the lift held eases out like the
 //!    horizontal correction.
+//!    **Ground**: out of the air (in contact, or low and not yet risen), a pivot that sinks below
+//!    the floor is raised onto it: its height `h` is shown as `grounded(h)` ([`GROUND_MARGIN_M`]),
+//!    which is `h` from the margin up, 0 from the margin below the floor down and a quadratic
+//!    between (continuous slope), so the synthesized stance foot that sinks a centimetre or two
+//!    (interpolated leg rotations) stands on the floor, and the lift is the larger of this one and
+//!    the landing's easing one.
 //! 3. **Two-bone IK.** The ankle is moved by the correction with the hip fixed ([`two_bone`]): the
 //!    knee stays in the leg's current bend plane, thigh and shin keep their lengths, and the foot keeps
 //!    its world orientation (its points move with the ankle). Beyond [`SOFT_REACH`] of the leg's length
@@ -56,6 +62,9 @@ pub const MAX_REACH: f32 = 0.9999;
 /// Weight of the pole (the character's forward, in thigh lengths) in the IK's bend plane
 /// ([`two_bone`]): small against the offset of a bent knee, decisive for a straight leg.
 pub const POLE_WEIGHT: f32 = 0.1;
+/// Half-width of the soft floor of [`FootLock`]'s ground correction (m): a pivot from this far below
+/// the floor down is shown on it, one from this far above it up as it is.
+pub const GROUND_MARGIN_M: f32 = 0.005;
 /// A pivot moving faster than this between two frames (m/s) has been moved, not walked: the lock
 /// forgets its anchor.
 pub const TELEPORT_SPEED_M_S: f32 = 20.0;
@@ -220,6 +229,22 @@ fn cleared(h: f32) -> f32 {
     }
 }
 
+/// The pivot height shown on the ground for an uncorrected height `h` above the floor: `h` from
+/// `m` up, 0 from `-m` down and `(h + m)^2 / (4 m)` between (`m` = [`GROUND_MARGIN_M`]): never below
+/// the floor nor below `h`, with a continuous slope, so a sinking stance foot is raised without a
+/// kink.
+fn grounded(h: f32) -> f32 {
+    let m = GROUND_MARGIN_M;
+    if h >= m {
+        h
+    } else if h <= -m {
+        0.0
+    } else {
+        let u = h + m;
+        u * u / (4.0 * m)
+    }
+}
+
 impl FootState {
     /// Advances the state by one frame with the foot's uncorrected world points; returns the world
     /// correction to show.
@@ -266,7 +291,9 @@ impl FootState {
         self.offset = released(self.lift_off.0, self.lift_off.1, self.since_lift);
     }
 
-    /// The clearance lift for a pivot `height` above the floor (module documentation, step 2).
+    /// The vertical lift for a pivot `height` above the floor (module documentation, step 2): the
+    /// clearance lift in the air, on the ground the larger of the landing's easing lift and the
+    /// ground correction.
     fn clear(&mut self, height: f32, contact: bool, dt: f32) {
         if contact {
             self.land();
@@ -277,6 +304,7 @@ impl FootState {
             self.lift = cleared(height) - height;
         } else {
             self.ease_lift(dt);
+            self.lift = self.lift.max(grounded(height) - height);
         }
     }
 
@@ -688,6 +716,83 @@ mod tests {
         assert!(!lock.is_active());
     }
 
+    #[test]
+    fn grounded_height_is_continuous_with_its_slope_and_never_below_the_floor() {
+        let m = GROUND_MARGIN_M;
+        assert_eq!(grounded(m), m);
+        assert_eq!(grounded(0.2), 0.2);
+        assert_eq!(grounded(-m), 0.0);
+        assert_eq!(grounded(-0.02), 0.0);
+        let step = 1e-4f32;
+        let mut prev: Option<(f32, f32)> = None;
+        for i in -300..=300 {
+            let h = i as f32 * step;
+            let g = grounded(h);
+            assert!(g >= 0.0 && g >= h - 1e-7, "{h}: {g}");
+            if let Some((pg, ps)) = prev {
+                let slope = (g - pg) / step;
+                assert!((0.0..=1.0 + 1e-3).contains(&slope), "{h}: slope {slope}");
+                assert!(
+                    (slope - ps).abs() < 0.05,
+                    "{h}: slope jumps {ps} -> {slope}"
+                );
+                prev = Some((g, slope));
+            } else {
+                prev = Some((g, 0.0));
+            }
+        }
+    }
+
+    /// A stance foot that sinks (the walk lowers the hips from 0.845 m to 0.82 m over 15 frames, the
+    /// toes from 0.25 cm above the floor to 2.25 cm under it) is shown on the floor, within the soft
+    /// margin, and its toe never jumps: the ground correction grows with the sink.
+    #[test]
+    fn a_sinking_stance_foot_stands_on_the_floor() {
+        let (rig, feet) = legs();
+        let dt = 1.0 / 30.0;
+        let mut lock = FootLock::new();
+        let frame = CycleFrame::default();
+        let pose_at = |f: usize| {
+            let mut pose = vec![0.0f32; rig.dof()];
+            let sink = 0.025 * (f.min(15) as f32 / 15.0);
+            pose[..3].copy_from_slice(&[0.0, 0.845 - sink, 0.002 * f as f32]);
+            for leg in [7, 16] {
+                pose[leg] = 0.3;
+                pose[leg + 3] = -0.6;
+                pose[leg + 6] = 0.3;
+            }
+            pose
+        };
+        let mut prev_toe: Option<Vec3> = None;
+        let mut lowest_free = f32::MAX;
+        for f in 0..30 {
+            let mut pose = pose_at(f);
+            lock.apply(&rig, &feet, &frame, 6, 1.0, dt, &mut pose)
+                .unwrap();
+            let (shown, free) = (positions(&rig, &pose), positions(&rig, &pose_at(f)));
+            lowest_free = lowest_free.min(free[4].y);
+            for toe in [3 + 1, 7 + 1] {
+                let y = shown[toe].y;
+                assert!(
+                    (-1e-4..=GROUND_MARGIN_M).contains(&y),
+                    "frame {f}: toe {toe} shown at {y} (free {})",
+                    free[toe].y
+                );
+            }
+            if let Some(q) = prev_toe {
+                // The walk moves 2 mm a frame and sinks under 2 mm a frame: the correction adds
+                // no jump of its own.
+                assert!(
+                    shown[4].distance(q) < 4e-3,
+                    "frame {f}: toe jumps {}",
+                    shown[4].distance(q)
+                );
+            }
+            prev_toe = Some(shown[4]);
+        }
+        assert!(lowest_free < -0.02, "the free toe sinks to {lowest_free}");
+    }
+
     /// A body 1.25 times the rig's size (hips 1.25 times as high) plants its feet where the scaled
     /// forward kinematics draws them, with the scaled leg lengths; the same walk locked as if it had
     /// the rig's size finds no foot on the floor and leaves the drawn toe sliding.
@@ -760,9 +865,9 @@ mod tests {
         let dt = 1.0 / 30.0;
         let mut lock = FootLock::new();
         for f in 0..10 {
-            // Fast (1 m/s): never planted.
+            // Fast (1 m/s), 2 cm above the floor (toes): never planted, nothing to lift.
             let mut pose = vec![0.0f32; rig.dof()];
-            pose[..3].copy_from_slice(&[0.0, 0.86, 0.033 * f as f32]);
+            pose[..3].copy_from_slice(&[0.0, 0.90, 0.033 * f as f32]);
             let before = pose.clone();
             lock.apply(&rig, &feet, &CycleFrame::default(), 6, 1.0, dt, &mut pose)
                 .unwrap();
