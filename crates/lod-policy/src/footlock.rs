@@ -601,6 +601,20 @@ mod tests {
         (rig, feet)
     }
 
+    /// A pose of [`legs`] with the root at `(0, hip_y, z)` and both legs bent the same way: thighs
+    /// forward 0.3 rad, knees back 0.6, ankles forward 0.3 (feet flat), so the ankles are 0.8025 m
+    /// below the hips and the toes 0.04 m below the ankles.
+    fn bent_legs(rig: &Rig, hip_y: f32, z: f32) -> Vec<f32> {
+        let mut pose = vec![0.0f32; rig.dof()];
+        pose[..3].copy_from_slice(&[0.0, hip_y, z]);
+        for leg in [7, 16] {
+            pose[leg] = 0.3;
+            pose[leg + 3] = -0.6;
+            pose[leg + 6] = 0.3;
+        }
+        pose
+    }
+
     fn positions(rig: &Rig, pose: &[f32]) -> Vec<Vec3> {
         let mut out = vec![Vec3::ZERO; rig.joint_count()];
         rig.joint_positions(pose, 6, &mut out).unwrap();
@@ -670,17 +684,10 @@ mod tests {
         let dt = 1.0 / 30.0;
         let mut lock = FootLock::new();
         let frame = CycleFrame::default();
-        // Thighs forward 0.3 rad, knees back 0.6, ankles forward 0.3 (feet flat): ankles 0.8025 m
-        // below the hips, toes 0.04 below the ankles. Hips at 0.83 m put the toes 1.25 cm under the
-        // floor, the ankles 2.75 cm above it. The walk slides 0.5 cm per frame (0.15 m/s).
+        // Hips at 0.83 m put the toes 1.25 cm under the floor (raised onto it by the ground
+        // correction), the ankles 2.75 cm above it. The walk slides 0.5 cm per frame (0.15 m/s).
         let pose_at = |f: usize| {
-            let mut pose = vec![0.0f32; rig.dof()];
-            pose[..3].copy_from_slice(&[0.0, 0.83, 0.005 * f as f32]);
-            for leg in [7, 16] {
-                pose[leg] = 0.3;
-                pose[leg + 3] = -0.6;
-                pose[leg + 6] = 0.3;
-            }
+            let mut pose = bent_legs(&rig, 0.83, 0.005 * f as f32);
             if f >= 20 {
                 pose[1] += 0.05 * (f - 19) as f32;
             }
@@ -753,15 +760,8 @@ mod tests {
         let mut lock = FootLock::new();
         let frame = CycleFrame::default();
         let pose_at = |f: usize| {
-            let mut pose = vec![0.0f32; rig.dof()];
             let sink = 0.025 * (f.min(15) as f32 / 15.0);
-            pose[..3].copy_from_slice(&[0.0, 0.845 - sink, 0.002 * f as f32]);
-            for leg in [7, 16] {
-                pose[leg] = 0.3;
-                pose[leg + 3] = -0.6;
-                pose[leg + 6] = 0.3;
-            }
-            pose
+            bent_legs(&rig, 0.845 - sink, 0.002 * f as f32)
         };
         let mut prev_toe: Option<Vec3> = None;
         let mut lowest_free = f32::MAX;
@@ -800,16 +800,7 @@ mod tests {
     fn a_scaled_body_plants_the_feet_it_draws() {
         let (rig, feet) = legs();
         let (dt, scale) = (1.0 / 30.0, 1.25f32);
-        let pose_at = |f: usize| {
-            let mut pose = vec![0.0f32; rig.dof()];
-            pose[..3].copy_from_slice(&[0.0, 0.83 * scale, 0.005 * f as f32]);
-            for leg in [7, 16] {
-                pose[leg] = 0.3;
-                pose[leg + 3] = -0.6;
-                pose[leg + 6] = 0.3;
-            }
-            pose
-        };
+        let pose_at = |f: usize| bent_legs(&rig, 0.83 * scale, 0.005 * f as f32);
         let drawn = |pose: &[f32]| {
             let mut out = vec![Vec3::ZERO; rig.joint_count()];
             rig.joint_positions_scaled(pose, 6, scale, &mut out)
