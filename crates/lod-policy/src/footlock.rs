@@ -12,7 +12,12 @@
 //!    the previous frame is below [`LOCK_SPEED_M_S`].
 //! 2. **Correction.** In contact, the horizontal motion of the pivot is cancelled:
 //!    `d(f) = d(f - 1) - (x_j(f) - x_j(f - 1))_xz` (world frame; `j` the pivot of frame `f`, which
-//!    may pass from heel to toe). Contact starts from the correction held (0 after a full release),
+//!    may pass from heel to toe), and a stance above the floor is lowered onto it,
+//!    `d_y(f) = d_y(f - 1) + w (-max(0, h_low(f)) - d_y(f - 1))` (`h_low` the lowest pivot height
+//!    above the floor since the contact started: the foot keeps its own rise and roll within the
+//!    stance), as the offline lock puts each stance's lowest point on the floor. Both corrections
+//!    are weighted by `w`, which eases from 0 to 1 over [`ONSET_S`] from the contact's start.
+//!    Contact starts from the correction held (0 after a full release),
 //!    so the foot never jumps. Out of contact the correction held at lift-off eases to zero over
 //!    [`RELEASE_S`] (`e(1 - r / RELEASE_S)` with the ease curve [`crate::ease_in_out`], `r` the
 //!    time since lift-off), while the foot is in the air.
@@ -22,7 +27,8 @@
 //!    which is continuous since it starts at 0; at touchdown the lift held eases out like the
 //!    horizontal correction.
 //!    **Ground**: out of the air (in contact, or low and not yet risen), a pivot that sinks below
-//!    the floor is raised onto it: its height `h` is shown as `grounded(h)` ([`GROUND_MARGIN_M`]),
+//!    the floor is raised onto it: its height `h` (with the correction held) is shown as
+//!    `grounded(h)` ([`GROUND_MARGIN_M`]),
 //!    which is `h` from the margin up, 0 from the margin below the floor down and a quadratic
 //!    between (continuous slope), so the synthesized stance foot that sinks a centimetre or two
 //!    (interpolated leg rotations) stands on the floor, and the lift is the larger of this one and
@@ -184,6 +190,8 @@ struct FootState {
     planted: bool,
     /// Seconds since the contact started.
     since_contact: f32,
+    /// Lowest pivot height above the floor since the contact started (m).
+    contact_low: f32,
     /// The horizontal correction shown at the previous frame (world).
     offset: Vec3,
     /// Its rate of change at the previous frame (m/s).
@@ -263,20 +271,25 @@ impl FootState {
         }
         let height = points[pivot].y - floor;
         let contact = height < LOCK_HEIGHT_M && speed.is_some_and(|s| s < LOCK_SPEED_M_S);
-        self.clear(height, contact, dt);
         let before = self.offset;
         if contact {
             if !self.planted {
                 self.planted = true;
                 self.since_contact = 0.0;
+                self.contact_low = height;
             }
             self.since_contact += dt;
+            self.contact_low = self.contact_low.min(height);
             let w = ease_in_out((self.since_contact / ONSET_S).min(1.0));
             self.offset -= w * moved.unwrap_or(Vec3::ZERO);
+            // Down onto the floor: a stance whose lowest point so far is above it is lowered by
+            // that much, with the same onset.
+            self.offset.y += w * (-self.contact_low.max(0.0) - self.offset.y);
         } else {
             self.release(dt);
         }
         self.velocity = (self.offset - before) / dt;
+        self.clear(height, height + self.offset.y, contact, dt);
         self.offset + Vec3::new(0.0, self.lift, 0.0)
     }
 
@@ -291,20 +304,20 @@ impl FootState {
         self.offset = released(self.lift_off.0, self.lift_off.1, self.since_lift);
     }
 
-    /// The vertical lift for a pivot `height` above the floor (module documentation, step 2): the
-    /// clearance lift in the air, on the ground the larger of the landing's easing lift and the
-    /// ground correction.
-    fn clear(&mut self, height: f32, contact: bool, dt: f32) {
+    /// The vertical lift for a pivot `height` above the floor, `shown` with the correction held
+    /// (module documentation, step 2): the clearance lift in the air, on the ground the larger of
+    /// the landing's easing lift and the ground correction, both of the height shown.
+    fn clear(&mut self, height: f32, shown: f32, contact: bool, dt: f32) {
         if contact {
             self.land();
         } else if height >= LOCK_HEIGHT_M {
             self.airborne = true;
         }
         if self.airborne {
-            self.lift = cleared(height) - height;
+            self.lift = cleared(shown) - shown;
         } else {
             self.ease_lift(dt);
-            self.lift = self.lift.max(grounded(height) - height);
+            self.lift = self.lift.max(grounded(shown) - shown);
         }
     }
 
@@ -791,6 +804,60 @@ mod tests {
             prev_toe = Some(shown[4]);
         }
         assert!(lowest_free < -0.02, "the free toe sinks to {lowest_free}");
+    }
+
+    /// A stance foot that floats 1.5 cm above the floor (hips at 0.8575 m) is lowered onto it once
+    /// the onset has passed, without a jump, and lets go of the floor when it lifts.
+    #[test]
+    fn a_floating_stance_foot_is_lowered_onto_the_floor() {
+        let (rig, feet) = legs();
+        let dt = 1.0 / 30.0;
+        let mut lock = FootLock::new();
+        let frame = CycleFrame::default();
+        let pose_at = |f: usize| {
+            let mut pose = bent_legs(&rig, 0.8575, 0.002 * f as f32);
+            if f >= 20 {
+                pose[1] += 0.05 * (f - 19) as f32;
+            }
+            pose
+        };
+        let mut prev_toe: Option<Vec3> = None;
+        for f in 0..40 {
+            let mut pose = pose_at(f);
+            lock.apply(&rig, &feet, &frame, 6, 1.0, dt, &mut pose)
+                .unwrap();
+            let (shown, free) = (positions(&rig, &pose), positions(&rig, &pose_at(f)));
+            if (5..20).contains(&f) {
+                assert!(
+                    (free[4].y - 0.015).abs() < 1e-4,
+                    "frame {f}: free toe {}",
+                    free[4].y
+                );
+                for toe in [4, 8] {
+                    assert!(
+                        (0.0..=GROUND_MARGIN_M).contains(&shown[toe].y),
+                        "frame {f}: toe {toe} shown at {}",
+                        shown[toe].y
+                    );
+                }
+            }
+            if f >= 20 + (RELEASE_S / dt).ceil() as usize {
+                assert!(
+                    shown[4].distance(free[4]) < 1e-5,
+                    "frame {f}: still corrected"
+                );
+            }
+            if let Some(q) = prev_toe {
+                // At most the walk's 2 mm, the lift's 5 cm and an eased share of the 1.5 cm.
+                let step = shown[4].distance(q);
+                assert!(step < 0.06, "frame {f}: toe jumps {step}");
+                if f < 20 {
+                    assert!(step < 0.01, "frame {f}: toe jumps {step} while planted");
+                }
+            }
+            prev_toe = Some(shown[4]);
+        }
+        assert!(!lock.is_active());
     }
 
     /// A body 1.25 times the rig's size (hips 1.25 times as high) plants its feet where the scaled
