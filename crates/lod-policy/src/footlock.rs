@@ -192,7 +192,8 @@ struct FootState {
     since_contact: f32,
     /// Lowest pivot height above the floor since the contact started (m).
     contact_low: f32,
-    /// The horizontal correction shown at the previous frame (world).
+    /// The correction shown at the previous frame (world): the cancelled horizontal drift and the
+    /// stance's lowering onto the floor (`y`), without the lift.
     offset: Vec3,
     /// Its rate of change at the previous frame (m/s).
     velocity: Vec3,
@@ -293,7 +294,7 @@ impl FootState {
         self.offset + Vec3::new(0.0, self.lift, 0.0)
     }
 
-    /// Out of contact: the horizontal correction released from lift-off.
+    /// Out of contact: the correction (horizontal drift and lowering) released from lift-off.
     fn release(&mut self, dt: f32) {
         if self.planted {
             self.planted = false;
