@@ -597,12 +597,12 @@ fn bandai_crowd_fast_path_matches_the_reference_path() {
 
 /// The two sources' walkers keep the same cycle frames, to the bit, for 60 s (1,800 frames), and
 /// their roots within 1e-5 m: the bound above allows differences in the arithmetic of a pose, but
-/// none in a walker's trajectory. World positions are
-/// f32 and a walker's cycle frame moves by the sum of its clips' root motions, so one ulp of
-/// difference in one clip's root motion (kriging weights, `K(c)` or a time table summed in another
-/// order, in f32, or with fused multiply-adds) is carried by every later cycle, and one ulp of a
-/// position is already 7.6e-6 m from 64 m to 128 m from the origin and 1.5e-5 m beyond (this field
-/// is 173 m wide). See docs/architecture.md, "Precision".
+/// none in a walker's trajectory. World positions are f32 and a walker's cycle frame moves by the
+/// sum of its clips' root motions, so one ulp of difference in one clip's root motion (kriging
+/// weights, `K(c)` or a time table summed in another order, in f32, or with fused multiply-adds)
+/// is carried by every later cycle, and one ulp of a position is already 7.6e-6 m from 64 m to
+/// 128 m from the origin and 1.5e-5 m or more beyond (this field is 173 m wide). See
+/// docs/architecture.md, "Precision".
 fn same_trajectories_for_a_minute(
     model: &MotionModel,
     policy: &DistancePolicy,
