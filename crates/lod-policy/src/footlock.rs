@@ -28,11 +28,10 @@
 //!    horizontal correction.
 //!    **Ground**: out of the air (in contact, or low and not yet risen), a pivot that sinks below
 //!    the floor is raised onto it: its height `h` (with the correction held) is shown as
-//!    `grounded(h)` ([`GROUND_MARGIN_M`]),
-//!    which is `h` from the margin up, 0 from the margin below the floor down and a quadratic
-//!    between (continuous slope), so the synthesized stance foot that sinks a centimetre or two
-//!    (interpolated leg rotations) stands on the floor, and the lift is the larger of this one and
-//!    the landing's easing one.
+//!    `grounded(h)`, which is `h` from [`GROUND_MARGIN_M`] up, 0 from the margin below the floor
+//!    down and a quadratic between (continuous slope, the clearance's rounding at a lower level),
+//!    so the synthesized stance foot that sinks a centimetre or two (interpolated leg rotations)
+//!    stands on the floor; the lift is the larger of this one and the landing's easing one.
 //! 3. **Two-bone IK.** The ankle is moved by the correction with the hip fixed ([`two_bone`]): the
 //!    knee stays in the leg's current bend plane, thigh and shin keep their lengths, and the foot keeps
 //!    its world orientation (its points move with the ankle). Beyond [`SOFT_REACH`] of the leg's length
@@ -222,36 +221,32 @@ fn released(x0: Vec3, v0: Vec3, t: f32) -> Vec3 {
     (x0 + (v0 + g * x0) * t) * (-g * t).exp() * ease_in_out(1.0 - t / RELEASE_S)
 }
 
-/// The pivot height shown in the air for an uncorrected height `h` above the floor: `h` from
-/// `LOCK_HEIGHT_M + m` up, `LOCK_HEIGHT_M` from `LOCK_HEIGHT_M - m` down and
-/// `LOCK_HEIGHT_M + (h - LOCK_HEIGHT_M + m)^2 / (4 m)` between (`m = LOCK_HEIGHT_M / 2`): at least the
-/// lock height, with a continuous slope, so a swing foot is lifted without a kink.
-fn cleared(h: f32) -> f32 {
-    let m = 0.5 * LOCK_HEIGHT_M;
-    if h >= LOCK_HEIGHT_M + m {
+/// `max(h, level)` with the corner rounded over `level +- m`: `h` from `level + m` up, `level` from
+/// `level - m` down and `level + (h - level + m)^2 / (4 m)` between. Never below `h` nor below
+/// `level`, with a continuous slope, so a pivot pushed up to `level` moves without a kink.
+fn soft_max(h: f32, level: f32, m: f32) -> f32 {
+    if h >= level + m {
         h
-    } else if h <= LOCK_HEIGHT_M - m {
-        LOCK_HEIGHT_M
+    } else if h <= level - m {
+        level
     } else {
-        let u = h - LOCK_HEIGHT_M + m;
-        LOCK_HEIGHT_M + u * u / (4.0 * m)
+        let u = h - level + m;
+        level + u * u / (4.0 * m)
     }
 }
 
-/// The pivot height shown on the ground for an uncorrected height `h` above the floor: `h` from
-/// `m` up, 0 from `-m` down and `(h + m)^2 / (4 m)` between (`m` = [`GROUND_MARGIN_M`]): never below
-/// the floor nor below `h`, with a continuous slope, so a sinking stance foot is raised without a
-/// kink.
+/// The pivot height shown in the air for an uncorrected height `h` above the floor: at least the
+/// lock height, rounded over half of it (`soft_max(h, LOCK_HEIGHT_M, LOCK_HEIGHT_M / 2)`), so a
+/// swing foot is lifted without a kink.
+fn cleared(h: f32) -> f32 {
+    soft_max(h, LOCK_HEIGHT_M, 0.5 * LOCK_HEIGHT_M)
+}
+
+/// The pivot height shown on the ground for an uncorrected height `h` above the floor: never below
+/// the floor, rounded over [`GROUND_MARGIN_M`] (`soft_max(h, 0, GROUND_MARGIN_M)`), so a sinking
+/// stance foot is raised without a kink.
 fn grounded(h: f32) -> f32 {
-    let m = GROUND_MARGIN_M;
-    if h >= m {
-        h
-    } else if h <= -m {
-        0.0
-    } else {
-        let u = h + m;
-        u * u / (4.0 * m)
-    }
+    soft_max(h, 0.0, GROUND_MARGIN_M)
 }
 
 impl FootState {

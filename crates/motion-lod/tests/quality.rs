@@ -339,34 +339,18 @@ fn embedded_crowd_walkers_plant_their_feet() {
 /// (a switch snapped them: 2.7x).
 #[test]
 fn embedded_crowd_walkers_stand_on_the_floor_and_fade_joints_at_seams() {
-    use motion_lod::crowd_sim::{CrowdConfig, Scene};
+    use motion_lod::crowd_sim::Scene;
     let (model, _) = common::built();
     let data = model.report.quality.as_ref().expect("reference").median;
-    let policy = DistancePolicy::for_model(&model.lod);
-    let config = CrowdConfig::with_density(200, 0.01);
-    let ground = motion_lod::crowd::crowd_quality(model, config, Scene::Ground, &policy, 10.0)
-        .expect("crowd measures");
-    let mut near_ground = 0;
-    for w in ground.iter().filter(|w| w.levels.1 <= 2 && w.joints.0 >= 8) {
-        near_ground += 1;
-        assert!(
-            w.quality.floor_offset_cm.abs() <= FLOOR_CM,
-            "ground walker {} (levels {:?}, joints {:?}): floor offset {:.2} cm",
-            w.walker,
-            w.levels,
-            w.joints,
-            w.quality.floor_offset_cm
-        );
-    }
+    let ground = distance_policy_crowd(model, Scene::Ground);
+    let near_ground = locked_walkers_stand_on_the_floor(Scene::Ground, &ground);
     assert!(
         near_ground >= 20,
         "{near_ground} near walkers on the ground"
     );
-    let walkers = motion_lod::crowd::crowd_quality(model, config, Scene::Overview, &policy, 10.0)
-        .expect("crowd measures");
+    let walkers = distance_policy_crowd(model, Scene::Overview);
     let joint_changes = walkers.iter().filter(|w| w.joints.0 != w.joints.1).count();
     assert!(joint_changes >= 10, "{joint_changes} walkers change joints");
-    let mut near = 0;
     for w in &walkers {
         let q = &w.quality;
         assert!(
@@ -378,18 +362,8 @@ fn embedded_crowd_walkers_stand_on_the_floor_and_fade_joints_at_seams() {
             q.seam_pop_cm,
             data.pop_cm
         );
-        if w.levels.1 <= 2 && w.joints.0 >= 8 {
-            near += 1;
-            assert!(
-                q.floor_offset_cm.abs() <= FLOOR_CM,
-                "walker {} (levels {:?}, joints {:?}): floor offset {:.2} cm",
-                w.walker,
-                w.levels,
-                w.joints,
-                q.floor_offset_cm
-            );
-        }
     }
+    let near = locked_walkers_stand_on_the_floor(Scene::Overview, &walkers);
     assert!(near >= 20, "{near} near walkers");
 }
 
@@ -398,44 +372,64 @@ fn embedded_crowd_walkers_stand_on_the_floor_and_fade_joints_at_seams() {
 /// ([`lod_policy::footlock::GROUND_MARGIN_M`]), half issue 12's 1 cm.
 const FLOOR_CM: f64 = 0.5;
 
+/// Asserts that the crowd walkers the runtime lock held for their whole stretch (levels 0-2, at
+/// least the 8 joints that evaluate both legs) stand on the data's floor within [`FLOOR_CM`];
+/// returns how many there were.
+fn locked_walkers_stand_on_the_floor(
+    scene: motion_lod::crowd_sim::Scene,
+    walkers: &[motion_lod::crowd::WalkerQuality],
+) -> usize {
+    let locked: Vec<_> = walkers
+        .iter()
+        .filter(|w| w.levels.1 <= 2 && w.joints.0 >= 8)
+        .collect();
+    for w in &locked {
+        assert!(
+            w.quality.floor_offset_cm.abs() <= FLOOR_CM,
+            "{scene:?} walker {} (levels {:?}, joints {:?}): floor offset {:.2} cm",
+            w.walker,
+            w.levels,
+            w.joints,
+            w.quality.floor_offset_cm
+        );
+    }
+    locked.len()
+}
+
+/// 200 walkers at 0.01 per m² for 10 s under the model's distance policy with the camera of
+/// `scene`, each measured by the meter as the crowd plays it.
+fn distance_policy_crowd(
+    model: &MotionModel,
+    scene: motion_lod::crowd_sim::Scene,
+) -> Vec<motion_lod::crowd::WalkerQuality> {
+    let policy = DistancePolicy::for_model(&model.lod);
+    let config = motion_lod::crowd_sim::CrowdConfig::with_density(200, 0.01);
+    motion_lod::crowd::crowd_quality(model, config, scene, &policy, 10.0).expect("crowd measures")
+}
+
 /// CMU crowds as the distance policy plays them (200 walkers, 10 s, both scenes): the near
 /// walkers stand on the data's floor within [`FLOOR_CM`] (their stances floated up to 1.38 cm above
 /// it before the runtime lock lowered them, and sank up to 0.55 cm before it raised them), and no
 /// walker pops more than 1.5x the data's median.
 #[test]
 fn cmu_crowd_walkers_stand_on_the_floor() {
-    use motion_lod::crowd_sim::{CrowdConfig, Scene};
+    use motion_lod::crowd_sim::Scene;
     let Some((model, _)) = cmu() else {
         return;
     };
     let data = model.report.quality.as_ref().expect("reference").median;
-    let policy = DistancePolicy::for_model(&model.lod);
     for scene in [Scene::Ground, Scene::Overview] {
-        let config = CrowdConfig::with_density(200, 0.01);
-        let walkers = motion_lod::crowd::crowd_quality(model, config, scene, &policy, 10.0)
-            .expect("crowd measures");
-        let mut near = 0;
+        let walkers = distance_policy_crowd(model, scene);
         for w in &walkers {
-            let q = &w.quality;
-            let what = format!(
-                "{scene:?} walker {} (levels {:?}, joints {:?})",
-                w.walker, w.levels, w.joints
-            );
             assert!(
-                q.pop_cm <= 1.5 * data.pop_cm,
-                "{what}: pop {:.2} > 1.5 x {:.2}",
-                q.pop_cm,
+                w.quality.pop_cm <= 1.5 * data.pop_cm,
+                "{scene:?} walker {}: pop {:.2} > 1.5 x {:.2}",
+                w.walker,
+                w.quality.pop_cm,
                 data.pop_cm
             );
-            if w.levels.1 < 3 && w.joints.0 >= 8 {
-                near += 1;
-                assert!(
-                    q.floor_offset_cm.abs() <= FLOOR_CM,
-                    "{what}: floor offset {:.2} cm",
-                    q.floor_offset_cm
-                );
-            }
         }
+        let near = locked_walkers_stand_on_the_floor(scene, &walkers);
         assert!(near >= 20, "{scene:?}: {near} near walkers");
     }
 }
@@ -447,16 +441,13 @@ fn cmu_crowd_walkers_stand_on_the_floor() {
 /// floor within [`FLOOR_CM`].
 #[test]
 fn bandai_crowds_under_the_distance_policy_look_like_the_data() {
-    use motion_lod::crowd_sim::{CrowdConfig, Scene};
+    use motion_lod::crowd_sim::Scene;
     let Some((model, _)) = bandai() else {
         return;
     };
     let data = model.report.quality.as_ref().expect("reference").median;
-    let policy = DistancePolicy::for_model(&model.lod);
     for scene in [Scene::Ground, Scene::Overview] {
-        let config = CrowdConfig::with_density(200, 0.01);
-        let walkers = motion_lod::crowd::crowd_quality(model, config, scene, &policy, 10.0)
-            .expect("crowd measures");
+        let walkers = distance_policy_crowd(model, scene);
         let worst = walkers.iter().map(|w| w.quality.pop_cm).fold(0.0, f64::max);
         eprintln!(
             "bandai {scene:?}: {} walkers measured, worst pop {:.2}x the data",
@@ -482,16 +473,9 @@ fn bandai_crowds_under_the_distance_policy_look_like_the_data() {
                 q.pop_cm,
                 data.pop_cm
             );
-            if w.levels.1 < 3 && w.joints.0 >= 8 {
-                // Locked the whole stretch with both legs evaluated: the lock's ground correction
-                // stands them on the floor (they sank up to 1.85 cm without it).
-                assert!(
-                    q.floor_offset_cm.abs() <= FLOOR_CM,
-                    "{what}: floor offset {:.2} cm",
-                    q.floor_offset_cm
-                );
-            }
         }
+        // The lock holds their stances on the floor (they sank up to 1.85 cm without it).
+        locked_walkers_stand_on_the_floor(scene, &walkers);
         let mut near: Vec<f64> = walkers
             .iter()
             .filter(|w| w.levels.1 < 3 && w.joints.0 > 0)
