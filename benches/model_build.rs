@@ -23,7 +23,7 @@ fn build(c: &mut Criterion) {
     group.finish();
 
     let model = MotionModel::build(&loaded.training, &config, &NoProgress).unwrap();
-    let lod = &model.lod;
+    let lod = model.lod();
     let controls = [0.0f32, 1.3, 0.1, 1.75];
     let mut scratch = KernelScratch::new(lod);
     let mut kernel = ClipKernel::new(lod);

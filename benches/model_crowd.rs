@@ -27,7 +27,7 @@ fn model() -> (MotionModel, Analysis) {
 }
 
 fn kernels_and_poses(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
-    let lod = &model.lod;
+    let lod = model.lod();
     let controls: Vec<[f32; 4]> = analysis
         .controls
         .iter()
@@ -79,7 +79,7 @@ fn kernels_and_poses(c: &mut Criterion, model: &MotionModel, analysis: &Analysis
 }
 
 fn crowd_frame(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
-    let lod = &model.lod;
+    let lod = model.lod();
     let lod_policy = DistancePolicy::for_model(lod);
     let full = FullDetail;
     let walkers = 1_000;

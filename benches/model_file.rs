@@ -22,7 +22,7 @@ fn bench(c: &mut Criterion) {
         return;
     };
     let model = MotionModel::load(&path).expect("MOTION_LOD_BENCH_MODEL loads");
-    let lod = &model.lod;
+    let lod = model.lod();
     let cs = lod.controls();
     // Controls spread over the data's range (a fixed low-discrepancy walk, so every run is the same).
     let controls: Vec<Vec<f32>> = (0..64)

@@ -4,8 +4,8 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use timewarp::{
-    AlignConfig, AlignMethod, DtwConfig, DtwWorkspace, FrameSeq, TimeTable, align, dtw_with,
-    medoid, playback_into,
+    AlignConfig, AlignMethod, DtwConfig, DtwWorkspace, FrameSeq, align, dtw_with, medoid,
+    playback_into,
 };
 
 /// A smooth closed curve of `dim` values, `n` frames, time-warped by `a` (|a| < 1).
@@ -63,7 +63,8 @@ fn bench_timewarp(c: &mut Criterion) {
     )
     .unwrap();
     let aligned = &al.aligned[0];
-    let mut table = TimeTable::with_capacity(33);
+    // The runtime's clip time table (what a clip kernel fills per clip).
+    let mut table = lod_policy::TimeTable::with_capacity(33);
     let incs: Vec<f64> = (0..33)
         .map(|k| aligned.frame(k)[al.increment_col])
         .collect();
@@ -78,13 +79,14 @@ fn bench_timewarp(c: &mut Criterion) {
         })
     });
     let mut out = FrameSeq::zeros(60, 0);
+    let mut times = Vec::with_capacity(33);
     c.bench_function("timewarp/playback_cycle_at_60fps", |bench| {
         bench.iter(|| {
             playback_into(
                 black_box(aligned),
                 al.increment_col,
                 60.0,
-                &mut table,
+                &mut times,
                 &mut out,
             )
             .unwrap()

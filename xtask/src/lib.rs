@@ -38,6 +38,7 @@ pub mod euler;
 pub mod fixtures;
 pub mod footsteps;
 pub mod gait;
+pub mod imports;
 pub mod leg_ik;
 pub mod rig;
 pub mod rng;

@@ -1,12 +1,13 @@
 //! Project tasks: `cargo xtask fixtures` regenerates `fixtures/` (the synthetic gait set of the
 //! procedural walker, see the library part of this crate); `cargo xtask tables` measures the paper's
-//! tables and figures into `docs/tables.md` and `docs/figures/`.
+//! tables and figures into `docs/tables.md` and `docs/figures/`; `cargo xtask imports` fails on an
+//! import circle among a crate's source files.
 
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand};
-use xtask::{fixtures, tables};
+use xtask::{fixtures, imports, tables};
 
 /// Project tasks of the motion-lod workspace.
 #[derive(Debug, Parser)]
@@ -24,6 +25,20 @@ enum Command {
     /// Measure the paper's tables and figures (storage, Figures 4 and 5, crowd frame rates, accuracy)
     /// and write `docs/tables.md` and `docs/figures/*.svg`.
     Tables(TablesArgs),
+    /// List the `use crate::` edges among a crate's top-level modules and fail on an import circle
+    /// (default: the facade, `crates/motion-lod/src`).
+    Imports(ImportsArgs),
+}
+
+/// Options of `xtask imports`.
+#[derive(Debug, Args)]
+struct ImportsArgs {
+    /// The crate's `src/` folders to check (default: `crates/motion-lod/src`).
+    #[arg(value_name = "SRC")]
+    dirs: Vec<PathBuf>,
+    /// Print every edge, not only the circles.
+    #[arg(long)]
+    verbose: bool,
 }
 
 /// Options of `xtask tables`.
@@ -65,7 +80,45 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Fixtures(args) => run_fixtures(&args),
         Command::Tables(args) => run_tables(&args),
+        Command::Imports(args) => run_imports(&args),
     }
+}
+
+fn run_imports(args: &ImportsArgs) -> Result<()> {
+    let dirs = if args.dirs.is_empty() {
+        vec![tables::workspace_root().join("crates/motion-lod/src")]
+    } else {
+        args.dirs.clone()
+    };
+    let mut circles = 0;
+    for dir in &dirs {
+        let graph = imports::ImportGraph::of_crate(dir)?;
+        let edges: usize = graph.edges.values().map(|t| t.len()).sum();
+        println!(
+            "{}: {} modules, {edges} import edges",
+            dir.display(),
+            graph.edges.len()
+        );
+        if args.verbose {
+            for (a, targets) in &graph.edges {
+                for b in targets {
+                    println!("  {a} -> {b}");
+                }
+            }
+        }
+        for circle in graph.circles() {
+            circles += 1;
+            println!("import circle: {}", circle.join(", "));
+            for edge in graph.edges_within(&circle) {
+                println!("  {edge}");
+            }
+        }
+    }
+    if circles > 0 {
+        bail!("{circles} import circle(s): cut one edge of each");
+    }
+    println!("no import circles");
+    Ok(())
 }
 
 fn run_tables(args: &TablesArgs) -> Result<()> {

@@ -76,7 +76,7 @@ fn online_truncation_matches_the_runtime_kernel_on_truncations_of_key_0() {
             .expect("model builds");
     let trunc = schemes::truncation_only(&model).expect("truncation model");
     assert_eq!(trunc.keys().len(), 1);
-    assert_eq!(trunc.levels().len(), model.lod.levels().len());
+    assert_eq!(trunc.levels().len(), model.lod().levels().len());
     let mut online = OnlineTruncation::new(&trunc);
     let mut scratch = KernelScratch::new(&trunc);
     let mut kernel = ClipKernel::new(&trunc);

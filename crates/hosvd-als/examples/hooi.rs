@@ -10,7 +10,7 @@
 
 use anyhow::Context;
 use clap::Parser;
-use hosvd_als::storage::{Precision, key_levels_bytes};
+use hosvd_als::storage::key_levels_bytes;
 use hosvd_als::{AlsOptions, KeySearchConfig, hooi, key_levels};
 use serde_json::json;
 use std::path::PathBuf;
@@ -86,8 +86,8 @@ fn main() -> anyhow::Result<()> {
                     "iterations": l.iterations,
                     "als_runs": l.als_runs,
                     "threshold": l.threshold,
-                    "bytes_f64": l.tucker.bytes(Precision::F64),
-                    "bytes_f32": l.tucker.bytes(Precision::F32),
+                    "bytes_f64": l.tucker.bytes(8),
+                    "bytes_f32": l.tucker.bytes(4),
                 })
             })
             .collect();
@@ -97,8 +97,8 @@ fn main() -> anyhow::Result<()> {
             "requested_levels": keys.requested_levels,
             "clamped": keys.clamped,
             "levels": levels,
-            "total_bytes_f64": key_levels_bytes(&keys, Precision::F64),
-            "total_bytes_f32": key_levels_bytes(&keys, Precision::F32),
+            "total_bytes_f64": key_levels_bytes(&keys, 8),
+            "total_bytes_f32": key_levels_bytes(&keys, 4),
             "seconds": seconds,
         });
         println!("{out}");

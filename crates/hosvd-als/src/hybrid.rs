@@ -5,24 +5,14 @@ use serde::{Deserialize, Serialize};
 
 /// One accuracy level of the hybrid model as the offline decomposition schedules it: the key level it
 /// is truncated from and its rank triple `[R_P, R_T, R_S]` as the Tucker models index ranks. The
-/// model builder turns each into the runtime's [`lod_policy::AccuracyLevel`] (same key, ranks as
-/// [`lod_policy::Ranks`]), the one the model file stores.
+/// motion model's builder turns each into the runtime's accuracy level (same key and ranks), the
+/// one the model file stores.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct HybridLevel {
     /// Index of the key level whose model is truncated (the nearest larger key).
     pub key: usize,
     /// The rank triple of this level (componentwise `<=` the key's ranks).
     pub ranks: [usize; 3],
-}
-
-impl From<HybridLevel> for lod_policy::AccuracyLevel {
-    /// The runtime's form of the level: the same key, the ranks as [`lod_policy::Ranks`].
-    fn from(l: HybridLevel) -> lod_policy::AccuracyLevel {
-        lod_policy::AccuracyLevel {
-            key: l.key,
-            ranks: lod_policy::Ranks::new(l.ranks[0], l.ranks[1], l.ranks[2]),
-        }
-    }
 }
 
 /// The `N_A` accuracy levels of the hybrid scheme for `N` key levels.

@@ -14,7 +14,7 @@
 //!
 //! ```
 //! use hosvd_als::{AlsOptions, KeySearchConfig, hooi, hosvd, hybrid_levels, key_levels};
-//! use hosvd_als::storage::{Precision, key_levels_bytes};
+//! use hosvd_als::storage::key_levels_bytes;
 //! use tensor_ops::Tensor3;
 //!
 //! let x = Tensor3::from_fn([8, 9, 10], |i, j, k| {
@@ -34,7 +34,8 @@
 //! assert_eq!(acc.len(), 7);
 //! let model = keys.model_at(&acc[1]).unwrap();
 //! assert_eq!(model.ranks(), acc[1].ranks);
-//! assert!(key_levels_bytes(&keys, Precision::F32) < key_levels_bytes(&keys, Precision::F64));
+//! // Stored as f32 (4 bytes a value) against f64 (8 bytes).
+//! assert!(key_levels_bytes(&keys, 4) < key_levels_bytes(&keys, 8));
 //! ```
 
 #![warn(missing_docs)]
@@ -56,5 +57,4 @@ pub use hooi::{AlsOptions, AlsReport, hooi, hooi_with_start};
 pub use hosvd::{hosvd, hosvd_full};
 pub use hybrid::{HybridLevel, hybrid_levels};
 pub use keys::{KeyLevel, KeyLevels, KeySearchConfig, key_levels};
-pub use storage::Precision;
 pub use tucker::Tucker;

@@ -8,38 +8,35 @@
 
 use crate::{HybridLevel, KeyLevels};
 
-/// Element type of a stored model: the runtime's [`lod_policy::Precision`] (one definition for the
-/// runtime model's byte counts and these), re-exported here.
-pub use lod_policy::Precision;
-
-/// Bytes of one Tucker model: `(R_0 R_1 R_2 + sum_n I_n R_n) * size`.
-pub fn tucker_bytes(dims: [usize; 3], ranks: [usize; 3], precision: Precision) -> usize {
+/// Bytes of one Tucker model of `value_bytes`-byte elements (8 for f64, 4 for f32):
+/// `(R_0 R_1 R_2 + sum_n I_n R_n) * value_bytes`.
+pub fn tucker_bytes(dims: [usize; 3], ranks: [usize; 3], value_bytes: usize) -> usize {
     let core = ranks[0] * ranks[1] * ranks[2];
     let factors: usize = (0..3).map(|n| dims[n] * ranks[n]).sum();
-    (core + factors) * precision.value_bytes()
+    (core + factors) * value_bytes
 }
 
 /// Bytes of the hybrid model: every key level's core and factors (paper: "all key tensors and
 /// basic matrices", 1.45 MB for N = 10 at 94 x 100 x 186).
-pub fn key_levels_bytes(keys: &KeyLevels, precision: Precision) -> usize {
+pub fn key_levels_bytes(keys: &KeyLevels, value_bytes: usize) -> usize {
     keys.levels
         .iter()
-        .map(|l| tucker_bytes(l.tucker.dims(), l.ranks, precision))
+        .map(|l| tucker_bytes(l.tucker.dims(), l.ranks, value_bytes))
         .sum()
 }
 
 /// Bytes needed if every accuracy level were stored as its own ALS model (the paper's
 /// "9.7 MB when all reduced core tensors are computed by ALS"), for data of shape `dims`.
-pub fn all_levels_bytes(dims: [usize; 3], levels: &[HybridLevel], precision: Precision) -> usize {
+pub fn all_levels_bytes(dims: [usize; 3], levels: &[HybridLevel], value_bytes: usize) -> usize {
     levels
         .iter()
-        .map(|l| tucker_bytes(dims, l.ranks, precision))
+        .map(|l| tucker_bytes(dims, l.ranks, value_bytes))
         .sum()
 }
 
-/// Bytes of the dense data tensor `I_0 I_1 I_2 * size` (the paper's "naive interpolation").
-pub fn dense_bytes(dims: [usize; 3], precision: Precision) -> usize {
-    dims[0] * dims[1] * dims[2] * precision.value_bytes()
+/// Bytes of the dense data tensor `I_0 I_1 I_2 * value_bytes` (the paper's "naive interpolation").
+pub fn dense_bytes(dims: [usize; 3], value_bytes: usize) -> usize {
+    dims[0] * dims[1] * dims[2] * value_bytes
 }
 
 /// Bytes to mebibytes (`/ 2^20`), the unit of the paper's MB figures.

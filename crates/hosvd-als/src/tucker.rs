@@ -4,7 +4,7 @@ use crate::HosvdError;
 use crate::eig::{leading_eigen, normalize_signs};
 use crate::gram::gram_into;
 use crate::project::multi_product;
-use crate::storage::{Precision, tucker_bytes};
+use crate::storage::tucker_bytes;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, Par};
 use tensor_ops::{Tensor3, TensorError, check_ranks, mode_vec_product_into};
@@ -153,9 +153,10 @@ impl Tucker {
         s.iter().map(|v| v.sqrt()).collect()
     }
 
-    /// Storage of the core and the three factors in bytes (see [`crate::storage`]).
-    pub fn bytes(&self, precision: Precision) -> usize {
-        tucker_bytes(self.dims(), self.ranks(), precision)
+    /// Storage of the core and the three factors in bytes, for elements of `value_bytes` bytes
+    /// (8 for f64, 4 for f32; see [`crate::storage`]).
+    pub fn bytes(&self, value_bytes: usize) -> usize {
+        tucker_bytes(self.dims(), self.ranks(), value_bytes)
     }
 
     /// Mean squared error `||X - X~||_F^2 / (I_0 I_1 I_2)` computed explicitly by reconstruction

@@ -1,8 +1,6 @@
 //! The greedy key-level search, hybrid accuracy levels and storage accounting.
 
-use hosvd_als::storage::{
-    Precision, all_levels_bytes, dense_bytes, key_levels_bytes, mib, tucker_bytes,
-};
+use hosvd_als::storage::{all_levels_bytes, dense_bytes, key_levels_bytes, mib, tucker_bytes};
 use hosvd_als::synthetic::decaying_tucker;
 use hosvd_als::{AlsOptions, HosvdError, KeySearchConfig, hybrid_levels, key_levels};
 
@@ -139,26 +137,22 @@ fn hybrid_levels_truncate_the_nearest_larger_key() {
 #[test]
 fn storage_counts_cores_and_factors() {
     assert_eq!(
-        tucker_bytes([94, 100, 186], [40, 40, 60], Precision::F64),
+        tucker_bytes([94, 100, 186], [40, 40, 60], 8),
         (40 * 40 * 60 + 94 * 40 + 100 * 40 + 186 * 60) * 8
     );
     assert_eq!(
-        tucker_bytes([94, 100, 186], [7, 7, 9], Precision::F32),
+        tucker_bytes([94, 100, 186], [7, 7, 9], 4),
         (7 * 7 * 9 + 94 * 7 + 100 * 7 + 186 * 9) * 4
     );
     // The paper's 13.34 MB for all samples is 94 x 100 x 186 doubles in MiB.
-    assert!((mib(dense_bytes([94, 100, 186], Precision::F64)) - 13.34).abs() < 0.005);
+    assert!((mib(dense_bytes([94, 100, 186], 8)) - 13.34).abs() < 0.005);
     let x = data();
     let keys = key_levels(&x, &cfg(3, [10, 10, 10], [4, 4, 4])).unwrap();
-    let sum: usize = keys
-        .levels
-        .iter()
-        .map(|l| l.tucker.bytes(Precision::F64))
-        .sum();
-    assert_eq!(key_levels_bytes(&keys, Precision::F64), sum);
-    assert_eq!(key_levels_bytes(&keys, Precision::F32) * 2, sum);
+    let sum: usize = keys.levels.iter().map(|l| l.tucker.bytes(8)).sum();
+    assert_eq!(key_levels_bytes(&keys, 8), sum);
+    assert_eq!(key_levels_bytes(&keys, 4) * 2, sum);
     let acc = hybrid_levels(&keys, 9);
-    assert!(all_levels_bytes(x.dims(), &acc, Precision::F64) > sum);
+    assert!(all_levels_bytes(x.dims(), &acc, 8) > sum);
 }
 
 #[test]

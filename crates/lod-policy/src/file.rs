@@ -1,23 +1,37 @@
-//! The model file's framing, and the reader an engine loads models with.
+//! The model file's framing and sections, and the reader an engine loads models with.
 //!
 //! Layout (all integers little-endian):
 //!
 //! | offset | size | content |
 //! |---|---|---|
 //! | 0 | 8 | magic `b"MLOD\r\n\x1a\n"` (catches text-mode transfers, like PNG's) |
-//! | 8 | 4 | format version (`u32`) |
+//! | 8 | 4 | format version (`u32`, [`FORMAT_VERSION`]) |
 //! | 12 | 8 | payload length in bytes (`u64`) |
 //! | 20 | 4 | CRC-32 (IEEE) of the payload |
-//! | 24 | n | payload: `bincode` 2 (standard configuration) of the serde value |
+//! | 24 | n | payload: one or more sections |
 //!
-//! The offline builder (`motion_lod::model_file`) writes files with [`frame`]; every reader goes
-//! through [`unframe`]: a wrong magic, another version, a length that disagrees with the file or a
-//! checksum mismatch is a [`FileError`] naming the path and the offset, and a payload that does
-//! not decode is one too. Nothing panics, and the decoder never allocates more than a small
-//! multiple of the file ([`decode_payload`]).
+//! Each section ([`Section`]) is a header of [`SECTION_HEADER_LEN`] bytes, then its bytes:
 //!
-//! The payload of a motion model is `(PoseLayout, LodModel, BuildReport)` in that order; the runtime
-//! reads the first two ([`crate::RuntimeModel::from_bytes`]) and ignores the report.
+//! | offset | size | content |
+//! |---|---|---|
+//! | 0 | 4 | tag (four ASCII bytes) |
+//! | 4 | 4 | the section's own version (`u32`) |
+//! | 8 | 8 | length of its bytes (`u64`) |
+//! | 16 | 4 | CRC-32 (IEEE) of its bytes |
+//! | 20 | n | its bytes: `bincode` 2 (standard configuration) of a serde value |
+//!
+//! The runtime owns the first section, [`RuntimeModel::SECTION`](crate::RuntimeModel::SECTION)
+//! (`RTIM`): everything playback needs ([`crate::RuntimeModel`]). The offline builder
+//! (`motion_lod::model_file`) appends its build report as a section of its own (`RPRT`); the
+//! runtime reader skips every section that is not its own, so an engine never decodes the
+//! workshop's types, and a file holding the runtime section alone
+//! ([`RuntimeModel::to_bytes`](crate::RuntimeModel::to_bytes)) plays the same.
+//!
+//! Every reader goes through [`unframe`] and [`sections`]: a wrong magic, another version, a
+//! length that disagrees with the file, a checksum mismatch, a section that runs past the payload
+//! or fails its own checksum, a missing or outdated section, or a section that does not decode is
+//! a [`FileError`] naming the path and the offset. Nothing panics, and the decoder never allocates
+//! more than a small multiple of the file ([`decode_payload`]).
 
 use std::path::{Path, PathBuf};
 
@@ -26,7 +40,7 @@ use serde::de::DeserializeOwned;
 /// The eight bytes every model file starts with.
 pub const MAGIC: [u8; 8] = *b"MLOD\r\n\x1a\n";
 /// The format version this build writes and the only one it reads.
-pub const FORMAT_VERSION: u32 = 7;
+pub const FORMAT_VERSION: u32 = 8;
 
 // Version history: 1 (first release); 2 (the build report records the DOF row weights and the build
 // settings their choice); 3 (the kriging rows of the controls, `C A^-1`, are stored once in the control
@@ -38,12 +52,45 @@ pub const FORMAT_VERSION: u32 = 7;
 // screen check; the recorded data folders are relative to the model file, and the data
 // specification records the units, up axis and joint map); 6 (the feet and floor for the runtime foot
 // lock, `FootRig`, after the runtime model); 7 (the rig's stature after the feet, for the body
-// scale of each character, and the data's takes measured with their own body scale). Files of an
+// scale of each character, and the data's takes measured with their own body scale); 8 (the payload
+// is sections: the runtime's own `RTIM` (rig, multilinear model, feet, stature, control names)
+// first, the offline build report `RPRT` after it). Files of an
 // older version are refused
 // with a request to rebuild: a model is
 // rebuilt from its data in seconds, and a converter would carry guesses.
 /// Bytes before the payload: magic, version, length, checksum.
 pub const HEADER_LEN: usize = 24;
+/// Bytes of a section's header: tag, version, length, checksum.
+pub const SECTION_HEADER_LEN: usize = 20;
+
+/// One section of a model file's payload (see the module documentation): a tag, the section's
+/// own format version and its bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Section<'a> {
+    /// Four ASCII bytes naming what the section holds (`RTIM`: the runtime model).
+    pub tag: [u8; 4],
+    /// The section's own format version.
+    pub version: u32,
+    /// Its bytes (bincode of a serde value).
+    pub bytes: &'a [u8],
+    /// Offset of its bytes in the file (for error messages; ignored by [`frame`]).
+    pub offset: usize,
+}
+
+impl Section<'_> {
+    /// The tag as text, for messages (`RTIM`).
+    pub fn tag_name(&self) -> String {
+        tag_name(self.tag)
+    }
+}
+
+/// A tag as text, for messages (bytes outside printable ASCII as `\xNN`).
+pub fn tag_name(tag: [u8; 4]) -> String {
+    tag.iter()
+        .flat_map(|&b| std::ascii::escape_default(b))
+        .map(char::from)
+        .collect()
+}
 
 /// What is wrong with a decoded model whose parts do not fit together.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -149,6 +196,60 @@ pub enum FileError {
         /// What is wrong.
         source: InvalidModel,
     },
+    /// The section table is malformed: a section header or its bytes run past the payload.
+    #[error("{path}: malformed model file: {message} (offset {offset})")]
+    Section {
+        /// The file concerned.
+        path: PathBuf,
+        /// Offset in the file of the section header concerned.
+        offset: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A section's bytes do not match its own checksum.
+    #[error(
+        "{path}: corrupted model file: section {tag} checksum {found:08x} differs from {expected:08x} stored at offset {offset}"
+    )]
+    SectionChecksum {
+        /// The file concerned.
+        path: PathBuf,
+        /// The section's tag.
+        tag: String,
+        /// Offset in the file of the stored checksum.
+        offset: usize,
+        /// Checksum stored in the section header.
+        expected: u32,
+        /// Checksum of the bytes as read.
+        found: u32,
+    },
+    /// A section the reader needs is not in the file.
+    #[error(
+        "{path}: not a complete model: it has no {tag} section ({what}); rebuild it with `motion-lod build`"
+    )]
+    MissingSection {
+        /// The file concerned.
+        path: PathBuf,
+        /// The tag looked for.
+        tag: String,
+        /// What that section holds.
+        what: &'static str,
+    },
+    /// A section was written in another version of its format than this build reads.
+    #[error(
+        "{path}: section {tag} has version {found}, this build reads version {expected}; rebuild the model with `motion-lod build`{hint}"
+    )]
+    SectionVersion {
+        /// The file concerned.
+        path: PathBuf,
+        /// The section's tag.
+        tag: String,
+        /// The version found.
+        found: u32,
+        /// The version this build reads.
+        expected: u32,
+        /// `" or update motion-lod"` for a newer section, empty otherwise.
+        hint: &'static str,
+    },
     /// The value could not be encoded (writing a model, offline).
     #[error("{path}: cannot encode model: {message}")]
     Encode {
@@ -159,9 +260,28 @@ pub enum FileError {
     },
 }
 
-/// The framed file bytes for an encoded `payload`: the header (magic, [`FORMAT_VERSION`], payload
-/// length, CRC-32 of the payload), then the payload.
-pub fn frame(payload: &[u8]) -> Vec<u8> {
+/// The framed file bytes for `sections`, in order: the header (magic, [`FORMAT_VERSION`], payload
+/// length, CRC-32 of the payload), then each section's header (tag, version, length, CRC-32 of
+/// its bytes) and bytes.
+pub fn frame(sections: &[Section<'_>]) -> Vec<u8> {
+    let len: usize = sections
+        .iter()
+        .map(|s| SECTION_HEADER_LEN + s.bytes.len())
+        .sum();
+    let mut payload = Vec::with_capacity(len);
+    for s in sections {
+        payload.extend_from_slice(&s.tag);
+        payload.extend_from_slice(&s.version.to_le_bytes());
+        payload.extend_from_slice(&(s.bytes.len() as u64).to_le_bytes());
+        payload.extend_from_slice(&crc32fast::hash(s.bytes).to_le_bytes());
+        payload.extend_from_slice(s.bytes);
+    }
+    frame_payload(&payload)
+}
+
+/// The framed file bytes for a raw `payload` (the header, then the payload as given): what
+/// [`frame`] does after laying out its sections. For tests of the framing and hand-made files.
+pub fn frame_payload(payload: &[u8]) -> Vec<u8> {
     let mut bytes = Vec::with_capacity(HEADER_LEN + payload.len());
     bytes.extend_from_slice(&MAGIC);
     bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -169,6 +289,95 @@ pub fn frame(payload: &[u8]) -> Vec<u8> {
     bytes.extend_from_slice(&crc32fast::hash(payload).to_le_bytes());
     bytes.extend_from_slice(payload);
     bytes
+}
+
+/// The sections of framed file bytes, in file order, after [`unframe`]'s checks and each
+/// section's own: its header and bytes lie inside the payload and its bytes match its checksum.
+///
+/// `path` only labels errors.
+pub fn sections<'a>(bytes: &'a [u8], path: &Path) -> Result<Vec<Section<'a>>, FileError> {
+    let payload = unframe(bytes, path)?;
+    let mut out = Vec::new();
+    let mut at = 0usize;
+    while at < payload.len() {
+        let offset = HEADER_LEN + at;
+        let malformed = |message: String| FileError::Section {
+            path: path.to_path_buf(),
+            offset,
+            message,
+        };
+        let rest = &payload[at..];
+        if rest.len() < SECTION_HEADER_LEN {
+            return Err(malformed(format!(
+                "{} bytes left, fewer than a {SECTION_HEADER_LEN}-byte section header",
+                rest.len()
+            )));
+        }
+        let tag: [u8; 4] = field(rest, 0);
+        let version = u32::from_le_bytes(field(rest, 4));
+        let len = u64::from_le_bytes(field(rest, 8));
+        let stored_crc = u32::from_le_bytes(field(rest, 16));
+        let available = (rest.len() - SECTION_HEADER_LEN) as u64;
+        if len > available {
+            return Err(malformed(format!(
+                "section {} announces {len} bytes, {available} remain",
+                tag_name(tag)
+            )));
+        }
+        let body = &rest[SECTION_HEADER_LEN..SECTION_HEADER_LEN + len as usize];
+        let found = crc32fast::hash(body);
+        if found != stored_crc {
+            return Err(FileError::SectionChecksum {
+                path: path.to_path_buf(),
+                tag: tag_name(tag),
+                offset: offset + 16,
+                expected: stored_crc,
+                found,
+            });
+        }
+        out.push(Section {
+            tag,
+            version,
+            bytes: body,
+            offset: offset + SECTION_HEADER_LEN,
+        });
+        at += SECTION_HEADER_LEN + len as usize;
+    }
+    Ok(out)
+}
+
+/// The bytes of the first section tagged `tag` in framed file bytes ([`sections`]), checked to be
+/// of `version`; `what` names its content in the error when it is missing. Other sections are
+/// skipped unread.
+pub fn find_section<'a>(
+    bytes: &'a [u8],
+    tag: [u8; 4],
+    version: u32,
+    what: &'static str,
+    path: &Path,
+) -> Result<Section<'a>, FileError> {
+    let section = sections(bytes, path)?
+        .into_iter()
+        .find(|s| s.tag == tag)
+        .ok_or_else(|| FileError::MissingSection {
+            path: path.to_path_buf(),
+            tag: tag_name(tag),
+            what,
+        })?;
+    if section.version != version {
+        return Err(FileError::SectionVersion {
+            path: path.to_path_buf(),
+            tag: tag_name(tag),
+            found: section.version,
+            expected: version,
+            hint: if section.version > version {
+                " or update motion-lod"
+            } else {
+                ""
+            },
+        });
+    }
+    Ok(section)
 }
 
 /// Little-endian integer of `N` bytes at `offset` (the caller has checked the header's length).
@@ -232,11 +441,29 @@ pub fn unframe<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a [u8], FileError> 
     Ok(payload)
 }
 
-/// Decodes a value from framed file bytes: [`unframe`], then [`decode_payload`].
+/// Decodes the value of the section tagged `tag` (of `version`) from framed file bytes:
+/// [`find_section`], then [`decode_payload`] of its bytes (errors give the section's offset).
 ///
 /// `path` only labels errors.
-pub fn decode<T: DeserializeOwned>(bytes: &[u8], path: &Path) -> Result<T, FileError> {
-    decode_payload(unframe(bytes, path)?, path)
+pub fn decode_section<T: DeserializeOwned>(
+    bytes: &[u8],
+    tag: [u8; 4],
+    version: u32,
+    what: &'static str,
+    path: &Path,
+) -> Result<T, FileError> {
+    let section = find_section(bytes, tag, version, what, path)?;
+    decode_payload(section.bytes, path).map_err(|e| match e {
+        FileError::Decode { path, message } => FileError::Decode {
+            path,
+            message: format!(
+                "section {} (offset {}..): {message}",
+                section.tag_name(),
+                section.offset
+            ),
+        },
+        other => other,
+    })
 }
 
 /// Reads a file's bytes, naming the path on failure.
@@ -277,9 +504,8 @@ fn decode_error(path: &Path, message: String) -> FileError {
 }
 
 /// Decodes a value from the start of `payload` with [`decode_payload`]'s configuration and limit,
-/// and returns it with the number of bytes it used (later bytes are not read: bincode is
-/// sequential, so the first fields of a larger value decode alone).
-pub fn decode_prefix<T: DeserializeOwned>(
+/// and returns it with the number of bytes it used.
+fn decode_prefix<T: DeserializeOwned>(
     payload: &[u8],
     path: &Path,
 ) -> Result<(T, usize), FileError> {
@@ -335,8 +561,31 @@ mod tests {
         }
     }
 
+    const TAG: [u8; 4] = *b"TEST";
+
+    fn section(bytes: &[u8]) -> Section<'_> {
+        Section {
+            tag: TAG,
+            version: 3,
+            bytes,
+            offset: 0,
+        }
+    }
+
+    /// A file of two sections: an unknown one first, then the sample.
     fn encode(s: &Sample) -> Vec<u8> {
-        frame(&bincode::serde::encode_to_vec(s, bincode::config::standard()).unwrap())
+        let body = bincode::serde::encode_to_vec(s, bincode::config::standard()).unwrap();
+        let other = Section {
+            tag: *b"XTRA",
+            version: 1,
+            bytes: b"skipped",
+            offset: 0,
+        };
+        frame(&[other, section(&body)])
+    }
+
+    fn decode(bytes: &[u8]) -> Result<Sample, FileError> {
+        decode_section(bytes, TAG, 3, "a sample", p())
     }
 
     fn p() -> &'static Path {
@@ -344,18 +593,22 @@ mod tests {
     }
 
     #[test]
-    fn round_trip() {
+    fn round_trip_skips_other_sections() {
         let bytes = encode(&sample());
         assert_eq!(&bytes[..8], &MAGIC);
-        let back: Sample = decode(&bytes, p()).unwrap();
-        assert_eq!(back, sample());
+        assert_eq!(decode(&bytes).unwrap(), sample());
+        let all = sections(&bytes, p()).unwrap();
+        let tags: Vec<String> = all.iter().map(Section::tag_name).collect();
+        assert_eq!(tags, ["XTRA", "TEST"]);
+        assert_eq!(all[0].bytes, b"skipped");
+        assert_eq!(all[0].offset, HEADER_LEN + SECTION_HEADER_LEN);
     }
 
     #[test]
     fn every_truncation_is_an_error() {
         let bytes = encode(&sample());
         for len in 0..bytes.len() {
-            let err = decode::<Sample>(&bytes[..len], p()).unwrap_err();
+            let err = decode(&bytes[..len]).unwrap_err();
             let ok = matches!(
                 err,
                 FileError::TooShort { .. } | FileError::LengthMismatch { .. }
@@ -370,18 +623,48 @@ mod tests {
         for i in 0..bytes.len() {
             let mut bad = bytes.clone();
             bad[i] ^= 0x5a;
-            assert!(
-                decode::<Sample>(&bad, p()).is_err(),
-                "flip at {i} went unnoticed"
-            );
+            assert!(decode(&bad).is_err(), "flip at {i} went unnoticed");
         }
+    }
+
+    /// A file whose outer checksum was recomputed after a section changed: the section's own
+    /// checksum still catches it, and a section that runs past the payload is named.
+    #[test]
+    fn sections_check_their_own_checksum_and_bounds() {
+        let bytes = encode(&sample());
+        let payload = unframe(&bytes, p()).unwrap().to_vec();
+        let mut edited = payload.clone();
+        let last = edited.len() - 1;
+        edited[last] ^= 1;
+        let err = decode(&frame_payload(&edited)).unwrap_err();
+        assert!(
+            matches!(&err, FileError::SectionChecksum { tag, .. } if tag == "TEST"),
+            "{err}"
+        );
+        let err = decode(&frame_payload(&payload[..payload.len() - 1])).unwrap_err();
+        assert!(matches!(err, FileError::Section { .. }), "{err}");
+        assert!(err.to_string().contains("announces"), "{err}");
+        let err = decode(&frame_payload(&payload[..10])).unwrap_err();
+        assert!(err.to_string().contains("section header"), "{err}");
+    }
+
+    #[test]
+    fn a_missing_or_outdated_section_asks_for_a_rebuild() {
+        let bytes = encode(&sample());
+        let err = decode_section::<Sample>(&bytes, *b"NONE", 1, "nothing", p()).unwrap_err();
+        assert!(matches!(err, FileError::MissingSection { .. }), "{err}");
+        assert!(err.to_string().contains("rebuild"), "{err}");
+        let err = decode_section::<Sample>(&bytes, TAG, 4, "a sample", p()).unwrap_err();
+        assert!(err.to_string().contains("rebuild"), "{err}");
+        let err = decode_section::<Sample>(&bytes, TAG, 2, "a sample", p()).unwrap_err();
+        assert!(err.to_string().contains("update motion-lod"), "{err}");
     }
 
     #[test]
     fn future_version_is_named() {
         let mut bytes = encode(&sample());
         bytes[8..12].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes());
-        let err = decode::<Sample>(&bytes, p()).unwrap_err();
+        let err = decode(&bytes).unwrap_err();
         assert!(
             matches!(err, FileError::FutureVersion { found, .. } if found == FORMAT_VERSION + 1)
         );
@@ -392,21 +675,27 @@ mod tests {
     fn old_version_asks_for_a_rebuild() {
         let mut bytes = encode(&sample());
         bytes[8..12].copy_from_slice(&(FORMAT_VERSION - 1).to_le_bytes());
-        let err = decode::<Sample>(&bytes, p()).unwrap_err();
+        let err = decode(&bytes).unwrap_err();
         assert!(matches!(err, FileError::OldVersion { found, .. } if found == FORMAT_VERSION - 1));
         assert!(err.to_string().contains("rebuild"));
     }
 
     #[test]
-    fn wrong_type_is_a_decode_error_and_a_prefix_decodes_alone() {
-        let bytes =
-            frame(&bincode::serde::encode_to_vec(42u8, bincode::config::standard()).unwrap());
-        let err = decode::<Sample>(&bytes, p()).unwrap_err();
+    fn wrong_type_is_a_decode_error_naming_the_section() {
+        let body = bincode::serde::encode_to_vec(42u8, bincode::config::standard()).unwrap();
+        let err = decode(&frame(&[section(&body)])).unwrap_err();
         assert!(matches!(err, FileError::Decode { .. }), "{err}");
-        let payload = unframe(&encode(&sample()), p()).unwrap().to_vec();
-        let (name, used): (String, usize) = decode_prefix(&payload, p()).unwrap();
-        assert_eq!((name.as_str(), used), ("walk", 5));
-        let err = decode_payload::<String>(&payload, p()).unwrap_err();
+        assert!(err.to_string().contains("section TEST"), "{err}");
+        let body = bincode::serde::encode_to_vec(sample(), bincode::config::standard()).unwrap();
+        let mut longer = body.clone();
+        longer.push(0);
+        let err = decode(&frame(&[section(&longer)])).unwrap_err();
         assert!(err.to_string().contains("trailing"), "{err}");
+    }
+
+    #[test]
+    fn tags_print_as_text() {
+        assert_eq!(tag_name(*b"RTIM"), "RTIM");
+        assert_eq!(tag_name([b'A', 0, 0xff, b'\n']), "A\\x00\\xff\\n");
     }
 }

@@ -40,6 +40,7 @@ pub fn yaw_of_exp_map(v: &[f32]) -> f32 {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Isa {
     Baseline,
+    #[cfg(target_arch = "x86_64")]
     Avx2,
 }
 

@@ -15,6 +15,7 @@
 use std::ops::Range;
 
 use glam::{Quat, Vec3};
+use serde::{Deserialize, Serialize};
 
 use crate::error::RigError;
 use crate::model::{ALWAYS_ROWS, ROWS_PER_JOINT};
@@ -46,7 +47,7 @@ pub fn exp_to_quat(v: Vec3) -> Quat {
 }
 
 /// What drives a joint of a [`Rig`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum JointRole {
     /// Not below the motion root: static, placed on the ground under the root.
     Outside,
@@ -68,8 +69,8 @@ fn check_scale(scale: f32) -> Result<(), RigError> {
     }
 }
 
-/// One joint of a [`Rig`].
-#[derive(Debug, Clone, PartialEq)]
+/// One joint of a [`Rig`] (stored as is in the model file's runtime section).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RigJoint {
     /// The joint's name in the source data.
     pub name: String,

@@ -1,20 +1,23 @@
-//! [`RuntimeModel`]: what an engine loads from a model file: the [`Rig`] and the [`LodModel`].
+//! [`RuntimeModel`]: the one model type of the runtime, and its section of the model file.
 //!
-//! A model file's payload is the offline `MotionModel`: the pose layout (`motion_io::PoseLayout`,
-//! stored as what it is built from), the runtime model, the feet for the foot lock, the rig's
-//! stature, then the build report. The runtime decodes the first four and ignores the rest. The layout's stored form is mirrored here field for field
-//! (private types with the same serde shape), so the runtime reads files without the offline crates.
+//! A runtime model holds everything playback needs and nothing of the workshop: the skeleton
+//! ([`Rig`]: joint names, parents, rest transforms, what drives each joint), the multilinear model
+//! at every accuracy level ([`LodModel`]), the feet for the foot lock ([`FootRig`]), the rig's
+//! stature for the body scale, and the names of the controls (their ranges are the model's
+//! [`ControlSpace`](crate::ControlSpace)). It writes and reads its own section of the model file
+//! ([`RuntimeModel::SECTION`], versioned by [`RuntimeModel::SECTION_VERSION`] and checksummed, see
+//! [`crate::file`]); the offline build writes this section first and appends its report after
+//! it, which this reader skips.
 
 use std::path::Path;
 
-use glam::{DQuat, DVec3};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::controls::Controls;
-use crate::file::{self, FileError, InvalidModel};
+use crate::file::{self, FileError, InvalidModel, Section};
 use crate::footlock::FootRig;
 use crate::model::{ALWAYS_ROWS, LodModel, ROWS_PER_JOINT};
-use crate::rig::{JointRole, Rig, RigJoint};
+use crate::rig::{Rig, RigJoint};
 
 /// The runtime form of a model file: the skeleton with its forward kinematics, the
 /// multilinear model at every accuracy level, the feet for the foot lock, and the rig's stature
@@ -31,7 +34,17 @@ impl RuntimeModel {
     /// A runtime model from its parts, checking that they fit: the rig drives the model's pose
     /// rows (`7 + 3 n` rows for its `n` rotating joints, the model's `P`, with the model's 7 always
     /// evaluated rows and 3 rows per joint).
+    ///
+    /// The model's controls are the walk's four, [`Controls::NAMES`].
     pub fn new(rig: Rig, lod: LodModel) -> Result<RuntimeModel, InvalidModel> {
+        if lod.d() != Controls::COUNT {
+            return Err(InvalidModel(format!(
+                "the runtime model has {} controls; a walk model has {} ({})",
+                lod.d(),
+                Controls::COUNT,
+                Controls::NAMES.join(", ")
+            )));
+        }
         if lod.always_rows() != ALWAYS_ROWS || lod.rows_per_joint() != ROWS_PER_JOINT {
             return Err(InvalidModel(format!(
                 "the runtime model has {} root rows and {} rows per joint; pose vectors have {ALWAYS_ROWS} and {ROWS_PER_JOINT}",
@@ -74,34 +87,104 @@ impl RuntimeModel {
         Ok(self)
     }
 
-    /// Decodes the bytes of a model file (framing and checksum as [`file::unframe`] checks them,
-    /// then the pose layout, the runtime model and the feet; the build report after them is not
-    /// read).
+    /// The model with measured error tables per accuracy level and per joint count
+    /// ([`LodModel::set_errors`], validated there): the offline build measures them once the model
+    /// exists.
+    pub fn with_errors(
+        mut self,
+        level_errors: Vec<crate::LevelError>,
+        joint_errors: Vec<crate::LevelError>,
+    ) -> Result<RuntimeModel, crate::ModelError> {
+        self.lod.set_errors(level_errors, joint_errors)?;
+        Ok(self)
+    }
+
+    /// The tag of the runtime's section of a model file.
+    pub const SECTION: [u8; 4] = *b"RTIM";
+    /// The format version of the runtime's section; a section of another version is refused with
+    /// a request to rebuild the model.
+    ///
+    /// History: 1 (the first sectioned file, format 8: control names, rig joints, the multilinear
+    /// model, feet, stature).
+    pub const SECTION_VERSION: u32 = 1;
+
+    /// Decodes the runtime model from the bytes of a model file: the framing and checksums
+    /// ([`file::unframe`], [`file::sections`]), then the runtime's own section
+    /// ([`RuntimeModel::SECTION`]), then the checks of [`RuntimeModel::new`], the feet and the
+    /// stature. Every other section (the offline build report) is skipped unread.
     pub fn from_bytes(bytes: &[u8]) -> Result<RuntimeModel, FileError> {
-        Self::decode_at(bytes, Path::new("<model bytes>"))
+        Self::decode(bytes, Path::new("<model bytes>"))
     }
 
     /// Reads a model file (see [`RuntimeModel::from_bytes`]); errors name the path.
     pub fn load(path: &Path) -> Result<RuntimeModel, FileError> {
-        Self::decode_at(&file::read(path)?, path)
+        Self::decode(&file::read(path)?, path)
     }
 
-    fn decode_at(bytes: &[u8], path: &Path) -> Result<RuntimeModel, FileError> {
-        let payload = file::unframe(bytes, path)?;
-        type Prefix = (LayoutParts, LodModel, Option<FootRig>, Option<f32>);
-        let ((layout, lod, feet, stature), _): (Prefix, usize) =
-            file::decode_prefix(payload, path)?;
-        let invalid = |source: InvalidModel| FileError::Invalid {
+    /// Decodes the runtime section's bytes alone (what [`RuntimeModel::section_bytes`] wrote) and
+    /// checks the model; `path` only labels errors. For a reader that has already split the file
+    /// into its sections ([`file::sections`]).
+    pub fn from_section_bytes(section: &[u8], path: &Path) -> Result<RuntimeModel, FileError> {
+        let parts: Parts = file::decode_payload(section, path)?;
+        parts.into_model().map_err(|source| FileError::Invalid {
             path: path.to_path_buf(),
             source,
+        })
+    }
+
+    /// [`RuntimeModel::from_bytes`] with errors naming `path` (which only labels them).
+    pub fn decode(bytes: &[u8], path: &Path) -> Result<RuntimeModel, FileError> {
+        let section = file::find_section(
+            bytes,
+            Self::SECTION,
+            Self::SECTION_VERSION,
+            "the runtime model",
+            path,
+        )?;
+        Self::from_section_bytes(section.bytes, path).map_err(|e| match e {
+            FileError::Decode { path, message } => FileError::Decode {
+                path,
+                message: format!(
+                    "section {} (offset {}..): {message}",
+                    section.tag_name(),
+                    section.offset
+                ),
+            },
+            other => other,
+        })
+    }
+
+    /// The bytes of the runtime's section (bincode of the control names, the rig's joints, the
+    /// multilinear model, the feet and the stature), what [`RuntimeModel::from_section_bytes`]
+    /// reads back. The same model gives the same bytes.
+    pub fn section_bytes(&self) -> Vec<u8> {
+        let parts = PartsRef {
+            control_names: &Controls::NAMES,
+            joints: self.rig.joints(),
+            lod: &self.lod,
+            feet: &self.feet,
+            stature_m: self.stature_m,
         };
-        let rig = layout
-            .rig()
-            .map_err(|e| invalid(InvalidModel(format!("pose layout: {e}"))))?;
-        RuntimeModel::new(rig, lod)
-            .and_then(|m| m.with_feet(feet))
-            .and_then(|m| m.with_stature(stature))
-            .map_err(invalid)
+        // Encoding plain data into a Vec cannot fail (no map keys, no I/O).
+        bincode::serde::encode_to_vec(&parts, bincode::config::standard())
+            .expect("a runtime model encodes")
+    }
+
+    /// The runtime's section of a model file, to frame with others ([`file::frame`]):
+    /// `bytes` must be [`RuntimeModel::section_bytes`].
+    pub fn section(bytes: &[u8]) -> Section<'_> {
+        Section {
+            tag: Self::SECTION,
+            version: Self::SECTION_VERSION,
+            bytes,
+            offset: 0,
+        }
+    }
+
+    /// A complete model file holding the runtime section alone: what an engine or a browser
+    /// needs to ship (the build report left out), read back by [`RuntimeModel::from_bytes`].
+    pub fn to_bytes(&self) -> Vec<u8> {
+        file::frame(&[Self::section(&self.section_bytes())])
     }
 
     /// The skeleton and its forward kinematics.
@@ -142,6 +225,42 @@ impl RuntimeModel {
     }
 }
 
+/// The runtime section as written: borrowed parts, in the order [`Parts`] reads them.
+#[derive(Serialize)]
+struct PartsRef<'a> {
+    control_names: &'static [&'static str],
+    joints: &'a [RigJoint],
+    lod: &'a LodModel,
+    feet: &'a Option<FootRig>,
+    stature_m: Option<f32>,
+}
+
+/// The runtime section as read, before the checks that make it a [`RuntimeModel`].
+#[derive(Deserialize)]
+struct Parts {
+    control_names: Vec<String>,
+    joints: Vec<RigJoint>,
+    lod: LodModel,
+    feet: Option<FootRig>,
+    stature_m: Option<f32>,
+}
+
+impl Parts {
+    fn into_model(self) -> Result<RuntimeModel, InvalidModel> {
+        if self.control_names != Controls::NAMES {
+            return Err(InvalidModel(format!(
+                "the model's controls are {:?}; this build plays walks with {:?}",
+                self.control_names,
+                Controls::NAMES
+            )));
+        }
+        let rig = Rig::new(self.joints).map_err(|e| InvalidModel(format!("rig: {e}")))?;
+        RuntimeModel::new(rig, self.lod)?
+            .with_feet(self.feet)?
+            .with_stature(self.stature_m)
+    }
+}
+
 /// Checks a stature (the standing height of a model's skeleton, m): a finite height between 1 cm and
 /// 100 m. The one check the runtime and the offline model use.
 pub fn check_stature(h: f32) -> Result<(), String> {
@@ -151,202 +270,5 @@ pub fn check_stature(h: f32) -> Result<(), String> {
         Err(format!(
             "stature {h} m is not a standing height (finite, 0.01 to 100 m)"
         ))
-    }
-}
-
-/// `motion_io::Channel` as stored (variant order is the file format).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-enum Channel {
-    Xposition,
-    Yposition,
-    Zposition,
-    Xrotation,
-    Yrotation,
-    Zrotation,
-}
-
-impl Channel {
-    /// The axis of a position channel, `None` for a rotation channel.
-    fn position_axis(self) -> Option<usize> {
-        match self {
-            Channel::Xposition => Some(0),
-            Channel::Yposition => Some(1),
-            Channel::Zposition => Some(2),
-            _ => None,
-        }
-    }
-}
-
-/// `motion_io::Joint` as stored.
-#[derive(Debug, Clone, Deserialize)]
-struct Joint {
-    name: String,
-    parent: Option<usize>,
-    offset: DVec3,
-    channels: Vec<Channel>,
-    end_site: Option<DVec3>,
-}
-
-/// `motion_io::Skeleton` as stored.
-#[derive(Debug, Clone, Deserialize)]
-struct Skeleton {
-    joints: Vec<Joint>,
-}
-
-/// `motion_io::PoseLayoutParts`, the stored form of a `PoseLayout`.
-#[derive(Debug, Clone, Deserialize)]
-struct LayoutParts {
-    skeleton: Skeleton,
-    units_per_metre: f64,
-    root: usize,
-    joint_order: Vec<usize>,
-    template: Vec<f64>,
-    rest: Vec<DQuat>,
-}
-
-/// Largest `| |q| - 1 |` accepted for a stored rest rotation (the layout's own tolerance).
-const UNIT_TOLERANCE: f64 = 1e-6;
-
-impl LayoutParts {
-    /// The rig the layout's f32 forward kinematics evaluates, after the checks the layout makes
-    /// when it is decoded (skeleton order and channels, units, root, template, joint order, rest
-    /// rotations). Offsets are the joints' OFFSETs with position channels taken from the template
-    /// frame, divided by the units per metre, then rounded to f32.
-    fn rig(&self) -> Result<Rig, String> {
-        let joints = &self.skeleton.joints;
-        let nj = joints.len();
-        if nj == 0 {
-            return Err("the skeleton has no joints".into());
-        }
-        let name = |j: usize| &joints[j].name;
-        for (i, j) in joints.iter().enumerate() {
-            let ok = match j.parent {
-                None => i == 0,
-                Some(p) => p < i,
-            };
-            if !ok {
-                return Err(format!(
-                    "joint {i} ({}): parent {:?} must come before it (and only joint 0 is a root)",
-                    j.name, j.parent
-                ));
-            }
-            let mut seen = [false; 6];
-            for &c in &j.channels {
-                if std::mem::replace(&mut seen[c as usize], true) {
-                    return Err(format!("joint {i} ({}): channel {c:?} twice", j.name));
-                }
-            }
-            if !j.offset.is_finite() || j.end_site.is_some_and(|e| !e.is_finite()) {
-                return Err(format!("joint {i} ({}): non-finite offset", j.name));
-            }
-        }
-        let units = self.units_per_metre;
-        if !(units.is_finite() && units > 0.0) {
-            return Err(format!(
-                "units per metre must be positive and finite, found {units}"
-            ));
-        }
-        let root = self.root;
-        if root >= nj {
-            return Err(format!(
-                "root joint {root} is not one of the skeleton's {nj} joints"
-            ));
-        }
-        let channels: usize = joints.iter().map(|j| j.channels.len()).sum();
-        if self.template.len() != channels {
-            return Err(format!(
-                "template frame: expected {channels} values (one per channel), found {}",
-                self.template.len()
-            ));
-        }
-        if let Some(i) = self.template.iter().position(|v| !v.is_finite()) {
-            return Err(format!("template frame: non-finite value at index {i}"));
-        }
-        let below_root = |mut j: usize| loop {
-            if j == root {
-                return true;
-            }
-            match joints[j].parent {
-                Some(p) => j = p,
-                None => return false,
-            }
-        };
-        let mut role: Vec<JointRole> = (0..nj)
-            .map(|j| {
-                if j == root {
-                    JointRole::Root
-                } else if below_root(j) {
-                    JointRole::Static
-                } else {
-                    JointRole::Outside
-                }
-            })
-            .collect();
-        for (k, &j) in self.joint_order.iter().enumerate() {
-            if j >= nj {
-                return Err(format!(
-                    "joint order entry {k} names joint {j}; the skeleton has {nj} joints"
-                ));
-            }
-            match role[j] {
-                JointRole::Static => {}
-                JointRole::Rotating(_) => {
-                    return Err(format!(
-                        "joint order entry {k}: joint {j} ({}) is listed twice",
-                        name(j)
-                    ));
-                }
-                JointRole::Root | JointRole::Outside => {
-                    return Err(format!(
-                        "joint order entry {k}: joint {j} ({}) is not below the root joint {root}",
-                        name(j)
-                    ));
-                }
-            }
-            if joints[j]
-                .channels
-                .iter()
-                .all(|c| c.position_axis().is_some())
-            {
-                return Err(format!(
-                    "joint order entry {k}: joint {j} ({}) has no rotation channels",
-                    name(j)
-                ));
-            }
-            role[j] = JointRole::Rotating(k);
-        }
-        if self.rest.len() != nj {
-            return Err(format!(
-                "rest rotations: expected {nj} (one per joint), found {}",
-                self.rest.len()
-            ));
-        }
-        let mut start = 0;
-        let mut rig = Vec::with_capacity(nj);
-        for (j, joint) in joints.iter().enumerate() {
-            let q = self.rest[j];
-            if !q.is_finite() || (q.length() - 1.0).abs() > UNIT_TOLERANCE {
-                return Err(format!(
-                    "rest rotation of joint {j} ({}) is not a unit quaternion: {q:?}",
-                    joint.name
-                ));
-            }
-            let mut t = joint.offset.to_array();
-            let values = &self.template[start..start + joint.channels.len()];
-            start += joint.channels.len();
-            for (c, &v) in joint.channels.iter().zip(values) {
-                if let Some(axis) = c.position_axis() {
-                    t[axis] = v;
-                }
-            }
-            rig.push(RigJoint {
-                name: joint.name.clone(),
-                parent: joint.parent,
-                offset: (DVec3::from_array(t) / units).as_vec3(),
-                rest: q.as_quat(),
-                role: role[j],
-            });
-        }
-        Rig::new(rig).map_err(|e| e.to_string())
     }
 }

@@ -4,7 +4,7 @@
 //!
 //! Byte-level fuzzing of a model file mostly stops at the checksum or the decoder. Here the fuzzer
 //! edits the model's *parts* instead: the seed model is turned into a JSON tree of its serde layout
-//! (the same fields the file stores, before any validation), the input bytes are read as a list of
+//! (the same fields the file's two sections store, before any validation: [`RawModel`]), the input bytes are read as a list of
 //! edits on that tree (set a number, make it NaN or infinite, remove, duplicate, swap or truncate an
 //! array's elements), the tree is read back into the unvalidated parts, written as a model file with
 //! a valid checksum, and then every consumer a user can reach runs on it: loading, `info`'s report,
@@ -16,20 +16,80 @@ use std::path::Path;
 use motion_lod::crowd::{CrowdRun, run_crowd};
 use motion_lod::crowd_sim::{Camera, CrowdConfig, Scene};
 use motion_lod::lod_policy::{Controls, Detail, DistancePolicy};
-use motion_lod::model_file::{HEADER_LEN, encode};
+use motion_lod::lod_policy::{FootRig, ModelParts, RigJoint, RuntimeModel, file};
+use motion_lod::motion_io::PoseLayoutParts;
 use motion_lod::synth::WalkRequest;
 use motion_lod::{BuildReport, LodSource, MotionModel, info};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-/// A model's parts in the file's serde layout (that of `MotionModel`), unvalidated.
-#[derive(Serialize, Deserialize)]
-struct RawModel {
-    layout: motion_lod::motion_io::PoseLayoutParts,
-    lod: motion_lod::lod_policy::ModelParts,
-    feet: Option<motion_lod::lod_policy::FootRig>,
-    stature_m: Option<f32>,
-    report: BuildReport,
+/// The runtime section's parts in its serde layout (`lod_policy::RuntimeModel`'s), unvalidated.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RawRuntime {
+    /// The control names.
+    pub control_names: Vec<String>,
+    /// The rig's joints.
+    pub joints: Vec<RigJoint>,
+    /// The multilinear model's parts.
+    pub lod: ModelParts,
+    /// The feet for the foot lock.
+    pub feet: Option<FootRig>,
+    /// The rig's stature.
+    pub stature_m: Option<f32>,
+}
+
+/// A model's parts in the file's serde layout (the runtime section, then the report section's
+/// pose layout and build report), unvalidated.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RawModel {
+    /// The runtime section.
+    pub runtime: RawRuntime,
+    /// The report section's pose layout.
+    pub layout: PoseLayoutParts,
+    /// The report section's build report.
+    pub report: BuildReport,
+}
+
+impl RawModel {
+    /// The parts of `model`.
+    pub fn new(model: &MotionModel) -> RawModel {
+        RawModel {
+            runtime: RawRuntime {
+                control_names: motion_lod::lod_policy::Controls::NAMES
+                    .map(String::from)
+                    .to_vec(),
+                joints: model.rig().joints().to_vec(),
+                lod: model.lod().clone().into_parts(),
+                feet: model.feet().copied(),
+                stature_m: model.stature_m(),
+            },
+            layout: model.layout.clone().into(),
+            report: model.report.clone(),
+        }
+    }
+
+    /// The bytes of the runtime and report sections.
+    pub fn section_bytes(&self) -> (Vec<u8>, Vec<u8>) {
+        let cfg = bincode::config::standard();
+        let runtime = bincode::serde::encode_to_vec(&self.runtime, cfg).expect("encodes");
+        let report =
+            bincode::serde::encode_to_vec((&self.layout, &self.report), cfg).expect("encodes");
+        (runtime, report)
+    }
+
+    /// A model file of these parts, with valid checksums.
+    pub fn file(&self) -> Vec<u8> {
+        let (runtime, report) = self.section_bytes();
+        frame(&runtime, &report)
+    }
+}
+
+/// A model file of the two sections' bytes, with valid checksums.
+pub fn frame(runtime: &[u8], report: &[u8]) -> Vec<u8> {
+    file::frame(&[
+        RuntimeModel::section(runtime),
+        motion_lod::model_file::report_section(report),
+    ])
 }
 
 /// A float no real model holds, exact in f32 and f64: written into the tree where an edit asks for
@@ -48,7 +108,8 @@ impl Seed {
     /// (the leave-one-out statistics of control decisions made without selection) become
     /// [`NAN_MARK`] again, so that the unedited tree reads back into the parts.
     pub fn new(model: &MotionModel) -> Seed {
-        let mut tree = serde_json::to_value(model).expect("a model serialises to JSON");
+        let mut tree =
+            serde_json::to_value(RawModel::new(model)).expect("a model serialises to JSON");
         if let Some(decisions) = tree.pointer_mut("/report/control_decisions") {
             nulls_to_nan_mark(decisions);
         }
@@ -93,41 +154,46 @@ pub fn mutated_file(seed: &Seed, data: &[u8]) -> Option<Vec<u8>> {
         edit(&mut tree, op, &mut input);
     }
     let raw: RawModel = serde_json::from_value(tree).ok()?;
-    let path = Path::new("mutated.mlod");
-    let mut bytes = encode(&raw, path).ok()?;
-    let payload = &mut bytes[HEADER_LEN..];
-    replace_all(
-        payload,
-        &(NAN_MARK as f32).to_le_bytes(),
-        &f32::NAN.to_le_bytes(),
-    );
-    replace_all(payload, &NAN_MARK.to_le_bytes(), &f64::NAN.to_le_bytes());
-    replace_all(
-        payload,
-        &(INF_MARK as f32).to_le_bytes(),
-        &f32::INFINITY.to_le_bytes(),
-    );
-    replace_all(
-        payload,
-        &INF_MARK.to_le_bytes(),
-        &f64::INFINITY.to_le_bytes(),
-    );
-    let crc = crc32fast::hash(&bytes[HEADER_LEN..]);
-    bytes[HEADER_LEN - 4..HEADER_LEN].copy_from_slice(&crc.to_le_bytes());
-    Some(bytes)
+    let (mut runtime, mut report) = raw.section_bytes();
+    for payload in [&mut runtime, &mut report] {
+        replace_all(
+            payload,
+            &(NAN_MARK as f32).to_le_bytes(),
+            &f32::NAN.to_le_bytes(),
+        );
+        replace_all(payload, &NAN_MARK.to_le_bytes(), &f64::NAN.to_le_bytes());
+        replace_all(
+            payload,
+            &(INF_MARK as f32).to_le_bytes(),
+            &f32::INFINITY.to_le_bytes(),
+        );
+        replace_all(
+            payload,
+            &INF_MARK.to_le_bytes(),
+            &f64::INFINITY.to_le_bytes(),
+        );
+    }
+    Some(frame(&runtime, &report))
 }
 
 /// Loads `bytes` as a model file and, when it loads, runs `info`'s report, a few crowd frames at
 /// every level the policy picks, and a synthesized walk at the finest and coarsest levels.
 pub fn exercise(bytes: &[u8]) -> Outcome {
+    // The runtime reads its own section alone: whatever the offline reader accepts, it accepts.
+    let runtime = RuntimeModel::from_bytes(bytes);
     let Ok(model) = MotionModel::from_bytes(bytes, Path::new("mutated.mlod")) else {
         return Outcome::Refused;
     };
+    assert_eq!(
+        runtime.as_ref().ok(),
+        Some(model.runtime()),
+        "the runtime reads what the offline reader reads"
+    );
     let _ = info::summary(&model);
     let _ = info::write_report(&mut std::io::sink(), &model);
     let _ = info::control_notes(&model.report);
 
-    let lod = &model.lod;
+    let lod = model.lod();
     let policy = DistancePolicy::for_model(lod);
     // A sparse field (55 m square): paths of the model's turn range fit in it.
     let run = CrowdRun {

@@ -16,7 +16,7 @@
 use faer::Mat;
 use hosvd_als::{AlsOptions, AlsReport, KeyLevels, KeySearchConfig, Tucker, hybrid_levels};
 use kriging::{DimDecision, Kriging, KrigingConfig, SelectRule, select_dims};
-use lod_policy::{AccuracyLevel, Detail, LevelError, LodModel, ModelParts, Ranks};
+use lod_policy::{AccuracyLevel, Detail, LevelError, LodModel, ModelParts, Ranks, RuntimeModel};
 use motion_io::PoseLayout;
 use serde::{Deserialize, Serialize};
 use tensor_ops::Tensor3;
@@ -168,6 +168,9 @@ pub enum BuildError {
     /// The runtime model rejected the parts.
     #[error("runtime model: {0}")]
     Model(#[from] lod_policy::ModelError),
+    /// The runtime model's parts do not fit together (a bug of the build).
+    #[error("runtime model: {0}")]
+    Invalid(#[from] lod_policy::InvalidModel),
     /// The fitted variogram cannot go into the runtime model.
     #[error("runtime model: {0}")]
     Variogram(#[from] VariogramConversionError),
@@ -650,23 +653,18 @@ impl Analysis {
             always_rows: lod_policy::ALWAYS_ROWS,
             rows_per_joint: lod_policy::ROWS_PER_JOINT,
             keys: key_tensors,
-            levels: self
-                .levels
-                .iter()
-                .map(|&l| AccuracyLevel::from(l))
-                .collect(),
+            levels: self.levels.iter().map(|&l| accuracy_level(l)).collect(),
             controls,
             time_scale: self.time_scale,
             mean_pose: mean_pose.iter().map(|&v| v as f32).collect(),
             level_errors: Vec::new(),
             joint_errors: Vec::new(),
         };
-        Ok(MotionModel {
-            layout: self.layout.clone(),
-            lod: LodModel::new(parts)?,
-            feet: None,
-            stature_m: None,
-            report: BuildReport {
+        let runtime = RuntimeModel::new(self.layout.rig().clone(), LodModel::new(parts)?)?;
+        Ok(MotionModel::new(
+            runtime,
+            self.layout.clone(),
+            BuildReport {
                 samples: s,
                 dims: [p, t, s],
                 sources: self.sources.clone(),
@@ -686,7 +684,15 @@ impl Analysis {
                 data: None,
                 config: config.clone(),
             },
-        })
+        )?)
+    }
+}
+
+/// The runtime's form of a hybrid level: the same key, the ranks as [`Ranks`].
+fn accuracy_level(l: hosvd_als::HybridLevel) -> AccuracyLevel {
+    AccuracyLevel {
+        key: l.key,
+        ranks: Ranks::new(l.ranks[0], l.ranks[1], l.ranks[2]),
     }
 }
 
@@ -714,20 +720,28 @@ impl MotionModel {
         rayon::broadcast(|_| lod_policy::clear_avx_upper_state());
         lod_policy::clear_avx_upper_state();
         model.report.quality = set.quality.clone();
-        model.feet = set
+        let feet = set
             .quality
             .as_ref()
             .and_then(|q| q.foot_rig(model.layout.rig()));
-        model.stature_m = set
+        let stature_m = set
             .quality
             .as_ref()
             .and_then(|q| q.stature_m)
             .map(|h| h as f32);
+        model.runtime = model
+            .runtime
+            .clone()
+            .with_feet(feet)?
+            .with_stature(stature_m)?;
         // 6. Measured errors of every accuracy level and joint count.
         progress.stage("level errors", 1);
         let (level_errors, joint_errors) =
             model.measure_lod_errors(&set.controls, config.error_samples)?;
-        model.lod.set_errors(level_errors, joint_errors)?;
+        model.runtime = model
+            .runtime
+            .clone()
+            .with_errors(level_errors, joint_errors)?;
         progress.inc(1);
         Ok((model, analysis))
     }
@@ -740,7 +754,7 @@ impl MotionModel {
         controls: &[[f64; 4]],
         max_samples: usize,
     ) -> Result<(Vec<LevelError>, Vec<LevelError>), BuildError> {
-        let lod = &self.lod;
+        let lod = self.lod();
         let (p, t) = (lod.p(), lod.t());
         let stride = controls.len().div_ceil(max_samples.max(1)).max(1);
         let picked: Vec<[f32; 4]> = controls

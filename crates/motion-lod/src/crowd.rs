@@ -163,7 +163,7 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
     let field = crowd.config().field_size_m;
     let (path, lens) = (scene.path(field), scene.lens(Camera::default(), field));
     let dt = 1.0 / config.fps;
-    let p = model.lod.p();
+    let p = model.lod().p();
     let rest = model.layout.rest_pose();
     let mut placed = vec![0.0f32; p];
     let mut tracks: Vec<WalkerTrack> = walkers

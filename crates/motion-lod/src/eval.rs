@@ -541,8 +541,8 @@ pub fn k_fold(
         let held = set.select(&test);
         let analysis = Analysis::run(&training, build, &crate::progress::NoProgress)?;
         let model = analysis.runtime_model(build, &crate::progress::NoProgress)?;
-        let key_bytes: Vec<usize> = (0..model.lod.keys().len())
-            .map(|k| model.lod.key_bytes(k, lod_policy::Precision::F64))
+        let key_bytes: Vec<usize> = (0..model.lod().keys().len())
+            .map(|k| model.lod().key_bytes(k, lod_policy::Precision::F64))
             .collect();
         let model_bytes = crate::storage::Storage::of(&model).model_f64;
         let targets = analysis.prepare(&set.layout, &held.tensor);

@@ -60,7 +60,7 @@ pub fn one_pixel_from_m(e: &lod_policy::LevelError) -> f32 {
 
 /// The JSON summary of `model`.
 pub fn summary(model: &MotionModel) -> Summary {
-    let lod = &model.lod;
+    let lod = model.lod();
     let errors = lod.level_errors();
     Summary {
         p: lod.p(),
@@ -87,7 +87,7 @@ pub fn summary(model: &MotionModel) -> Summary {
 
 /// Writes the human-readable report of `model`.
 pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Result<()> {
-    let lod = &model.lod;
+    let lod = model.lod();
     let r = &model.report;
     writeln!(
         out,
@@ -117,7 +117,7 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
     for line in control_notes(r) {
         writeln!(out, "{line}")?;
     }
-    if let Some(stature) = model.stature_m {
+    if let Some(stature) = model.stature_m() {
         let scale = |h: f32| {
             let mut c = lod_policy::Controls::from_array(range.map(|(lo, _)| lo));
             c.height = h;

@@ -120,24 +120,21 @@ impl BuildReport {
 /// ([`MotionModel::validate`]; the runtime's type, shared by the file errors).
 pub use lod_policy::InvalidModel;
 
-/// The multilinear motion model with level-of-detail controls.
+/// The multilinear motion model with level-of-detail controls, as the offline side holds it: the
+/// runtime's one model type ([`RuntimeModel`]: rig, multilinear model, feet, stature) with what
+/// the workshop adds (the pose layout with its BVH channels, and the build report).
 ///
 /// Built offline by [`MotionModel::build`](crate::build) from aligned gait cycles; immutable at
 /// runtime, where clip kernels and poses are written into caller-owned buffers
-/// ([`MotionModel::lod`]).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// ([`MotionModel::lod`]). The model file holds the runtime's section, then the report's
+/// ([`crate::model_file`]); an engine reads the first alone ([`RuntimeModel::load`]).
+#[derive(Debug, Clone, PartialEq)]
 pub struct MotionModel {
-    /// Skeleton and pose-vector layout (joint rows in the model's importance order).
+    /// What playback needs: the runtime model.
+    pub(crate) runtime: RuntimeModel,
+    /// Skeleton and pose-vector layout (joint rows in the model's importance order): how BVH
+    /// frames become pose vectors and back. Its rig is the runtime model's.
     pub layout: PoseLayout,
-    /// The runtime model at every accuracy level.
-    pub lod: LodModel,
-    /// The skeleton's feet and the data's floor, for the runtime foot lock
-    /// ([`lod_policy::footlock`]); `None` when the build found no feet.
-    pub feet: Option<lod_policy::FootRig>,
-    /// Standing height (m) of the layout's skeleton, measured as the height control measures the
-    /// data's performers: a character's body scale is its height over this
-    /// ([`MotionModel::body_scale`]); `None` when the build found no feet.
-    pub stature_m: Option<f32>,
     /// What the build measured.
     pub report: BuildReport,
 }
@@ -157,9 +154,9 @@ impl Evaluator {
     /// Buffers sized for the largest level of `model`.
     pub fn new(model: &MotionModel) -> Evaluator {
         Evaluator {
-            kernel: ClipKernel::new(&model.lod),
-            scratch: KernelScratch::new(&model.lod),
-            pose: vec![0.0; model.lod.p()],
+            kernel: ClipKernel::new(model.lod()),
+            scratch: KernelScratch::new(model.lod()),
+            pose: vec![0.0; model.lod().p()],
         }
     }
 }
@@ -201,53 +198,95 @@ impl MotionModel {
         Ok(model)
     }
 
-    /// Decodes and validates a model from the bytes of a model file (`path` only labels errors).
-    ///
-    /// Decoding already validates the parts that check themselves (the pose layout and its
-    /// skeleton, [`PoseLayout::from_parts`]; the runtime model, [`LodModel::new`]);
-    /// [`MotionModel::validate`] then checks how they fit together.
+    /// Decodes and validates a model from the bytes of a model file (`path` only labels errors):
+    /// the runtime section ([`RuntimeModel::from_bytes`], which checks the runtime's parts), the
+    /// report section ([`model_file::decode_report`]), then [`MotionModel::validate`].
     pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<MotionModel, ModelFileError> {
-        let model: MotionModel = model_file::decode(bytes, path)?;
-        model.validate().map_err(|source| ModelFileError::Invalid {
+        let (runtime, layout, report) = model_file::decode(bytes, path)?;
+        MotionModel::new(runtime, layout, report).map_err(|source| ModelFileError::Invalid {
             path: path.to_path_buf(),
             source,
-        })?;
+        })
+    }
+
+    /// A model from its parts, checked by [`MotionModel::validate`].
+    pub fn new(
+        runtime: RuntimeModel,
+        layout: PoseLayout,
+        report: BuildReport,
+    ) -> Result<MotionModel, InvalidModel> {
+        let model = MotionModel {
+            runtime,
+            layout,
+            report,
+        };
+        model.validate()?;
         Ok(model)
     }
 
-    /// The runtime form of this model ([`RuntimeModel`]): the pose layout's rig ([`PoseLayout::rig`]),
-    /// the runtime model, the feet and the stature, what [`RuntimeModel::load`] reads from this
-    /// model's file. Fails only when the layout's rows are not the runtime model's, the feet do not
-    /// fit the rig or the stature is not a height.
-    pub fn runtime(&self) -> Result<RuntimeModel, InvalidModel> {
-        RuntimeModel::new(self.rig().clone(), self.lod.clone())?
-            .with_feet(self.feet)?
-            .with_stature(self.stature_m)
+    /// The runtime model: what [`RuntimeModel::load`] reads from this model's file.
+    pub fn runtime(&self) -> &RuntimeModel {
+        &self.runtime
+    }
+
+    /// The multilinear model at every accuracy level (the runtime model's).
+    pub fn lod(&self) -> &LodModel {
+        self.runtime.lod()
+    }
+
+    /// The skeleton's feet and the data's floor, for the runtime foot lock
+    /// ([`lod_policy::footlock`]); `None` when the build found no feet.
+    pub fn feet(&self) -> Option<&lod_policy::FootRig> {
+        self.runtime.feet()
+    }
+
+    /// Standing height (m) of the skeleton, measured as the height control measures the data's
+    /// performers ([`MotionModel::body_scale`]); `None` when the build found no feet.
+    pub fn stature_m(&self) -> Option<f32> {
+        self.runtime.stature_m()
+    }
+
+    /// This model with its multilinear model replaced by `lod` (the same skeleton, feet, stature and
+    /// report), for comparing decomposition schemes on the same data; `lod` must fit the skeleton
+    /// ([`RuntimeModel::new`]). The report is not checked against `lod`: it describes the model
+    /// that was built.
+    pub fn with_lod(&self, lod: LodModel) -> Result<MotionModel, InvalidModel> {
+        let runtime = RuntimeModel::new(self.rig().clone(), lod)?
+            .with_feet(self.feet().copied())?
+            .with_stature(self.stature_m())?;
+        Ok(MotionModel {
+            runtime,
+            layout: self.layout.clone(),
+            report: self.report.clone(),
+        })
+    }
+
+    /// The parts: the runtime model, the pose layout and the report.
+    pub fn into_parts(self) -> (RuntimeModel, PoseLayout, BuildReport) {
+        (self.runtime, self.layout, self.report)
     }
 
     /// The body scale of a character with `controls`: the height they give over the skeleton's
     /// stature ([`lod_policy::ControlSpace::body_scale`]); 1 when the data hold one height. The
     /// runtime's [`RuntimeModel::body_scale`].
     pub fn body_scale(&self, controls: &lod_policy::Controls) -> f32 {
-        self.lod
-            .controls()
-            .body_scale(self.stature_m, &controls.to_array())
+        self.runtime.body_scale(controls)
     }
 
     /// The skeleton and its f32 forward kinematics, as the runtime evaluates them.
     pub fn rig(&self) -> &Rig {
-        self.layout.rig()
+        self.runtime.rig()
     }
 
     /// Checks that the parts fit together (each part validates itself when it is built or
-    /// decoded): the runtime model's row layout is the pose layout's (7 root and time rows, 3 per
-    /// rotating joint, as many joints) with the 4 controls of [`CONTROL_NAMES`]; the build report
-    /// describes this model (samples, dimensions, one source per sample, the importance order
-    /// equal to the layout's joint order, one positive row weight per DOF row, one key report per
-    /// key with its ranks, dropped controls among the 4) and holds finite numbers.
+    /// decoded, the runtime model its rig, rows, controls, feet and stature): the pose layout's rig
+    /// is the runtime model's; the build report describes this model (samples, dimensions, one
+    /// source per sample, the importance order equal to the layout's joint order, one positive row
+    /// weight per DOF row, one key report per key with its ranks, dropped controls among the 4)
+    /// and holds finite numbers.
     pub fn validate(&self) -> Result<(), InvalidModel> {
         let bad = |what: String| Err(InvalidModel(what));
-        let lod = &self.lod;
+        let lod = self.lod();
         let (p, t, s) = (lod.p(), lod.t(), lod.s());
         if self.layout.dof() != p {
             return bad(format!(
@@ -255,27 +294,8 @@ impl MotionModel {
                 self.layout.dof()
             ));
         }
-        if lod.always_rows() != motion_io::pose::ROOT_ROWS || lod.rows_per_joint() != 3 {
-            return bad(format!(
-                "the runtime model has {} root rows and {} rows per joint; pose vectors have {} and 3",
-                lod.always_rows(),
-                lod.rows_per_joint(),
-                motion_io::pose::ROOT_ROWS
-            ));
-        }
-        if lod.d() != CONTROL_NAMES.len() {
-            return bad(format!(
-                "the runtime model has {} controls; a walk model has {} ({})",
-                lod.d(),
-                CONTROL_NAMES.len(),
-                CONTROL_NAMES.join(", ")
-            ));
-        }
-        if let Some(feet) = &self.feet {
-            feet.check(self.layout.rig()).map_err(InvalidModel)?;
-        }
-        if let Some(h) = self.stature_m {
-            lod_policy::runtime::check_stature(h).map_err(InvalidModel)?;
+        if self.layout.rig() != self.runtime.rig() {
+            return bad("the pose layout's rig differs from the runtime model's".into());
         }
         let r = &self.report;
         if r.samples != s || r.dims != [p, t, s] {
@@ -369,13 +389,13 @@ impl MotionModel {
         detail: Detail,
     ) -> Result<Vec<f64>, lod_policy::KernelError> {
         let mut ev = Evaluator::new(self);
-        self.lod
+        self.lod()
             .build_kernel(controls, detail, &mut ev.scratch, &mut ev.kernel)?;
-        let (p, t) = (self.lod.p(), self.lod.t());
-        let time_scale = self.lod.parts().time_scale;
+        let (p, t) = (self.lod().p(), self.lod().t());
+        let time_scale = self.lod().parts().time_scale;
         let mut out = Vec::with_capacity(p * t);
         for tau in 0..t {
-            self.lod.pose(&ev.kernel, tau as f32, &mut ev.pose)?;
+            self.lod().pose(&ev.kernel, tau as f32, &mut ev.pose)?;
             out.extend(ev.pose.iter().map(|&v| v as f64));
             out[tau * p + TIME_ROW] /= time_scale;
         }
@@ -385,13 +405,13 @@ impl MotionModel {
     /// For every control, whether the model ignores it (constant over the data, or dropped at build
     /// for carrying no signal; its scale in the control space is 0).
     pub fn ignored_controls(&self) -> [bool; 4] {
-        let scale = &self.lod.controls().scale;
+        let scale = &self.lod().controls().scale;
         std::array::from_fn(|k| scale.get(k).is_none_or(|&v| v == 0.0))
     }
 
     /// The range `[min, max]` of every control over the training data.
     pub fn control_range(&self) -> [(f32, f32); 4] {
-        let c = self.lod.controls();
+        let c = self.lod().controls();
         std::array::from_fn(|k| (c.min[k], c.max[k]))
     }
 }

@@ -1,50 +1,97 @@
-//! The model file, offline side: encoding and atomic writing. The framing (magic, version, length,
-//! checksum), its errors and the reader are the runtime's ([`lod_policy::file`]), re-exported here so
-//! that there is one copy of each rule.
+//! The model file, offline side: the report section, encoding and atomic writing. The framing
+//! (magic, version, length, checksum), the sections, their errors and the runtime's own section are
+//! the runtime's ([`lod_policy::file`], [`lod_policy::RuntimeModel`]), re-exported here so that
+//! there is one copy of each rule.
 //!
-//! Layout (all integers little-endian):
+//! A model file holds two sections (see [`lod_policy::file`] for the byte layout):
 //!
-//! | offset | size | content |
-//! |---|---|---|
-//! | 0 | 8 | magic `b"MLOD\r\n\x1a\n"` (catches text-mode transfers, like PNG's) |
-//! | 8 | 4 | format version (`u32`) |
-//! | 12 | 8 | payload length in bytes (`u64`) |
-//! | 20 | 4 | CRC-32 (IEEE) of the payload |
-//! | 24 | n | payload: `bincode` 2 (standard configuration) of the serde value |
+//! | tag | version | content | read by |
+//! |---|---|---|---|
+//! | `RTIM` | [`RuntimeModel::SECTION_VERSION`] | the runtime model: control names, rig, multilinear model, feet, stature | every reader ([`RuntimeModel::from_bytes`]) |
+//! | `RPRT` | [`REPORT_VERSION`] | the offline report: the pose layout (skeleton with its BVH channels, units, joint order) and the [`BuildReport`] | the offline side ([`MotionModel::from_bytes`]) |
 //!
-//! A wrong magic, a newer version, a length that disagrees with the file, a checksum mismatch or a payload
-//! that does not decode is a [`ModelFileError`] naming the path and the offset; nothing panics and the
-//! decoder never allocates more than a small multiple of the file (see [`decode_payload`]).
+//! A wrong magic, a newer version, a length that disagrees with the file, a checksum mismatch or a
+//! section that does not decode is a [`ModelFileError`] naming the path and the offset; nothing
+//! panics and the decoder never allocates more than a small multiple of the file (see
+//! [`decode_payload`]).
 
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use serde::Serialize;
-use serde::de::DeserializeOwned;
+use lod_policy::RuntimeModel;
+use lod_policy::file::Section;
+use motion_io::PoseLayout;
+
+use crate::model::{BuildReport, MotionModel};
 
 /// Why a model file could not be read or written (the runtime's [`lod_policy::FileError`]).
 pub use lod_policy::file::FileError as ModelFileError;
-pub use lod_policy::file::{FORMAT_VERSION, HEADER_LEN, MAGIC, decode};
+pub use lod_policy::file::{FORMAT_VERSION, HEADER_LEN, MAGIC, SECTION_HEADER_LEN};
+
+/// The tag of the offline report's section.
+pub const REPORT_SECTION: [u8; 4] = *b"RPRT";
+/// The format version of the report section; another version is refused with a request to
+/// rebuild. History: 1 (format 8: the pose layout, then the build report).
+pub const REPORT_VERSION: u32 = 1;
 
 /// The runtime's payload decoder ([`lod_policy::file::decode_payload`]): the entry point for fuzzing
 /// the decoder itself.
 #[doc(hidden)]
 pub use lod_policy::file::decode_payload;
 
-/// Encodes `value` into the framed byte layout described in the module documentation
-/// ([`lod_policy::file::frame`]).
+/// The bytes of the report section of `model`: bincode of its pose layout and build report.
+pub fn report_bytes(model: &MotionModel, path: &Path) -> Result<Vec<u8>, ModelFileError> {
+    bincode::serde::encode_to_vec((&model.layout, &model.report), bincode::config::standard())
+        .map_err(|e| ModelFileError::Encode {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
+}
+
+/// The report section of a model file, to frame after the runtime's: `bytes` must be
+/// [`report_bytes`].
+pub fn report_section(bytes: &[u8]) -> Section<'_> {
+    Section {
+        tag: REPORT_SECTION,
+        version: REPORT_VERSION,
+        bytes,
+        offset: 0,
+    }
+}
+
+/// Encodes `model` into the framed byte layout described in the module documentation: the
+/// runtime's section ([`RuntimeModel::section_bytes`]), then the report's.
 ///
 /// `path` only labels errors.
-pub fn encode<T: Serialize>(value: &T, path: &Path) -> Result<Vec<u8>, ModelFileError> {
-    let payload =
-        bincode::serde::encode_to_vec(value, bincode::config::standard()).map_err(|e| {
-            ModelFileError::Encode {
-                path: path.to_path_buf(),
-                message: e.to_string(),
-            }
-        })?;
-    Ok(lod_policy::file::frame(&payload))
+pub fn encode(model: &MotionModel, path: &Path) -> Result<Vec<u8>, ModelFileError> {
+    let runtime = model.runtime().section_bytes();
+    let report = report_bytes(model, path)?;
+    Ok(lod_policy::file::frame(&[
+        RuntimeModel::section(&runtime),
+        report_section(&report),
+    ]))
+}
+
+/// Decodes the parts of a model file: the runtime model ([`RuntimeModel::decode`]: framing,
+/// checksums, its section and its checks) and the report section's pose layout and build
+/// report. The parts are not yet checked against each other ([`MotionModel::from_bytes`] does
+/// that).
+///
+/// `path` only labels errors.
+pub fn decode(
+    bytes: &[u8],
+    path: &Path,
+) -> Result<(RuntimeModel, PoseLayout, BuildReport), ModelFileError> {
+    let runtime = RuntimeModel::decode(bytes, path)?;
+    let (layout, report) = lod_policy::file::decode_section(
+        bytes,
+        REPORT_SECTION,
+        REPORT_VERSION,
+        "the build report",
+        path,
+    )?;
+    Ok((runtime, layout, report))
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed to disk, then renamed
@@ -76,48 +123,29 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ModelFileError> {
     Ok(())
 }
 
-/// Encodes `value` and writes it to `path` atomically.
-pub fn save<T: Serialize>(value: &T, path: &Path) -> Result<(), ModelFileError> {
-    let bytes = encode(value, path)?;
+/// Encodes `model` and writes it to `path` atomically.
+pub fn save(model: &MotionModel, path: &Path) -> Result<(), ModelFileError> {
+    let bytes = encode(model, path)?;
     write_atomic(path, &bytes)
 }
 
-/// Reads and decodes a model file.
-pub fn load<T: DeserializeOwned>(path: &Path) -> Result<T, ModelFileError> {
-    decode(&lod_policy::file::read(path)?, path)
+/// Reads, decodes and validates a model file ([`MotionModel::load`]).
+pub fn load(path: &Path) -> Result<MotionModel, ModelFileError> {
+    MotionModel::load(path)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Any serde value will do: the framing's own tests are the runtime's (`lod_policy::file`).
-    type Sample = (String, Vec<f32>);
-
-    fn sample() -> Sample {
-        ("walk".into(), (0..200).map(|i| i as f32 * 0.25).collect())
-    }
-
-    fn p() -> &'static Path {
-        Path::new("test.mlod")
-    }
-
-    #[test]
-    fn round_trip() {
-        let bytes = encode(&sample(), p()).unwrap();
-        assert_eq!((&bytes[..8], bytes.len() > HEADER_LEN), (&MAGIC[..], true));
-        assert_eq!(decode::<Sample>(&bytes, p()).unwrap(), sample());
-    }
-
     #[test]
     fn atomic_write_replaces_and_leaves_no_temporary() {
         let dir = std::env::temp_dir().join(format!("mlod-file-test-{}", std::process::id()));
         fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("m.mlod");
-        save(&sample(), &path).unwrap();
-        save(&sample(), &path).unwrap();
-        let back: Sample = load(&path).unwrap();
-        assert_eq!(back, sample());
+        let path = dir.join("m.bin");
+        write_atomic(&path, b"first").unwrap();
+        write_atomic(&path, b"second").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"second");
         let names: Vec<_> = fs::read_dir(&dir)
             .unwrap()
             .map(|e| e.unwrap().file_name())
@@ -129,7 +157,7 @@ mod tests {
     #[test]
     fn write_into_missing_folder_fails_cleanly() {
         let path = std::env::temp_dir().join("mlod-no-such-dir-xyz/sub/m.mlod");
-        let err = save(&sample(), &path).unwrap_err();
+        let err = write_atomic(&path, b"x").unwrap_err();
         assert!(matches!(err, ModelFileError::Io { .. }));
     }
 }

@@ -18,8 +18,8 @@
 use crowd_sim::{ClipError, ClipSource, LevelTable};
 use faer::Mat;
 use glam::Vec3;
+use lod_policy::TimeTable;
 use lod_policy::{ControlRange, Controls, Detail, RootMotion};
-use timewarp::TimeTable;
 
 use crate::build::{Analysis, BuildError};
 use crate::model::{MotionModel, TIME_ROW};
@@ -74,7 +74,7 @@ impl<'m> NaiveSource<'m> {
         model: &'m MotionModel,
         analysis: &'m Analysis,
     ) -> Result<NaiveSource<'m>, BuildError> {
-        let lod = &model.lod;
+        let lod = model.lod();
         let [p, t, s] = analysis.tensor.dims();
         if [p, t, s] != [lod.p(), lod.t(), lod.s()] || analysis.kriging.n_samples() != s {
             return Err(BuildError::Data(format!(
@@ -101,7 +101,7 @@ impl<'m> NaiveSource<'m> {
     }
 
     fn dims(&self) -> (usize, usize) {
-        let lod = &self.model.lod;
+        let lod = self.model.lod();
         (lod.p(), lod.t())
     }
 
@@ -131,7 +131,7 @@ impl ClipSource for NaiveSource<'_> {
 
     fn new_clip(&self) -> NaiveClip {
         let (_, t) = self.dims();
-        let rows = self.model.lod.always_rows();
+        let rows = self.model.lod().always_rows();
         NaiveClip {
             values: vec![0.0; rows * t],
             rows,
@@ -149,7 +149,7 @@ impl ClipSource for NaiveSource<'_> {
         clip: &mut NaiveClip,
     ) -> Result<(), ClipError> {
         let (p, t) = self.dims();
-        let lod = &self.model.lod;
+        let lod = self.model.lod();
         clip.active_joints = detail.active_joints.min(lod.joints());
         clip.rows = lod.active_rows(clip.active_joints).min(p);
         // Sized for the clip's rows (a root-only clip holds 7 T values).

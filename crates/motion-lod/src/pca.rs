@@ -25,9 +25,9 @@
 use crowd_sim::{ClipError, ClipSource, LevelTable};
 use faer::Mat;
 use glam::Vec3;
+use lod_policy::TimeTable;
 use lod_policy::{ALWAYS_ROWS, ControlRange, Controls, Detail, Precision, RootMotion};
 use tensor_ops::Tensor3;
-use timewarp::TimeTable;
 
 use crate::build::{Analysis, BuildError};
 use crate::model::{MotionModel, TIME_ROW};
@@ -128,7 +128,7 @@ impl<'m> PcaSource<'m> {
         analysis: &'m Analysis,
         rank_max: usize,
     ) -> Result<PcaSource<'m>, BuildError> {
-        let lod = &model.lod;
+        let lod = model.lod();
         let [p, t, s] = analysis.tensor.dims();
         if [p, t, s] != [lod.p(), lod.t(), lod.s()] {
             return Err(BuildError::Data(format!(
@@ -210,7 +210,7 @@ impl<'m> PcaSource<'m> {
     }
 
     fn dims(&self) -> (usize, usize, usize) {
-        let lod = &self.model.lod;
+        let lod = self.model.lod();
         (lod.p(), lod.t(), lod.s())
     }
 
@@ -234,8 +234,8 @@ impl ClipSource for PcaSource<'_> {
     fn levels(&self) -> LevelTable {
         LevelTable {
             accuracy_levels: self.level_ranks.len(),
-            joints: self.model.lod.joints(),
-            pose_len: self.model.lod.p(),
+            joints: self.model.lod().joints(),
+            pose_len: self.model.lod().p(),
         }
     }
 
@@ -249,7 +249,7 @@ impl ClipSource for PcaSource<'_> {
             coeffs: vec![0.0; t * self.rank],
             rank: self.rank,
             rows: p,
-            active_joints: self.model.lod.joints(),
+            active_joints: self.model.lod().joints(),
             times: TimeTable::with_capacity(t),
             root_motion: RootMotion::default(),
             body_scale: 1.0,
@@ -265,7 +265,7 @@ impl ClipSource for PcaSource<'_> {
         clip: &mut PcaClip,
     ) -> Result<(), ClipError> {
         let (p, t, _) = self.dims();
-        let lod = &self.model.lod;
+        let lod = self.model.lod();
         let d = detail
             .evaluated()
             .resolve(self.level_ranks.len(), lod.joints())

@@ -488,9 +488,9 @@ pub struct GridWalk {
 /// reach furthest along each of the six control directions (`+-dx`, `+-dz`, `+-turn`, in units of each
 /// control's range): the corners of the hull, inside it by construction.
 pub fn walk_grid(model: &crate::MotionModel) -> Vec<GridWalk> {
-    let cs = model.lod.controls();
-    let s = model.lod.s();
-    let d = model.lod.d();
+    let cs = model.lod().controls();
+    let s = model.lod().s();
+    let d = model.lod().d();
     let raw = |i: usize, k: usize| -> f32 {
         if cs.scale[k] > 0.0 {
             cs.samples[i + s * k] / cs.scale[k] + cs.offset[k]

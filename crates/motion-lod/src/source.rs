@@ -98,7 +98,7 @@ impl<'m> LodSource<'m> {
     }
 
     fn with_scratch<R>(&self, f: impl FnOnce(&mut KernelScratch) -> R) -> R {
-        let lod = &self.model.lod;
+        let lod = self.model.lod();
         SCRATCH.with(|cell| {
             let mut slot = cell.borrow_mut();
             let scratch = match slot.take() {
@@ -174,7 +174,7 @@ pub(crate) fn plant_feet(
     lock: &mut FootLock,
     pose: &mut [f32],
 ) {
-    if let Some(feet) = &model.feet {
+    if let Some(feet) = model.feet() {
         let _ = lock.apply(model.layout.rig(), feet, frame, active, scale, dt, pose);
     }
 }
@@ -183,9 +183,9 @@ pub(crate) fn plant_feet(
 /// baselines, so that the crowd's policy applies to them unchanged).
 pub fn level_table(model: &MotionModel) -> LevelTable {
     LevelTable {
-        accuracy_levels: model.lod.levels().len(),
-        joints: model.lod.joints(),
-        pose_len: model.lod.p(),
+        accuracy_levels: model.lod().levels().len(),
+        joints: model.lod().joints(),
+        pose_len: model.lod().p(),
     }
 }
 
@@ -212,9 +212,9 @@ impl ClipSource for LodSource<'_> {
     fn new_clip(&self) -> LodClip {
         LodClip {
             kernel: if self.compact {
-                ClipKernel::compact(&self.model.lod)
+                ClipKernel::compact(self.model.lod())
             } else {
-                ClipKernel::new(&self.model.lod)
+                ClipKernel::new(self.model.lod())
             },
             duration: 1.0,
             root_motion: RootMotion::default(),
@@ -232,7 +232,7 @@ impl ClipSource for LodSource<'_> {
         clip: &mut LodClip,
     ) -> Result<(), ClipError> {
         let c = controls.to_array();
-        let lod = &self.model.lod;
+        let lod = self.model.lod();
         let detail = detail.evaluated();
         self.with_scratch(|s| {
             if self.compact {
@@ -259,7 +259,7 @@ impl ClipSource for LodSource<'_> {
     }
 
     fn pose(&self, clip: &LodClip, t_seconds: f32, out: &mut [f32]) -> usize {
-        let lod = &self.model.lod;
+        let lod = self.model.lod();
         let phase = clip.kernel.phase_at(f64::from(t_seconds));
         let rows = clip.kernel.rows();
         let written = if self.compact {

@@ -20,7 +20,7 @@ pub struct Storage {
 impl Storage {
     /// Accounts `model`.
     pub fn of(model: &MotionModel) -> Storage {
-        let lod = &model.lod;
+        let lod = model.lod();
         Storage {
             raw_f64: lod.p() * lod.t() * lod.s() * 8,
             model_f64: lod.bytes(Precision::F64),

@@ -81,7 +81,7 @@ impl MotionModel {
                 req.fps
             )));
         }
-        let lod = &self.lod;
+        let lod = self.lod();
         let p = lod.p();
         let mut ev = Evaluator::new(self);
         lod.build_kernel(

@@ -299,11 +299,11 @@ fn bandai_at_the_papers_settings_keeps_at_most_an_eighth_of_the_samples() {
         (10, [40, 40, 60], [7, 7, 9])
     );
     let model = MotionModel::build(&loaded.training, &config, &NoProgress).expect("model builds");
-    assert_eq!(model.lod.t(), 100);
-    assert_eq!(model.lod.s(), 186);
-    assert_eq!(model.lod.keys().len(), 10);
+    assert_eq!(model.lod().t(), 100);
+    assert_eq!(model.lod().s(), 186);
+    assert_eq!(model.lod().keys().len(), 10);
     let st = Storage::of(&model);
-    assert_eq!(st.raw_f64, model.lod.p() * 100 * 186 * 8);
+    assert_eq!(st.raw_f64, model.lod().p() * 100 * 186 * 8);
     assert!(
         st.model_f64 * 8 <= st.raw_f64,
         "hybrid model {} bytes in f64 against {} raw: {:.1}%",

@@ -18,7 +18,7 @@ fn simulate<S: ClipSource>(source: &S, scene: Scene, frames: usize) -> Vec<Frame
         screen_budget_px: None,
         ..lod_policy::DistanceConfig::default()
     };
-    let policy = DistancePolicy::new(&model.lod, published).unwrap();
+    let policy = DistancePolicy::new(model.lod(), published).unwrap();
     let config = CrowdConfig {
         seed: 11,
         ..CrowdConfig::with_density(300, 0.01)
@@ -29,7 +29,7 @@ fn simulate<S: ClipSource>(source: &S, scene: Scene, frames: usize) -> Vec<Frame
 #[test]
 fn fast_path_poses_match_the_reference_path() {
     let (model, _) = built();
-    let levels = model.lod.levels().len();
+    let levels = model.lod().levels().len();
     for scene in Scene::ALL {
         let fast = simulate(&LodSource::new(model), scene, 75);
         let reference = simulate(&LodSource::reference(model), scene, 75);
@@ -61,7 +61,7 @@ fn fast_path_poses_match_the_reference_path() {
         assert!(root_only > 0, "{scene:?}: no root-only walker");
         for (i, &b) in last.bins.iter().enumerate() {
             if b == levels {
-                assert_eq!(last.poses[i].len(), model.lod.always_rows());
+                assert_eq!(last.poses[i].len(), model.lod().always_rows());
                 assert_eq!(last.joints[i].len(), 1);
             }
         }

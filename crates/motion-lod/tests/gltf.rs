@@ -325,7 +325,7 @@ fn check_crowd(what: &str, model: &MotionModel) {
         screen_budget_px: None,
         ..lod_policy::DistanceConfig::default()
     };
-    let policy = lod_policy::DistancePolicy::new(&model.lod, published).unwrap();
+    let policy = lod_policy::DistancePolicy::new(model.lod(), published).unwrap();
     let (scene, summary) = export_crowd(model, &policy, &clip).expect("crowd export");
     let bytes = scene.to_glb().unwrap();
     let (again, _) = export_crowd(model, &policy, &clip).unwrap();
@@ -367,7 +367,7 @@ fn check_crowd(what: &str, model: &MotionModel) {
     let legend = &rb.doc["scenes"][0]["extras"]["motion_lod"]["legend"];
     assert_eq!(
         legend.as_array().map(Vec::len),
-        Some(model.lod.levels().len() + 1)
+        Some(model.lod().levels().len() + 1)
     );
 }
 

@@ -1,12 +1,14 @@
 //! Hostile model files: truncated at every offset, every byte flipped, a future version, empty,
-//! garbage, forged checksums over hostile payloads. Every case is a `ModelFileError` naming the
+//! garbage, forged checksums over hostile sections. Every case is a `ModelFileError` naming the
 //! file, in bounded time and memory; nothing panics.
 
 use std::path::Path;
 
+use motion_lod::lod_policy::file::{Section, decode_section, frame};
 use motion_lod::model_file::{
-    FORMAT_VERSION, HEADER_LEN, MAGIC, ModelFileError, decode, decode_payload, encode, load,
+    FORMAT_VERSION, HEADER_LEN, MAGIC, ModelFileError, SECTION_HEADER_LEN, decode_payload,
 };
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 #[path = "../fuzz/seed_model.rs"]
@@ -40,14 +42,33 @@ fn p() -> &'static Path {
     Path::new("hostile.mlod")
 }
 
-/// A header with the right magic, version and length and a correct CRC over `payload`.
-fn forge(payload: &[u8]) -> Vec<u8> {
-    let mut b = MAGIC.to_vec();
-    b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-    b.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    b.extend_from_slice(&crc32fast::hash(payload).to_le_bytes());
-    b.extend_from_slice(payload);
-    b
+/// The section the framing tests store their values in.
+const TAG: [u8; 4] = *b"TEST";
+
+/// A file of one section holding `body`, with the right magic, version and lengths and correct
+/// checksums.
+fn forge(body: &[u8]) -> Vec<u8> {
+    frame(&[Section {
+        tag: TAG,
+        version: 1,
+        bytes: body,
+        offset: 0,
+    }])
+}
+
+/// `value` in a file of one section.
+fn encode<T: Serialize>(value: &T) -> Vec<u8> {
+    forge(&bincode::serde::encode_to_vec(value, bincode::config::standard()).unwrap())
+}
+
+/// The value of a file of one section.
+fn decode<T: DeserializeOwned>(bytes: &[u8], path: &Path) -> Result<T, ModelFileError> {
+    decode_section(bytes, TAG, 1, "a test value", path)
+}
+
+/// The bincode of `small()`, as its section stores it.
+fn small_body() -> Vec<u8> {
+    encode(&small())[HEADER_LEN + SECTION_HEADER_LEN..].to_vec()
 }
 
 fn assert_names_file(e: &ModelFileError) {
@@ -95,18 +116,18 @@ fn check_truncations_and_flips<T: serde::de::DeserializeOwned>(bytes: &[u8]) {
 
 #[test]
 fn small_value_round_trips() {
-    let bytes = encode(&small(), p()).unwrap();
+    let bytes = encode(&small());
     assert_eq!(decode::<Small>(&bytes, p()).unwrap(), small());
 }
 
 #[test]
 fn small_value_truncated_everywhere_and_flipped_everywhere() {
-    check_truncations_and_flips::<Small>(&encode(&small(), p()).unwrap());
+    check_truncations_and_flips::<Small>(&encode(&small()));
 }
 
 #[test]
 fn future_and_zero_versions() {
-    let mut bytes = encode(&small(), p()).unwrap();
+    let mut bytes = encode(&small());
     bytes[8..12].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes());
     let e = decode::<Small>(&bytes, p()).unwrap_err();
     assert!(
@@ -146,7 +167,7 @@ fn empty_and_garbage_files() {
     b.extend((0..200u32).map(|i| (i * 37 % 251) as u8));
     assert!(decode::<Small>(&b, p()).is_err());
     // A length field of u64::MAX in a small file.
-    let mut b = encode(&small(), p()).unwrap();
+    let mut b = encode(&small());
     b[12..20].copy_from_slice(&u64::MAX.to_le_bytes());
     assert!(matches!(
         decode::<Small>(&b, p()),
@@ -156,7 +177,7 @@ fn empty_and_garbage_files() {
         })
     ));
     // A missing file.
-    let e = load::<Small>(Path::new("/nonexistent/hostile.mlod")).unwrap_err();
+    let e = motion_lod::MotionModel::load(Path::new("/nonexistent/hostile.mlod")).unwrap_err();
     assert!(matches!(e, ModelFileError::Io { .. }));
     assert_names_file(&e);
 }
@@ -168,7 +189,7 @@ fn forged_checksum_over_a_wrong_payload_is_a_decode_error() {
     assert!(matches!(e, ModelFileError::Decode { .. }), "{e}");
     assert_names_file(&e);
     // Trailing bytes after a valid payload.
-    let mut payload = encode(&small(), p()).unwrap()[HEADER_LEN..].to_vec();
+    let mut payload = small_body();
     payload.extend_from_slice(&[0, 0]);
     let e = decode::<Small>(&forge(&payload), p()).unwrap_err();
     assert!(e.to_string().contains("2 trailing bytes"), "{e}");
@@ -187,7 +208,7 @@ fn a_huge_length_prefix_inside_the_payload_is_refused_before_allocating() {
     let mut payload = vec![252u8];
     payload.extend_from_slice(&(1u32 << 17).to_le_bytes());
     assert!(decode_payload::<Small>(&payload, p()).is_err());
-    let mut payload = encode(&small(), p()).unwrap()[HEADER_LEN..].to_vec();
+    let mut payload = small_body();
     let at = 1 + 4 + 3; // after `name` ("walk") and `dims` (three 1-byte varints)
     assert_eq!(payload[at], 40, "length of `values`");
     payload.splice(
@@ -206,7 +227,7 @@ fn random_payloads_behind_a_valid_frame_never_panic() {
         state ^= state << 17;
         state
     };
-    let good = encode(&small(), p()).unwrap()[HEADER_LEN..].to_vec();
+    let good = small_body();
     for round in 0..5000 {
         let mut payload = if round % 2 == 0 {
             good.clone()
@@ -223,7 +244,7 @@ fn random_payloads_behind_a_valid_frame_never_panic() {
         let r = decode::<Small>(&forge(&payload), p());
         if let Ok(v) = r {
             // Whatever decodes re-encodes to a payload that decodes to the same value.
-            let again = encode(&v, p()).unwrap();
+            let again = encode(&v);
             let back: Small = decode(&again, p()).unwrap();
             assert_eq!(format!("{back:?}"), format!("{v:?}"));
         }
@@ -243,65 +264,73 @@ fn small_model() -> Option<motion_lod::MotionModel> {
 #[test]
 fn real_model_file_is_checked_like_any_other() {
     use motion_lod::MotionModel;
+    use motion_lod::lod_policy::RuntimeModel;
 
     let Some(model) = small_model() else {
         return;
     };
-    let bytes = encode(&model, p()).unwrap();
-    assert_eq!(decode::<MotionModel>(&bytes, p()).unwrap(), model);
+    let read = |bytes: &[u8]| MotionModel::from_bytes(bytes, p());
+    let bytes = motion_lod::model_file::encode(&model, p()).unwrap();
+    assert_eq!(read(&bytes).unwrap(), model);
+    assert_eq!(&RuntimeModel::from_bytes(&bytes).unwrap(), model.runtime());
 
     // Every truncation; flips at a stride (every byte of a ~100 KB file would be slow in the
-    // dev profile): all of the header, then every 7th byte of the payload.
+    // dev profile): all of the header, then every 7th byte of the sections.
     for len in (0..bytes.len())
         .step_by(13)
         .chain(bytes.len() - 30..bytes.len())
     {
+        assert!(read(&bytes[..len]).is_err(), "cut at {len}");
         assert!(
-            decode::<MotionModel>(&bytes[..len], p()).is_err(),
+            RuntimeModel::from_bytes(&bytes[..len]).is_err(),
             "cut at {len}"
         );
     }
     let mut bad = bytes.clone();
     for i in (0..HEADER_LEN).chain((HEADER_LEN..bytes.len()).step_by(7)) {
         bad[i] ^= 0x10;
-        assert!(decode::<MotionModel>(&bad, p()).is_err(), "flip at {i}");
+        assert!(read(&bad).is_err(), "flip at {i}");
+        assert!(RuntimeModel::from_bytes(&bad).is_err(), "flip at {i}");
         bad[i] ^= 0x10;
     }
     let mut future = bytes.clone();
     future[8..12].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes());
     assert!(matches!(
-        decode::<MotionModel>(&future, p()),
+        read(&future),
         Err(ModelFileError::FutureVersion { .. })
     ));
 
-    // Behind a forged checksum, corrupted payloads reach the decoder and the runtime model's
-    // validation: an error or a model, never a panic.
-    let payload = &bytes[HEADER_LEN..];
+    // Behind forged checksums, corrupted or cut sections reach the decoders and the validation
+    // of the runtime model, the pose layout and the report: an error or a model, never a panic,
+    // and the runtime reads whatever the offline reader reads.
+    let (runtime, report) = mutate_model::RawModel::new(&model).section_bytes();
+    assert_eq!(runtime, model.runtime().section_bytes());
+    assert_eq!(mutate_model::frame(&runtime, &report), bytes);
     let mut decoded = 0;
-    for i in (0..payload.len()).step_by(payload.len() / 400 + 1) {
-        let mut bad = payload.to_vec();
-        bad[i] = bad[i].wrapping_add(0x41);
-        if decode_payload::<MotionModel>(&bad, p()).is_ok() {
-            decoded += 1;
+    for (which, section) in [(0, &runtime), (1, &report)] {
+        for i in (0..section.len()).step_by(section.len() / 300 + 1) {
+            let mut bad = section.clone();
+            bad[i] = bad[i].wrapping_add(0x41);
+            let cut = section[..i].to_vec();
+            for (edited, is_cut) in [(bad, false), (cut, true)] {
+                let file = if which == 0 {
+                    mutate_model::frame(&edited, &report)
+                } else {
+                    mutate_model::frame(&runtime, &edited)
+                };
+                let runtime_read = RuntimeModel::from_bytes(&file);
+                match read(&file) {
+                    Ok(m) => {
+                        assert!(!is_cut, "section {which} cut at {i} was read");
+                        assert_eq!(runtime_read.as_ref().ok(), Some(m.runtime()));
+                        decoded += 1;
+                    }
+                    Err(e) => assert!(e.to_string().contains("hostile.mlod"), "{e}"),
+                }
+            }
         }
-        let cut = &payload[..i];
-        assert!(
-            decode_payload::<MotionModel>(cut, p()).is_err(),
-            "payload cut at {i}"
-        );
     }
-    println!("{decoded} corrupted payloads still decoded (changed numbers)");
-}
-
-/// A model's parts as the file stores them (the same serde layout as `MotionModel`), so that a test
-/// can write values the validated types would never hold.
-#[derive(Serialize)]
-struct RawModel {
-    layout: motion_io::PoseLayoutParts,
-    lod: lod_policy::ModelParts,
-    feet: Option<lod_policy::FootRig>,
-    stature_m: Option<f32>,
-    report: motion_lod::BuildReport,
+    println!("{decoded} corrupted sections still decoded (changed numbers)");
 }
 
 /// Hand-made files with a valid checksum and a broken part: every command refuses each with a
@@ -314,30 +343,30 @@ fn valid_checksum_broken_models_are_refused_by_every_command() {
     {
         let dir = std::env::temp_dir().join(format!("mlod-hostile-cli-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let raw = || RawModel {
-            layout: model.layout.clone().into(),
-            lod: model.lod.clone().into_parts(),
-            feet: model.feet,
-            stature_m: model.stature_m,
-            report: model.report.clone(),
-        };
+        let raw = || mutate_model::RawModel::new(&model);
         let mut parent = raw();
-        parent.layout.skeleton.joints[3].parent = Some(200);
+        parent.runtime.joints[3].parent = Some(200);
+        let mut layout_parent = raw();
+        layout_parent.layout.skeleton.joints[3].parent = Some(200);
         let mut rank = raw();
-        rank.lod.keys[0].ranks.p = rank.lod.p + 1;
+        rank.runtime.lod.keys[0].ranks.p = rank.runtime.lod.p + 1;
         let mut nan = raw();
-        nan.lod.keys[0].core[5] = f32::NAN;
+        nan.runtime.lod.keys[0].core[5] = f32::NAN;
         let mut report = raw();
         report.report.row_weights.pop();
         let mut feet = raw();
-        let mut broken = model.feet.expect("the embedded data's model has feet");
+        let mut broken = *model.feet().expect("the embedded data's model has feet");
         // The hips as an ankle: its parent is the top joint, which has no parent (thigh).
         broken.left.ankle = model.layout.root();
-        feet.feet = Some(broken);
+        feet.runtime.feet = Some(broken);
         let mut stature = raw();
-        stature.stature_m = Some(f32::NAN);
+        stature.runtime.stature_m = Some(f32::NAN);
+        let mut controls = raw();
+        controls.runtime.control_names[2] = "style".into();
         let cases = [
             ("parent.mlod", parent, "parent"),
+            ("layout-parent.mlod", layout_parent, "parent"),
+            ("controls.mlod", controls, "controls"),
             ("rank.mlod", rank, "rank"),
             ("nan.mlod", nan, "non-finite"),
             ("weights.mlod", report, "row weights"),
@@ -347,7 +376,7 @@ fn valid_checksum_broken_models_are_refused_by_every_command() {
         let exe = env!("CARGO_BIN_EXE_motion-lod");
         for (name, value, expected) in cases {
             let path = dir.join(name);
-            std::fs::write(&path, encode(&value, &path).unwrap()).unwrap();
+            std::fs::write(&path, value.file()).unwrap();
             let err = motion_lod::MotionModel::load(&path)
                 .unwrap_err()
                 .to_string();

@@ -266,7 +266,7 @@ fn cmu_drops_the_noise_controls_and_its_duration_ignores_them() {
         let poses = model
             .synthesize_aligned(&[dx, dz, turn, range[3].0], Detail::full())
             .unwrap();
-        let p = model.lod.p();
+        let p = model.lod().p();
         poses
             .chunks_exact(p)
             .map(|pose| pose[motion_lod::TIME_ROW])

@@ -22,7 +22,7 @@ fn one_hour_of_animated_time_stays_finite_on_path_and_bounded() {
         .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
         .unwrap();
     let model = MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress).unwrap();
-    let lod = &model.lod;
+    let lod = model.lod();
     let source = LodSource::new(&model);
     let policy = DistancePolicy::for_model(lod);
     let config = CrowdConfig {

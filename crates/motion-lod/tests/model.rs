@@ -28,7 +28,7 @@ fn temp(name: &str) -> PathBuf {
 #[test]
 fn model_has_levels_with_growing_error_and_a_compact_size() {
     let (model, analysis) = built();
-    let lod = &model.lod;
+    let lod = model.lod();
     assert_eq!(lod.s(), analysis.tensor.dims()[2]);
     assert!(lod.levels().len() >= lod.keys().len());
     let errors = lod.level_errors();
@@ -133,7 +133,7 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
         scene: crowd_sim::Scene::Ground,
         render: None,
     };
-    let lod = &model.lod;
+    let lod = model.lod();
     let source = LodSource::new(model);
     let policy = DistancePolicy::for_model(lod);
     let a = run_crowd(&source, &policy, &run).unwrap();
@@ -184,7 +184,7 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
 #[test]
 fn crowd_poses_are_bit_identical_for_1_2_and_8_threads() {
     let (model, _) = built();
-    let lod = &model.lod;
+    let lod = model.lod();
     let source = LodSource::new(model);
     let policy = DistancePolicy::for_model(lod);
     let config = CrowdConfig {
@@ -353,7 +353,7 @@ fn avx2_and_baseline_builds_of_the_kernels_give_the_same_bits() {
         );
     }
     let (model, analysis) = built();
-    let lod = &model.lod;
+    let lod = model.lod();
     let mut scratch = lod_policy::KernelScratch::new(lod);
     let (mut fast, mut base) = (
         lod_policy::ClipKernel::compact(lod),

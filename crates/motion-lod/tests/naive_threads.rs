@@ -40,7 +40,7 @@ fn naive_crowd_poses_are_bit_identical_for_1_2_and_8_threads() {
         })
     };
     let one = simulate(1);
-    assert_eq!(one.len(), 120 * (model.lod.joints() + 1) * 3);
+    assert_eq!(one.len(), 120 * (model.lod().joints() + 1) * 3);
     assert!(one.iter().all(|&b| f32::from_bits(b).is_finite()));
     assert!(one == simulate(2), "2 threads differ from 1");
     assert!(one == simulate(8), "8 threads differ from 1");

@@ -27,7 +27,7 @@ fn test_controls(analysis: &Analysis) -> Vec<Controls> {
 fn all_joints(model: &MotionModel, accuracy: usize) -> Detail {
     Detail {
         accuracy,
-        active_joints: model.lod.joints(),
+        active_joints: model.lod().joints(),
     }
 }
 
@@ -58,7 +58,7 @@ fn assert_close(a: &[f32], b: &[f32], tol: f32, what: &str) {
 #[test]
 fn all_components_at_level_0_equal_the_naive_clip() {
     let (model, analysis) = built();
-    let p = model.lod.p();
+    let p = model.lod().p();
     let pca = PcaSource::new(model, analysis, p).unwrap();
     assert_eq!(pca.rank(), p);
     assert_eq!(pca.level_ranks()[0], p);
@@ -79,7 +79,7 @@ fn all_components_at_level_0_equal_the_naive_clip() {
             "{rp:?} vs {rn:?}"
         );
         assert!((rp.turn - rn.turn).abs() < 1e-4, "{rp:?} vs {rn:?}");
-        for phase in phases(model.lod.t()) {
+        for phase in phases(model.lod().t()) {
             let a = pose_at(&pca, &pc, pc.times().time_at(phase), p);
             let b = pose_at(&naive, &nc, nc.times().time_at(phase), p);
             assert_close(&a, &b, 2e-4, &format!("{controls:?} at phase {phase}"));
@@ -90,7 +90,7 @@ fn all_components_at_level_0_equal_the_naive_clip() {
 #[test]
 fn fewer_components_give_the_projection_of_the_naive_pose() {
     let (model, analysis) = built();
-    let p = model.lod.p();
+    let p = model.lod().p();
     let r = 12.min(p - 1);
     let pca = PcaSource::new(model, analysis, r).unwrap();
     assert_eq!(pca.rank(), r);
@@ -118,7 +118,7 @@ fn fewer_components_give_the_projection_of_the_naive_pose() {
             .build_clip(&controls, all_joints(model, 0), &mut nc)
             .unwrap();
         assert_eq!(pc.rank(), r);
-        for phase in phases(model.lod.t()) {
+        for phase in phases(model.lod().t()) {
             let a = pose_at(&pca, &pc, pc.times().time_at(phase), p);
             let b = pose_at(&naive, &nc, nc.times().time_at(phase), p);
             // D^-1 U U^T D b, with D scaling the time row as the analysis does.
@@ -152,7 +152,7 @@ fn fewer_components_give_the_projection_of_the_naive_pose() {
 #[test]
 fn lower_levels_use_fewer_components_and_lose_accuracy() {
     let (model, analysis) = built();
-    let lod = &model.lod;
+    let lod = model.lod();
     let (p, levels) = (lod.p(), lod.levels().len());
     let pca = PcaSource::new(model, analysis, 40).unwrap();
     let ranks = pca.level_ranks().to_vec();
@@ -209,7 +209,7 @@ fn lower_levels_use_fewer_components_and_lose_accuracy() {
 #[test]
 fn root_only_writes_the_root_rows_of_the_last_level() {
     let (model, analysis) = built();
-    let lod = &model.lod;
+    let lod = model.lod();
     let p = lod.p();
     let pca = PcaSource::new(model, analysis, 40).unwrap();
     let last = pca.level_ranks().len() - 1;
@@ -248,7 +248,7 @@ fn root_only_writes_the_root_rows_of_the_last_level() {
 #[test]
 fn crowd_poses_are_bit_identical_for_1_and_2_threads() {
     let (model, analysis) = built();
-    let lod = &model.lod;
+    let lod = model.lod();
     let source = PcaSource::new(model, analysis, 40).unwrap();
     let policy = DistancePolicy::for_model(lod);
     let config = CrowdConfig {

@@ -90,7 +90,7 @@ fn cmu() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
 /// training samples: shell error against full detail and foot slide beyond full detail's, projected at
 /// the nearest distance the detail is used, at most one pixel.
 fn details_stay_under_a_pixel(model: &MotionModel, controls: &[[f64; 4]]) {
-    let lod = &model.lod;
+    let lod = model.lod();
     let joints = lod.joints();
     let view = ViewParams::default();
     let distance = DistancePolicy::for_model(lod);
@@ -319,7 +319,7 @@ fn median_skate(qs: &[MotionQuality]) -> f64 {
 #[test]
 fn embedded_crowd_walkers_plant_their_feet() {
     let (model, _) = common::built();
-    assert!(model.feet.is_some(), "the model records its feet");
+    assert!(model.feet().is_some(), "the model records its feet");
     let (locked, free) = (crowd_tracks(model, 3), crowd_tracks(model, 0));
     let (l, f) = (median_skate(&locked), median_skate(&free));
     eprintln!("embedded crowd: median skate {l:.2} cm/s locked, {f:.2} free");
@@ -402,7 +402,7 @@ fn distance_policy_crowd(
     model: &MotionModel,
     scene: motion_lod::crowd_sim::Scene,
 ) -> Vec<motion_lod::crowd::WalkerQuality> {
-    let policy = DistancePolicy::for_model(&model.lod);
+    let policy = DistancePolicy::for_model(model.lod());
     let config = motion_lod::crowd_sim::CrowdConfig::with_density(200, 0.01);
     motion_lod::crowd::crowd_quality(model, config, scene, &policy, 10.0).expect("crowd measures")
 }
@@ -549,7 +549,7 @@ fn bandai_crowd_fast_path_matches_the_reference_path() {
     let Some((model, _)) = bandai() else {
         return;
     };
-    let policy = DistancePolicy::for_model(&model.lod);
+    let policy = DistancePolicy::for_model(model.lod());
     let config = CrowdConfig {
         seed: 5,
         ..CrowdConfig::with_density(300, 0.01)

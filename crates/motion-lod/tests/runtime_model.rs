@@ -1,14 +1,14 @@
 //! The runtime reads what the offline pipeline writes: a model built from the embedded data set loads
-//! through `lod_policy::RuntimeModel` (the runtime's own file reader and pose-layout mirror) and gives
-//! the same poses and joint positions as the offline `MotionModel` and `PoseLayout`, bit for bit.
-//! Damaged files are errors that say what is wrong, never panics.
+//! through `lod_policy::RuntimeModel` (the runtime's own section of the file) and gives the same
+//! poses and joint positions as the offline `MotionModel` and `PoseLayout`, bit for bit. Damaged
+//! files are errors that say what is wrong, never panics.
 
 use std::path::{Path, PathBuf};
 
 use glam::{Quat, Vec3};
 use lod_policy::{ClipKernel, Detail, FileError, JointTransform, KernelScratch, RuntimeModel};
 use motion_io::PoseLayout;
-use motion_lod::model_file::{self, FORMAT_VERSION, HEADER_LEN};
+use motion_lod::model_file::{self, FORMAT_VERSION, HEADER_LEN, SECTION_HEADER_LEN};
 
 mod common;
 
@@ -60,11 +60,11 @@ fn reference_fk(layout: &PoseLayout, pose: &[f32], active: usize, out: &mut [(Qu
 fn a_built_model_loads_in_the_runtime_with_the_same_poses_and_joints() {
     let (model, _) = built();
     let runtime = RuntimeModel::from_bytes(&file_bytes()).unwrap();
-    assert_eq!(runtime.lod(), &model.lod);
+    assert_eq!(runtime.lod(), model.lod());
     assert_eq!(runtime.rig(), model.layout.rig());
     // The feet for the foot lock: the skeleton's ankles and toes, read back from the file.
     let feet = runtime.feet().expect("the embedded data's model has feet");
-    assert_eq!(Some(*feet), model.feet);
+    assert_eq!(Some(feet), model.feet());
     let name = |j: usize| runtime.rig().joints()[j].name.as_str();
     assert_eq!(
         (name(feet.left.ankle), name(feet.right.ankle)),
@@ -75,7 +75,7 @@ fn a_built_model_loads_in_the_runtime_with_the_same_poses_and_joints() {
     let stature = runtime
         .stature_m()
         .expect("the embedded data's model has a stature");
-    assert_eq!(Some(stature), model.stature_m);
+    assert_eq!(Some(stature), model.stature_m());
     assert!((stature - 1.60).abs() < 0.03, "stature {stature} m");
     let range = runtime.lod().controls().range().unwrap();
     for height in [range.min.height, 1.75, range.max.height] {
@@ -94,13 +94,16 @@ fn a_built_model_loads_in_the_runtime_with_the_same_poses_and_joints() {
         report.contains(&format!("skeleton: stature {stature:.3} m")),
         "{report}"
     );
-    assert_eq!(&model.runtime().unwrap(), &runtime);
+    assert_eq!(model.runtime(), &runtime);
     let (lod, rig) = (runtime.lod(), runtime.rig());
     assert_eq!(rig.dof(), lod.p());
     assert_eq!(rig.joint_count(), model.layout.skeleton().joints.len());
 
     let (mut s1, mut k1) = (KernelScratch::new(lod), ClipKernel::new(lod));
-    let (mut s2, mut k2) = (KernelScratch::new(&model.lod), ClipKernel::new(&model.lod));
+    let (mut s2, mut k2) = (
+        KernelScratch::new(model.lod()),
+        ClipKernel::new(model.lod()),
+    );
     let (mut p1, mut p2) = (vec![0.0f32; lod.p()], vec![0.0f32; lod.p()]);
     let nj = rig.joint_count();
     let mut runtime_joints = vec![Vec3::ZERO; nj];
@@ -119,13 +122,16 @@ fn a_built_model_loads_in_the_runtime_with_the_same_poses_and_joints() {
         lod.build_kernel(&controls, detail, &mut s1, &mut k1)
             .unwrap();
         model
-            .lod
+            .lod()
             .build_kernel(&controls, detail, &mut s2, &mut k2)
             .unwrap();
         for f in 0..=12 {
             let seconds = k1.duration() * f64::from(f) / 12.0;
             lod.pose(&k1, k1.phase_at(seconds), &mut p1).unwrap();
-            model.lod.pose(&k2, k2.phase_at(seconds), &mut p2).unwrap();
+            model
+                .lod()
+                .pose(&k2, k2.phase_at(seconds), &mut p2)
+                .unwrap();
             assert_eq!(p1, p2, "pose at {seconds} s, {detail:?}");
             let rows = lod.active_rows(joints);
             // The runtime reads only the evaluated rows; the offline layout the whole pose.
@@ -155,7 +161,7 @@ fn the_runtime_loads_a_saved_file_and_names_the_path_of_a_missing_one() {
     let path = temp("walk.mlod");
     model.save(&path).unwrap();
     let runtime = RuntimeModel::load(&path).unwrap();
-    assert_eq!(runtime.lod(), &model.lod);
+    assert_eq!(runtime.lod(), model.lod());
     let missing = temp("no-such-model.mlod");
     let e = RuntimeModel::load(&missing).unwrap_err();
     assert!(matches!(e, FileError::Io { .. }), "{e}");
@@ -201,69 +207,82 @@ fn damaged_files_are_clear_errors() {
     // Not a model at all.
     let e = RuntimeModel::from_bytes(b"hello, this is not a model file").unwrap_err();
     assert!(matches!(e, FileError::BadMagic { .. }), "{e}");
-    // A payload cut short but framed with a valid checksum: a decode error, not a panic.
+    // A payload cut short but framed with a valid checksum: the section table says so.
     let payload = &bytes[HEADER_LEN..];
-    for len in [0, 1, 100, payload.len() / 3, payload.len() / 2] {
-        let framed = lod_policy::file::frame(&payload[..len]);
+    for len in [1, 100, payload.len() / 3, payload.len() / 2] {
+        let framed = lod_policy::file::frame_payload(&payload[..len]);
         let e = RuntimeModel::from_bytes(&framed).unwrap_err();
         assert!(
-            matches!(e, FileError::Decode { .. }),
+            matches!(e, FileError::Section { .. }),
             "payload cut at {len}: {e}"
         );
     }
+    // No sections at all: the runtime section is missing.
+    let e = RuntimeModel::from_bytes(&lod_policy::file::frame_payload(&[])).unwrap_err();
+    assert!(matches!(e, FileError::MissingSection { .. }), "{e}");
+    assert!(e.to_string().contains("RTIM"), "{e}");
+    // A runtime section cut short behind valid checksums: a decode error naming the section.
+    let runtime = RuntimeModel::from_bytes(&bytes).unwrap().section_bytes();
+    for len in [0, 1, 100, runtime.len() / 2, runtime.len() - 1] {
+        let framed = lod_policy::file::frame(&[RuntimeModel::section(&runtime[..len])]);
+        let e = RuntimeModel::from_bytes(&framed).unwrap_err();
+        assert!(
+            matches!(e, FileError::Decode { .. }),
+            "section cut at {len}: {e}"
+        );
+        assert!(e.to_string().contains("section RTIM"), "{e}");
+    }
+    // Another version of the runtime section asks for a rebuild.
+    let mut section = RuntimeModel::section(&runtime);
+    section.version += 1;
+    let e = RuntimeModel::from_bytes(&lod_policy::file::frame(&[section])).unwrap_err();
+    assert!(matches!(e, FileError::SectionVersion { .. }), "{e}");
+    assert!(e.to_string().contains("rebuild"), "{e}");
+}
+
+/// The runtime's section alone is a complete model file for the runtime (what an engine or a page
+/// ships); the offline reader asks for the report section. The runtime section starts the file,
+/// and the runtime skips the report whatever it holds.
+#[test]
+fn the_runtime_section_alone_plays_and_the_report_is_skipped() {
+    let (model, _) = built();
+    let bytes = file_bytes();
+    let runtime = model.runtime();
+    let alone = runtime.to_bytes();
+    assert!(alone.len() < bytes.len());
+    assert_eq!(&RuntimeModel::from_bytes(&alone).unwrap(), runtime);
+    let e = motion_lod::MotionModel::from_bytes(&alone, Path::new("m.mlod")).unwrap_err();
+    assert!(
+        e.to_string().contains("RPRT") && e.to_string().contains("rebuild"),
+        "{e}"
+    );
+    // The file's first section is the runtime's, byte for byte.
+    let section = runtime.section_bytes();
+    let start = HEADER_LEN + SECTION_HEADER_LEN;
+    assert_eq!(&bytes[HEADER_LEN..HEADER_LEN + 4], b"RTIM");
+    assert_eq!(&bytes[start..start + section.len()], &section[..]);
+    // A report the runtime cannot decode does not stop it.
+    let framed = lod_policy::file::frame(&[
+        RuntimeModel::section(&section),
+        model_file::report_section(b"not a report"),
+    ]);
+    assert_eq!(&RuntimeModel::from_bytes(&framed).unwrap(), runtime);
+    let e = motion_lod::MotionModel::from_bytes(&framed, Path::new("m.mlod")).unwrap_err();
+    assert!(e.to_string().contains("section RPRT"), "{e}");
 }
 
 #[test]
 fn a_layout_that_does_not_fit_the_model_is_refused() {
     let (model, _) = built();
-    // The layout of a model with one joint less: the rows no longer match.
+    // The layout of a model with one joint less: the rows no longer match. The runtime never
+    // reads the layout; the offline reader refuses the file.
     let mut other = model.clone();
     let last = *other.layout.joint_order().last().unwrap();
     other.layout = other.layout.clone().freeze_joints(&[last]).unwrap();
     let bytes = model_file::encode(&other, Path::new("m")).unwrap();
-    let e = RuntimeModel::from_bytes(&bytes).unwrap_err();
+    assert_eq!(&RuntimeModel::from_bytes(&bytes).unwrap(), model.runtime());
+    let e = motion_lod::MotionModel::from_bytes(&bytes, Path::new("m")).unwrap_err();
     assert!(matches!(e, FileError::Invalid { .. }), "{e}");
     assert!(e.to_string().contains("DOF rows"), "{e}");
-    assert!(other.runtime().is_err());
-}
-
-/// Random edits of the stored pose layout behind a valid checksum: the runtime's reader never
-/// panics, and every file the offline reader accepts the runtime accepts too, with the offline
-/// layout's rig (the runtime's mirror checks what the layout checks, and derives the same rig).
-#[test]
-fn edited_layouts_are_read_alike_offline_and_at_runtime() {
-    let (model, _) = built();
-    let bytes = file_bytes();
-    let payload = &bytes[HEADER_LEN..];
-    let layout_len = bincode::serde::encode_to_vec(&model.layout, bincode::config::standard())
-        .unwrap()
-        .len();
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        state
-    };
-    let (mut both, mut refused, mut runtime_only) = (0, 0, 0);
-    for _ in 0..600 {
-        let mut edited = payload.to_vec();
-        for _ in 0..1 + next() % 3 {
-            let at = (next() % layout_len as u64) as usize;
-            edited[at] = next() as u8;
-        }
-        let framed = lod_policy::file::frame(&edited);
-        let runtime = RuntimeModel::from_bytes(&framed);
-        match motion_lod::MotionModel::from_bytes(&framed, Path::new("m")) {
-            Ok(offline) => {
-                let runtime = runtime.expect("the runtime reads what the offline reader reads");
-                assert_eq!(runtime.rig(), offline.layout.rig());
-                both += 1;
-            }
-            Err(_) if runtime.is_ok() => runtime_only += 1,
-            Err(_) => refused += 1,
-        }
-    }
-    println!("{both} read by both, {runtime_only} by the runtime only, {refused} refused");
-    assert!(both > 20 && refused > 20, "{both} {refused}");
+    assert!(other.validate().is_err());
 }

@@ -478,7 +478,7 @@ fn a_crowd_of_a_model_of_straight_walks_fits_its_field_instead_of_refusing() {
         scene: motion_lod::crowd_sim::Scene::Ground,
         render: None,
     };
-    let lod = &model.lod;
+    let lod = model.lod();
     let source = motion_lod::LodSource::new(&model);
     let policy = DistancePolicy::for_model(lod);
     let outcome = run_crowd(&source, &policy, &run).expect("the crowd runs");

@@ -122,9 +122,25 @@ impl FrameSeq {
     }
 }
 
-/// The runtime's frame split ([`lod_policy::time_table::split_phase`]): one rule for the runtime's
-/// time table and the offline resampling.
-pub(crate) use lod_policy::time_table::split_phase as split_position;
+/// Splits a fractional frame position into `(k, f)` with `k + f = phase` clamped to
+/// `[0, frames - 1]`, `0 <= f < 1` and `k + 1 < frames` whenever `f > 0` (NaN gives `(0, 0)`):
+/// the rule by which resampling and playback interpolate between frames (the runtime's
+/// `lod_policy::time_table::split_phase` is the same rule; a test checks they agree). `frames`
+/// must be at least 1.
+pub(crate) fn split_position(phase: f64, frames: usize) -> (usize, f64) {
+    debug_assert!(frames >= 1);
+    let n = frames.max(1);
+    let last = (n - 1) as f64;
+    // NaN maps to 0 through `max`.
+    let t = phase.max(0.0).min(last);
+    let k = (t.floor() as usize).min(n - 1);
+    let f = t - k as f64;
+    if k + 1 >= n || f <= 0.0 {
+        (k, 0.0)
+    } else {
+        (k, f)
+    }
+}
 
 /// Squared Euclidean distance `sum_c (a_c - b_c)^2` between two frames of equal length.
 #[inline]
@@ -137,4 +153,26 @@ pub(crate) fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
             d * d
         })
         .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::split_position;
+
+    /// The offline frame split is the runtime's rule, to the bit.
+    #[test]
+    fn split_position_is_the_runtime_split_phase() {
+        for frames in [1, 2, 5, 40] {
+            for k in -20..=500 {
+                let phase = k as f64 * 0.0973;
+                let (a, f) = split_position(phase, frames);
+                let (b, g) = lod_policy::time_table::split_phase(phase, frames);
+                assert_eq!((a, f.to_bits()), (b, g.to_bits()), "{phase} of {frames}");
+            }
+            assert_eq!(
+                split_position(f64::NAN, frames),
+                lod_policy::time_table::split_phase(f64::NAN, frames)
+            );
+        }
+    }
 }

@@ -14,8 +14,8 @@
 //! - [`align`]: every sequence mapped onto the reference's time at `T` frames by DTW or by uniform
 //!   scaling ([`AlignMethod`]), values resampled by linear interpolation, plus one column of time
 //!   increments in seconds that sum to each sequence's true duration.
-//! - [`TimeTable`] (the runtime's, re-exported from `lod-policy`) and [`playback`]: a (synthesized)
-//!   aligned sequence back to frames at any rate.
+//! - [`fill_times`], [`phase_at`] and [`playback`]: a (synthesized) aligned sequence back to frames
+//!   at any rate through the cumulative times of its increment column.
 //!
 //! ```
 //! use timewarp::{AlignConfig, AlignMethod, DtwConfig, FrameSeq, align, playback};
@@ -49,9 +49,7 @@ pub use align::{AlignConfig, AlignMethod, Alignment, align};
 pub use dtw::{DtwConfig, DtwWorkspace, WarpPath, dtw, dtw_cost_with, dtw_with};
 pub use error::TimewarpError;
 pub use frame_seq::FrameSeq;
-/// The playback time table is the runtime's (`lod-policy`), shared so there is one definition.
-pub use lod_policy::time_table::{MIN_INCREMENT, TimeTable};
 pub use medoid::{
     DEFAULT_MEDOID_CANDIDATES, median_length, medoid, medoid_with_candidates, uniform_medoid,
 };
-pub use playback::{playback, playback_into};
+pub use playback::{MIN_INCREMENT, fill_times, phase_at, playback, playback_into};

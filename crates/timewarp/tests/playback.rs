@@ -2,10 +2,35 @@
 
 mod common;
 
+use lod_policy::TimeTable;
 use timewarp::{
-    AlignConfig, AlignMethod, DtwConfig, FrameSeq, MIN_INCREMENT, TimeTable, TimewarpError, align,
-    playback, playback_into,
+    AlignConfig, AlignMethod, DtwConfig, FrameSeq, MIN_INCREMENT, TimewarpError, align, fill_times,
+    phase_at, playback, playback_into,
 };
+
+/// The offline playback times and the runtime's clip time table are the same rule: the same bits
+/// for the same increments (bad ones included), at every playback time.
+#[test]
+fn offline_playback_times_match_the_runtime_time_table_bit_for_bit() {
+    assert_eq!(MIN_INCREMENT, lod_policy::MIN_INCREMENT);
+    let sets: [&[f64]; 4] = [
+        &[0.1, 0.2, 0.3, 0.0],
+        &[0.1, -0.5, f64::NAN, f64::INFINITY, 0.2, 9.0],
+        &[0.033; 40],
+        &[0.5],
+    ];
+    let mut times = Vec::new();
+    for incs in sets {
+        let table = TimeTable::from_increments(incs);
+        fill_times(&mut times, incs.iter().copied());
+        assert_eq!(times, table.times());
+        for k in -5..=200 {
+            let t = k as f64 * 0.0137;
+            assert_eq!(phase_at(&times, t).to_bits(), table.phase_at(t).to_bits());
+        }
+        assert_eq!(phase_at(&times, f64::NAN), table.phase_at(f64::NAN));
+    }
+}
 
 #[test]
 fn time_table_accumulates_and_inverts() {
@@ -120,9 +145,9 @@ fn playback_into_reuses_buffers_and_rejects_bad_input() {
         f[1] = if k < 4 { 0.25 } else { 0.0 };
         f[2] = -(k as f64);
     }
-    let mut table = TimeTable::with_capacity(5);
+    let mut times = Vec::with_capacity(5);
     let mut out = FrameSeq::zeros(2, 9);
-    playback_into(&aligned, 1, 8.0, &mut table, &mut out).unwrap();
+    playback_into(&aligned, 1, 8.0, &mut times, &mut out).unwrap();
     assert_eq!(out.len(), 9);
     for m in 0..9 {
         let phase = m as f64 * 0.5;

@@ -1,9 +1,10 @@
 //! An engine's walk loop on the motion-lod runtime, written as an external crate that depends on
-//! `motion-lod` alone (with `default-features = false`: no command line). Run it on a model file:
+//! the runtime crate `lod-policy` alone (no linear algebra, threads or command line: what an engine
+//! links). Run it on a model file:
 //!
 //! ```sh
 //! motion-lod build -o walk.mlod        # or any folder of BVH takes
-//! cargo run -p engine-example -- walk.mlod
+//! cargo run --release -p engine-example -- walk.mlod
 //! ```
 //!
 //! It walks one character for ten seconds at 60 frames per second, turning 20 degrees per gait
@@ -16,8 +17,8 @@
 
 use std::error::Error;
 
-use motion_lod::glam::{Quat, Vec3};
-use motion_lod::lod_policy::{
+use lod_policy::glam::{Quat, Vec3};
+use lod_policy::{
     ClipKernel, Controls, CycleFrame, DistancePolicy, FootLock, KernelScratch, LevelPolicy,
     RuntimeModel, ViewParams,
 };
@@ -207,10 +208,8 @@ mod tests {
         let heading = |a: Vec3, b: Vec3| (b.x - a.x).atan2(b.z - a.z);
         let first = heading(frames[0].root_position, frames[60].root_position);
         let last = heading(frames[299].root_position, frames[359].root_position);
-        let turned = motion_lod::lod_policy::wrap_angle(last - first);
-        let expected = motion_lod::lod_policy::wrap_angle(
-            frames[329].cycle_heading - frames[30].cycle_heading,
-        );
+        let turned = lod_policy::wrap_angle(last - first);
+        let expected = lod_policy::wrap_angle(frames[329].cycle_heading - frames[30].cycle_heading);
         assert!(
             (turned - expected).abs() < 0.1,
             "travel turned {turned} rad, the cycle frames {expected}"

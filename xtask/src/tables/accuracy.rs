@@ -19,8 +19,8 @@ pub fn evaluate(
     config: &EvalConfig,
     progress: &dyn Progress,
 ) -> Result<EvalReport> {
-    let key_bytes: Vec<usize> = (0..model.lod.keys().len())
-        .map(|k| model.lod.key_bytes(k, Precision::F64))
+    let key_bytes: Vec<usize> = (0..model.lod().keys().len())
+        .map(|k| model.lod().key_bytes(k, Precision::F64))
         .collect();
     leave_one_out(
         analysis,

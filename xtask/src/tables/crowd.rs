@@ -268,7 +268,7 @@ pub fn measure(
     let lod = LodSource::new(model);
     let naive = NaiveSource::new(model, analysis).context("naive baseline")?;
     let pca = PcaSource::new(model, analysis, PCA_RANK).context("PCA baseline")?;
-    let lod_policy = DistancePolicy::for_model(&model.lod);
+    let lod_policy = DistancePolicy::for_model(model.lod());
     let full = FullDetail;
     let runs_per_size = 6 + threads.iter().filter(|&&t| t != MAIN_THREADS).count();
     progress.stage(

@@ -246,7 +246,7 @@ pub fn run(config: &TablesConfig) -> Result<()> {
         MotionModel::build_with_analysis(&loaded.training, &config.build, progress)
             .context("building the model")?;
     let build_seconds = build_started.elapsed().as_secs_f64();
-    let trunc = schemes::with_lod(&model, schemes::truncation_only(&model)?);
+    let trunc = schemes::with_lod(&model, schemes::truncation_only(&model)?)?;
     let (als, als_sweeps) = schemes::als_every_level(&analysis, &config.build, progress)?;
 
     // Measurements.
@@ -480,7 +480,7 @@ fn write_model_section(
         analysis.keys.levels.len(),
         ranks(analysis.keys.levels[0].ranks),
         ranks(analysis.keys.levels[analysis.keys.levels.len() - 1].ranks),
-        model.lod.levels().len(),
+        model.lod().levels().len(),
         build_seconds,
         als_sweeps.iter().sum::<usize>()
     );
@@ -563,7 +563,7 @@ fn write_figure5(doc: &mut String, pts: &[timing::DistancePoint], link: &str, mo
          40 x 40 x 60 to 7 x 7 x 9; Figure 5 is a plot without values. The text reports that the error \
          grows monotonically with distance with a jump past 200 m, and that time and key tensor size fall \
          exponentially with distance.\n",
-        model.lod.joints()
+        model.lod().joints()
     );
     let mut tab = Table::new(&[
         ">distance (m)",
@@ -575,7 +575,7 @@ fn write_figure5(doc: &mut String, pts: &[timing::DistancePoint], link: &str, mo
         ">per pose",
         ">error (cm)",
     ]);
-    let levels = model.lod.levels();
+    let levels = model.lod().levels();
     for p in pts {
         let r = levels[p.level].ranks;
         tab.row(&[
@@ -585,7 +585,7 @@ fn write_figure5(doc: &mut String, pts: &[timing::DistancePoint], link: &str, mo
             if p.detail.active_joints == 0 {
                 "root only".to_string()
             } else {
-                p.detail.active_joints.min(model.lod.joints()).to_string()
+                p.detail.active_joints.min(model.lod().joints()).to_string()
             },
             format!("{:.4}", p.size_ratio),
             duration_ns(p.timed.kernel_ns),

@@ -15,8 +15,8 @@
 //! and the clip's time table; per frame `pose = G w_T` (eq. 4-5). Everything writes into buffers
 //! allocated once by [`OnlineTruncation::new`].
 
+use lod_policy::TimeTable;
 use lod_policy::{KernelScratch, LodModel, Ranks, TIME_ROW};
-use timewarp::TimeTable;
 
 /// The online-truncation kernel over key 0 of a model, with its preallocated buffers.
 #[derive(Debug, Clone)]

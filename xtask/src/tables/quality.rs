@@ -34,14 +34,14 @@ pub fn measure(
         return Ok(None);
     };
     let grid = quality::walk_grid(model);
-    let levels = model.lod.levels().len();
+    let levels = model.lod().levels().len();
     progress.stage("motion quality per level", (levels * grid.len()) as u64);
     let mut points = Vec::with_capacity(levels * grid.len());
     for level in 0..levels {
         for walk in &grid {
             let req = WalkRequest {
                 controls: lod_policy::Controls::from_array(walk.controls),
-                detail: Detail::new(level, model.lod.joints()),
+                detail: Detail::new(level, model.lod().joints()),
                 cycles: CYCLES,
                 fps: 30.0,
                 blend: true,
@@ -125,7 +125,7 @@ pub fn section(
          pop {:.2} cm/frame² at 30 fps, skate {:.2} cm/s, facing range {:.1}..{:.1} deg). The issue's \
          thresholds for near characters: pop at most 1.25x, skate at most 1.5x, floor within 1 cm, \
          facing inside the data's range. The same command per walk: `motion-lod quality MODEL`.\n",
-        model.lod.joints(),
+        model.lod().joints(),
         reference.takes,
         m.pop_cm,
         m.skate_cm_s,
@@ -162,7 +162,7 @@ pub fn measure_crowd(
 ) -> Result<Vec<(&'static str, Vec<motion_lod::crowd::WalkerQuality>)>> {
     use motion_lod::crowd_sim::{CrowdConfig, Scene};
     progress.stage("motion quality of crowd walkers", 2);
-    let policy = lod_policy::DistancePolicy::for_model(&model.lod);
+    let policy = lod_policy::DistancePolicy::for_model(model.lod());
     let mut out = Vec::new();
     for (name, scene) in [("ground", Scene::Ground), ("overview", Scene::Overview)] {
         let config = CrowdConfig::with_density(CROWD_WALKERS, CROWD_DENSITY);
@@ -184,7 +184,7 @@ type GroupRule = fn((usize, usize), usize, usize, usize) -> bool;
 pub fn leg_joints(model: &MotionModel) -> usize {
     let order = model.layout.joint_order();
     let sk = model.layout.skeleton();
-    let Some(feet) = model.feet else {
+    let Some(feet) = model.feet() else {
         return order.len();
     };
     let mut needed = 0;

@@ -16,20 +16,16 @@ use motion_lod::{Analysis, BuildConfig, MotionModel};
 
 /// `model` with its runtime part replaced by `lod` (same skeleton and report), for synthesis and error
 /// measurement with [`MotionModel::synthesize_aligned`].
-pub fn with_lod(model: &MotionModel, lod: LodModel) -> MotionModel {
-    MotionModel {
-        layout: model.layout.clone(),
-        lod,
-        feet: model.feet,
-        stature_m: model.stature_m,
-        report: model.report.clone(),
-    }
+pub fn with_lod(model: &MotionModel, lod: LodModel) -> Result<MotionModel> {
+    model
+        .with_lod(lod)
+        .context("a scheme's model does not fit the skeleton")
 }
 
 /// The runtime model of the online-truncation scheme: the hybrid model's key 0 only, and every accuracy
 /// level of the hybrid model as a leading sub-block truncation of it (ranks clamped to key 0's).
 pub fn truncation_only(model: &MotionModel) -> Result<LodModel> {
-    let mut parts = model.lod.parts().clone();
+    let mut parts = model.lod().parts().clone();
     let full = parts.keys[0].ranks;
     parts.keys.truncate(1);
     parts.levels = parts

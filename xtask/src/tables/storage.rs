@@ -4,9 +4,8 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use hosvd_als::storage::{
-    Precision, all_levels_bytes, dense_bytes, key_levels_bytes, tucker_bytes,
-};
+use hosvd_als::storage::{all_levels_bytes, dense_bytes, key_levels_bytes, tucker_bytes};
+use lod_policy::Precision;
 use motion_lod::{Analysis, MotionModel};
 
 use super::markdown::{Table, mb, mib, percent};
@@ -46,15 +45,15 @@ pub fn paper_rows(analysis: &Analysis, pca_rank: usize) -> Vec<StorageRow> {
     let rows: [(String, (usize, usize)); 4] = [
         (
             format!("raw samples ({} x {} x {})", dims[0], dims[1], dims[2]),
-            both(&|pr| dense_bytes(dims, pr)),
+            both(&|pr| dense_bytes(dims, pr.value_bytes())),
         ),
         (
             format!("all {} accuracy levels by ALS", analysis.levels.len()),
-            both(&|pr| all_levels_bytes(dims, &analysis.levels, pr)),
+            both(&|pr| all_levels_bytes(dims, &analysis.levels, pr.value_bytes())),
         ),
         (
             format!("hybrid: {} key levels", analysis.keys.levels.len()),
-            both(&|pr| key_levels_bytes(&analysis.keys, pr)),
+            both(&|pr| key_levels_bytes(&analysis.keys, pr.value_bytes())),
         ),
         (
             format!("PCA (R_P = {})", pca_rank.clamp(1, dims[0])),
@@ -115,7 +114,7 @@ pub fn section(
          matrices, `(R_P R_T R_S + P R_P + T R_T + S R_S) x bytes`; the paper's \"MB\" are MiB \
          (94 x 100 x 186 x 8 bytes = 13.34). Key 0 alone ({}) is {}.\n\n",
         super::markdown::ranks(key0.ranks),
-        mib(tucker_bytes(analysis.tensor.dims(), key0.ranks, Precision::F64))
+        mib(tucker_bytes(analysis.tensor.dims(), key0.ranks, Precision::F64.value_bytes()))
     ));
     out.push_str(&t.render());
 
@@ -134,9 +133,9 @@ pub fn section(
         let file = model_file_bytes(m)?;
         rt.row(&[
             name.to_string(),
-            m.lod.keys().len().to_string(),
-            mib(m.lod.bytes(Precision::F64)),
-            mib(m.lod.bytes(Precision::F32)),
+            m.lod().keys().len().to_string(),
+            mib(m.lod().bytes(Precision::F64)),
+            mib(m.lod().bytes(Precision::F32)),
             format!("{} ({file} bytes)", mib(file)),
             percent(file as f64 / raw),
         ]);

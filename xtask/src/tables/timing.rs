@@ -173,7 +173,7 @@ pub fn figure4(
         .iter()
         .map(|&k| analysis.controls[k].map(|v| v as f32))
         .collect();
-    let n = schemes.hybrid.lod.levels().len();
+    let n = schemes.hybrid.lod().levels().len();
     progress.stage("figure 4: three schemes", 3 * n as u64);
     let mut out = Figure4 {
         truncation: Vec::with_capacity(n),
@@ -183,7 +183,7 @@ pub fn figure4(
     for level in 0..n {
         let detail = Detail::new(level, usize::MAX);
         let point = |m: &MotionModel, timed: Timed| -> Result<LevelPoint> {
-            let r = m.lod.levels()[level].ranks;
+            let r = m.lod().levels()[level].ranks;
             Ok(LevelPoint {
                 level,
                 ranks: [r.p, r.t, r.s],
@@ -191,7 +191,7 @@ pub fn figure4(
                 error_cm: data_error(m, analysis, picks, detail)?,
             })
         };
-        let tr = &schemes.truncation.lod;
+        let tr = schemes.truncation.lod();
         out.truncation.push(point(
             schemes.truncation,
             time_online(tr, &controls, level, budget),
@@ -199,12 +199,12 @@ pub fn figure4(
         progress.inc(1);
         out.als.push(point(
             schemes.als,
-            time_lod(&schemes.als.lod, &controls, detail, budget)?,
+            time_lod(schemes.als.lod(), &controls, detail, budget)?,
         )?);
         progress.inc(1);
         out.hybrid.push(point(
             schemes.hybrid,
-            time_lod(&schemes.hybrid.lod, &controls, detail, budget)?,
+            time_lod(schemes.hybrid.lod(), &controls, detail, budget)?,
         )?);
         progress.inc(1);
     }
@@ -255,7 +255,7 @@ pub fn figure5(
     budget: Budget,
     progress: &dyn Progress,
 ) -> Result<Vec<DistancePoint>> {
-    let lod = &model.lod;
+    let lod = model.lod();
     let controls: Vec<[f32; 4]> = picks
         .iter()
         .map(|&k| analysis.controls[k].map(|v| v as f32))

@@ -4,14 +4,14 @@
 //! - `npy`: small arrays written by `tensor_ops::npy` (f8/f4, C/Fortran order, 0-d to 3-d,
 //!   format 2.0, big-endian);
 //! - `model_file` / `model_payload`: the small real `MotionModel` of `seed_model.rs` (the whole
-//!   file, and its payload after the 24-byte header); `model_mutated`: a few edit lists.
+//!   file, and its runtime section's bytes); `model_mutated`: a few edit lists.
 //!
 //! Run: `cargo run --release --manifest-path crates/motion-lod/fuzz/Cargo.toml --example seed_corpus`
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use motion_lod::model_file::{HEADER_LEN, encode};
+use motion_lod::model_file::encode;
 use tensor_ops::npy::{NpyArray, NpyDtype, to_npy_bytes};
 
 #[path = "../seed_model.rs"]
@@ -125,7 +125,7 @@ fn seed_models(fixtures: &Path, corpus: &Path) -> Result<()> {
     fs::write(dir(&corpus.join("model_file"))?.join("small.mlod"), &bytes)?;
     fs::write(
         dir(&corpus.join("model_payload"))?.join("small.bin"),
-        &bytes[HEADER_LEN..],
+        model.runtime().section_bytes(),
     )?;
     println!("model: {} bytes", bytes.len());
     // Edit lists for `model_mutated` (see `mutate_model.rs`): an op byte, then its operands.

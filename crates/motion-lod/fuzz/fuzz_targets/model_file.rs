@@ -1,14 +1,18 @@
-//! Model file loader: any bytes go to `model_file::decode::<MotionModel>` (magic, version,
-//! length, CRC, then the bincode payload). Mutations mostly stop at the checksum; the
-//! `model_payload` target fuzzes the decoder behind it.
+//! Model file loader: any bytes go to both readers, the runtime's (`RuntimeModel::from_bytes`:
+//! magic, version, length, CRC, the section table, then its own section) and the offline one
+//! (`MotionModel::from_bytes`: both sections and their fit). Mutations mostly stop at the
+//! checksums; the `model_payload` target fuzzes the runtime section's decoder behind them.
 #![no_main]
 
 use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
 use motion_lod::MotionModel;
-use motion_lod::model_file::decode;
+use motion_lod::lod_policy::RuntimeModel;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = decode::<MotionModel>(data, Path::new("fuzz.mlod"));
+    let runtime = RuntimeModel::from_bytes(data);
+    if let Ok(model) = MotionModel::from_bytes(data, Path::new("fuzz.mlod")) {
+        assert_eq!(runtime.ok().as_ref(), Some(model.runtime()));
+    }
 });

@@ -128,7 +128,7 @@ pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::R
         .context("building the model")?;
     built.report.data = Some(spec);
     let config = model.config();
-    let made = built.lod.levels().len();
+    let made = built.lod().levels().len();
     if made != config.accuracy_levels {
         let why = if config.accuracy_levels < config.key_levels {
             format!(

@@ -258,7 +258,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         scene: args.camera.into(),
         render: args.render.clone().map(|d| (d, args.render_every)),
     };
-    let lod = &model.lod;
+    let lod = model.lod();
     let compare_run = CrowdRun {
         render: None,
         ..run.clone()
@@ -413,7 +413,7 @@ fn export_clip(
         seconds: args.export_seconds,
         exported: args.export_walkers,
     };
-    let lod = &model.lod;
+    let lod = model.lod();
     let (scene, summary) = match args.policy {
         PolicyArg::Distance => export_crowd(model, &DistancePolicy::for_model(lod), &clip),
         PolicyArg::Screen => export_crowd(

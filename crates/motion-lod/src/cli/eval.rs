@@ -187,8 +187,8 @@ pub fn evaluate(
     let model = analysis
         .runtime_model(config, progress)
         .context("building the runtime model")?;
-    let key_bytes: Vec<usize> = (0..model.lod.keys().len())
-        .map(|k| model.lod.key_bytes(k, Precision::F64))
+    let key_bytes: Vec<usize> = (0..model.lod().keys().len())
+        .map(|k| model.lod().key_bytes(k, Precision::F64))
         .collect();
     let eval_config = EvalConfig {
         pca_rank,

@@ -84,7 +84,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     if args.crowd {
         return run_crowd(&args, &model, &reference);
     }
-    let levels = model.lod.levels().len();
+    let levels = model.lod().levels().len();
     let chosen: Vec<usize> = match args.level {
         Some(l) if l >= levels => bail!("--level {l}: the model has levels 0..{}", levels - 1),
         Some(l) => vec![l],
@@ -92,8 +92,8 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     };
     let joints = args
         .joints
-        .unwrap_or(model.lod.joints())
-        .min(model.lod.joints());
+        .unwrap_or(model.lod().joints())
+        .min(model.lod().joints());
     let grid = quality::walk_grid(&model);
     let mut rows = Vec::new();
     for &level in &chosen {
@@ -209,7 +209,7 @@ fn run_crowd(
         },
         ..CrowdConfig::with_density(args.walkers, args.density)
     };
-    let policy = lod_policy::DistancePolicy::for_model(&model.lod);
+    let policy = lod_policy::DistancePolicy::for_model(model.lod());
     let walkers =
         motion_lod::crowd::crowd_quality(model, config, args.camera.into(), &policy, args.seconds)
             .context("measuring the crowd")?;

@@ -175,7 +175,7 @@ pub fn export_crowd<P: LevelPolicy + Sync>(
     // mesh (every walker, when the data hold one height).
     let reference = reference_walk(model)?;
     let mut rests: Vec<(u64, PoseLayout, Arc<Rest>)> = Vec::new();
-    let levels = model.lod.levels().len();
+    let levels = model.lod().levels().len();
     let mut scene = Scene::new();
     let mut material_of_bin: Vec<Option<usize>> = vec![None; levels + 1];
     let mut level_counts = vec![0usize; levels + 1];

@@ -111,7 +111,7 @@ pub fn export_walk(
     }
     let rest = std::sync::Arc::new(walk_rest(layout, walk)?);
     let character = Character::from_poses(layout, &rest, &walk.poses, walk.frame_time, name)?;
-    let levels = model.lod.levels().len();
+    let levels = model.lod().levels().len();
     let mut scene = Scene::new();
     let color = level_color(level, levels);
     let label = level_label(level, levels);
