@@ -17,6 +17,9 @@ use anyhow::{Context, Result};
 pub struct ImportGraph {
     /// `module -> modules it names through crate::`, both sorted.
     pub edges: BTreeMap<String, BTreeSet<String>>,
+    /// Items the crate root re-exports (`pub use model::{MotionModel, ...}` in `lib.rs`): the
+    /// module each comes from, so that `crate::MotionModel` counts as naming `model`.
+    pub reexports: BTreeMap<String, String>,
 }
 
 impl ImportGraph {
@@ -24,6 +27,9 @@ impl ImportGraph {
     /// are not modules of it and are skipped).
     pub fn of_crate(src: &Path) -> Result<ImportGraph> {
         let mut graph = ImportGraph::default();
+        if let Ok(root) = std::fs::read_to_string(src.join("lib.rs")) {
+            graph.add_reexports(&root);
+        }
         let mut files = Vec::new();
         collect_rs(src, &mut files)?;
         files.sort();
@@ -39,8 +45,38 @@ impl ImportGraph {
         Ok(graph)
     }
 
-    /// Adds the `crate::` names of `text` as edges from `module` (and `module` itself as a node).
+    /// Records the root's re-exports in `lib_rs` (`pub use module::{A, B};`, `pub use module::A;`;
+    /// re-exports of other crates are recorded too and never match a module).
+    pub fn add_reexports(&mut self, lib_rs: &str) {
+        let code: String = lib_rs
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .collect::<Vec<_>>()
+            .join(" ");
+        let mut rest = code.as_str();
+        while let Some(at) = rest.find("pub use ") {
+            rest = &rest[at + "pub use ".len()..];
+            let end = rest.find(';').unwrap_or(rest.len());
+            let item = rest[..end].trim();
+            if let Some((module, names)) = item.split_once("::") {
+                let names = names.trim().trim_start_matches('{').trim_end_matches('}');
+                for name in names.split(',') {
+                    let name = name.trim();
+                    let name = name.rsplit(" as ").next().unwrap_or(name).trim();
+                    if !name.is_empty() && !name.contains("::") {
+                        self.reexports
+                            .insert(name.to_string(), module.trim().to_string());
+                    }
+                }
+            }
+            rest = &rest[end..];
+        }
+    }
+
+    /// Adds the `crate::` names of `text` as edges from `module` (and `module` itself as a node);
+    /// a name the root re-exports counts as its module.
     pub fn add_source(&mut self, module: &str, text: &str) {
+        let reexports = &self.reexports;
         let targets = self.edges.entry(module.to_string()).or_default();
         for line in text.lines() {
             let code = line.trim_start();
@@ -49,6 +85,7 @@ impl ImportGraph {
             }
             let code = code.split("//").next().unwrap_or("");
             for name in crate_paths(code) {
+                let name = reexports.get(&name).cloned().unwrap_or(name);
                 if name != module {
                     targets.insert(name);
                 }
@@ -280,6 +317,16 @@ mod tests {
             ("d", "crate::c::y()"),
         ]);
         assert_eq!(two.circles(), [["a", "b"], ["c", "d"]]);
+    }
+
+    #[test]
+    fn names_the_root_reexports_count_as_their_module() {
+        let mut g = ImportGraph::default();
+        g.add_reexports("pub mod model;\npub use model::{Motion, Report as R};\npub use build::Build;\npub use glam;");
+        g.add_source("synth", "fn f(m: &crate::Motion, r: crate::R) {}");
+        g.add_source("model", "use crate::Build;");
+        g.add_source("build", "use crate::synth::f;");
+        assert_eq!(g.circles(), [["build", "model", "synth"]]);
     }
 
     #[test]

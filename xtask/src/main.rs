@@ -86,7 +86,12 @@ fn main() -> Result<()> {
 
 fn run_imports(args: &ImportsArgs) -> Result<()> {
     let dirs = if args.dirs.is_empty() {
-        vec![tables::workspace_root().join("crates/motion-lod/src")]
+        let root = tables::workspace_root();
+        vec![
+            root.canonicalize()
+                .unwrap_or(root)
+                .join("crates/motion-lod/src"),
+        ]
     } else {
         args.dirs.clone()
     };

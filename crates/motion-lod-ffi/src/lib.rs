@@ -2,30 +2,65 @@
 //! language with a C foreign-function interface.
 //!
 //! This crate is for: loading a model file, asking it for its levels, joints and control ranges,
-//! choosing a level of detail from a distance, and evaluating a walker's pose and joint transforms
-//! into arrays the caller owns. It is not for: building models (the `motion-lod` command line and
-//! library do that offline) or simulating crowds (the engine owns its characters; `crowd-sim` is the
-//! Rust one).
+//! choosing each character's level of detail from the camera, and walking characters: the library
+//! chains gait cycles by their root motion, evaluates poses, plants the feet (the runtime foot
+//! lock) and writes local joint rotations (for skinning), joint transforms and the root's world
+//! placement into memory the caller owns. It is not for: building models (the `motion-lod` command
+//! line and library do that offline) or simulating crowds (the engine owns its characters, their
+//! paths and their culling; `crowd-sim` is the Rust one).
 //!
-//! The header `include/motion_lod.h` is generated from this file by cbindgen (`cargo xtask header`)
-//! and checked in; a test fails when it is out of date. `examples/crowd.c` animates a small crowd
-//! through it, and a test checks its poses against the Rust API bit for bit.
+//! The header `include/motion_lod.h` is generated from this file by cbindgen (regenerate it with
+//! `MOTION_LOD_BLESS_HEADER=1 cargo test -p motion-lod-ffi --test header`) and checked in; a test
+//! fails when it is out of date, and another when it names a function or type that does not exist.
+//! `examples/crowd.c` walks a crowd of 1,000 characters through it, and a test checks every value it
+//! prints against the Rust API bit for bit.
+//!
+//! The jobs, in call order:
+//! 1. **Check the library** the program linked: [`mlod_abi_version`] equals the header's
+//!    [`MLOD_ABI_VERSION`]; [`mlod_version`] names the release.
+//! 2. **Load a model** once: [`mlod_model_load`] (a file) or [`mlod_model_from_bytes`]; then
+//!    [`mlod_model_sizes`] (levels, joints, animated joints, pose length), [`mlod_model_joint`]
+//!    and [`mlod_model_joint_rest`] (each joint's name, parent, offset and rest rotation, to bind
+//!    a skeleton), [`mlod_model_root_joint`] and [`mlod_model_control_range`].
+//! 3. **Create a walker** per character: [`mlod_walker_new`] allocates its buffers, once.
+//! 4. **Start its walk**: its first level of detail from the camera at its start position
+//!    ([`mlod_model_detail_from_camera`]), then [`mlod_walker_start`] with its first cycle's
+//!    controls, its position and heading on the ground; it shows the walk's first frame.
+//! 5. **Every frame**: the detail the camera gives the walker now
+//!    ([`mlod_walker_detail_from_camera`]), then [`mlod_walker_advance`] by the frame's step with
+//!    the controls and detail of its next cycle (used when the current cycle ends); it writes the
+//!    root's world position and rotation ([`MlodWalkerState`]). For skinning,
+//!    [`mlod_walker_local_rotations`]; for joints in the cycle frame,
+//!    [`mlod_walker_joint_transforms`]. [`mlod_walker_set_foot_lock`] turns the foot lock off or
+//!    on.
+//! 6. **Release**: [`mlod_walker_free`] for each walker, then [`mlod_model_free`].
+//!
+//! Engines that chain cycles themselves use the lower-level pair instead of steps 4-5:
+//! [`mlod_walker_prepare`] (one cycle's clip, with its duration and root motion) and
+//! [`mlod_walker_pose`] (the pose at a time in it), with [`mlod_model_detail_at`] for a detail
+//! from a distance alone.
 //!
 //! Conventions:
-//! - Every function returns an [`MlodStatus`]; `MLOD_STATUS_OK` is 0. On any other status,
-//!   [`mlod_last_error`] gives a message naming what was wrong and where (per thread, valid until the
-//!   next call on that thread). No call unwinds across the boundary: a Rust panic (a bug) becomes
-//!   `MLOD_STATUS_PANIC`.
-//! - Objects are opaque pointers created by `*_new`/`*_load*` and released by `*_free` (null is
-//!   accepted and ignored). A walker must be used with the model it was created for and must not
-//!   outlive it; passing another model is an error (`MLOD_STATUS_INVALID_ARGUMENT`), never undefined
-//!   behaviour.
+//! - Every function returns an [`MlodStatus`] (except those that only report a value, the `_free`
+//!   functions and [`mlod_last_error`]); `MLOD_STATUS_OK` is 0. On any other status,
+//!   [`mlod_last_error`] gives a message naming what was wrong and where (per thread, valid until
+//!   the next call on that thread). No call unwinds across the boundary: a Rust panic (a bug)
+//!   becomes `MLOD_STATUS_PANIC`. A failed call changes none of its outputs except where its
+//!   documentation says so.
+//! - Objects are opaque pointers created by `mlod_model_load`, `mlod_model_from_bytes` and
+//!   `mlod_walker_new` and released by `mlod_model_free` and `mlod_walker_free` (null is accepted and
+//!   ignored). A walker must be used with the model it was created for and must not outlive it;
+//!   passing another model is an error (`MLOD_STATUS_INVALID_ARGUMENT`), never undefined behaviour.
 //! - Units: metres, seconds, radians. Controls describe one gait cycle (two steps): `dx` sideways and
 //!   `dz` forward displacement (m), `turn` (rad, positive towards +x), `height` of the performer (m).
-//! - Poses are the model's pose vectors (`mlod_model_pose_len` floats: root position, root
-//!   exponential map, the time row, then three exponential-map rows per joint in the model's joint
-//!   order). Joint transforms are in the cycle frame (metres; +y up, the cycle starting at the
-//!   origin heading +z), parents before children.
+//!   The world is +y up; a heading is a rotation about +y, 0 facing +z.
+//! - Poses are the model's pose vectors (the `pose_len` of [`mlod_model_sizes`] floats: root
+//!   position, root exponential map, the time row, then three exponential-map rows per animated
+//!   joint in the model's evaluation order, legs first, the order a detail's `joints` counts in).
+//!   Joint transforms and local rotations are in the model's joint order (parents before
+//!   children); transforms are in the cycle frame (metres; +y up, the cycle starting at the origin
+//!   heading +z).
+//! - Walkers allocate nothing after [`mlod_walker_new`] (for skeletons of up to 128 joints).
 //! - Calls on different walkers may run on different threads at once; a model is read-only after
 //!   loading and may be shared by every thread.
 
@@ -34,10 +69,32 @@ use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
+use lod_policy::glam::{Quat, Vec3};
 use lod_policy::{
-    ClipKernel, Controls, Detail, DistancePolicy, FileError, JointTransform, KernelScratch,
-    LevelPolicy, RuntimeModel, ViewParams,
+    ClipKernel, Controls, CycleFrame, Detail, DistancePolicy, FileError, FootLock, JointTransform,
+    KernelScratch, LevelPolicy, RuntimeModel, ViewParams, wrap_angle,
 };
+
+/// The version of this C ABI: the functions, their arguments and the layouts of the structs in
+/// `motion_lod.h`. It changes whenever any of them changes; a program compiled against a header
+/// whose `MLOD_ABI_VERSION` differs from what `mlod_abi_version` returns must not use the library.
+pub const MLOD_ABI_VERSION: u32 = 2;
+
+/// The longest step [`mlod_walker_advance`] takes, seconds.
+pub const MLOD_MAX_STEP_S: f64 = 10.0;
+
+/// The library's version (`CARGO_PKG_VERSION`), NUL-terminated.
+const VERSION: &CStr =
+    match CStr::from_bytes_with_nul(concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes()) {
+        Ok(v) => v,
+        Err(_) => panic!("the package version holds a NUL byte"),
+    };
+
+/// The step the foot lock is given for a walk's first frame ([`mlod_walker_start`]). A fresh lock
+/// holds no correction yet and needs two frames to measure a foot's speed, so the step changes
+/// nothing it shows or keeps (the crate's C example test checks that against a walk whose first
+/// frame uses the frame step, as `examples/engine` does); it only has to be positive.
+const FIRST_FRAME_STEP_S: f32 = 1.0 / 60.0;
 
 /// Outcome of every call.
 #[repr(C)]
@@ -55,7 +112,8 @@ pub enum MlodStatus {
     Io = 4,
     /// An output array is shorter than needed (the message gives the length needed).
     BufferTooSmall = 5,
-    /// The walker has no clip yet: call `mlod_walker_prepare` first.
+    /// The walker has nothing to evaluate yet: call `mlod_walker_start` (or `mlod_walker_prepare`)
+    /// first, and `mlod_walker_pose` before asking for the joints of a prepared clip.
     NotPrepared = 6,
     /// A bug in the library (a Rust panic, caught at the boundary).
     Panic = 7,
@@ -81,9 +139,10 @@ pub struct MlodControls {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct MlodDetail {
-    /// Accuracy level, `0..mlod_model_levels()`.
+    /// Accuracy level, below the `levels` of `mlod_model_sizes`.
     pub level: u32,
-    /// Animated joints, `0..=` the `animated_joints` of `mlod_model_sizes`.
+    /// Animated joints, at most the `animated_joints` of `mlod_model_sizes` (more means all of
+    /// them); 0 is root only.
     pub joints: u32,
 }
 
@@ -115,13 +174,117 @@ pub struct MlodJointTransform {
     pub translation: [f32; 3],
 }
 
+/// A rotation as a unit quaternion.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MlodQuat {
+    /// Vector part, x.
+    pub x: f32,
+    /// Vector part, y.
+    pub y: f32,
+    /// Vector part, z.
+    pub z: f32,
+    /// Scalar part.
+    pub w: f32,
+}
+
+impl From<Quat> for MlodQuat {
+    fn from(q: Quat) -> MlodQuat {
+        let [x, y, z, w] = q.to_array();
+        MlodQuat { x, y, z, w }
+    }
+}
+
+/// Where a walker is after `mlod_walker_start` or `mlod_walker_advance`: its root in the world, the
+/// cycle it is in and what that cycle was built with.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MlodWalkerState {
+    /// Time into the current cycle, seconds.
+    pub time_in_cycle_s: f64,
+    /// Playback duration of the current cycle, seconds.
+    pub cycle_duration_s: f64,
+    /// Index of the current cycle: 0 for the cycle `mlod_walker_start` built, one more for each
+    /// cycle chained after it.
+    pub cycle: u64,
+    /// The root joint's position in the world, metres.
+    pub root_position: [f32; 3],
+    /// The root joint's rotation in the world: the cycle frame's heading times the root's rotation
+    /// in the cycle frame (which is the root's entry of `mlod_walker_local_rotations`).
+    pub root_rotation: MlodQuat,
+    /// Origin of the current cycle frame on the ground, metres (world x).
+    pub cycle_x: f32,
+    /// Origin of the current cycle frame on the ground, metres (world z).
+    pub cycle_z: f32,
+    /// Heading of the current cycle frame, radians about +y (0 = facing +z), in `(-pi, pi]`: the
+    /// start heading plus every chained cycle's turn.
+    pub heading: f32,
+    /// The current cycle's body scale (see `MlodCycle`).
+    pub body_scale: f32,
+    /// The detail the current cycle was built with (joints clamped to the model's).
+    pub detail: MlodDetail,
+    /// Cycles this call began: 0 while the walker stays in its cycle, 1 when it crossed into the
+    /// next one (more for a step longer than a cycle).
+    pub cycles_begun: u32,
+    /// Whether the foot lock ran on this frame: the model knows its feet and the walker's lock is
+    /// on (`mlod_walker_set_foot_lock`). It plants a foot in contact with the floor; a leg whose
+    /// joints the detail does not animate is never locked.
+    pub foot_locked: bool,
+}
+
+/// A camera, as a level-of-detail choice sees it: where it is, where it looks and its lens.
+///
+/// A point is in view when a sphere around it meets the cone of the view direction whose half-angle
+/// reaches the image's corners (`atan(tan(fov_y / 2) sqrt(1 + aspect^2))`), between the near and far
+/// distances along the view direction.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MlodCamera {
+    /// Eye position in the world, metres.
+    pub position: [f32; 3],
+    /// View direction, a unit vector (length within 1e-3 of 1).
+    pub direction: [f32; 3],
+    /// Vertical field of view, radians, in `(0, pi)`.
+    pub fov_y: f32,
+    /// Image width over height, `> 0`.
+    pub aspect: f32,
+    /// Image height, pixels, `> 0`: with `fov_y`, how large an error looks at a distance.
+    pub image_height_px: f32,
+    /// Near clipping distance along the view direction, metres; 0 for none.
+    pub near_m: f32,
+    /// Far clipping distance along the view direction, metres, beyond `near_m`; 0 or infinity for
+    /// none.
+    pub far_m: f32,
+}
+
 /// A loaded model (opaque): the runtime model and its distance policy.
 pub struct MlodModel {
     model: RuntimeModel,
     policy: DistancePolicy,
 }
 
-/// One walker's buffers (opaque): its clip kernel, scratch and last pose, allocated once.
+/// A walker's walk: where its cycle frame is, how far into the cycle, and what the next cycle will
+/// be built with.
+#[derive(Debug, Clone, Copy)]
+struct Walk {
+    frame: CycleFrame,
+    lock: FootLock,
+    /// Time into the current cycle (s).
+    t: f64,
+    cycle: u64,
+    /// Controls and detail of the next cycle.
+    next_controls: [f32; 4],
+    next_detail: Detail,
+    /// The current cycle's detail (resolved).
+    detail: Detail,
+    /// The root in the world at the last frame shown.
+    root: Vec3,
+    root_rotation: Quat,
+    locked: bool,
+}
+
+/// One walker (opaque): its clip kernel, scratch, last pose, walk state and output buffers, all
+/// allocated by `mlod_walker_new`.
 pub struct MlodWalker {
     /// The model the buffers were sized for (identity only, never dereferenced).
     model: *const MlodModel,
@@ -129,10 +292,16 @@ pub struct MlodWalker {
     scratch: KernelScratch,
     pose: Vec<f32>,
     transforms: Vec<JointTransform>,
+    locals: Vec<Quat>,
     /// The prepared cycle's body scale.
     body_scale: f32,
     prepared: bool,
     posed: bool,
+    /// A walk was started (and not ended by `mlod_walker_prepare` or a failed clip).
+    walking: bool,
+    walk: Walk,
+    /// The foot lock is on.
+    foot_lock: bool,
 }
 
 // SAFETY: the raw pointer is only compared, never dereferenced; everything else is owned data.
@@ -156,11 +325,22 @@ fn set_last_error(message: &str) {
     LAST_ERROR.with(|e| *e.borrow_mut() = text);
 }
 
+/// Empties the last error; allocates only when it held a message, so that a successful call
+/// allocates nothing.
+fn clear_last_error() {
+    LAST_ERROR.with(|e| {
+        let mut e = e.borrow_mut();
+        if !e.as_bytes().is_empty() {
+            *e = CString::default();
+        }
+    });
+}
+
 /// Runs `f`, catching panics, and turns its outcome into a status (recording the message).
 fn guard(what: &str, f: impl FnOnce() -> Result<(), Failure>) -> MlodStatus {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(Ok(())) => {
-            set_last_error("");
+            clear_last_error();
             MlodStatus::Ok
         }
         Ok(Err(Failure(status, message))) => {
@@ -222,12 +402,66 @@ unsafe fn out_slice<'a, T>(
     Ok(unsafe { std::slice::from_raw_parts_mut(ptr, len) })
 }
 
+/// The controls as the kernel takes them, checked to be finite.
+fn control_values(c: &MlodControls, name: &str) -> Result<[f32; 4], Failure> {
+    let values = [c.dx, c.dz, c.turn, c.height];
+    if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+        return Err(Failure::invalid(format!(
+            "{name}: control {} is {} (must be finite)",
+            Controls::NAMES[k],
+            values[k]
+        )));
+    }
+    Ok(values)
+}
+
+/// `detail` for `m`: the level checked, the joints clamped to the model's.
+fn checked_detail(m: &MlodModel, detail: MlodDetail, name: &str) -> Result<Detail, Failure> {
+    let lod = m.model.lod();
+    Detail::new(detail.level as usize, detail.joints as usize)
+        .resolve(lod.levels().len(), lod.joints())
+        .ok_or_else(|| {
+            Failure::invalid(format!(
+                "{name}: level {} is out of range (the model has {})",
+                detail.level,
+                lod.levels().len()
+            ))
+        })
+}
+
+/// A policy's detail as the C ABI gives it: a root-only detail at the smallest level (the cheapest
+/// clip, as the crowd evaluates it, [`Detail::evaluated`]), resolved for the model.
+fn policy_detail(m: &MlodModel, detail: Detail) -> Result<MlodDetail, Failure> {
+    let lod = m.model.lod();
+    let d = detail
+        .evaluated()
+        .resolve(lod.levels().len(), lod.joints())
+        .ok_or_else(|| Failure::invalid("the policy chose a level the model lacks"))?;
+    Ok(MlodDetail {
+        level: d.accuracy as u32,
+        joints: d.active_joints as u32,
+    })
+}
+
 fn new_model(model: RuntimeModel) -> Box<MlodModel> {
     let policy = DistancePolicy::for_model(model.lod());
     Box::new(MlodModel { model, policy })
 }
 
-/// Loads a model from the bytes of a model file (`len` bytes at `bytes`) into `*out`.
+/// The library's version, NUL-terminated (for example `"0.1.0"`); the pointer is static.
+#[unsafe(no_mangle)]
+pub extern "C" fn mlod_version() -> *const c_char {
+    VERSION.as_ptr()
+}
+
+/// The ABI version of the library linked: compare it with the header's `MLOD_ABI_VERSION`.
+#[unsafe(no_mangle)]
+pub extern "C" fn mlod_abi_version() -> u32 {
+    MLOD_ABI_VERSION
+}
+
+/// Loads a model from the bytes of a model file (`len` bytes at `bytes`) into `*out` (null on
+/// failure).
 ///
 /// # Safety
 /// `bytes` points to `len` readable bytes; `out` is a valid pointer to write the model pointer to.
@@ -253,7 +487,7 @@ pub unsafe extern "C" fn mlod_model_from_bytes(
     })
 }
 
-/// Loads a model file from `path` (UTF-8, NUL-terminated) into `*out`.
+/// Loads a model file from `path` (UTF-8, NUL-terminated) into `*out` (null on failure).
 ///
 /// # Safety
 /// `path` is a NUL-terminated string; `out` is a valid pointer to write the model pointer to.
@@ -297,9 +531,9 @@ pub unsafe extern "C" fn mlod_model_free(model: *mut MlodModel) {
     }
 }
 
-/// The model's sizes: accuracy levels, joints of the skeleton (the transforms' count), animated
-/// joints (the most a detail's `joints` can ask for) and the pose length in floats. Any output
-/// pointer may be null.
+/// The model's sizes: accuracy levels, joints of the skeleton (the count of joint transforms and
+/// local rotations), animated joints (the most a detail's `joints` can ask for) and the pose length
+/// in floats. Any output pointer may be null.
 ///
 /// # Safety
 /// `model` is a live model; each non-null output points to a writable `size_t`.
@@ -331,9 +565,10 @@ pub unsafe extern "C" fn mlod_model_sizes(
 }
 
 /// Joint `joint`'s name (NUL-terminated, truncated to `capacity` bytes with the NUL) into `name`,
-/// and its parent's index into `*parent` (-1 for the root). Joints are in the model's order
-/// (parents first), the order of the transforms. `name` may be null with `capacity` 0 to
-/// ask only for `*name_len`, the name's length in bytes without the NUL; any output may be null.
+/// and its parent's index into `*parent` (-1 for the skeleton's top joint). Joints are in the
+/// model's order (parents first), the order of the transforms and local rotations. `name` may be
+/// null with `capacity` 0 to ask only for `*name_len`, the name's length in bytes without the NUL;
+/// any output may be null.
 ///
 /// # Safety
 /// `model` is a live model; `name` is null or holds `capacity` bytes; `name_len` and `parent` are
@@ -350,7 +585,7 @@ pub unsafe extern "C" fn mlod_model_joint(
     guard("mlod_model_joint", || {
         // SAFETY: per this function's contract.
         let m = unsafe { reference(model, "model") }?;
-        let rig = &m.model.rig();
+        let rig = m.model.rig();
         if joint >= rig.joint_count() {
             return Err(Failure::invalid(format!(
                 "joint {joint} is out of range (the model has {})",
@@ -381,8 +616,64 @@ pub unsafe extern "C" fn mlod_model_joint(
     })
 }
 
+/// Joint `joint`'s rest transform relative to its parent into `*out`: `translation` is the
+/// joint's offset from its parent (metres, in the parent's frame, for a body scale of 1; a
+/// character of another `body_scale` has every offset that many times as long) and `rotation`
+/// its rest rotation (what `mlod_walker_local_rotations` gives a joint the pose does not move).
+/// The root and any joint not below it are placed by the pose, not by their offsets.
+///
+/// # Safety
+/// `model` is a live model; `out` is writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_model_joint_rest(
+    model: *const MlodModel,
+    joint: usize,
+    out: *mut MlodJointTransform,
+) -> MlodStatus {
+    guard("mlod_model_joint_rest", || {
+        // SAFETY: per this function's contract.
+        let m = unsafe { reference(model, "model") }?;
+        // SAFETY: per this function's contract.
+        let out = unsafe { mutable(out, "out") }?;
+        let rig = m.model.rig();
+        let j = rig.joints().get(joint).ok_or_else(|| {
+            Failure::invalid(format!(
+                "joint {joint} is out of range (the model has {})",
+                rig.joint_count()
+            ))
+        })?;
+        *out = MlodJointTransform {
+            rotation: j.rest.to_array(),
+            translation: j.offset.to_array(),
+        };
+        Ok(())
+    })
+}
+
+/// The index of the root joint into `*out`: the joint the pose's root rows drive, whose local
+/// rotation (`mlod_walker_local_rotations`) is relative to the cycle frame and whose world position
+/// and rotation are the walker state's `root_position` and `root_rotation`. Joints not below it,
+/// if any, are placed on the ground under it.
+///
+/// # Safety
+/// `model` is a live model; `out` is writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_model_root_joint(
+    model: *const MlodModel,
+    out: *mut usize,
+) -> MlodStatus {
+    guard("mlod_model_root_joint", || {
+        // SAFETY: per this function's contract.
+        let m = unsafe { reference(model, "model") }?;
+        // SAFETY: per this function's contract.
+        let out = unsafe { mutable(out, "out") }?;
+        *out = m.model.rig().root();
+        Ok(())
+    })
+}
+
 /// The range of every control over the model's training data (`*min`, `*max`). Controls outside
-/// it are extrapolated, and clamped to the model's margin when a clip is prepared.
+/// it are extrapolated, and clamped to the model's margin when a clip is built.
 ///
 /// # Safety
 /// `model` is a live model; `min` and `max` are writable.
@@ -410,8 +701,9 @@ pub unsafe extern "C" fn mlod_model_control_range(
     })
 }
 
-/// The level of detail the model's distance policy gives a character `distance_m` metres from
-/// the camera (1920 x 1080, 60 degrees vertical field of view; at most about a pixel of error).
+/// The level of detail the model's distance policy gives a visible character `distance_m` metres
+/// from the camera (1920 x 1080, 60 degrees vertical field of view; at most about a pixel of
+/// error). A detail without joints comes at the smallest level (root only, the cheapest clip).
 ///
 /// # Safety
 /// `model` is a live model; `out` is writable.
@@ -431,22 +723,132 @@ pub unsafe extern "C" fn mlod_model_detail_at(
                 "distance {distance_m} m must be finite and >= 0"
             )));
         }
-        let lod = m.model.lod();
-        let detail = m
-            .policy
-            .detail(distance_m, true, &ViewParams::default())
-            .resolve(lod.levels().len(), lod.joints())
-            .ok_or_else(|| Failure::invalid("the policy chose a level the model lacks"))?;
-        *out = MlodDetail {
-            level: detail.accuracy as u32,
-            joints: detail.active_joints as u32,
-        };
+        let detail = m.policy.detail(distance_m, true, &ViewParams::default());
+        *out = policy_detail(m, detail)?;
         Ok(())
     })
 }
 
-/// Creates a walker for `model` into `*out`: its buffers, allocated once (no call on it
-/// allocates afterwards).
+/// Checks every field of a camera (see [`MlodCamera`]).
+fn check_camera(c: &MlodCamera) -> Result<(), Failure> {
+    let bad = |what: String| Err(Failure::invalid(format!("camera: {what}")));
+    if !c.position.iter().chain(&c.direction).all(|v| v.is_finite()) {
+        return bad("position or direction is not finite".into());
+    }
+    let length = Vec3::from_array(c.direction).length();
+    if (length - 1.0).abs() > 1e-3 {
+        return bad(format!(
+            "direction has length {length} (must be a unit vector)"
+        ));
+    }
+    if !(c.fov_y > 0.0 && c.fov_y < std::f32::consts::PI) {
+        return bad(format!("fov_y {} rad is outside (0, pi)", c.fov_y));
+    }
+    if !(c.aspect.is_finite() && c.aspect > 0.0) {
+        return bad(format!("aspect {} must be finite and > 0", c.aspect));
+    }
+    if !(c.image_height_px.is_finite() && c.image_height_px > 0.0) {
+        return bad(format!(
+            "image_height_px {} must be finite and > 0",
+            c.image_height_px
+        ));
+    }
+    if !(c.near_m.is_finite() && c.near_m >= 0.0) {
+        return bad(format!("near_m {} m must be finite and >= 0", c.near_m));
+    }
+    if !(c.far_m == 0.0 || c.far_m > c.near_m) {
+        return bad(format!(
+            "far_m {} m must be 0 (none) or beyond near_m {} m",
+            c.far_m, c.near_m
+        ));
+    }
+    Ok(())
+}
+
+/// Whether a sphere of `radius` around the point `offset` from the eye (`distance` its length) is in
+/// the camera's view cone, between its near and far distances (see [`MlodCamera`]).
+fn in_view(c: &MlodCamera, offset: Vec3, distance: f32, radius: f32) -> bool {
+    let along = offset.dot(Vec3::from_array(c.direction));
+    if c.near_m > 0.0 && along + radius < c.near_m {
+        return false;
+    }
+    if c.far_m > 0.0 && along - radius > c.far_m {
+        return false;
+    }
+    if distance <= radius {
+        return true;
+    }
+    let half = ((0.5 * c.fov_y).tan() * (1.0 + c.aspect * c.aspect).sqrt()).atan();
+    let reach = half + (radius / distance).asin();
+    reach >= std::f32::consts::PI || (along / distance).clamp(-1.0, 1.0).acos() <= reach
+}
+
+/// The detail and visibility the camera gives a sphere of `radius_m` around `p`.
+fn seen(
+    m: &MlodModel,
+    camera: &MlodCamera,
+    p: Vec3,
+    radius_m: f32,
+) -> Result<(MlodDetail, bool), Failure> {
+    check_camera(camera)?;
+    if !p.is_finite() {
+        return Err(Failure::invalid(format!("position {p} is not finite")));
+    }
+    if !(radius_m.is_finite() && radius_m >= 0.0) {
+        return Err(Failure::invalid(format!(
+            "radius {radius_m} m must be finite and >= 0"
+        )));
+    }
+    let offset = p - Vec3::from_array(camera.position);
+    let distance = offset.length();
+    let visible = in_view(camera, offset, distance, radius_m);
+    let view = ViewParams {
+        fov_y_radians: camera.fov_y,
+        image_height_px: camera.image_height_px,
+    };
+    let detail = m.policy.detail(distance, visible, &view);
+    Ok((policy_detail(m, detail)?, visible))
+}
+
+/// The level of detail the model's distance policy gives a character at the world position
+/// `(x, y, z)` (metres) seen by `camera`, and whether it is in view: a sphere of `radius_m` metres
+/// around the position (one that holds the character's body) meets the camera's view (see
+/// `MlodCamera`). The distance is the position's from the eye; out of view the detail is root only
+/// (no joints, the smallest level). `visible` may be null.
+///
+/// # Safety
+/// `model` is a live model; `camera` is readable; `out` is writable; `visible` is null or writable.
+#[unsafe(no_mangle)]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn mlod_model_detail_from_camera(
+    model: *const MlodModel,
+    camera: *const MlodCamera,
+    x: f32,
+    y: f32,
+    z: f32,
+    radius_m: f32,
+    out: *mut MlodDetail,
+    visible: *mut bool,
+) -> MlodStatus {
+    guard("mlod_model_detail_from_camera", || {
+        // SAFETY: per this function's contract.
+        let m = unsafe { reference(model, "model") }?;
+        // SAFETY: per this function's contract.
+        let camera = unsafe { reference(camera, "camera") }?;
+        // SAFETY: per this function's contract.
+        let out = unsafe { mutable(out, "out") }?;
+        let (detail, seen_now) = seen(m, camera, Vec3::new(x, y, z), radius_m)?;
+        *out = detail;
+        // SAFETY: null or writable per the contract.
+        if let Some(v) = unsafe { visible.as_mut() } {
+            *v = seen_now;
+        }
+        Ok(())
+    })
+}
+
+/// Creates a walker for `model` into `*out` (null on failure): its buffers, allocated once (no
+/// call on it allocates afterwards). Its foot lock is on.
 ///
 /// # Safety
 /// `model` is a live model; `out` is writable.
@@ -461,16 +863,32 @@ pub unsafe extern "C" fn mlod_walker_new(
         *out = std::ptr::null_mut();
         // SAFETY: per this function's contract.
         let m = unsafe { reference(model, "model") }?;
-        let lod = &m.model.lod();
+        let lod = m.model.lod();
+        let joints = m.model.rig().joint_count();
         let walker = MlodWalker {
             model,
             kernel: ClipKernel::new(lod),
             scratch: KernelScratch::new(lod),
             pose: vec![0.0; lod.p()],
-            transforms: vec![JointTransform::default(); m.model.rig().joint_count()],
+            transforms: vec![JointTransform::default(); joints],
+            locals: vec![Quat::IDENTITY; joints],
             body_scale: 1.0,
             prepared: false,
             posed: false,
+            walking: false,
+            walk: Walk {
+                frame: CycleFrame::default(),
+                lock: FootLock::new(),
+                t: 0.0,
+                cycle: 0,
+                next_controls: [0.0; 4],
+                next_detail: Detail::root_only(),
+                detail: Detail::root_only(),
+                root: Vec3::ZERO,
+                root_rotation: Quat::IDENTITY,
+                locked: false,
+            },
+            foot_lock: true,
         };
         *out = Box::into_raw(Box::new(walker));
         Ok(())
@@ -507,10 +925,31 @@ unsafe fn walker_and_model<'a>(
     Ok((w, m))
 }
 
+/// Builds the walker's clip for `values` at `detail` (checked), with its body scale. On failure
+/// the walker has no clip (and no walk).
+fn build_clip(
+    w: &mut MlodWalker,
+    m: &MlodModel,
+    values: &[f32; 4],
+    detail: Detail,
+) -> Result<(), Failure> {
+    w.prepared = false;
+    w.posed = false;
+    w.walking = false;
+    m.model
+        .lod()
+        .build_kernel(values, detail, &mut w.scratch, &mut w.kernel)
+        .map_err(|e| Failure::invalid(e.to_string()))?;
+    w.body_scale = m.model.body_scale(&Controls::from_array(*values));
+    w.prepared = true;
+    Ok(())
+}
+
 /// Prepares the walker's next cycle: the clip for `controls` at `detail` (the kriging weights and
 /// blended core of the paper's eq. 8). Controls beyond the model's margin are clamped (see
 /// `mlod_model_control_range`); `*cycle`, when not null, receives the cycle's duration and root
-/// motion.
+/// motion. This is the lower-level path, for engines that chain cycles themselves; it ends a walk
+/// started by `mlod_walker_start`.
 ///
 /// # Safety
 /// `walker` and `model` are live and belong together; `controls` is readable; `cycle` is null or
@@ -528,29 +967,9 @@ pub unsafe extern "C" fn mlod_walker_prepare(
         let (w, m) = unsafe { walker_and_model(walker, model) }?;
         // SAFETY: per this function's contract.
         let c = unsafe { reference(controls, "controls") }?;
-        let values = [c.dx, c.dz, c.turn, c.height];
-        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-            return Err(Failure::invalid(format!(
-                "control {} is {} (must be finite)",
-                ["dx", "dz", "turn", "height"][k],
-                values[k]
-            )));
-        }
-        let lod = &m.model.lod();
-        if detail.level as usize >= lod.levels().len() {
-            return Err(Failure::invalid(format!(
-                "level {} is out of range (the model has {})",
-                detail.level,
-                lod.levels().len()
-            )));
-        }
-        w.prepared = false;
-        w.posed = false;
-        let d = Detail::new(detail.level as usize, detail.joints as usize);
-        lod.build_kernel(&values, d, &mut w.scratch, &mut w.kernel)
-            .map_err(|e| Failure::invalid(e.to_string()))?;
-        w.body_scale = m.model.body_scale(&Controls::from_array(values));
-        w.prepared = true;
+        let values = control_values(c, "controls")?;
+        let detail = checked_detail(m, detail, "detail")?;
+        build_clip(w, m, &values, detail)?;
         // SAFETY: null or writable per the contract.
         if let Some(out) = unsafe { cycle.as_mut() } {
             let motion = w.kernel.root_motion();
@@ -566,8 +985,10 @@ pub unsafe extern "C" fn mlod_walker_prepare(
     })
 }
 
-/// Evaluates the prepared cycle `seconds` into it (clamped to the cycle) into `pose`
-/// (`len >= mlod_model_pose_len` floats), and keeps it for `mlod_walker_joint_transforms`.
+/// Evaluates the prepared cycle `seconds` into it (clamped to the cycle) into `pose` (`len >=` the
+/// `pose_len` of `mlod_model_sizes` floats), and keeps it for `mlod_walker_joint_transforms` and
+/// `mlod_walker_local_rotations`. No foot lock: the lower-level path (`mlod_walker_prepare`). On a
+/// walking walker it replaces what those two read until the next `mlod_walker_advance`.
 ///
 /// # Safety
 /// `walker` and `model` are live and belong together; `pose` is null or holds `len` floats
@@ -586,30 +1007,294 @@ pub unsafe extern "C" fn mlod_walker_pose(
         if !w.prepared {
             return Err(Failure(
                 MlodStatus::NotPrepared,
-                "no clip: call mlod_walker_prepare first".into(),
+                "no clip: call mlod_walker_prepare or mlod_walker_start first".into(),
             ));
         }
         if !seconds.is_finite() {
             return Err(Failure::invalid(format!("time {seconds} s is not finite")));
         }
-        let lod = &m.model.lod();
+        let lod = m.model.lod();
+        let out = if pose.is_null() {
+            None
+        } else {
+            // SAFETY: per this function's contract.
+            Some(unsafe { out_slice(pose, len, lod.p(), "pose") }?)
+        };
         let phase = w.kernel.phase_at(seconds);
         lod.pose(&w.kernel, phase, &mut w.pose)
             .map_err(|e| Failure::invalid(e.to_string()))?;
         w.posed = true;
-        if !pose.is_null() {
-            // SAFETY: per this function's contract.
-            let out = unsafe { out_slice(pose, len, lod.p(), "pose") }?;
+        if let Some(out) = out {
             out[..lod.p()].copy_from_slice(&w.pose);
         }
         Ok(())
     })
 }
 
-/// The world transforms (cycle frame) of every joint for the pose last evaluated by
-/// `mlod_walker_pose`, into `out` (`len >=` the `joints` of `mlod_model_sizes`, in joint order), for a
-/// body of the prepared cycle's `body_scale`. Joints beyond the prepared detail's count keep the mean
-/// pose's rotations.
+/// The walker's pose for the current time of its walk, with the foot lock, and its root in the
+/// world (step 4 of `examples/engine`'s loop). `dt` is the time since the previous frame (s).
+fn show_frame(w: &mut MlodWalker, m: &MlodModel, dt: f32) -> Result<(), Failure> {
+    let (lod, rig) = (m.model.lod(), m.model.rig());
+    let walk = &mut w.walk;
+    w.posed = false;
+    lod.pose(&w.kernel, w.kernel.phase_at(walk.t), &mut w.pose)
+        .map_err(|e| Failure::invalid(e.to_string()))?;
+    let active = walk.detail.active_joints;
+    walk.locked = false;
+    if let (true, Some(feet)) = (w.foot_lock, m.model.feet()) {
+        walk.lock
+            .apply(
+                rig,
+                feet,
+                &walk.frame,
+                active,
+                w.body_scale,
+                dt,
+                &mut w.pose,
+            )
+            .map_err(|e| Failure::invalid(e.to_string()))?;
+        walk.locked = true;
+    }
+    w.posed = true;
+    let root = Vec3::new(w.pose[0], w.pose[1], w.pose[2]);
+    let orientation = Vec3::new(w.pose[3], w.pose[4], w.pose[5]);
+    walk.root = walk.frame.to_world(root);
+    // The root's local rotation, as `Rig::local_rotations` gives it.
+    walk.root_rotation = walk.frame.rotation() * lod_policy::rig::exp_to_quat(orientation);
+    Ok(())
+}
+
+/// The walker's state after a frame; `begun` cycles were begun by the call.
+fn state_of(w: &MlodWalker, begun: u32) -> MlodWalkerState {
+    let walk = &w.walk;
+    MlodWalkerState {
+        time_in_cycle_s: walk.t,
+        cycle_duration_s: w.kernel.duration(),
+        cycle: walk.cycle,
+        root_position: walk.root.to_array(),
+        root_rotation: walk.root_rotation.into(),
+        cycle_x: walk.frame.x,
+        cycle_z: walk.frame.z,
+        heading: walk.frame.heading,
+        body_scale: w.body_scale,
+        detail: MlodDetail {
+            level: walk.detail.accuracy as u32,
+            joints: walk.detail.active_joints as u32,
+        },
+        cycles_begun: begun,
+        foot_locked: walk.locked,
+    }
+}
+
+/// Starts a walk: the walker's first cycle, built for `controls` at `detail`, begins in the cycle
+/// frame at `(x, z)` on the ground (metres) facing `heading` (radians about +y, 0 = +z; kept
+/// wrapped to `(-pi, pi]`), and the walk's first frame (time 0 of that cycle) is evaluated, with
+/// the foot lock starting afresh (a foot is planted from the second frame on, once its speed is
+/// known). `*state`, when not null, receives where the walker is. The controls and detail are also
+/// those of the following cycles until `mlod_walker_advance` is given others. Starting again moves
+/// the walker (the lock forgets its feet).
+///
+/// # Safety
+/// `walker` and `model` are live and belong together; `controls` is readable; `state` is null or
+/// writable.
+#[unsafe(no_mangle)]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn mlod_walker_start(
+    walker: *mut MlodWalker,
+    model: *const MlodModel,
+    controls: *const MlodControls,
+    detail: MlodDetail,
+    x: f32,
+    z: f32,
+    heading: f32,
+    state: *mut MlodWalkerState,
+) -> MlodStatus {
+    guard("mlod_walker_start", || {
+        // SAFETY: per this function's contract.
+        let (w, m) = unsafe { walker_and_model(walker, model) }?;
+        // SAFETY: per this function's contract.
+        let c = unsafe { reference(controls, "controls") }?;
+        let values = control_values(c, "controls")?;
+        let detail = checked_detail(m, detail, "detail")?;
+        if let Some((name, v)) = [("x", x), ("z", z), ("heading", heading)]
+            .into_iter()
+            .find(|(_, v)| !v.is_finite())
+        {
+            return Err(Failure::invalid(format!("{name} is {v} (must be finite)")));
+        }
+        build_clip(w, m, &values, detail)?;
+        w.walk = Walk {
+            frame: CycleFrame {
+                x,
+                z,
+                heading: wrap_angle(heading),
+            },
+            lock: FootLock::new(),
+            t: 0.0,
+            cycle: 0,
+            next_controls: values,
+            next_detail: detail,
+            detail,
+            root: Vec3::ZERO,
+            root_rotation: Quat::IDENTITY,
+            locked: false,
+        };
+        show_frame(w, m, FIRST_FRAME_STEP_S)?;
+        w.walking = true;
+        // SAFETY: null or writable per the contract.
+        if let Some(out) = unsafe { state.as_mut() } {
+            *out = state_of(w, 0);
+        }
+        Ok(())
+    })
+}
+
+/// Moves the walk `dt_s` seconds forward (`0 < dt_s <=` `MLOD_MAX_STEP_S`) and evaluates the frame
+/// there: the pose, the foot lock (when on and the model knows its feet), the root in the world.
+/// When the current cycle ends on the way, the walker's cycle frame moves by that cycle's root
+/// motion and heading change, and the next cycle is built with `next_controls` at `next_detail`
+/// (the time past the end carries into it; a long step may chain several). Until a cycle ends they
+/// are only kept: the current cycle goes on as it was built, as the runtime chains cycles. Either
+/// may be null to keep those given before (at the start or by an earlier call). `*state`, when not
+/// null, receives where the walker is.
+///
+/// Arguments are checked before anything changes. Should a clip fail to build (it does not with
+/// checked arguments), the walk ends: start it again.
+///
+/// # Safety
+/// `walker` and `model` are live and belong together; `next_controls` and `next_detail` are null
+/// or readable; `state` is null or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_walker_advance(
+    walker: *mut MlodWalker,
+    model: *const MlodModel,
+    dt_s: f64,
+    next_controls: *const MlodControls,
+    next_detail: *const MlodDetail,
+    state: *mut MlodWalkerState,
+) -> MlodStatus {
+    guard("mlod_walker_advance", || {
+        // SAFETY: per this function's contract.
+        let (w, m) = unsafe { walker_and_model(walker, model) }?;
+        if !w.walking {
+            return Err(Failure(
+                MlodStatus::NotPrepared,
+                "no walk: call mlod_walker_start first".into(),
+            ));
+        }
+        if !(dt_s.is_finite() && dt_s > 0.0 && dt_s <= MLOD_MAX_STEP_S) {
+            return Err(Failure::invalid(format!(
+                "step {dt_s} s must be finite, > 0 and <= {MLOD_MAX_STEP_S} s"
+            )));
+        }
+        // SAFETY: null or readable per the contract.
+        let controls = match unsafe { next_controls.as_ref() } {
+            Some(c) => Some(control_values(c, "next_controls")?),
+            None => None,
+        };
+        // SAFETY: null or readable per the contract.
+        let detail = match unsafe { next_detail.as_ref() } {
+            Some(d) => Some(checked_detail(m, *d, "next_detail")?),
+            None => None,
+        };
+        if let Some(c) = controls {
+            w.walk.next_controls = c;
+        }
+        if let Some(d) = detail {
+            w.walk.next_detail = d;
+        }
+        w.walk.t += dt_s;
+        let mut begun = 0u32;
+        while w.walk.t >= w.kernel.duration() {
+            w.walk.t -= w.kernel.duration();
+            w.walk.frame = w.walk.frame.next(&w.kernel.root_motion());
+            let (values, detail) = (w.walk.next_controls, w.walk.next_detail);
+            build_clip(w, m, &values, detail)?;
+            w.walk.detail = detail;
+            w.walk.cycle += 1;
+            begun += 1;
+        }
+        w.walking = false;
+        show_frame(w, m, dt_s as f32)?;
+        w.walking = true;
+        // SAFETY: null or writable per the contract.
+        if let Some(out) = unsafe { state.as_mut() } {
+            *out = state_of(w, begun);
+        }
+        Ok(())
+    })
+}
+
+/// Turns the walker's foot lock on or off (it is on from `mlod_walker_new`). Turning it off
+/// forgets the planted feet, so that turning it on again starts afresh; it takes effect at the
+/// next `mlod_walker_advance`. Without feet in the model (the state's `foot_locked` stays false)
+/// it changes nothing.
+///
+/// # Safety
+/// `walker` is a live walker.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_walker_set_foot_lock(
+    walker: *mut MlodWalker,
+    enabled: bool,
+) -> MlodStatus {
+    guard("mlod_walker_set_foot_lock", || {
+        // SAFETY: per this function's contract.
+        let w = unsafe { mutable(walker, "walker") }?;
+        if !enabled {
+            w.walk.lock.release();
+        }
+        w.foot_lock = enabled;
+        Ok(())
+    })
+}
+
+/// The level of detail `camera` gives the walker, and whether it is in view, from where its root
+/// was at the last frame `mlod_walker_start` or `mlod_walker_advance` evaluated, with a sphere of
+/// `radius_m` metres around the root holding its body (two thirds of its height holds a walking
+/// character's limbs); otherwise as `mlod_model_detail_from_camera`. Pass the result as the
+/// `next_detail` of `mlod_walker_advance`. `visible` may be null.
+///
+/// # Safety
+/// `walker` and `model` are live and belong together; `camera` is readable; `out` is writable;
+/// `visible` is null or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_walker_detail_from_camera(
+    walker: *mut MlodWalker,
+    model: *const MlodModel,
+    camera: *const MlodCamera,
+    radius_m: f32,
+    out: *mut MlodDetail,
+    visible: *mut bool,
+) -> MlodStatus {
+    guard("mlod_walker_detail_from_camera", || {
+        // SAFETY: per this function's contract.
+        let (w, m) = unsafe { walker_and_model(walker, model) }?;
+        // SAFETY: per this function's contract.
+        let camera = unsafe { reference(camera, "camera") }?;
+        // SAFETY: per this function's contract.
+        let out = unsafe { mutable(out, "out") }?;
+        if !w.walking {
+            return Err(Failure(
+                MlodStatus::NotPrepared,
+                "no walk: call mlod_walker_start first".into(),
+            ));
+        }
+        let (detail, seen_now) = seen(m, camera, w.walk.root, radius_m)?;
+        *out = detail;
+        // SAFETY: null or writable per the contract.
+        if let Some(v) = unsafe { visible.as_mut() } {
+            *v = seen_now;
+        }
+        Ok(())
+    })
+}
+
+/// The transforms (cycle frame) of every joint for the walker's last pose (the frame
+/// `mlod_walker_start` or `mlod_walker_advance` evaluated, with its planted feet, or the pose of
+/// `mlod_walker_pose`), into `out` (`len >=` the `joints` of `mlod_model_sizes`, in joint order),
+/// for a body of the cycle's `body_scale`. Joints beyond the cycle's detail keep the mean pose's
+/// rotations. To place them in the world, rotate them by the state's heading about +y and move
+/// them by `(cycle_x, 0, cycle_z)`.
 ///
 /// # Safety
 /// `walker` and `model` are live and belong together; `out` holds `len` elements.
@@ -626,10 +1311,10 @@ pub unsafe extern "C" fn mlod_walker_joint_transforms(
         if !w.posed {
             return Err(Failure(
                 MlodStatus::NotPrepared,
-                "no pose: call mlod_walker_pose first".into(),
+                "no pose: call mlod_walker_start or mlod_walker_pose first".into(),
             ));
         }
-        let rig = &m.model.rig();
+        let rig = m.model.rig();
         // SAFETY: per this function's contract.
         let out = unsafe { out_slice(out, len, rig.joint_count(), "out") }?;
         let active = w.kernel.detail().active_joints;
@@ -640,6 +1325,45 @@ pub unsafe extern "C" fn mlod_walker_joint_transforms(
                 rotation: t.rotation.to_array(),
                 translation: t.position.to_array(),
             };
+        }
+        Ok(())
+    })
+}
+
+/// Every joint's rotation relative to its parent for the walker's last pose (as
+/// `mlod_walker_joint_transforms`), into `out` (`len >=` the `joints` of `mlod_model_sizes`, in
+/// joint order): what a skinned mesh's bones take, with the skeleton's joint offsets
+/// (`mlod_model_joint_rest`, times the state's `body_scale`) as local translations. The root's
+/// rotation is relative to the cycle frame; in the world the root is at the state's
+/// `root_position` with its `root_rotation`. A joint beyond the cycle's detail, or one that never
+/// moves, has its rest rotation; a joint not below the root has none (identity).
+///
+/// # Safety
+/// `walker` and `model` are live and belong together; `out` holds `len` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_walker_local_rotations(
+    walker: *mut MlodWalker,
+    model: *const MlodModel,
+    out: *mut MlodQuat,
+    len: usize,
+) -> MlodStatus {
+    guard("mlod_walker_local_rotations", || {
+        // SAFETY: per this function's contract.
+        let (w, m) = unsafe { walker_and_model(walker, model) }?;
+        if !w.posed {
+            return Err(Failure(
+                MlodStatus::NotPrepared,
+                "no pose: call mlod_walker_start or mlod_walker_pose first".into(),
+            ));
+        }
+        let rig = m.model.rig();
+        // SAFETY: per this function's contract.
+        let out = unsafe { out_slice(out, len, rig.joint_count(), "out") }?;
+        let active = w.kernel.detail().active_joints;
+        rig.local_rotations(&w.pose, active, &mut w.locals)
+            .map_err(|e| Failure::invalid(e.to_string()))?;
+        for (o, q) in out.iter_mut().zip(&w.locals) {
+            *o = (*q).into();
         }
         Ok(())
     })

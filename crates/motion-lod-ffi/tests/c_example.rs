@@ -1,21 +1,53 @@
 //! `examples/crowd.c`, compiled by the system's C compiler against the checked-in header and this
-//! crate's static library, animates a small crowd; its poses, joint transforms and root positions
-//! equal the Rust API's bit for bit, computed here the same way.
+//! crate's static library, walks 1,000 characters for 120 frames through the C ABI alone: details
+//! from the camera, cycles chained by the library with controls that change every cycle, the foot
+//! lock, local rotations and joint transforms. Every value it prints (all values of a subset of
+//! walkers and frames, and a checksum of every value of every frame of every walker) equals the
+//! same walk computed here through the Rust runtime API (`lod_policy`, as `examples/engine` walks),
+//! bit for bit.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use lod_policy::glam::{Quat, Vec3};
 use lod_policy::{
-    ClipKernel, DistancePolicy, JointTransform, KernelScratch, LevelPolicy, RuntimeModel,
-    ViewParams,
+    ClipKernel, Controls, CycleFrame, Detail, DistancePolicy, FootLock, JointTransform,
+    KernelScratch, LevelPolicy, RuntimeModel, ViewParams, wrap_angle,
 };
 use motion_lod::dataset::DataSpec;
 use motion_lod::progress::NoProgress;
 use motion_lod::{BuildConfig, MotionModel};
 
-const WALKERS: usize = 6;
-const FRAMES: usize = 45;
+// The constants of `examples/crowd.c`.
+const WALKERS: usize = 1000;
+const COLUMNS: usize = 40;
+const FRAMES: usize = 120;
+const DUMP_EVERY_WALKER: usize = 97;
+const DUMP_EVERY_FRAME: usize = 29;
 const FPS: f64 = 30.0;
+const SPACING_M: f32 = 4.0;
+const RADIUS_M: f32 = 1.2;
+
+/// The camera of `examples/crowd.c`.
+struct Camera {
+    position: Vec3,
+    direction: Vec3,
+    fov_y: f32,
+    aspect: f32,
+    image_height_px: f32,
+    near_m: f32,
+    far_m: f32,
+}
+
+const CAMERA: Camera = Camera {
+    position: Vec3::new(0.0, 1.7, -8.0),
+    direction: Vec3::Z,
+    fov_y: std::f32::consts::FRAC_PI_3, // 1.0471976f in crowd.c, the same float
+    aspect: 16.0 / 9.0,
+    image_height_px: 1080.0,
+    near_m: 0.1,
+    far_m: 90.0,
+};
 
 /// The folder holding this test binary's build artifacts (`target/<profile>`).
 fn profile_dir() -> PathBuf {
@@ -59,78 +91,205 @@ fn write_model(path: &Path) {
     model.save(path).expect("model saves");
 }
 
-fn hex(values: &[f32]) -> String {
-    values
-        .iter()
-        .map(|v| format!(" {:08x}", v.to_bits()))
-        .collect()
+/// `controls_for` of `examples/crowd.c`: walker `i`'s controls for its cycle `k`.
+fn controls_for(lo: &[f32], hi: &[f32], i: usize, k: u64) -> [f32; 4] {
+    let u = ((i as i64 * 7 + k as i64 * 3) % 11) as f32 / 10.0;
+    let v = ((i as i64 * 5 + k as i64 * 2) % 7) as f32 / 6.0;
+    [
+        lo[0] + (hi[0] - lo[0]) * (0.25 + 0.5 * v),
+        lo[1] + (hi[1] - lo[1]) * u,
+        lo[2] + (hi[2] - lo[2]) * (1.0 - u),
+        lo[3] + (hi[3] - lo[3]) * v,
+    ]
 }
 
-/// What `crowd.c --dump` prints, computed through the Rust API.
-fn rust_dump(model: &RuntimeModel) -> String {
+/// Whether a sphere of `radius` around `p` is in the camera's view: the cone through the image's
+/// corners, between the near and far distances along the view direction (as `MlodCamera`
+/// documents it).
+fn in_view(c: &Camera, p: Vec3, radius: f32) -> (f32, bool) {
+    let offset = p - c.position;
+    let distance = offset.length();
+    let along = offset.dot(c.direction);
+    let before_near = c.near_m > 0.0 && along + radius < c.near_m;
+    let beyond_far = c.far_m > 0.0 && along - radius > c.far_m;
+    let visible = if before_near || beyond_far {
+        false
+    } else if distance <= radius {
+        true
+    } else {
+        let half = ((0.5 * c.fov_y).tan() * (1.0 + c.aspect * c.aspect).sqrt()).atan();
+        let reach = half + (radius / distance).asin();
+        reach >= std::f32::consts::PI || (along / distance).clamp(-1.0, 1.0).acos() <= reach
+    };
+    (distance, visible)
+}
+
+/// The detail the distance policy gives a sphere of `RADIUS_M` around `p` seen by the camera,
+/// root only at the smallest level when it has no joints, and whether it is in view.
+fn camera_detail(model: &RuntimeModel, policy: &DistancePolicy, p: Vec3) -> (Detail, bool) {
+    let (distance, visible) = in_view(&CAMERA, p, RADIUS_M);
+    let view = ViewParams {
+        fov_y_radians: CAMERA.fov_y,
+        image_height_px: CAMERA.image_height_px,
+    };
     let lod = model.lod();
+    let detail = policy
+        .detail(distance, visible, &view)
+        .evaluated()
+        .resolve(lod.levels().len(), lod.joints())
+        .expect("policy level");
+    (detail, visible)
+}
+
+/// FNV-1a over 32-bit words, as `examples/crowd.c` mixes them.
+fn mix(h: u64, word: u32) -> u64 {
+    (h ^ u64::from(word)).wrapping_mul(0x100000001b3)
+}
+
+fn hex(words: &[u32]) -> String {
+    words.iter().map(|w| format!(" {w:08x}")).collect()
+}
+
+fn float_words(values: impl IntoIterator<Item = f32>) -> Vec<u32> {
+    values.into_iter().map(f32::to_bits).collect()
+}
+
+/// What `crowd.c --dump` prints, computed through the Rust runtime API, and how many walker-frames
+/// had their feet locked.
+fn rust_dump(model: &RuntimeModel) -> (String, usize) {
+    let (lod, rig) = (model.lod(), model.rig());
+    let feet = model.feet().expect("the embedded model knows its feet");
     let policy = DistancePolicy::for_model(lod);
-    let joints = model.rig().joint_count();
-    let animated = model.rig().rotating_joints().len();
+    let joints = rig.joint_count();
     let c = lod.controls();
     let (lo, hi) = (&c.min, &c.max);
-    let mut out = String::new();
+    let dt = 1.0 / FPS;
     let mut kernel = ClipKernel::new(lod);
     let mut scratch = KernelScratch::new(lod);
     let mut pose = vec![0.0f32; lod.p()];
+    let mut locals = vec![Quat::IDENTITY; joints];
     let mut transforms = vec![JointTransform::default(); joints];
+    // (frame, walker, line): the C program prints frame by frame.
+    let mut lines: Vec<(usize, usize, String)> = Vec::new();
+    let mut sums = Vec::with_capacity(WALKERS);
+    let mut locked_frames = 0;
     for i in 0..WALKERS {
-        let distance = 3.0f32 * 4.0f32.powf(i as f32);
-        let u = i as f32 / (WALKERS - 1) as f32;
-        let controls = [
-            lo[0] + (hi[0] - lo[0]) * 0.5,
-            lo[1] + (hi[1] - lo[1]) * u,
-            lo[2] + (hi[2] - lo[2]) * (1.0 - u),
-            lo[3] + (hi[3] - lo[3]) * 0.5,
-        ];
-        let detail = policy
-            .detail(distance, true, &ViewParams::default())
-            .resolve(lod.levels().len(), animated)
-            .expect("policy level");
-        let (level, active) = (detail.accuracy, detail.active_joints);
+        // Walker i starts on the grid, its detail from the camera at its start position.
+        let x = ((i % COLUMNS) as f32 - 19.5) * SPACING_M;
+        let z = ((i / COLUMNS) as f32 - 5.0) * SPACING_M;
+        // 0.39269908f in crowd.c, the same float.
+        let heading = (i % 16) as f32 * std::f32::consts::FRAC_PI_8 - 3.0;
+        let (mut detail, mut visible) = camera_detail(model, &policy, Vec3::new(x, 1.0, z));
+        let mut controls = controls_for(lo, hi, i, 0);
         lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
             .expect("kernel");
-        let mut root = [0.0f32; 3];
+        let mut body_scale = model.body_scale(&Controls::from_array(controls));
+        let mut cycle_detail = detail;
+        let mut frame = CycleFrame {
+            x,
+            z,
+            heading: wrap_angle(heading),
+        };
+        let mut lock = FootLock::new();
         let mut t = 0.0f64;
+        let mut cycle = 0u64;
+        let mut root = Vec3::ZERO;
+        let mut h: u64 = 0xcbf29ce484222325;
         for f in 0..FRAMES {
-            while t >= kernel.duration() {
-                t -= kernel.duration();
-                let motion = kernel.root_motion();
-                let (s, co) = (root[2].sin(), root[2].cos());
-                root[0] += co * motion.dx + s * motion.dz;
-                root[1] += -s * motion.dx + co * motion.dz;
-                root[2] += motion.turn;
-                lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
-                    .expect("kernel");
+            let mut begun = 0u32;
+            if f > 0 {
+                // The next cycle's detail from where the walker is, and its controls; used when
+                // the current cycle ends (the engine example's chaining).
+                (detail, visible) = camera_detail(model, &policy, root);
+                controls = controls_for(lo, hi, i, cycle + 1);
+                t += dt;
+                while t >= kernel.duration() {
+                    t -= kernel.duration();
+                    frame = frame.next(&kernel.root_motion());
+                    lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
+                        .expect("kernel");
+                    body_scale = model.body_scale(&Controls::from_array(controls));
+                    cycle_detail = detail;
+                    cycle += 1;
+                    begun += 1;
+                }
             }
+            let active = cycle_detail.active_joints;
             lod.pose(&kernel, kernel.phase_at(t), &mut pose)
                 .expect("pose");
-            let scale = model.body_scale(&lod_policy::Controls::from_array(controls));
-            model
-                .rig()
-                .joint_transforms_scaled(&pose, active, scale, &mut transforms)
+            lock.apply(rig, feet, &frame, active, body_scale, dt as f32, &mut pose)
+                .expect("foot lock");
+            locked_frames += 1;
+            rig.local_rotations(&pose, active, &mut locals)
+                .expect("local rotations");
+            root = frame.to_world(Vec3::new(pose[0], pose[1], pose[2]));
+            let root_rotation = frame.rotation() * locals[rig.root()];
+            rig.joint_transforms_scaled(&pose, active, body_scale, &mut transforms)
                 .expect("transforms");
-            let flat: Vec<f32> = transforms
+
+            let (t_bits, d_bits) = (t.to_bits(), kernel.duration().to_bits());
+            let mut state = vec![
+                t_bits as u32,
+                (t_bits >> 32) as u32,
+                d_bits as u32,
+                (d_bits >> 32) as u32,
+                cycle as u32,
+                (cycle >> 32) as u32,
+            ];
+            state.extend(float_words(root.to_array()));
+            state.extend(float_words(root_rotation.to_array()));
+            state.extend(float_words([frame.x, frame.z, frame.heading, body_scale]));
+            state.extend([
+                cycle_detail.accuracy as u32,
+                cycle_detail.active_joints as u32,
+                begun,
+                1, // feet locked
+            ]);
+            let local_words = float_words(locals.iter().flat_map(|q| q.to_array()));
+            let joint_words = float_words(transforms.iter().flat_map(|t| {
+                let (r, p) = (t.rotation.to_array(), t.position.to_array());
+                [r[0], r[1], r[2], r[3], p[0], p[1], p[2]]
+            }));
+            let head = [
+                f as u32,
+                detail.accuracy as u32,
+                detail.active_joints as u32,
+                u32::from(visible),
+            ];
+            for w in head
                 .iter()
-                .flat_map(|t| {
-                    let r = t.rotation.to_array();
-                    let p = t.position.to_array();
-                    [r[0], r[1], r[2], r[3], p[0], p[1], p[2]]
-                })
-                .collect();
-            out.push_str(&format!("D {i} {f} {level} {active}\n"));
-            out.push_str(&format!("P {i} {f}{}\n", hex(&pose)));
-            out.push_str(&format!("J {i} {f}{}\n", hex(&flat)));
-            out.push_str(&format!("R {i} {f}{}\n", hex(&root)));
-            t += 1.0 / FPS;
+                .chain(&state)
+                .chain(&local_words)
+                .chain(&joint_words)
+            {
+                h = mix(h, *w);
+            }
+            if i % DUMP_EVERY_WALKER == 0 && (f % DUMP_EVERY_FRAME == 0 || f == FRAMES - 1) {
+                let (level, active, vis) = (head[1], head[2], head[3]);
+                let text = format!(
+                    "D {i} {f} {level} {active} {vis}\nS {i} {f}{}\nL {i} {f}{}\nJ {i} {f}{}",
+                    hex(&state),
+                    hex(&local_words),
+                    hex(&joint_words)
+                );
+                lines.push((f, i, text));
+            }
         }
+        let t_bits = t.to_bits();
+        for w in [
+            cycle as u32,
+            (cycle >> 32) as u32,
+            t_bits as u32,
+            (t_bits >> 32) as u32,
+        ] {
+            h = mix(h, w);
+        }
+        sums.push(format!("H {i} {cycle} {h:016x}"));
     }
-    out
+    lines.sort_by_key(|(f, i, _)| (*f, *i));
+    let mut out: Vec<String> = lines.into_iter().map(|(_, _, l)| l).collect();
+    out.extend(sums);
+    (out.join("\n") + "\n", locked_frames)
 }
 
 #[test]
@@ -166,7 +325,19 @@ fn c_crowd_matches_the_rust_api_bit_for_bit() {
         text,
         String::from_utf8_lossy(&summary.stderr)
     );
-    assert_eq!(text.matches("walker ").count(), WALKERS, "{text}");
+    println!("{text}");
+    assert!(
+        text.contains(&format!("walkers: {WALKERS} for {FRAMES} frames")),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!(
+            "motion-lod {} (ABI {})",
+            env!("CARGO_PKG_VERSION"),
+            motion_lod_ffi::MLOD_ABI_VERSION
+        )),
+        "{text}"
+    );
     assert!(text.contains("garbage bytes refused"), "{text}");
 
     let dump = Command::new(&exe)
@@ -181,17 +352,44 @@ fn c_crowd_matches_the_rust_api_bit_for_bit() {
     );
     let c_lines = String::from_utf8(dump.stdout).expect("ASCII");
     let model = RuntimeModel::load(&model_path).expect("the runtime loads the model");
-    let rust_lines = rust_dump(&model);
+    let (rust_lines, locked) = rust_dump(&model);
+    assert_eq!(locked, WALKERS * FRAMES, "the reference locks every frame");
     assert_eq!(c_lines.lines().count(), rust_lines.lines().count());
     for (c, r) in c_lines.lines().zip(rust_lines.lines()) {
         assert_eq!(c, r, "the C example differs from the Rust API");
     }
-    // The crowd uses more than one level of detail, so the comparison covers several.
+    // Every walker's checksum was compared; the walk crossed several cycles, with and without the
+    // camera's view and at several levels of detail, feet locked (the state's last word).
+    let checksums: Vec<&str> = c_lines.lines().filter(|l| l.starts_with("H ")).collect();
+    assert_eq!(checksums.len(), WALKERS);
+    let fewest_cycles = checksums
+        .iter()
+        .map(|l| {
+            l.split(' ')
+                .nth(2)
+                .and_then(|c| c.parse::<u64>().ok())
+                .expect("cycle")
+        })
+        .min()
+        .expect("walkers");
+    assert!(
+        fewest_cycles >= 3,
+        "every walker chains at least three cycles: {fewest_cycles}"
+    );
     let details: std::collections::BTreeSet<&str> = c_lines
         .lines()
         .filter(|l| l.starts_with("D "))
         .map(|l| l.splitn(4, ' ').nth(3).unwrap_or(""))
         .collect();
-    assert!(details.len() >= 3, "details used: {details:?}");
+    assert!(details.len() >= 4, "details used: {details:?}");
+    assert!(details.iter().any(|d| d.ends_with(" 0")), "{details:?}");
+    assert!(details.iter().any(|d| d.ends_with(" 1")), "{details:?}");
+    assert!(
+        c_lines
+            .lines()
+            .filter(|l| l.starts_with("S "))
+            .all(|l| l.ends_with(" 00000001")),
+        "the foot lock ran on every frame"
+    );
     let _ = std::fs::remove_dir_all(&work);
 }

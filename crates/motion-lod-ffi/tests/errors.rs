@@ -12,8 +12,14 @@ fn message() -> String {
         .into_owned()
 }
 
-/// The model bytes of a model built from the checkout's fixtures (small settings).
+/// The model bytes of a model built from the checkout's fixtures (small settings), built once for
+/// every test of this file.
 fn model_bytes() -> Vec<u8> {
+    static BYTES: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    BYTES.get_or_init(build_model_bytes).clone()
+}
+
+fn build_model_bytes() -> Vec<u8> {
     use motion_lod::BuildConfig;
     use motion_lod::dataset::DataSpec;
     let spec = DataSpec {
@@ -209,5 +215,490 @@ fn misuse_is_a_status_with_a_message() {
         mlod_model_free(second);
         mlod_model_free(model);
         mlod_model_free(null_mut());
+    }
+}
+
+/// A model from `model_bytes`.
+fn load() -> *mut MlodModel {
+    let bytes = model_bytes();
+    let mut model: *mut MlodModel = null_mut();
+    // SAFETY: the bytes are readable and `model` writable.
+    let status = unsafe { mlod_model_from_bytes(bytes.as_ptr(), bytes.len(), &mut model) };
+    assert_eq!(status, MlodStatus::Ok);
+    model
+}
+
+/// The model's sizes: (levels, joints, animated joints).
+fn sizes(model: *const MlodModel) -> (usize, usize, usize) {
+    let (mut levels, mut joints, mut animated) = (0, 0, 0);
+    // SAFETY: live model, writable outputs.
+    let status =
+        unsafe { mlod_model_sizes(model, &mut levels, &mut joints, &mut animated, null_mut()) };
+    assert_eq!(status, MlodStatus::Ok);
+    (levels, joints, animated)
+}
+
+/// Mid-range controls of `model`.
+fn middle(model: *const MlodModel) -> MlodControls {
+    let (mut lo, mut hi) = (MlodControls::default(), MlodControls::default());
+    // SAFETY: live model, writable outputs.
+    assert_eq!(
+        unsafe { mlod_model_control_range(model, &mut lo, &mut hi) },
+        MlodStatus::Ok
+    );
+    MlodControls {
+        dx: 0.5 * (lo.dx + hi.dx),
+        dz: 0.5 * (lo.dz + hi.dz),
+        turn: 0.5 * (lo.turn + hi.turn),
+        height: 0.5 * (lo.height + hi.height),
+    }
+}
+
+/// A camera at 1.7 m looking along +z.
+fn camera() -> MlodCamera {
+    MlodCamera {
+        position: [0.0, 1.7, 0.0],
+        direction: [0.0, 0.0, 1.0],
+        fov_y: 1.0,
+        aspect: 16.0 / 9.0,
+        image_height_px: 1080.0,
+        near_m: 0.1,
+        far_m: 200.0,
+    }
+}
+
+#[test]
+fn the_version_is_the_crate_s_and_the_abi_the_header_s() {
+    // SAFETY: a static NUL-terminated string.
+    let version = unsafe { CStr::from_ptr(mlod_version()) };
+    assert_eq!(version.to_str(), Ok(env!("CARGO_PKG_VERSION")));
+    assert_eq!(mlod_abi_version(), MLOD_ABI_VERSION);
+    let header = include_str!("../include/motion_lod.h");
+    assert!(
+        header.contains(&format!("#define MLOD_ABI_VERSION {MLOD_ABI_VERSION}\n")),
+        "the header's ABI version is the library's"
+    );
+}
+
+#[test]
+fn walking_misuse_is_a_status_with_a_message() {
+    let model = load();
+    let second = load();
+    let (levels, joints, animated) = sizes(model);
+    let controls = middle(model);
+    let full = MlodDetail {
+        level: 0,
+        joints: animated as u32,
+    };
+    unsafe {
+        let mut walker: *mut MlodWalker = null_mut();
+        assert_eq!(mlod_walker_new(model, &mut walker), MlodStatus::Ok);
+        let mut state = MlodWalkerState::default();
+        let mut rotations = vec![MlodQuat::default(); joints];
+        let cam = camera();
+        let mut detail = MlodDetail::default();
+        let mut visible = false;
+
+        // Before the start: nothing to advance, no pose, no root to see.
+        assert_eq!(
+            mlod_walker_advance(walker, model, 0.1, null(), null(), &mut state),
+            MlodStatus::NotPrepared
+        );
+        assert!(message().contains("mlod_walker_start"), "{}", message());
+        assert_eq!(
+            mlod_walker_local_rotations(walker, model, rotations.as_mut_ptr(), joints),
+            MlodStatus::NotPrepared
+        );
+        assert_eq!(
+            mlod_walker_detail_from_camera(walker, model, &cam, 1.0, &mut detail, &mut visible),
+            MlodStatus::NotPrepared
+        );
+
+        // Start: null pointers, NaN controls or position, a level the model lacks, another model.
+        let start = |w, m, c, d: MlodDetail, x: f32, state: *mut MlodWalkerState| {
+            mlod_walker_start(w, m, c, d, x, 2.0, 0.5, state)
+        };
+        assert_eq!(
+            start(null_mut(), model, &controls, full, 0.0, null_mut()),
+            MlodStatus::NullPointer
+        );
+        assert!(message().contains("walker is null"), "{}", message());
+        assert_eq!(
+            start(walker, null(), &controls, full, 0.0, null_mut()),
+            MlodStatus::NullPointer
+        );
+        assert_eq!(
+            start(walker, model, null(), full, 0.0, null_mut()),
+            MlodStatus::NullPointer
+        );
+        assert!(message().contains("controls is null"), "{}", message());
+        let nan = MlodControls {
+            height: f32::NAN,
+            ..controls
+        };
+        assert_eq!(
+            start(walker, model, &nan, full, 0.0, null_mut()),
+            MlodStatus::InvalidArgument
+        );
+        assert!(message().contains("height"), "{}", message());
+        assert_eq!(
+            start(walker, model, &controls, full, f32::INFINITY, null_mut()),
+            MlodStatus::InvalidArgument
+        );
+        assert!(message().contains("x is inf"), "{}", message());
+        let missing = MlodDetail {
+            level: levels as u32,
+            joints: 0,
+        };
+        assert_eq!(
+            start(walker, model, &controls, missing, 0.0, null_mut()),
+            MlodStatus::InvalidArgument
+        );
+        assert!(message().contains("out of range"), "{}", message());
+        assert_eq!(
+            start(walker, second, &controls, full, 0.0, null_mut()),
+            MlodStatus::InvalidArgument
+        );
+        assert!(message().contains("another model"), "{}", message());
+        assert_eq!(
+            mlod_walker_advance(walker, model, 0.1, null(), null(), &mut state),
+            MlodStatus::NotPrepared,
+            "failed starts start nothing"
+        );
+
+        assert_eq!(
+            start(walker, model, &controls, full, 1.0, &mut state),
+            MlodStatus::Ok
+        );
+        assert_eq!(message(), "");
+        assert_eq!((state.cycle, state.time_in_cycle_s), (0, 0.0));
+        assert_eq!(
+            (state.cycle_x, state.cycle_z, state.heading),
+            (1.0, 2.0, 0.5)
+        );
+        assert_eq!(state.detail, full);
+        assert!(state.foot_locked, "the fixture model knows its feet");
+        let started = state;
+
+        // Advance: null pointers, NaN or out-of-range steps, NaN controls, a level the model
+        // lacks, another model; none of them changes the walk.
+        assert_eq!(
+            mlod_walker_advance(null_mut(), model, 0.1, null(), null(), &mut state),
+            MlodStatus::NullPointer
+        );
+        assert_eq!(
+            mlod_walker_advance(walker, null(), 0.1, null(), null(), &mut state),
+            MlodStatus::NullPointer
+        );
+        for dt in [f64::NAN, f64::INFINITY, 0.0, -0.1, MLOD_MAX_STEP_S * 1.5] {
+            assert_eq!(
+                mlod_walker_advance(walker, model, dt, null(), null(), &mut state),
+                MlodStatus::InvalidArgument,
+                "step {dt}"
+            );
+            assert!(message().contains("step"), "{}", message());
+        }
+        let nan_turn = MlodControls {
+            turn: f32::NAN,
+            ..controls
+        };
+        assert_eq!(
+            mlod_walker_advance(walker, model, 0.1, &nan_turn, null(), &mut state),
+            MlodStatus::InvalidArgument
+        );
+        assert!(message().contains("next_controls"), "{}", message());
+        assert!(message().contains("turn"), "{}", message());
+        assert_eq!(
+            mlod_walker_advance(walker, model, 0.1, null(), &missing, &mut state),
+            MlodStatus::InvalidArgument
+        );
+        assert!(message().contains("next_detail"), "{}", message());
+        assert_eq!(
+            mlod_walker_advance(walker, second, 0.1, null(), null(), &mut state),
+            MlodStatus::InvalidArgument
+        );
+        assert!(message().contains("another model"), "{}", message());
+        assert_eq!(state, started, "failed calls leave the state alone");
+
+        // The refused calls changed nothing: this walker and a fresh one walk alike.
+        let mut fresh: *mut MlodWalker = null_mut();
+        assert_eq!(mlod_walker_new(model, &mut fresh), MlodStatus::Ok);
+        let mut fresh_state = MlodWalkerState::default();
+        assert_eq!(
+            mlod_walker_start(
+                fresh,
+                model,
+                &controls,
+                full,
+                1.0,
+                2.0,
+                0.5,
+                &mut fresh_state
+            ),
+            MlodStatus::Ok
+        );
+        let mut crossed = false;
+        for _ in 0..90 {
+            assert_eq!(
+                mlod_walker_advance(walker, model, 1.0 / 30.0, null(), null(), &mut state),
+                MlodStatus::Ok
+            );
+            assert_eq!(
+                mlod_walker_advance(fresh, model, 1.0 / 30.0, &controls, &full, &mut fresh_state),
+                MlodStatus::Ok
+            );
+            assert_eq!(state, fresh_state);
+            crossed |= state.cycles_begun == 1;
+            assert!(state.time_in_cycle_s < state.cycle_duration_s);
+        }
+        assert!(crossed && state.cycle >= 2, "{state:?}");
+
+        // The root's world rotation is the cycle frame's heading times its local rotation.
+        assert_eq!(
+            mlod_walker_local_rotations(walker, model, rotations.as_mut_ptr(), joints - 1),
+            MlodStatus::BufferTooSmall
+        );
+        assert!(
+            message().contains(&format!("{joints} are needed")),
+            "{}",
+            message()
+        );
+        assert_eq!(
+            mlod_walker_local_rotations(walker, model, null_mut(), joints),
+            MlodStatus::NullPointer
+        );
+        assert_eq!(
+            mlod_walker_local_rotations(walker, second, rotations.as_mut_ptr(), joints),
+            MlodStatus::InvalidArgument
+        );
+        assert_eq!(
+            mlod_walker_local_rotations(walker, model, rotations.as_mut_ptr(), joints),
+            MlodStatus::Ok
+        );
+        for q in &rotations {
+            let norm = (q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w).sqrt();
+            assert!((norm - 1.0).abs() < 1e-4, "unit rotations: {q:?}");
+        }
+        let mut root = joints;
+        assert_eq!(mlod_model_root_joint(model, &mut root), MlodStatus::Ok);
+        assert_eq!(
+            mlod_model_root_joint(model, null_mut()),
+            MlodStatus::NullPointer
+        );
+        let mut parent = 0i32;
+        assert_eq!(
+            mlod_model_joint(model, root, null_mut(), 0, null_mut(), &mut parent),
+            MlodStatus::Ok
+        );
+        assert!(root < joints && parent < root as i32);
+        let quat = |q: MlodQuat| lod_policy::glam::Quat::from_xyzw(q.x, q.y, q.z, q.w);
+        let heading = lod_policy::glam::Quat::from_rotation_y(state.heading);
+        let world = heading * quat(rotations[root]);
+        assert!(
+            world.dot(quat(state.root_rotation)).abs() > 1.0 - 1e-6,
+            "{world:?} {:?}",
+            state.root_rotation
+        );
+
+        // The camera: null pointers, a bad camera or radius.
+        assert_eq!(
+            mlod_walker_detail_from_camera(walker, model, null(), 1.0, &mut detail, null_mut()),
+            MlodStatus::NullPointer
+        );
+        assert_eq!(
+            mlod_walker_detail_from_camera(walker, model, &cam, 1.0, null_mut(), null_mut()),
+            MlodStatus::NullPointer
+        );
+        assert_eq!(
+            mlod_walker_detail_from_camera(walker, second, &cam, 1.0, &mut detail, null_mut()),
+            MlodStatus::InvalidArgument
+        );
+        let bad_cameras = [
+            (
+                MlodCamera {
+                    direction: [0.0, 0.0, 2.0],
+                    ..cam
+                },
+                "unit",
+            ),
+            (
+                MlodCamera {
+                    position: [f32::NAN, 0.0, 0.0],
+                    ..cam
+                },
+                "finite",
+            ),
+            (MlodCamera { fov_y: 0.0, ..cam }, "fov_y"),
+            (
+                MlodCamera {
+                    aspect: -1.0,
+                    ..cam
+                },
+                "aspect",
+            ),
+            (
+                MlodCamera {
+                    image_height_px: 0.0,
+                    ..cam
+                },
+                "image_height_px",
+            ),
+            (
+                MlodCamera {
+                    near_m: -1.0,
+                    ..cam
+                },
+                "near_m",
+            ),
+            (MlodCamera { far_m: 0.05, ..cam }, "far_m"),
+        ];
+        for (bad, what) in bad_cameras {
+            assert_eq!(
+                mlod_walker_detail_from_camera(walker, model, &bad, 1.0, &mut detail, null_mut()),
+                MlodStatus::InvalidArgument,
+                "{bad:?}"
+            );
+            assert!(message().contains(what), "{what}: {}", message());
+        }
+        for radius in [-1.0, f32::NAN] {
+            assert_eq!(
+                mlod_walker_detail_from_camera(
+                    walker,
+                    model,
+                    &cam,
+                    radius,
+                    &mut detail,
+                    null_mut()
+                ),
+                MlodStatus::InvalidArgument
+            );
+            assert!(message().contains("radius"), "{}", message());
+        }
+        assert_eq!(
+            mlod_walker_detail_from_camera(walker, model, &cam, 1.0, &mut detail, &mut visible),
+            MlodStatus::Ok
+        );
+        let mut same = MlodDetail::default();
+        let mut same_visible = !visible;
+        let p = state.root_position;
+        assert_eq!(
+            mlod_model_detail_from_camera(
+                model,
+                &cam,
+                p[0],
+                p[1],
+                p[2],
+                1.0,
+                &mut same,
+                &mut same_visible
+            ),
+            MlodStatus::Ok
+        );
+        assert_eq!((detail, visible), (same, same_visible), "the walker's root");
+
+        // Near in view: full detail; behind the camera, beside its view or beyond its far
+        // distance: root only at the smallest level.
+        let root_only = MlodDetail {
+            level: levels as u32 - 1,
+            joints: 0,
+        };
+        for (x, z, expected, seen) in [
+            (0.0, 5.0, full, true),
+            (0.0, -5.0, root_only, false),
+            (20.0, 2.0, root_only, false),
+            (0.0, 500.0, root_only, false),
+        ] {
+            assert_eq!(
+                mlod_model_detail_from_camera(
+                    model,
+                    &cam,
+                    x,
+                    1.0,
+                    z,
+                    1.0,
+                    &mut detail,
+                    &mut visible
+                ),
+                MlodStatus::Ok
+            );
+            assert_eq!((detail, visible), (expected, seen), "at ({x}, {z})");
+        }
+        assert_eq!(
+            mlod_model_detail_from_camera(
+                model,
+                &cam,
+                f32::NAN,
+                1.0,
+                0.0,
+                1.0,
+                &mut detail,
+                null_mut()
+            ),
+            MlodStatus::InvalidArgument
+        );
+        assert_eq!(
+            mlod_model_detail_from_camera(
+                null(),
+                &cam,
+                0.0,
+                1.0,
+                0.0,
+                1.0,
+                &mut detail,
+                null_mut()
+            ),
+            MlodStatus::NullPointer
+        );
+
+        // The foot lock's switch.
+        assert_eq!(
+            mlod_walker_set_foot_lock(null_mut(), false),
+            MlodStatus::NullPointer
+        );
+        assert_eq!(mlod_walker_set_foot_lock(walker, false), MlodStatus::Ok);
+        assert_eq!(
+            mlod_walker_advance(walker, model, 0.02, null(), null(), &mut state),
+            MlodStatus::Ok
+        );
+        assert!(!state.foot_locked);
+        assert_eq!(mlod_walker_set_foot_lock(walker, true), MlodStatus::Ok);
+        assert_eq!(
+            mlod_walker_advance(walker, model, 0.02, null(), null(), &mut state),
+            MlodStatus::Ok
+        );
+        assert!(state.foot_locked);
+
+        // The skeleton's rest transforms.
+        let mut rest = MlodJointTransform::default();
+        assert_eq!(
+            mlod_model_joint_rest(model, joints, &mut rest),
+            MlodStatus::InvalidArgument
+        );
+        assert!(message().contains("out of range"), "{}", message());
+        assert_eq!(
+            mlod_model_joint_rest(model, 0, null_mut()),
+            MlodStatus::NullPointer
+        );
+        assert_eq!(
+            mlod_model_joint_rest(model, joints - 1, &mut rest),
+            MlodStatus::Ok
+        );
+        let norm = rest.rotation.iter().map(|v| v * v).sum::<f32>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-4, "{rest:?}");
+
+        // Preparing a clip ends the walk.
+        assert_eq!(
+            mlod_walker_prepare(walker, model, &controls, full, null_mut()),
+            MlodStatus::Ok
+        );
+        assert_eq!(
+            mlod_walker_advance(walker, model, 0.1, null(), null(), &mut state),
+            MlodStatus::NotPrepared
+        );
+
+        mlod_walker_free(fresh);
+        mlod_walker_free(walker);
+        mlod_model_free(second);
+        mlod_model_free(model);
     }
 }

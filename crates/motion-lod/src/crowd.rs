@@ -10,6 +10,9 @@ use crowd_sim::{
 };
 use lod_policy::LevelPolicy;
 
+use crate::model::MotionModel;
+use crate::quality::MotionQuality;
+
 /// How to run a crowd.
 #[derive(Debug, Clone)]
 pub struct CrowdRun {
@@ -125,7 +128,7 @@ pub fn check_render_dir(dir: &Path) -> Result<(), RenderError> {
 }
 
 /// What one crowd walker showed, frame by frame: the motion-quality meter's input
-/// ([`crate::quality::measure_track`]).
+/// ([`measure_track`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct WalkerTrack {
     /// The walker's index in the crowd.
@@ -139,7 +142,7 @@ pub struct WalkerTrack {
     pub levels: Vec<usize>,
     /// Active joints shown at every frame.
     pub joints: Vec<usize>,
-    /// The walker's body scale ([`crate::MotionModel::body_scale`] of its height): its bones are
+    /// The walker's body scale ([`MotionModel::body_scale`] of its height): its bones are
     /// the skeleton's times this.
     pub body_scale: f64,
     /// Whether the walker was in the camera's view at every frame.
@@ -151,7 +154,7 @@ pub struct WalkerTrack {
 /// cycles of changing controls, levels that change with distance, planted feet near the camera.
 /// Walker indices beyond the crowd are ignored.
 pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
-    model: &crate::MotionModel,
+    model: &MotionModel,
     config: CrowdConfig,
     scene: Scene,
     policy: &P,
@@ -241,7 +244,7 @@ pub struct WalkerQuality {
     /// Cycle seams in that stretch.
     pub seams: usize,
     /// The meter's figures.
-    pub quality: crate::quality::MotionQuality,
+    pub quality: MotionQuality,
 }
 
 /// Why [`crowd_quality`] failed.
@@ -271,7 +274,7 @@ pub enum CrowdQualityError {
 /// seams and planted feet, farther ones switch as they are (`config.seam_levels`,
 /// `config.foot_lock_levels`), so the figures are the crowd's transitions as a viewer sees them.
 pub fn crowd_quality<P: LevelPolicy + Sync + ?Sized>(
-    model: &crate::MotionModel,
+    model: &MotionModel,
     config: CrowdConfig,
     scene: Scene,
     policy: &P,
@@ -314,13 +317,12 @@ pub fn crowd_quality<P: LevelPolicy + Sync + ?Sized>(
         if best.len() < min_frames {
             continue;
         }
-        let quality =
-            crate::quality::measure_track_range(model, t, dt, best.clone()).map_err(|source| {
-                CrowdQualityError::Quality {
-                    walker: t.walker,
-                    source,
-                }
-            })?;
+        let quality = measure_track_range(model, t, dt, best.clone()).map_err(|source| {
+            CrowdQualityError::Quality {
+                walker: t.walker,
+                source,
+            }
+        })?;
         let span = |v: &[usize]| {
             let v = &v[best.clone()];
             (
@@ -338,4 +340,54 @@ pub fn crowd_quality<P: LevelPolicy + Sync + ?Sized>(
         });
     }
     Ok(out)
+}
+
+/// Measures what a crowd walker showed ([`record_walkers`]) against the model's
+/// reference floor, with its seams; `frame_time`: the crowd's `1 / fps`. The cycle duration (the
+/// facing window) is the mean time between the track's seams, the track's length with fewer than
+/// two. The frames before the first seam are the crowd's start and are not measured: a new crowd's
+/// walkers begin root-only (drawn by nobody) and take their joints in the first cycle
+/// ([`crowd_sim::CrowdConfig::spread_first_builds`]), a switch from the rest pose.
+pub fn measure_track(
+    model: &MotionModel,
+    track: &WalkerTrack,
+    frame_time: f64,
+) -> Result<MotionQuality, crate::quality::QualityError> {
+    let dof = model.layout.dof().max(1);
+    let start = track.seams.first().copied().unwrap_or(0);
+    measure_track_range(model, track, frame_time, start..track.poses.len() / dof)
+}
+
+/// [`measure_track`] over the frames `range` of the track only (its seams inside the range).
+pub fn measure_track_range(
+    model: &MotionModel,
+    track: &WalkerTrack,
+    frame_time: f64,
+    range: std::ops::Range<usize>,
+) -> Result<MotionQuality, crate::quality::QualityError> {
+    let reference = crate::walk_quality::reference_of(model)?;
+    let dof = model.layout.dof().max(1);
+    let (start, end) = (range.start, range.end.min(track.poses.len() / dof));
+    let poses = track.poses.get(start * dof..end * dof).unwrap_or(&[]);
+    let seams: Vec<usize> = track
+        .seams
+        .iter()
+        .filter(|&&s| s >= start && s < end)
+        .map(|&s| s - start)
+        .collect();
+    let frames = poses.len() / dof;
+    let cycle_s = match (seams.first(), seams.last()) {
+        (Some(&a), Some(&b)) if b > a => (b - a) as f64 / (seams.len() - 1) as f64,
+        _ => frames as f64,
+    } * frame_time;
+    let layout = crate::walk_quality::drawn_layout(model, track.body_scale)?;
+    crate::quality::measure(
+        &layout,
+        &reference.feet,
+        poses,
+        frame_time,
+        Some(reference.floor_m),
+        cycle_s,
+        &seams,
+    )
 }

@@ -28,6 +28,22 @@ use tensor_ops::Tensor3;
 use crate::quality::{self, FootJoints, MotionQuality, QualityReference};
 use timewarp::{AlignConfig, AlignMethod, FrameSeq, TimewarpError, align};
 
+/// Aligned training data: the motion tensor and what each sample is (what [`DataSpec::load`]
+/// gives and `MotionModel::build` takes).
+#[derive(Debug, Clone)]
+pub struct TrainingSet {
+    /// Pose layout of every sample (rows of the tensor).
+    pub layout: PoseLayout,
+    /// Motion tensor `P x T x S`; row 6 holds the time increment in seconds.
+    pub tensor: Tensor3,
+    /// Controls `(dx, dz, turn, height)` per sample (metres, metres, radians, metres).
+    pub controls: Vec<[f64; 4]>,
+    /// Where each sample came from (file and frame range), for reports.
+    pub sources: Vec<String>,
+    /// The motion-quality meter on the data's own takes, when they were measured.
+    pub quality: Option<QualityReference>,
+}
+
 /// Errors of the dataset pipeline. Failures of single files are not errors: they are reported in
 /// [`CycleSet::failed`] and the file is skipped.
 #[derive(Debug, thiserror::Error)]
@@ -984,7 +1000,7 @@ pub struct LoadedData {
     /// All kept cycles aligned.
     pub aligned: AlignedSet,
     /// The training set (`samples` of them when a subset was asked for).
-    pub training: crate::build::TrainingSet,
+    pub training: TrainingSet,
 }
 
 impl DataSpec {
@@ -1166,8 +1182,8 @@ pub fn take_of(source: &str) -> &str {
 impl AlignedSet {
     /// The training set of every aligned sample, for `MotionModel::build`; each source reads
     /// `<file> [<first>..=<last>]` ([`take_of`] gives the file back).
-    pub fn training_set(&self) -> crate::build::TrainingSet {
-        crate::build::TrainingSet {
+    pub fn training_set(&self) -> TrainingSet {
+        TrainingSet {
             layout: self.layout.clone(),
             tensor: self.tensor.clone(),
             controls: self.controls.iter().map(|c| c.to_array()).collect(),

@@ -88,6 +88,7 @@
 //! ```
 
 pub mod build;
+pub mod config;
 pub mod crowd;
 pub mod dataset;
 pub mod eval;
@@ -107,6 +108,7 @@ mod sample_weights;
 pub mod source;
 pub mod storage;
 pub mod synth;
+pub mod walk_quality;
 
 pub use build::{Analysis, BuildConfig, BuildError, TrainingSet};
 pub use model::{BuildReport, CONTROL_NAMES, Evaluator, MotionModel, TIME_ROW};

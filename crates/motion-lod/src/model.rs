@@ -1,15 +1,12 @@
 //! [`MotionModel`]: the runtime multilinear model with its skeleton, the model file, and synthesis of
 //! aligned cycles and of played-back walks.
 
-use std::path::Path;
-
 use kriging::Variogram;
 use lod_policy::{ClipKernel, Detail, KernelScratch, LodModel, Rig, RuntimeModel};
 use motion_io::PoseLayout;
 use serde::{Deserialize, Serialize};
 
 use crate::importance::JointImportance;
-use crate::model_file::{self, ModelFileError};
 
 /// Names and units of the control parameters, in the order of every control vector.
 pub const CONTROL_NAMES: [&str; 4] = lod_policy::Controls::LABELS;
@@ -46,7 +43,7 @@ pub struct BuildReport {
     /// Joints by decreasing measured importance (the row order of the model).
     pub importance: Vec<JointImportance>,
     /// Weight of every DOF row in the decomposition (model row order; see
-    /// [`RowWeights`](crate::build::RowWeights)).
+    /// [`RowWeights`](crate::config::RowWeights)).
     pub row_weights: Vec<f64>,
     /// Key levels as searched.
     pub keys: Vec<KeyReport>,
@@ -63,7 +60,7 @@ pub struct BuildReport {
     /// ([`kriging::select_dims`]).
     pub control_decisions: Vec<kriging::DimDecision>,
     /// Controls that vary over the data but were left out because the samples are too few for a
-    /// trend over all of them (`crate::build::MIN_SAMPLES`).
+    /// trend over all of them ([`crate::config::MIN_SAMPLES`]).
     pub dropped_for_samples: Vec<usize>,
     /// Rotating joints of the data that are static (held at their mean rotation, not counted).
     pub static_joints: Vec<crate::importance::StaticJoint>,
@@ -76,7 +73,7 @@ pub struct BuildReport {
     /// Where the training data came from (set by the command line; `None` for in-memory data).
     pub data: Option<crate::dataset::DataSpec>,
     /// The settings the model was built with.
-    pub config: crate::build::BuildConfig,
+    pub config: crate::config::BuildConfig,
 }
 
 impl BuildReport {
@@ -161,54 +158,7 @@ impl Evaluator {
     }
 }
 
-/// The folder of a model file (`.` for a bare file name).
-fn model_folder(path: &Path) -> &Path {
-    match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    }
-}
-
 impl MotionModel {
-    /// Writes the model file atomically (see [`crate::model_file`]). The recorded data folders are
-    /// written relative to the model file's folder (absolute ones stay absolute), so that the model
-    /// and its data can move together and be used from any working directory.
-    pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
-        match &self.report.data {
-            Some(spec) if spec.dirs.iter().any(|d| d.is_relative()) => {
-                let mut model = self.clone();
-                model.report.data = Some(spec.relative_to(model_folder(path)));
-                model_file::save(&model, path)
-            }
-            _ => model_file::save(self, path),
-        }
-    }
-
-    /// Reads a model file: framing and checksum ([`model_file::decode`]), then the semantic
-    /// validation of [`MotionModel::validate`]. Every failure names the file and what is wrong.
-    pub fn load(path: &Path) -> Result<MotionModel, ModelFileError> {
-        let bytes = std::fs::read(path).map_err(|source| ModelFileError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let mut model = MotionModel::from_bytes(&bytes, path)?;
-        if let Some(spec) = &model.report.data {
-            model.report.data = Some(spec.resolved_from(model_folder(path)));
-        }
-        Ok(model)
-    }
-
-    /// Decodes and validates a model from the bytes of a model file (`path` only labels errors):
-    /// the runtime section ([`RuntimeModel::from_bytes`], which checks the runtime's parts), the
-    /// report section ([`model_file::decode_report`]), then [`MotionModel::validate`].
-    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<MotionModel, ModelFileError> {
-        let (runtime, layout, report) = model_file::decode(bytes, path)?;
-        MotionModel::new(runtime, layout, report).map_err(|source| ModelFileError::Invalid {
-            path: path.to_path_buf(),
-            source,
-        })
-    }
-
     /// A model from its parts, checked by [`MotionModel::validate`].
     pub fn new(
         runtime: RuntimeModel,

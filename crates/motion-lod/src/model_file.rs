@@ -129,6 +129,55 @@ pub fn save(model: &MotionModel, path: &Path) -> Result<(), ModelFileError> {
     write_atomic(path, &bytes)
 }
 
+impl MotionModel {
+    /// Writes the model file atomically (see [`crate::model_file`]). The recorded data folders are
+    /// written relative to the model file's folder (absolute ones stay absolute), so that the model
+    /// and its data can move together and be used from any working directory.
+    pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
+        match &self.report.data {
+            Some(spec) if spec.dirs.iter().any(|d| d.is_relative()) => {
+                let mut model = self.clone();
+                model.report.data = Some(spec.relative_to(model_folder(path)));
+                save(&model, path)
+            }
+            _ => save(self, path),
+        }
+    }
+
+    /// Reads a model file: framing, checksums and sections ([`decode`]), then the semantic
+    /// validation of [`MotionModel::validate`]. Every failure names the file and what is wrong.
+    pub fn load(path: &Path) -> Result<MotionModel, ModelFileError> {
+        let bytes = std::fs::read(path).map_err(|source| ModelFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut model = MotionModel::from_bytes(&bytes, path)?;
+        if let Some(spec) = &model.report.data {
+            model.report.data = Some(spec.resolved_from(model_folder(path)));
+        }
+        Ok(model)
+    }
+
+    /// Decodes and validates a model from the bytes of a model file (`path` only labels errors):
+    /// the runtime section ([`RuntimeModel::from_bytes`], which checks the runtime's parts), the
+    /// report section ([`decode`]), then [`MotionModel::validate`].
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<MotionModel, ModelFileError> {
+        let (runtime, layout, report) = decode(bytes, path)?;
+        MotionModel::new(runtime, layout, report).map_err(|source| ModelFileError::Invalid {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+}
+
+/// The folder of a model file (`.` for a bare file name).
+fn model_folder(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
 /// Reads, decodes and validates a model file ([`MotionModel::load`]).
 pub fn load(path: &Path) -> Result<MotionModel, ModelFileError> {
     MotionModel::load(path)

@@ -27,6 +27,7 @@ use motion_lod::metrics::ErrorMeter;
 use motion_lod::progress::NoProgress;
 use motion_lod::quality::{self, MotionQuality};
 use motion_lod::synth::WalkRequest;
+use motion_lod::walk_quality;
 
 /// The data folder `name` under `../shared/mocap`, or `None` (with the skip message) when absent; a
 /// test failure instead when `MOTION_LOD_REQUIRE_DATA` is set (CI).
@@ -44,7 +45,7 @@ fn walk(model: &MotionModel, controls: [f32; 4], blend: bool, plant_feet: bool) 
         plant_feet,
     };
     let w = model.synthesize_walk(&req).expect("walk synthesizes");
-    quality::measure_walk(model, &w).expect("walk measures")
+    walk_quality::measure_walk(model, &w).expect("walk measures")
 }
 
 /// What the Bandai model is built from (all 800 cycles); `None` (skipped) without the data.
@@ -175,7 +176,7 @@ fn walks_look_like_the_data(what: &str, model: &MotionModel, min_takes: usize) {
         "{what}: {} takes measured",
         reference.takes
     );
-    for g in quality::walk_grid(model) {
+    for g in walk_quality::walk_grid(model) {
         let q = walk(model, g.controls, true, true);
         let name = format!("{what} {}", g.name);
         assert!(
@@ -261,7 +262,7 @@ fn planted_feet_skate_less_than_sliding_ones() {
     let reference = model.report.quality.as_ref().expect("reference measured");
     assert!(reference.takes > 0 && reference.median.pop_cm > 0.0);
     let (mut skate_free, mut skate_locked) = (0.0, 0.0);
-    for g in quality::walk_grid(model) {
+    for g in walk_quality::walk_grid(model) {
         skate_free += walk(model, g.controls, true, false).skate_cm_s;
         skate_locked += walk(model, g.controls, true, true).skate_cm_s;
     }
@@ -274,7 +275,7 @@ fn planted_feet_skate_less_than_sliding_ones() {
 /// What crowd walkers show as the crowd plays them: 8 walkers for 10 s at 30 fps on their curved
 /// paths (controls changing every cycle, seams inertialized), all at full detail and in view of the
 /// overview camera (the lock runs for visible walkers), measured by the
-/// meter from each walker's first seam on ([`quality::measure_track`]); with the foot lock
+/// meter from each walker's first seam on ([`motion_lod::crowd::measure_track`]); with the foot lock
 /// (`CrowdConfig::foot_lock_levels`, default) and without it (0).
 fn crowd_tracks(model: &MotionModel, foot_lock_levels: usize) -> Vec<MotionQuality> {
     use motion_lod::crowd::record_walkers;
@@ -304,7 +305,8 @@ fn crowd_tracks(model: &MotionModel, foot_lock_levels: usize) -> Vec<MotionQuali
                 t.walker,
                 t.seams
             );
-            quality::measure_track(model, t, 1.0 / f64::from(config.fps)).expect("track measures")
+            motion_lod::crowd::measure_track(model, t, 1.0 / f64::from(config.fps))
+                .expect("track measures")
         })
         .collect()
 }

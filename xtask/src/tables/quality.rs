@@ -7,8 +7,9 @@ use std::fmt::Write as _;
 use anyhow::{Context as _, Result};
 use lod_policy::Detail;
 use motion_lod::MotionModel;
-use motion_lod::quality::{self, GridWalk, MotionQuality, QualityReference};
+use motion_lod::quality::{self, MotionQuality, QualityReference};
 use motion_lod::synth::WalkRequest;
+use motion_lod::walk_quality::{self, GridWalk};
 
 /// Cycles per measured walk (as `motion-lod quality`).
 pub const CYCLES: usize = 4;
@@ -33,7 +34,7 @@ pub fn measure(
     let Some(reference) = model.report.quality.clone() else {
         return Ok(None);
     };
-    let grid = quality::walk_grid(model);
+    let grid = walk_quality::walk_grid(model);
     let levels = model.lod().levels().len();
     progress.stage("motion quality per level", (levels * grid.len()) as u64);
     let mut points = Vec::with_capacity(levels * grid.len());
@@ -50,7 +51,7 @@ pub fn measure(
             let w = model
                 .synthesize_walk(&req)
                 .with_context(|| format!("synthesizing `{}` at level {level}", walk.name))?;
-            let q = quality::measure_walk(model, &w)
+            let q = walk_quality::measure_walk(model, &w)
                 .with_context(|| format!("measuring `{}` at level {level}", walk.name))?;
             points.push(QualityPoint {
                 walk: walk.clone(),

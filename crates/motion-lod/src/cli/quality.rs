@@ -9,8 +9,9 @@ use anyhow::{Context as _, bail};
 use clap::Args;
 use lod_policy::Detail;
 use motion_lod::MotionModel;
-use motion_lod::quality::{self, GridWalk, MotionQuality};
+use motion_lod::quality::{self, MotionQuality};
 use motion_lod::synth::WalkRequest;
+use motion_lod::walk_quality::{self, GridWalk};
 use serde::Serialize;
 
 /// Arguments of `motion-lod quality`.
@@ -94,7 +95,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         .joints
         .unwrap_or(model.lod().joints())
         .min(model.lod().joints());
-    let grid = quality::walk_grid(&model);
+    let grid = walk_quality::walk_grid(&model);
     let mut rows = Vec::new();
     for &level in &chosen {
         for walk in &grid {
@@ -109,7 +110,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             let w = model
                 .synthesize_walk(&req)
                 .with_context(|| format!("synthesizing `{}` at level {level}", walk.name))?;
-            let q = quality::measure_walk(&model, &w)
+            let q = walk_quality::measure_walk(&model, &w)
                 .with_context(|| format!("measuring `{}` at level {level}", walk.name))?;
             let step = f64::from(walk.controls[0]).hypot(f64::from(walk.controls[1]));
             rows.push(Row {

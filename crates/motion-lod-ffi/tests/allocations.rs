@@ -1,0 +1,173 @@
+//! A walker allocates nothing after `mlod_walker_new`: starting, advancing across cycles with
+//! controls and details that change, asking the camera for its detail and reading its local
+//! rotations and joint transforms, counted by a global allocator on this test's thread.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::ptr::{null, null_mut};
+
+use motion_lod_ffi::*;
+
+/// The system allocator, counting the allocations of each thread.
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: forwards to the system allocator; the counter is a const-initialised thread local.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: per GlobalAlloc's contract.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: per GlobalAlloc's contract.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: per GlobalAlloc's contract.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
+
+/// The model bytes of a model built from the checkout's fixtures (small settings).
+fn model_bytes() -> Vec<u8> {
+    use motion_lod::BuildConfig;
+    use motion_lod::dataset::DataSpec;
+    let spec = DataSpec {
+        samples: Some(12),
+        ..DataSpec::default()
+    };
+    let data = spec
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("fixtures load");
+    let config = BuildConfig {
+        key_levels: 3,
+        accuracy_levels: 4,
+        ..BuildConfig::default()
+    };
+    let model =
+        motion_lod::MotionModel::build(&data.training, &config, &motion_lod::progress::NoProgress)
+            .expect("builds");
+    motion_lod::model_file::encode(&model, std::path::Path::new("m")).expect("encodes")
+}
+
+#[test]
+fn walking_allocates_nothing_after_creation() {
+    let bytes = model_bytes();
+    unsafe {
+        let mut model: *mut MlodModel = null_mut();
+        assert_eq!(
+            mlod_model_from_bytes(bytes.as_ptr(), bytes.len(), &mut model),
+            MlodStatus::Ok
+        );
+        let (mut levels, mut joints, mut animated) = (0, 0, 0);
+        assert_eq!(
+            mlod_model_sizes(model, &mut levels, &mut joints, &mut animated, null_mut()),
+            MlodStatus::Ok
+        );
+        let (mut lo, mut hi) = (MlodControls::default(), MlodControls::default());
+        assert_eq!(
+            mlod_model_control_range(model, &mut lo, &mut hi),
+            MlodStatus::Ok
+        );
+        let camera = MlodCamera {
+            position: [0.0, 1.7, -3.0],
+            direction: [0.0, 0.0, 1.0],
+            fov_y: 1.0,
+            aspect: 1.5,
+            image_height_px: 1080.0,
+            near_m: 0.1,
+            far_m: 0.0,
+        };
+        let mut walker: *mut MlodWalker = null_mut();
+        assert_eq!(mlod_walker_new(model, &mut walker), MlodStatus::Ok);
+        let mut rotations = vec![MlodQuat::default(); joints];
+        let mut transforms = vec![MlodJointTransform::default(); joints];
+        // A failed call first: its message is cleared by the next success (which may allocate
+        // once to do so).
+        assert_eq!(
+            mlod_walker_advance(walker, model, 0.1, null(), null(), null_mut()),
+            MlodStatus::NotPrepared
+        );
+        let mut detail = MlodDetail::default();
+        assert_eq!(
+            mlod_model_detail_at(model, 1.0, &mut detail),
+            MlodStatus::Ok
+        );
+
+        // Allocated before counting starts.
+        let mut details = Vec::with_capacity(200);
+        let before = allocations();
+        let mut state = MlodWalkerState::default();
+        let first = MlodControls {
+            turn: hi.turn,
+            ..lo
+        };
+        assert_eq!(
+            mlod_walker_start(walker, model, &first, detail, 0.0, 0.0, 0.0, &mut state),
+            MlodStatus::Ok
+        );
+        for f in 0..150u32 {
+            let mut visible = false;
+            assert_eq!(
+                mlod_walker_detail_from_camera(
+                    walker,
+                    model,
+                    &camera,
+                    1.0,
+                    &mut detail,
+                    &mut visible
+                ),
+                MlodStatus::Ok
+            );
+            // Every fifth frame the lowest detail, to change details between cycles.
+            if f % 5 == 0 {
+                detail = MlodDetail {
+                    level: levels as u32 - 1,
+                    joints: (animated / 2) as u32,
+                };
+            }
+            let u = (f % 7) as f32 / 6.0;
+            let next = MlodControls {
+                dx: lo.dx + (hi.dx - lo.dx) * u,
+                dz: lo.dz + (hi.dz - lo.dz) * u,
+                turn: hi.turn - (hi.turn - lo.turn) * u,
+                height: lo.height + (hi.height - lo.height) * u,
+            };
+            assert_eq!(
+                mlod_walker_advance(walker, model, 1.0 / 30.0, &next, &detail, &mut state),
+                MlodStatus::Ok
+            );
+            assert_eq!(
+                mlod_walker_local_rotations(walker, model, rotations.as_mut_ptr(), joints),
+                MlodStatus::Ok
+            );
+            assert_eq!(
+                mlod_walker_joint_transforms(walker, model, transforms.as_mut_ptr(), joints),
+                MlodStatus::Ok
+            );
+            details.push((state.detail.level, state.detail.joints));
+        }
+        let during = allocations() - before;
+        assert!(state.cycle >= 3, "{state:?}");
+        details.sort();
+        details.dedup();
+        assert!(details.len() >= 2, "{details:?}");
+        assert!(state.foot_locked);
+        assert_eq!(during, 0, "allocations while walking");
+
+        mlod_walker_free(walker);
+        mlod_model_free(model);
+    }
+}
