@@ -7,7 +7,7 @@ use crowd_sim::culling::WalkerAabbTree;
 use crowd_sim::testing::{ProceduralSource, paper_distance_policy};
 use crowd_sim::{Bounds, Camera, CameraPath, ClipSource, Crowd, CrowdConfig, Frustum};
 use glam::Vec3;
-use lod_policy::rng::SplitMix64;
+use lod_policy::SplitMix64;
 use std::hint::black_box;
 
 /// Walkers per square metre.

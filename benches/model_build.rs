@@ -24,7 +24,7 @@ fn build(c: &mut Criterion) {
 
     let model = MotionModel::build(&loaded.training, &config, &NoProgress).unwrap();
     let lod = model.lod();
-    let controls = [0.0f32, 1.3, 0.1, 1.75];
+    let controls = lod_policy::Controls::from_array([0.0, 1.3, 0.1, 1.75]);
     let mut scratch = KernelScratch::new(lod);
     let mut kernel = ClipKernel::new(lod);
     let mut pose = vec![0.0f32; lod.p()];

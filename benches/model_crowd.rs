@@ -28,11 +28,11 @@ fn model() -> (MotionModel, Analysis) {
 
 fn kernels_and_poses(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
     let lod = model.lod();
-    let controls: Vec<[f32; 4]> = analysis
+    let controls: Vec<lod_policy::Controls> = analysis
         .controls
         .iter()
         .step_by(4)
-        .map(|c| c.map(|v| v as f32))
+        .map(|&c| lod_policy::Controls::from_f64(c))
         .collect();
     let mut scratch = KernelScratch::new(lod);
     let mut kernel = ClipKernel::new(lod);

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use crowd_sim::{Camera, Crowd, CrowdConfig, FrameStats, Scene};
-use lod_policy::{ClipKernel, Detail, KernelScratch, ViewParams};
+use lod_policy::{ClipKernel, Controls, Detail, KernelScratch, ViewParams};
 use motion_lod::{LodSource, MotionModel};
 
 fn bench(c: &mut Criterion) {
@@ -25,14 +25,12 @@ fn bench(c: &mut Criterion) {
     let lod = model.lod();
     let cs = lod.controls();
     // Controls spread over the data's range (a fixed low-discrepancy walk, so every run is the same).
-    let controls: Vec<Vec<f32>> = (0..64)
+    let controls: Vec<Controls> = (0..64)
         .map(|i| {
-            (0..lod.d())
-                .map(|k| {
-                    let u = ((i as f32 + 0.5) * (0.618_034 + 0.1 * k as f32)).fract();
-                    cs.min[k] + u * (cs.max[k] - cs.min[k])
-                })
-                .collect()
+            Controls::from_array(std::array::from_fn(|k| {
+                let u = ((i as f32 + 0.5) * (0.618_034 + 0.1 * k as f32)).fract();
+                cs.min[k] + u * (cs.max[k] - cs.min[k])
+            }))
         })
         .collect();
     let mut scratch = KernelScratch::new(lod);

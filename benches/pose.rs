@@ -3,7 +3,7 @@
 //! ranks 40 x 40 x 60 down to 7 x 7 x 9).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use lod_policy::model::{AccuracyLevel, KeyTensor, ModelParts, Ranks};
+use lod_policy::{AccuracyLevel, KeyTensor, ModelParts, Ranks};
 use lod_policy::{ClipKernel, Detail, KernelScratch, LodModel, Variogram, VariogramModel};
 use std::hint::black_box;
 
@@ -85,12 +85,12 @@ fn bench_pose(c: &mut Criterion) {
         group.bench_function(format!("build_kernel/{name}"), |b| {
             b.iter(|| {
                 model
-                    .build_kernel(black_box(&controls), detail, &mut scratch, &mut kernel)
+                    .build_kernel_values(black_box(&controls), detail, &mut scratch, &mut kernel)
                     .unwrap();
             })
         });
         model
-            .build_kernel(&controls, detail, &mut scratch, &mut kernel)
+            .build_kernel_values(&controls, detail, &mut scratch, &mut kernel)
             .unwrap();
         let mut phase = 0.0f32;
         group.bench_function(format!("pose/{name}"), |b| {

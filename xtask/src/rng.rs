@@ -1,10 +1,10 @@
 //! A tiny deterministic pseudo-random generator (SplitMix64) for the fixture plan.
 //!
 //! The fixtures must be byte-identical on every machine and every run, so the generator is the
-//! project's own (`lod_policy::rng::SplitMix64`, no dependency whose stream could change between
-//! versions); `lod_policy::rng`'s tests pin its stream against the reference values.
+//! project's own (`lod_policy::SplitMix64`, no dependency whose stream could change between
+//! versions); `lod_policy::SplitMix64`'s tests pin its stream against the reference values.
 
-pub use lod_policy::rng::SplitMix64;
+pub use lod_policy::SplitMix64;
 
 #[cfg(test)]
 mod tests {

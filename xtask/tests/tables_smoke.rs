@@ -83,7 +83,7 @@ fn online_truncation_matches_the_runtime_kernel_on_truncations_of_key_0() {
     let (mut a, mut b) = (vec![0.0f32; trunc.p()], vec![0.0f32; trunc.p()]);
     let last = trunc.levels().len() - 1;
     for (k, c) in analysis.controls.iter().enumerate().step_by(5) {
-        let c = c.map(|v| v as f32);
+        let c = lod_policy::Controls::from_f64(*c);
         for level in [0, last / 2, last] {
             for joints in [usize::MAX, 2] {
                 let detail = Detail::new(level, joints);

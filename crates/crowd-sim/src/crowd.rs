@@ -9,8 +9,8 @@ use crate::source::ClipSource;
 use crate::stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
 use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
 use glam::{Vec2, Vec3};
-use lod_policy::chain::SeamScratch;
-use lod_policy::rng::SplitMix64;
+use lod_policy::SeamScratch;
+use lod_policy::SplitMix64;
 use lod_policy::{Controls, Detail, LevelPolicy};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -88,13 +88,13 @@ pub struct CrowdConfig {
     /// Frames per second of `Crowd::run` (`dt = 1 / fps`).
     pub fps: f32,
     /// At accuracy levels `0..seam_levels` a change of clip (a cycle seam, or a finer detail
-    /// mid-cycle) is inertialized ([`lod_policy::chain`]): every row stays continuous in position
+    /// mid-cycle) is inertialized ([`lod_policy::SeamTransition`]): every row stays continuous in position
     /// and velocity. Coarser levels and root-only walkers switch clips as they are.
     pub seam_levels: usize,
     /// Half-life of a seam's offset (s).
     pub seam_halflife_s: f32,
     /// Visible walkers at accuracy levels `0..foot_lock_levels` (with joints) keep planted feet planted: the
-    /// source's foot lock ([`ClipSource::plant_feet`], `lod_policy::footlock`) runs on their pose
+    /// source's foot lock ([`ClipSource::plant_feet`], `lod_policy::FootLock`) runs on their pose
     /// every frame. Farther walkers skate only as much as their level's measured slide, which the
     /// policies keep under a pixel. Default 3, the walkers whose seams are inertialized; 0 turns
     /// the lock off.
@@ -124,7 +124,7 @@ impl Default for CrowdConfig {
             seed: 1,
             fps: 30.0,
             seam_levels: 3,
-            seam_halflife_s: lod_policy::chain::DEFAULT_HALFLIFE_S,
+            seam_halflife_s: lod_policy::DEFAULT_HALFLIFE_S,
             foot_lock_levels: 3,
             border_m: 2.0,
             cull_margin_m: 0.25,
@@ -427,7 +427,7 @@ impl<C: Send> Crowd<C> {
         let frustum = Frustum::from_camera(camera)?;
         // Vector code run before on this thread (a model build) may have left the AVX upper state
         // dirty, which slows every SSE instruction after it.
-        lod_policy::clear_avx_upper_state();
+        lod_policy::offline::clear_avx_upper_state();
 
         // (1) Culling, over the boxes the last frame's FK stage left (or `new`'s): by the tree here,
         // or by a scan of each chunk's boxes in the pass below.
@@ -473,7 +473,7 @@ impl<C: Send> Crowd<C> {
                     c,
                     (((((((walkers, visible), boxes), scratch), poses), joints), bins), bounds),
                 )| {
-                    lod_policy::clear_avx_upper_state();
+                    lod_policy::offline::clear_avx_upper_state();
                     let mut out = ChunkOutcome::default();
                     let t_scan = Instant::now();
                     if scan {
@@ -485,7 +485,7 @@ impl<C: Send> Crowd<C> {
                     let ta = Instant::now();
                     for k in 0..walkers.len() {
                         if let Some(ahead) = walkers.get(k + PREFETCH_WALKERS) {
-                            lod_policy::prefetch(ahead);
+                            lod_policy::offline::prefetch(ahead);
                         }
                         let (w, vis) = (&mut walkers[k], visible[k]);
                         let d = policy.detail(w.root.distance(eye), vis, &view);
@@ -512,8 +512,14 @@ impl<C: Send> Crowd<C> {
                                 // The first line of its pose and joint slots, which this pass
                                 // and the next write (a root-only walker writes nothing more).
                                 let j = k + PREFETCH;
-                                lod_policy::prefetch_bytes(poses[j * pl..].as_ptr().cast(), 1);
-                                lod_policy::prefetch_bytes(joints[j * npos..].as_ptr().cast(), 1);
+                                lod_policy::offline::prefetch_bytes(
+                                    poses[j * pl..].as_ptr().cast(),
+                                    1,
+                                );
+                                lod_policy::offline::prefetch_bytes(
+                                    joints[j * npos..].as_ptr().cast(),
+                                    1,
+                                );
                             }
                             let pose = &mut poses[k * pl..(k + 1) * pl];
                             walkers[k].pose(source, &params, dt, visible[k], pose);

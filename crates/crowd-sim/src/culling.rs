@@ -304,7 +304,7 @@ mod tests {
     use super::*;
     use crate::camera::Camera;
     use glam::Vec3;
-    use lod_policy::rng::SplitMix64;
+    use lod_policy::SplitMix64;
 
     fn random_bounds(n: usize, seed: u64) -> Vec<Bounds> {
         let mut g = SplitMix64::new(seed);

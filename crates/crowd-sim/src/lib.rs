@@ -16,7 +16,7 @@
 //! distance to the camera and its visibility (resolved against the source's [`LevelTable`]). A
 //! clip the source cannot build is counted in the frame's statistics
 //! ([`FrameStats::clip_faults`]) and the walker keeps its previous clip. Cycles chain through their root motion with the runtime's one
-//! chaining routine ([`lod_policy::chain`]): changes of clip are inertialized at the first levels
+//! chaining routine ([`lod_policy::SeamTransition`]): changes of clip are inertialized at the first levels
 //! (continuous in position and velocity) and switched as they are beyond. Each frame
 //! culls walker boxes against the camera frustum ([`Culling`]: a scan of every box inside the
 //! frame's parallel pass, or an AABB tree, [`culling`]), then runs kernels, poses and forward

@@ -5,7 +5,7 @@
 //! is `(cos h, -sin h)` (positive heading change = turn left, as in `docs/architecture.md`).
 
 use glam::Vec2;
-use lod_policy::rng::SplitMix64;
+use lod_policy::SplitMix64;
 use lod_policy::{ControlRange, Controls, wrap_angle};
 use std::f32::consts::{PI, TAU};
 

@@ -21,7 +21,7 @@ use lod_policy::{ControlRange, Controls, CycleFrame, Detail, FootLock, RootMotio
 /// Pose vectors follow the runtime's row layout (`lod_policy`): rows 0-2 the root position in the
 /// cycle frame, rows 3-5 the root orientation as an exponential map, row 6 the time increment
 /// (left alone by transitions), then three rows per joint (exponential maps on one branch). Seam
-/// transitions ([`lod_policy::chain`]) offset the rows by decaying differences, so every joint row
+/// transitions ([`lod_policy::SeamTransition`]) offset the rows by decaying differences, so every joint row
 /// must be a quantity that can be interpolated.
 pub trait ClipSource: Sync {
     /// A per-walker clip buffer, allocated once by `new_clip` and refilled by `build_clip`.
@@ -70,7 +70,7 @@ pub trait ClipSource: Sync {
 
     /// Plants the feet of `pose` (the `rows` rows written by `pose` for this clip, seam applied),
     /// shown in cycle frame `frame` `dt` seconds after the walker's previous frame: a source with a
-    /// rig runs its foot lock (`lock`, the walker's; [`lod_policy::footlock`]) and writes the
+    /// rig runs its foot lock (`lock`, the walker's; [`lod_policy::FootLock`]) and writes the
     /// corrected leg rows into `pose`. The crowd calls it for near walkers only
     /// ([`CrowdConfig::foot_lock_levels`](crate::CrowdConfig)). Does nothing by default (a source
     /// without feet).

@@ -77,7 +77,7 @@ pub struct FrameStats {
     pub visible: usize,
     /// Clip kernels built during the frame (cycle changes and detail upgrades).
     pub kernels_built: usize,
-    /// Walkers inside a seam transition (`lod_policy::chain`).
+    /// Walkers inside a seam transition (`lod_policy::SeamTransition`).
     pub in_transition: usize,
     /// Clips the source failed to build (those walkers kept their previous clips).
     pub clip_faults: ClipFaults,

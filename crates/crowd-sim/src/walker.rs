@@ -7,8 +7,8 @@ use crate::levels::LevelTable;
 use crate::path::{EllipsePath, forward, left, path_controls};
 use crate::source::ClipSource;
 use glam::{Vec2, Vec3};
-use lod_policy::chain::{SeamScratch, SeamTransition};
 use lod_policy::{ControlRange, Controls, CycleFrame, Detail, FootLock, RootMotion, wrap_angle};
+use lod_policy::{SeamScratch, SeamTransition};
 
 /// Settings the stages need, copied out of the crowd config.
 #[derive(Debug, Clone, Copy)]
@@ -49,11 +49,11 @@ pub(crate) struct Walker<C> {
     pub rows: usize,
     /// Joint positions written this frame.
     pub n_joints: usize,
-    /// The walker's foot lock (`lod_policy::footlock`, 200 bytes), allocated when it first comes
+    /// The walker's foot lock (`lod_policy::FootLock`, 200 bytes), allocated when it first comes
     /// near enough to plant its feet and kept (released) when it leaves, so walkers never near
     /// hold no lock state and the frame loop never allocates for one that returns.
     pub lock: Option<Box<FootLock>>,
-    /// The inertialized seam into the current clip (`lod_policy::chain`), inactive when none runs.
+    /// The inertialized seam into the current clip (`lod_policy::SeamTransition`), inactive when none runs.
     /// `None` until the walker's first inertialized seam: far and culled walkers never need its
     /// `3 P` floats.
     pub seam: Option<Box<SeamTransition>>,

@@ -479,7 +479,7 @@ pub fn read(path: &Path) -> Result<Vec<u8>, FileError> {
 /// enum tag can claim 16 bytes for one varint byte; nothing claims more.
 const CLAIMS_PER_BYTE: usize = 16;
 
-/// Decodes the bincode payload (the bytes after the header) exactly as [`decode`] does after its
+/// Decodes the bincode payload (the bytes after the header) exactly as [`decode_section`] does after its
 /// checks, without them: the entry point for fuzzing the decoder itself. Every byte must be used.
 ///
 /// The decode limit grows with the payload (at most `64 x` its length, at least 64 KiB), so

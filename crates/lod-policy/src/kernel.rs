@@ -18,6 +18,7 @@ use crate::error::KernelError;
 use crate::time_table::TimeTable;
 
 use crate::chain::{RootMotion, exp_map_to_quat};
+use crate::controls::Controls;
 use crate::detail::Detail;
 use crate::model::{LodModel, Ranks, TIME_ROW};
 
@@ -244,7 +245,7 @@ impl ClipKernel {
     /// [`TURN_CONTROL`]; when the model ignores turn, the turn the data imply for the other controls,
     /// [`crate::ControlSpace::implied`]; the pelvis's yaw change for a model without a turn
     /// dimension). The next cycle frame
-    /// follows from it ([`crate::chain`]).
+    /// follows from it ([`crate::CycleFrame::next`]).
     pub fn root_motion(&self) -> RootMotion {
         self.root_motion
     }
@@ -522,14 +523,29 @@ impl LodModel {
         Ok(())
     }
 
-    /// Builds the clip kernel for raw `controls` (length `d`) at `detail`, into `out`, without
-    /// allocating.
+    /// Builds the clip kernel for `controls` at `detail`, into `out`, without allocating: the job
+    /// an engine runs once per gait cycle.
     ///
     /// Controls outside the data's `[min, max]` are clamped (reported by
-    /// [`ClipKernel::clamped`]); NaN or infinite controls, a wrong length or an unknown accuracy
-    /// level are errors. Active joints above the model's count mean all joints. Cost
+    /// [`ClipKernel::clamped`]); NaN or infinite controls, a model whose control space is not the
+    /// walk's ([`Controls::COUNT`] dimensions) or an unknown accuracy level are errors. Active
+    /// joints above the model's count mean all joints. Cost
     /// `O((R_S + d) S + r_P r_T r_S + P' r_P r_T + T r_T)`, see [`LodModel::kernel_cost`].
     pub fn build_kernel(
+        &self,
+        controls: &Controls,
+        detail: Detail,
+        scratch: &mut KernelScratch,
+        out: &mut ClipKernel,
+    ) -> Result<(), KernelError> {
+        let values = controls.to_array();
+        self.build_kernel_isa(Isa::current(), &values, detail, scratch, out, false)
+    }
+
+    /// [`LodModel::build_kernel`] for a raw control vector of the model's `d` dimensions (any
+    /// `d`): for tests of control spaces other than the walk's (feature `reference`).
+    #[cfg(feature = "reference")]
+    pub fn build_kernel_values(
         &self,
         controls: &[f32],
         detail: Detail,
@@ -539,10 +555,11 @@ impl LodModel {
         self.build_kernel_isa(Isa::current(), controls, detail, scratch, out, false)
     }
 
-    /// [`LodModel::build_kernel`] run by the baseline build of its loops (x86-64 SSE2) whatever the
-    /// CPU. `build_kernel` runs an AVX2 build where the CPU has it; both perform the same
+    /// [`LodModel::build_kernel_values`] run by the baseline build of its loops (x86-64 SSE2)
+    /// whatever the CPU (feature `reference`). `build_kernel` runs an AVX2 build where the CPU has it; both perform the same
     /// floating-point operations in the same order (no fused multiply-add), so they give the same
-    /// bits. This one exists to check that, and for callers that want the baseline code path.
+    /// bits. This one exists to check that.
+    #[cfg(feature = "reference")]
     pub fn build_kernel_baseline(
         &self,
         controls: &[f32],
@@ -557,7 +574,8 @@ impl LodModel {
     /// the order they are stored (one multiply-add per sample and row, summed in sample order),
     /// instead of as row-major dot products with several partial sums. The two differ by rounding
     /// only (relative `1e-15` in the weights); this straightforward form is the reference the
-    /// fast path is tested against.
+    /// fast path is tested against (feature `reference`; raw control vector of length `d`).
+    #[cfg(feature = "reference")]
     pub fn build_kernel_reference(
         &self,
         controls: &[f32],
@@ -568,15 +586,29 @@ impl LodModel {
         self.build_kernel_isa(Isa::current(), controls, detail, scratch, out, true)
     }
 
-    /// The sample-mode kriging weights `w` of key `key` for raw `controls` (length `d`), truncated
-    /// to its first `r_s` sample components: steps 1-4 of the module documentation,
+    /// The sample-mode kriging weights `w` of key `key` for `controls`, truncated to its first
+    /// `r_s` sample components: steps 1-4 of the module documentation,
     /// `w = U_S^T b(c) + V ([c' ; 1] - C b(c))` with `b(c)` the kriging weights of the scaled,
     /// clamped controls `c'`. The same numbers [`LodModel::build_kernel`] blends the core with; the
     /// returned slice (length `r_s`) lives in `scratch`. No allocation.
     ///
-    /// Errors: a wrong control length or a non-finite control, a key out of range or `r_s` not in
-    /// `1..=R_S` of that key ([`KernelError::Key`]), scratch sized for another model.
+    /// Errors: a model whose control space is not the walk's or a non-finite control, a key out of
+    /// range or `r_s` not in `1..=R_S` of that key ([`KernelError::Key`]), scratch sized for
+    /// another model.
     pub fn kriging_weights<'s>(
+        &self,
+        controls: &Controls,
+        key: usize,
+        r_s: usize,
+        scratch: &'s mut KernelScratch,
+    ) -> Result<&'s [f32], KernelError> {
+        self.kriging_weights_checked(&controls.to_array(), key, r_s, scratch, false)
+    }
+
+    /// [`LodModel::kriging_weights`] for a raw control vector of length `d` (any `d`; feature
+    /// `reference`).
+    #[cfg(feature = "reference")]
+    pub fn kriging_weights_values<'s>(
         &self,
         controls: &[f32],
         key: usize,
@@ -586,8 +618,10 @@ impl LodModel {
         self.kriging_weights_checked(controls, key, r_s, scratch, false)
     }
 
-    /// [`LodModel::kriging_weights`] with the projections accumulated in stored column order, as
-    /// [`LodModel::build_kernel_reference`] does (the two differ by rounding only).
+    /// [`LodModel::kriging_weights`] for a raw control vector of length `d`, with the projections
+    /// accumulated in stored column order as [`LodModel::build_kernel_reference`] does (the two
+    /// differ by rounding only; feature `reference`).
+    #[cfg(feature = "reference")]
     pub fn kriging_weights_reference<'s>(
         &self,
         controls: &[f32],
@@ -891,7 +925,7 @@ impl LodModel {
             self.pose_rows_body(out, phase, e)?;
         }
         let [start, end] = ends;
-        out.root_motion = self.controls().root_motion(controls, &start, &end);
+        out.root_motion = self.controls().root_motion_of(controls, &start, &end);
         Ok(())
     }
 
@@ -929,7 +963,8 @@ impl LodModel {
     }
 
     /// [`LodModel::pose_rows`] run by the baseline build (x86-64 SSE2) whatever the CPU: the same
-    /// bits as `pose_rows` (see [`LodModel::build_kernel_baseline`]).
+    /// bits as `pose_rows` (see [`LodModel::build_kernel_baseline`]; feature `reference`).
+    #[cfg(feature = "reference")]
     pub fn pose_rows_baseline(
         &self,
         kernel: &ClipKernel,

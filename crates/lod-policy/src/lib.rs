@@ -9,24 +9,31 @@
 //! fits the decomposition, the kriging and the variogram, and writes the file with this crate's
 //! framing), reading motion capture, or simulating crowds (see `crowd-sim`).
 //!
-//! The pieces (Mukai and Kuriyama, sections 3.2-4.3):
-//! - [`runtime`]: [`RuntimeModel`], a model file's [`Rig`] and [`LodModel`]; [`file`](mod@file): the file
-//!   framing and its errors ([`FileError`]), shared with the offline writer.
-//! - [`model`]: [`LodModel`], validated from plain-data [`ModelParts`]: key tensors (ordered Tucker
-//!   models with their universal-kriging projections), accuracy levels (leading sub-block
-//!   truncations of a key), the control space with its [`Variogram`], the mean pose, measured error
-//!   tables, storage.
-//! - [`kernel`]: per clip, [`LodModel::build_kernel`] computes the kriging weights, the blended
-//!   core `K(c) = Z x_3 w` (eq. 8), `G(c) = U_P K(c)` for the active rows and the clip's
-//!   [`TimeTable`]; per frame, [`LodModel::pose`] evaluates `G w_T` (eq. 4-5). Neither allocates.
-//! - [`rig`]: [`Rig`], forward kinematics of f32 poses for the active joints.
-//! - [`footlock`]: [`FootLock`], planted feet frame by frame (a causal foot lock with two-bone IK)
-//!   for the model file's [`FootRig`].
-//! - [`policy`]: the paper's [`DistancePolicy`] and a [`ScreenSpacePolicy`] with a pixel budget,
-//!   both behind the [`LevelPolicy`] trait.
-//! - The one vocabulary: [`Controls`] (with their names, units and [`ControlRange`] clamp),
-//!   [`Detail`], [`RootMotion`], the angle wrap and ease curve ([`math`]) and the seeded generator
-//!   ([`rng`]).
+//! The jobs an engine runs, in call order (Mukai and Kuriyama, sections 3.2-4.3), each a small call
+//! over buffers the caller owns, none allocating after its buffers exist:
+//! 1. **Load** the model once: [`RuntimeModel::load`] or [`RuntimeModel::from_bytes`] read the
+//!    runtime's own section of a model file ([`file`](mod@file): sections, checksums, versions,
+//!    [`FileError`]) into the one model type: the [`Rig`], the multilinear model at every accuracy
+//!    level ([`LodModel`]: key tensors with their universal-kriging projections, accuracy levels,
+//!    the control space with its [`Variogram`], the mean pose, measured error tables), the
+//!    [`FootRig`] and the stature.
+//! 2. **Per character, once**: a [`ClipKernel`], a [`KernelScratch`] (shared by the characters of a
+//!    thread), a pose vector, a [`FootLock`].
+//! 3. **Per cycle**: the [`LevelPolicy`] ([`DistancePolicy`], the paper's, or
+//!    [`ScreenSpacePolicy`] with a pixel budget) gives the [`Detail`] from the camera; then
+//!    [`LodModel::build_kernel`] builds the clip for the [`Controls`]: the kriging weights, the
+//!    blended core `K(c) = Z x_3 w` (eq. 8), `G(c) = U_P K(c)` for the active rows, the clip's
+//!    [`TimeTable`] and its [`RootMotion`].
+//! 4. **Per frame**: [`LodModel::pose`] evaluates `G w_T` (eq. 4-5) at [`ClipKernel::phase_at`];
+//!    [`FootLock::apply`] holds planted feet; [`Rig::local_rotations`] (local space, for skinning)
+//!    or [`Rig::joint_transforms`] (model space) turn the pose into joints.
+//! 5. **At a cycle's end**: [`CycleFrame::next`] moves the character's frame by the clip's root
+//!    motion, and the next clip is built (step 3); a [`SeamTransition`] inertializes the change.
+//!
+//! The vocabulary is one type per concept ([`Controls`], [`Detail`], [`ClipKernel`],
+//! [`RuntimeModel`]); `docs/architecture.md` has the glossary. The [`offline`] module holds what the
+//! offline crates share with the runtime to get its bits; an engine needs none of it. The baseline
+//! and reference kernels exist only with the feature `reference`, for tests and benchmarks.
 //!
 //! ```
 //! use lod_policy::{Detail, DistancePolicy, LevelPolicy, LodModel, ViewParams};
@@ -39,7 +46,7 @@
 //!     // Once per clip: the level from the policy, then the kernel.
 //!     let policy = DistancePolicy::for_model(model);
 //!     let detail: Detail = policy.detail(distance_m, true, &ViewParams::default());
-//!     model.build_kernel(&controls.to_array(), detail, &mut scratch, &mut kernel)?;
+//!     model.build_kernel(controls, detail, &mut scratch, &mut kernel)?;
 //!     // Per frame: playback time -> aligned phase -> pose vector.
 //!     let phase = kernel.phase_at(0.5 * kernel.duration());
 //!     model.pose(&kernel, phase, &mut pose)?;
@@ -59,7 +66,7 @@
 //! let (mut scratch, mut kernel) = (KernelScratch::new(lod), ClipKernel::new(lod));
 //! let mut pose = vec![0.0f32; lod.p()];
 //! let mut joints = vec![glam::Vec3::ZERO; rig.joint_count()];
-//! lod.build_kernel(&[0.0, 1.4, 0.0, 1.7], Detail::full(), &mut scratch, &mut kernel)?;
+//! lod.build_kernel(&lod_policy::Controls::from_array([0.0, 1.4, 0.0, 1.7]), Detail::full(), &mut scratch, &mut kernel)?;
 //! lod.pose(&kernel, kernel.phase_at(0.25), &mut pose)?;
 //! rig.joint_positions(&pose, kernel.detail().active_joints, &mut joints)?; // metres, cycle frame
 //! # Ok(())
@@ -68,42 +75,64 @@
 
 #![warn(missing_docs)]
 
-pub mod chain;
-pub mod controls;
-pub mod detail;
-pub mod error;
+mod chain;
+mod controls;
+mod detail;
+mod error;
 pub mod file;
-pub mod footlock;
-pub mod kernel;
-pub mod math;
-pub mod model;
-pub mod policy;
-pub mod rig;
-pub mod rng;
-pub mod runtime;
-pub mod time_table;
-pub mod variogram;
+mod footlock;
+mod kernel;
+mod math;
+mod model;
+pub mod offline;
+mod policy;
+mod rig;
+mod rng;
+mod runtime;
+mod time_table;
+mod variogram;
 
-pub use chain::{CycleFrame, PoseState, RootMotion, SeamScratch, SeamTransition};
-pub use controls::{ControlRange, Controls, clamp_control};
-pub use detail::Detail;
-pub use error::{KernelError, ModelError, RigError, VariogramError};
-pub use file::{FileError, InvalidModel};
-pub use footlock::{Foot, FootLock, FootLockError, FootRig};
-/// The math types of the runtime API (`Vec3`, `Quat`), so an engine uses the same version.
-pub use glam;
-pub use kernel::{ClipKernel, KernelScratch, TURN_CONTROL};
-pub use math::{
-    clear_avx_upper_state, ease_in_out, prefetch, prefetch_bytes, prefetch_slice, wrap_angle,
-};
-pub use model::{
-    ALWAYS_ROWS, AccuracyLevel, ControlSpace, HEIGHT_CONTROL, KeyTensor, LevelError, LodModel,
-    ModelParts, Precision, ROWS_PER_JOINT, Ranks, TIME_ROW, Variogram, VariogramModel,
-};
+// The jobs an engine runs, in call order (docs/architecture.md, "How an engine uses it").
+
+// 1. Load: the one model type, read from its section of a model file.
+pub use runtime::RuntimeModel;
+
+// 2. Per character, once: the buffers every job writes into.
+pub use kernel::{ClipKernel, KernelScratch};
+
+// 3. Per cycle: the policy chooses the detail, then the clip is built for the controls.
 pub use policy::{
     DistanceConfig, DistancePolicy, ERROR_MARGIN, ErrorMetric, FullDetail, LevelPolicy,
     PolicyError, ScreenConfig, ScreenSpacePolicy, ViewParams,
 };
+
+// 4. Per frame: the pose at the clip's phase (`LodModel::pose`), then local rotations or model-space
+//    transforms (`Rig`), and the foot lock on the pose.
+pub use footlock::{Foot, FootLock, FootLockError, FootRig};
 pub use rig::{JointRole, JointTransform, Rig, RigJoint};
-pub use runtime::RuntimeModel;
+
+// 5. At a cycle's end: chain to the next cycle (the cycle frame moves by the clip's root motion),
+//    optionally with an inertialized seam.
+pub use chain::{
+    CycleFrame, DEFAULT_HALFLIFE_S, PoseState, RootMotion, SEAM_STEP_S, SeamScratch, SeamTransition,
+};
+
+// The one vocabulary: controls, detail, the pose rows, time, errors.
+pub use controls::{ControlRange, Controls, clamp_control};
+pub use detail::Detail;
+pub use error::{KernelError, ModelError, RigError, VariogramError};
+pub use file::{FileError, InvalidModel};
+/// The math types of the runtime API (`Vec3`, `Quat`), so an engine uses the same version.
+pub use glam;
+pub use kernel::TURN_CONTROL;
+pub use math::{ease_in_out, wrap_angle};
+pub use model::{ALWAYS_ROWS, HEIGHT_CONTROL, ROWS_PER_JOINT, TIME_ROW};
+pub use rng::SplitMix64;
 pub use time_table::{MIN_INCREMENT, TimeTable};
+
+// The model's data: what the offline builder fills and a reader may inspect (ranks, levels,
+// errors, storage).
+pub use model::{
+    AccuracyLevel, ControlSpace, KeyTensor, LevelError, LodModel, ModelParts, Precision, Ranks,
+    Variogram, VariogramModel,
+};

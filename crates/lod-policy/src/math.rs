@@ -11,7 +11,7 @@ use std::f32::consts::{PI, TAU};
 /// dirty (a linear-algebra kernel that did not clear it) makes every later SSE instruction on that
 /// thread, and on threads spawned from it, pay for merging that state: measured here, a crowd frame
 /// ran 2.5 times slower after a model build in the same process. The crowd calls this at the start
-/// of each frame and of each chunk of walkers ([`crate::footlock`] and the kernels need nothing
+/// of each frame and of each chunk of walkers ([`crate::FootLock`] and the kernels need nothing
 /// else); an engine that runs its own vector code before the runtime's may call it too. It changes
 /// no value the program holds.
 #[inline]

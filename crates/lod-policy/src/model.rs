@@ -10,6 +10,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::chain::RootMotion;
+use crate::controls::Controls;
+use crate::detail::Detail;
 
 use crate::error::ModelError;
 
@@ -126,15 +128,25 @@ pub struct ControlSpace {
 }
 
 impl ControlSpace {
-    /// Root motion of a clip built for `controls` (raw, length `d`) whose first and last poses are
-    /// `start` and `end` (rows 0-5: root position and exponential map): the root's ground
-    /// displacement, and the travel turn, the turn control as [`ControlSpace::implied`] reads it
-    /// (the pelvis's yaw change for a control space without a turn dimension). The one rule every
-    /// clip source chains by ([`crate::chain`]).
-    pub fn root_motion(&self, controls: &[f32], start: &[f32], end: &[f32]) -> RootMotion {
+    /// Root motion of a clip built for `controls` whose first and last poses are `start` and
+    /// `end` (rows 0-5: root position and exponential map): the root's ground displacement, and
+    /// the travel turn, the turn control as [`ControlSpace::implied`] reads it (the pelvis's yaw
+    /// change for a control space without a turn dimension). The one rule every clip source
+    /// chains by ([`crate::CycleFrame::next`]).
+    pub fn root_motion(&self, controls: &Controls, start: &[f32], end: &[f32]) -> RootMotion {
+        self.root_motion_of(&controls.to_array(), start, end)
+    }
+
+    /// [`ControlSpace::root_motion`] for a raw control vector of length `d`.
+    pub(crate) fn root_motion_of(
+        &self,
+        controls: &[f32],
+        start: &[f32],
+        end: &[f32],
+    ) -> RootMotion {
         use crate::kernel::{TURN_CONTROL, yaw_of_exp_map};
         let turn = if self.scale.len() > TURN_CONTROL && controls.len() > TURN_CONTROL {
-            self.implied(TURN_CONTROL, controls)
+            self.implied_of(TURN_CONTROL, controls)
         } else {
             crate::math::wrap_angle(yaw_of_exp_map(&end[3..6]) - yaw_of_exp_map(&start[3..6]))
         };
@@ -145,7 +157,7 @@ impl ControlSpace {
         }
     }
 
-    /// The body scale of a character with raw controls `c` (length `d`): the standing height the
+    /// The body scale of a character with controls `c`: the standing height the
     /// controls give ([`ControlSpace::implied`] of [`HEIGHT_CONTROL`]: the height control clamped
     /// to the data's range, or the height the data imply from the other controls when the kriging
     /// ignores it) over `stature_m`, the rig's standing height measured the same way. The bones
@@ -153,7 +165,8 @@ impl ControlSpace {
     /// the pose's, kriged in metres). Exactly 1 when the data hold one height (the rig is theirs),
     /// the control space has no height dimension, `stature_m` is `None`, or the ratio is not finite
     /// and positive.
-    pub fn body_scale(&self, stature_m: Option<f32>, c: &[f32]) -> f32 {
+    pub fn body_scale(&self, stature_m: Option<f32>, c: &Controls) -> f32 {
+        let c = &c.to_array();
         let k = HEIGHT_CONTROL;
         let Some(stature) = stature_m else {
             return 1.0;
@@ -161,14 +174,26 @@ impl ControlSpace {
         if self.scale.len() <= k || c.len() < self.scale.len() || self.min[k] == self.max[k] {
             return 1.0;
         }
-        let s = self.implied(k, c) / stature;
+        let s = self.implied_of(k, c) / stature;
         if s.is_finite() && s > 0.0 { s } else { 1.0 }
     }
 
-    /// The value of dimension `k` that the controls `c` (raw, length `d`, each clamped to the data's
-    /// range here) imply: `c_k` itself for a kept dimension, else the least-squares prediction from
-    /// the kept ones ([`ControlSpace::implied`] field), clamped to the data's range of `c_k`.
-    pub fn implied(&self, k: usize, c: &[f32]) -> f32 {
+    /// The value of dimension `k` that the controls `c` (each clamped to the data's range here)
+    /// imply: `c_k` itself for a kept dimension, else the least-squares prediction from the kept
+    /// ones ([`ControlSpace::implied`] field), clamped to the data's range of `c_k`. `k` must be a
+    /// dimension of the control space, which must be the walk's.
+    pub fn implied(&self, k: usize, c: &Controls) -> f32 {
+        self.implied_of(k, &c.to_array())
+    }
+
+    /// [`ControlSpace::implied`] for a raw control vector of length `d` (any `d`; the tests of
+    /// other control spaces use it, feature `reference`).
+    #[cfg(feature = "reference")]
+    pub fn implied_values(&self, k: usize, c: &[f32]) -> f32 {
+        self.implied_of(k, c)
+    }
+
+    pub(crate) fn implied_of(&self, k: usize, c: &[f32]) -> f32 {
         let d = self.scale.len();
         debug_assert!(k < d && c.len() >= d);
         let clamp = |j: usize| c[j].clamp(self.min[j], self.max[j]);
@@ -698,10 +723,22 @@ impl LodModel {
         self.max_ranks
     }
 
+    /// Multiply-adds to build a clip kernel at `detail` ([`LodModel::kernel_cost_rows`] of its
+    /// evaluated rows); `None` for a level the model lacks.
+    pub fn kernel_cost(&self, detail: Detail) -> Option<usize> {
+        self.kernel_cost_rows(detail.accuracy, self.active_rows(detail.active_joints))
+    }
+
+    /// Multiply-adds per evaluated pose at `detail` ([`LodModel::pose_cost_rows`] of its evaluated
+    /// rows); `None` for a level the model lacks.
+    pub fn pose_cost(&self, detail: Detail) -> Option<usize> {
+        self.pose_cost_rows(detail.accuracy, self.active_rows(detail.active_joints))
+    }
+
     /// Multiply-adds to build a clip kernel at `level` for `rows` evaluated rows:
     /// `(r_S + d + 1)(S + 1) + r_S (d + 1)` for the kriging weights, `r_P r_T r_S` for `K(c)`,
     /// `rows r_P r_T` for `G(c)` and `T r_T` for the time table; `None` for a bad level.
-    pub fn kernel_cost(&self, level: usize, rows: usize) -> Option<usize> {
+    pub(crate) fn kernel_cost_rows(&self, level: usize, rows: usize) -> Option<usize> {
         let lv = self.parts.levels.get(level)?;
         let r = lv.ranks;
         let (s, d, t) = (self.parts.s, self.parts.d, self.parts.t);
@@ -709,7 +746,7 @@ impl LodModel {
     }
 
     /// Multiply-adds per evaluated pose at `level` for `rows` rows: `rows r_T`.
-    pub fn pose_cost(&self, level: usize, rows: usize) -> Option<usize> {
+    pub(crate) fn pose_cost_rows(&self, level: usize, rows: usize) -> Option<usize> {
         Some(self.parts.levels.get(level)?.ranks.t * rows)
     }
 

@@ -371,7 +371,7 @@ impl Default for ScreenConfig {
 /// `err_px = m err_m * image_height / (2 distance tan(fov_y / 2))` with the margin `m` =
 /// [`ERROR_MARGIN`]. Among all `(l, j)` with
 /// `err_px <= budget_px` it returns the one with the smallest cost
-/// `kernel_cost(l, P') + T pose_cost(l, P')` (a cycle's kernel and poses, [`LodModel::kernel_cost`]);
+/// `kernel_cost(l, P') + T pose_cost(l, P')` (a cycle's kernel and poses, [`LodModel::kernel_cost`] of the detail);
 /// if none qualifies, full detail. When the model has no joint error table, every joint is kept.
 /// Since the admissible set only grows with distance, the chosen cost never increases with it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -415,9 +415,9 @@ impl ScreenSpacePolicy {
         let mut level_row_cost = Vec::new();
         for l in 0..model.levels().len() {
             // kernel_cost is affine in the row count.
-            let c0 = model.kernel_cost(l, 0).unwrap_or(0) as u64;
-            let c1 = model.kernel_cost(l, 1).unwrap_or(0) as u64;
-            let p1 = model.pose_cost(l, 1).unwrap_or(0) as u64;
+            let c0 = model.kernel_cost_rows(l, 0).unwrap_or(0) as u64;
+            let c1 = model.kernel_cost_rows(l, 1).unwrap_or(0) as u64;
+            let p1 = model.pose_cost_rows(l, 1).unwrap_or(0) as u64;
             level_base_cost.push(c0);
             level_row_cost.push(c1 - c0 + t * p1);
         }
@@ -447,16 +447,19 @@ impl ScreenSpacePolicy {
         self.config
     }
 
-    /// Estimated error in metres of `level` with `active_joints` joints (see the type's docs).
-    pub fn estimated_error_m(&self, level: usize, active_joints: usize) -> Option<f32> {
-        let e = self.level_err_m.get(level)?;
-        Some(e + self.joint_err_m[active_joints.min(self.joints)])
+    /// Estimated error in metres of `detail` (see the type's docs); `None` for a level the model
+    /// lacks.
+    pub fn estimated_error_m(&self, detail: Detail) -> Option<f32> {
+        let e = self.level_err_m.get(detail.accuracy)?;
+        Some(e + self.joint_err_m[detail.active_joints.min(self.joints)])
     }
 
-    /// Estimated cost (multiply-adds of one kernel and `T` poses) of `level` with
-    /// `active_joints` joints.
-    pub fn cost(&self, level: usize, active_joints: usize) -> Option<u64> {
-        let rows = (self.always_rows + self.rows_per_joint * active_joints.min(self.joints)) as u64;
+    /// Estimated cost (multiply-adds of one kernel and `T` poses) of `detail`; `None` for a level
+    /// the model lacks.
+    pub fn cost(&self, detail: Detail) -> Option<u64> {
+        let level = detail.accuracy;
+        let joints = detail.active_joints.min(self.joints);
+        let rows = (self.always_rows + self.rows_per_joint * joints) as u64;
         Some(self.level_base_cost.get(level)? + rows * self.level_row_cost[level])
     }
 }

@@ -214,9 +214,7 @@ impl RuntimeModel {
     /// [`Rig::joint_transforms_scaled`] and [`crate::FootLock::apply`] take, and what an engine
     /// scales the skeleton's bone translations by. 1 when the data hold one height.
     pub fn body_scale(&self, controls: &Controls) -> f32 {
-        self.lod
-            .controls()
-            .body_scale(self.stature_m, &controls.to_array())
+        self.lod.controls().body_scale(self.stature_m, controls)
     }
 
     /// The parts.

@@ -13,7 +13,7 @@ fn kernel_pose(model: &LodModel, c: &[f32], detail: Detail, phase: f32) -> (Clip
     let mut scratch = KernelScratch::new(model);
     let mut kernel = ClipKernel::new(model);
     model
-        .build_kernel(c, detail, &mut scratch, &mut kernel)
+        .build_kernel_values(c, detail, &mut scratch, &mut kernel)
         .unwrap();
     let mut out = vec![f32::NAN; model.p()];
     model.pose(&kernel, phase, &mut out).unwrap();
@@ -208,11 +208,11 @@ fn bad_inputs_are_errors() {
     let mut scratch = KernelScratch::new(&model);
     let mut kernel = ClipKernel::new(&model);
     assert!(matches!(
-        model.build_kernel(&[f32::NAN, 1.0], Detail::full(), &mut scratch, &mut kernel),
+        model.build_kernel_values(&[f32::NAN, 1.0], Detail::full(), &mut scratch, &mut kernel),
         Err(KernelError::NonFiniteControl { index: 0, .. })
     ));
     assert!(matches!(
-        model.build_kernel(
+        model.build_kernel_values(
             &[0.0, f32::INFINITY],
             Detail::full(),
             &mut scratch,
@@ -221,21 +221,21 @@ fn bad_inputs_are_errors() {
         Err(KernelError::NonFiniteControl { index: 1, .. })
     ));
     assert!(matches!(
-        model.build_kernel(&[0.0], Detail::full(), &mut scratch, &mut kernel),
+        model.build_kernel_values(&[0.0], Detail::full(), &mut scratch, &mut kernel),
         Err(KernelError::ControlLength {
             expected: 2,
             found: 1
         })
     ));
     assert!(matches!(
-        model.build_kernel(&[0.0, 1.0], Detail::new(4, 1), &mut scratch, &mut kernel),
+        model.build_kernel_values(&[0.0, 1.0], Detail::new(4, 1), &mut scratch, &mut kernel),
         Err(KernelError::Level {
             level: 4,
             levels: 4
         })
     ));
     model
-        .build_kernel(&[0.0, 1.0], Detail::full(), &mut scratch, &mut kernel)
+        .build_kernel_values(&[0.0, 1.0], Detail::full(), &mut scratch, &mut kernel)
         .unwrap();
     let mut short = vec![0.0; P - 1];
     assert!(matches!(
@@ -274,7 +274,7 @@ fn kernel_from_another_model_is_rejected() {
     let mut scratch = KernelScratch::new(&model);
     let mut kernel = ClipKernel::new(&other);
     assert!(matches!(
-        model.build_kernel(&[0.0, 1.0], Detail::full(), &mut scratch, &mut kernel),
+        model.build_kernel_values(&[0.0, 1.0], Detail::full(), &mut scratch, &mut kernel),
         Err(KernelError::Capacity { what: "kernel", .. })
     ));
 }
@@ -285,7 +285,7 @@ fn rebuilding_a_kernel_is_deterministic_and_independent_of_history() {
     let mut scratch = KernelScratch::new(&model);
     let mut k1 = ClipKernel::new(&model);
     model
-        .build_kernel(
+        .build_kernel_values(
             &[0.1, 1.3],
             Detail::new(0, usize::MAX),
             &mut scratch,
@@ -295,10 +295,10 @@ fn rebuilding_a_kernel_is_deterministic_and_independent_of_history() {
     let g1 = k1.g().to_vec();
     // Build at a different level and controls in between, then rebuild.
     model
-        .build_kernel(&[-0.4, 0.7], Detail::root_only(), &mut scratch, &mut k1)
+        .build_kernel_values(&[-0.4, 0.7], Detail::root_only(), &mut scratch, &mut k1)
         .unwrap();
     model
-        .build_kernel(
+        .build_kernel_values(
             &[0.1, 1.3],
             Detail::new(0, usize::MAX),
             &mut scratch,
@@ -308,7 +308,7 @@ fn rebuilding_a_kernel_is_deterministic_and_independent_of_history() {
     let mut fresh_scratch = KernelScratch::new(&model);
     let mut k2 = ClipKernel::new(&model);
     model
-        .build_kernel(
+        .build_kernel_values(
             &[0.1, 1.3],
             Detail::new(0, usize::MAX),
             &mut fresh_scratch,
@@ -328,7 +328,7 @@ fn pose_rows_equal_the_leading_rows_of_pose() {
     let c: Vec<f32> = (0..D).map(|k| 0.3 + 0.1 * k as f32).collect();
     for detail in [Detail::full(), Detail::new(1, 2), Detail::root_only()] {
         model
-            .build_kernel(&c, detail, &mut scratch, &mut kernel)
+            .build_kernel_values(&c, detail, &mut scratch, &mut kernel)
             .unwrap();
         let mut full = vec![0.0f32; P];
         model.pose(&kernel, 2.5, &mut full).unwrap();
@@ -366,10 +366,10 @@ fn compact_kernels_hold_their_level_and_give_the_same_bits() {
             .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
             .collect();
         model
-            .build_kernel(&c, detail, &mut scratch, &mut full)
+            .build_kernel_values(&c, detail, &mut scratch, &mut full)
             .unwrap();
         model
-            .build_kernel(&c, detail, &mut scratch, &mut compact)
+            .build_kernel_values(&c, detail, &mut scratch, &mut compact)
             .unwrap();
         assert_eq!(compact.g(), full.g(), "step {i}");
         assert_eq!(compact.time_table(), full.time_table());
@@ -404,7 +404,7 @@ fn fast_kernel_agrees_with_the_column_order_reference() {
                 .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
                 .collect();
             model
-                .build_kernel(&c, detail, &mut scratch, &mut fast)
+                .build_kernel_values(&c, detail, &mut scratch, &mut fast)
                 .unwrap();
             model
                 .build_kernel_reference(&c, detail, &mut scratch, &mut reference)
@@ -429,7 +429,7 @@ fn kernel_phase_lookup_equals_the_time_table_bitwise() {
             .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
             .collect();
         model
-            .build_kernel(&c, Detail::full(), &mut scratch, &mut kernel)
+            .build_kernel_values(&c, Detail::full(), &mut scratch, &mut kernel)
             .unwrap();
         let table: &TimeTable = kernel.time_table();
         let d = kernel.duration();
@@ -508,7 +508,9 @@ fn kriging_weights_are_the_per_sample_formula_bitwise() {
                     .unwrap();
                 let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(got), bits(&want), "seed {seed} key {key} r_S {r_s}");
-                let fast = model.kriging_weights(&c, key, r_s, &mut scratch).unwrap();
+                let fast = model
+                    .kriging_weights_values(&c, key, r_s, &mut scratch)
+                    .unwrap();
                 for (a, b) in fast.iter().zip(&want) {
                     assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "{a} vs {b}");
                 }
@@ -527,12 +529,12 @@ fn kriging_weights_refuse_a_missing_key_or_rank() {
     let big = model.keys()[0].ranks.s;
     for (key, r_s) in [(keys, 1), (0, 0), (0, big + 1)] {
         assert!(matches!(
-            model.kriging_weights(&c, key, r_s, &mut scratch),
+            model.kriging_weights_values(&c, key, r_s, &mut scratch),
             Err(KernelError::Key { .. })
         ));
     }
     assert!(matches!(
-        model.kriging_weights(&c[1..], 0, 1, &mut scratch),
+        model.kriging_weights_values(&c[1..], 0, 1, &mut scratch),
         Err(KernelError::ControlLength { .. })
     ));
 }
@@ -554,7 +556,7 @@ fn time_table_is_the_per_frame_sum_of_the_time_row() {
                 .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
                 .collect();
             model
-                .build_kernel(&c, Detail::new(level, joints), &mut scratch, &mut kernel)
+                .build_kernel_values(&c, Detail::new(level, joints), &mut scratch, &mut kernel)
                 .unwrap();
             let key = &model.keys()[model.levels()[level].key];
             let (g, rows, rt) = (kernel.g(), kernel.rows(), kernel.ranks().t);

@@ -170,7 +170,7 @@ fn serde_round_trip_keeps_model_and_poses() {
     let pose = |m: &LodModel| {
         let mut scratch = KernelScratch::new(m);
         let mut kernel = ClipKernel::new(m);
-        m.build_kernel(&[0.2, 1.4], Detail::new(1, 3), &mut scratch, &mut kernel)
+        m.build_kernel_values(&[0.2, 1.4], Detail::new(1, 3), &mut scratch, &mut kernel)
             .unwrap();
         let mut out = vec![0.0; m.p()];
         m.pose(&kernel, 4.5, &mut out).unwrap();

@@ -191,22 +191,23 @@ fn screen_policy_meets_the_budget_and_is_cheapest() {
         let dist = i as f32 * 0.25;
         let d = pol.detail(dist, true, &v);
         let (level, joints) = detail_rank(&m, d);
-        let cost = pol.cost(level, joints).unwrap();
+        let cost = pol.cost(Detail::new(level, joints)).unwrap();
         assert!(cost <= prev_cost, "cost rose at {dist} m");
         prev_cost = cost;
         let budget_m = v.metres_per_pixel(dist) * 1.0;
-        let err = pol.estimated_error_m(level, joints).unwrap();
-        let any_fits =
-            (0..4).any(|l| (0..=JOINTS).any(|j| pol.estimated_error_m(l, j).unwrap() <= budget_m));
+        let err = pol.estimated_error_m(Detail::new(level, joints)).unwrap();
+        let any_fits = (0..4).any(|l| {
+            (0..=JOINTS).any(|j| pol.estimated_error_m(Detail::new(l, j)).unwrap() <= budget_m)
+        });
         if any_fits {
             // Projected error within 1 px (err_px = err_m H / (2 d tan(fov/2))).
             let err_px = err * v.image_height_px / (2.0 * dist * (0.5 * v.fov_y_radians).tan());
             assert!(err_px <= 1.0 + 1e-4, "{err_px} px at {dist} m");
             for l in 0..4 {
                 for j in 0..=JOINTS {
-                    if pol.estimated_error_m(l, j).unwrap() <= budget_m {
+                    if pol.estimated_error_m(Detail::new(l, j)).unwrap() <= budget_m {
                         assert!(
-                            pol.cost(l, j).unwrap() >= cost,
+                            pol.cost(Detail::new(l, j)).unwrap() >= cost,
                             "({l}, {j}) is cheaper at {dist} m"
                         );
                     }
@@ -288,7 +289,7 @@ proptest! {
         for i in 0..400 {
             let d = pol.detail(i as f32 * 2.0, true, &v);
             let (l, j) = detail_rank(&m, d);
-            let c = pol.cost(l, j).unwrap();
+            let c = pol.cost(Detail::new(l, j)).unwrap();
             prop_assert!(c <= prev);
             prev = c;
         }

@@ -37,8 +37,8 @@ pub fn exp_to_quat(v: DVec3) -> DQuat {
     DQuat::from_xyzw(v.x * k, v.y * k, v.z * k, half.cos())
 }
 
-/// Single-precision [`exp_to_quat`]: the runtime's ([`lod_policy::rig::exp_to_quat`]).
-pub use lod_policy::rig::exp_to_quat as exp_to_quat_f32;
+/// Single-precision [`exp_to_quat`]: the runtime's ([`lod_policy::offline::exp_to_quat`]).
+pub use lod_policy::offline::exp_to_quat as exp_to_quat_f32;
 
 /// The branch of `v` (same rotation) nearest `reference`: among `v + 2 pi k v/|v|` for integer
 /// `k` (which includes the opposite-axis form `-(2 pi - theta) a`), the one minimising the distance

@@ -938,7 +938,12 @@ fn build_clip(
     w.walking = false;
     m.model
         .lod()
-        .build_kernel(values, detail, &mut w.scratch, &mut w.kernel)
+        .build_kernel(
+            &Controls::from_array(*values),
+            detail,
+            &mut w.scratch,
+            &mut w.kernel,
+        )
         .map_err(|e| Failure::invalid(e.to_string()))?;
     w.body_scale = m.model.body_scale(&Controls::from_array(*values));
     w.prepared = true;
@@ -1060,7 +1065,7 @@ fn show_frame(w: &mut MlodWalker, m: &MlodModel, dt: f32) -> Result<(), Failure>
     let orientation = Vec3::new(w.pose[3], w.pose[4], w.pose[5]);
     walk.root = walk.frame.to_world(root);
     // The root's local rotation, as `Rig::local_rotations` gives it.
-    walk.root_rotation = walk.frame.rotation() * lod_policy::rig::exp_to_quat(orientation);
+    walk.root_rotation = walk.frame.rotation() * lod_policy::offline::exp_to_quat(orientation);
     Ok(())
 }
 

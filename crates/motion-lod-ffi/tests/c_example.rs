@@ -181,8 +181,13 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
         let heading = (i % 16) as f32 * std::f32::consts::FRAC_PI_8 - 3.0;
         let (mut detail, mut visible) = camera_detail(model, &policy, Vec3::new(x, 1.0, z));
         let mut controls = controls_for(lo, hi, i, 0);
-        lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
-            .expect("kernel");
+        lod.build_kernel(
+            &Controls::from_array(controls),
+            detail,
+            &mut scratch,
+            &mut kernel,
+        )
+        .expect("kernel");
         let mut body_scale = model.body_scale(&Controls::from_array(controls));
         let mut cycle_detail = detail;
         let mut frame = CycleFrame {
@@ -206,8 +211,13 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
                 while t >= kernel.duration() {
                     t -= kernel.duration();
                     frame = frame.next(&kernel.root_motion());
-                    lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
-                        .expect("kernel");
+                    lod.build_kernel(
+                        &Controls::from_array(controls),
+                        detail,
+                        &mut scratch,
+                        &mut kernel,
+                    )
+                    .expect("kernel");
                     body_scale = model.body_scale(&Controls::from_array(controls));
                     cycle_detail = detail;
                     cycle += 1;

@@ -16,7 +16,9 @@
 use faer::Mat;
 use hosvd_als::{AlsOptions, AlsReport, KeyLevels, KeySearchConfig, Tucker, hybrid_levels};
 use kriging::{DimDecision, Kriging, KrigingConfig, SelectRule, select_dims};
-use lod_policy::{AccuracyLevel, Detail, LevelError, LodModel, ModelParts, Ranks, RuntimeModel};
+use lod_policy::{
+    AccuracyLevel, Controls, Detail, LevelError, LodModel, ModelParts, Ranks, RuntimeModel,
+};
 use motion_io::PoseLayout;
 use tensor_ops::Tensor3;
 
@@ -114,7 +116,7 @@ impl TrainingSet {
         }
         // Partial Fisher-Yates with splitmix64: the same (n, seed) always picks the same samples.
         let mut idx: Vec<usize> = (0..s).collect();
-        let mut rng = lod_policy::rng::SplitMix64::new(seed);
+        let mut rng = lod_policy::SplitMix64::new(seed);
         for i in 0..n {
             let j = i + (rng.next_u64() % (s - i) as u64) as usize;
             idx.swap(i, j);
@@ -598,8 +600,8 @@ impl MotionModel {
         // The decompositions' vector kernels may leave the AVX upper state dirty on every thread
         // they ran on, which slows this crate's SSE code (the runtime after a build in the same
         // process ran 2.5x slower): clear it everywhere before the runtime is used.
-        rayon::broadcast(|_| lod_policy::clear_avx_upper_state());
-        lod_policy::clear_avx_upper_state();
+        rayon::broadcast(|_| lod_policy::offline::clear_avx_upper_state());
+        lod_policy::offline::clear_avx_upper_state();
         model.report.quality = set.quality.clone();
         let feet = set
             .quality
@@ -638,10 +640,10 @@ impl MotionModel {
         let lod = self.lod();
         let (p, t) = (lod.p(), lod.t());
         let stride = controls.len().div_ceil(max_samples.max(1)).max(1);
-        let picked: Vec<[f32; 4]> = controls
+        let picked: Vec<Controls> = controls
             .iter()
             .step_by(stride)
-            .map(|c| c.map(|v| v as f32))
+            .map(|&c| Controls::from_f64(c))
             .collect();
         let full = Detail::full();
         let reference: Vec<Vec<f64>> = picked
@@ -651,7 +653,7 @@ impl MotionModel {
         // Foot slide needs the feet (the quality reference); without them it is 0. Measured over
         // the quality grid (the hull's corners, turns, sidesteps, slow and fast) and the picked
         // training controls: the largest over both.
-        let grid: Vec<[f32; 4]> = crate::walk_quality::walk_grid(self)
+        let grid: Vec<Controls> = crate::walk_quality::walk_grid(self)
             .into_iter()
             .map(|w| w.controls)
             .chain(picked.iter().copied())
@@ -659,7 +661,7 @@ impl MotionModel {
         let slides_full: Option<Vec<f64>> = match &self.report.quality {
             Some(_) => Some(
                 grid.iter()
-                    .map(|&c| foot_slide_cm(self, c, full))
+                    .map(|c| foot_slide_cm(self, c, full))
                     .collect::<Result<_, _>>()?,
             ),
             None => None,
@@ -674,7 +676,7 @@ impl MotionModel {
             let slide_cm = match &slides_full {
                 Some(full) => {
                     let mut worst = 0.0f64;
-                    for (&c, full) in grid.iter().zip(full) {
+                    for (c, full) in grid.iter().zip(full) {
                         worst = worst.max(foot_slide_cm(self, c, detail)? - full);
                     }
                     worst as f32
@@ -707,12 +709,12 @@ pub const SLIDE_WALK_CYCLES: usize = 3;
 /// floor, per foot and cycle). Needs the model's quality reference.
 pub fn foot_slide_cm(
     model: &MotionModel,
-    controls: [f32; 4],
+    controls: &Controls,
     detail: Detail,
 ) -> Result<f64, BuildError> {
     let walk = model
         .synthesize_walk(&crate::synth::WalkRequest {
-            controls: lod_policy::Controls::from_array(controls),
+            controls: *controls,
             detail,
             cycles: SLIDE_WALK_CYCLES,
             fps: crate::quality::REFERENCE_FPS,

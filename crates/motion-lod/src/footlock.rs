@@ -23,7 +23,7 @@
 //!
 //! Only the rotations of the thigh, knee and ankle joints change; the root does not move.
 //!
-//! The runtime's foot lock ([`lod_policy::footlock`]) is the causal counterpart for characters
+//! The runtime's foot lock ([`lod_policy::FootLock`]) is the causal counterpart for characters
 //! played frame by frame (crowds, engines): it cannot centre a contact it has not seen the end of,
 //! so it holds the foot where it landed and releases it with a decay. The thresholds are the same
 //! numbers (checked by a test); the arithmetic here is f64 over a whole walk.
@@ -229,7 +229,7 @@ fn correction(world: &[Transform], nj: usize, points: &[usize], floor: f64, dt: 
 /// The reach the IK uses for a target `reach` away from the hip with a leg of length `len` whose
 /// ankle is `current` away now: itself up to `max(SOFT_REACH len, current)`, then easing toward `len`
 /// (C1 at the joint), at most `max(0.9999 len, current)` (the runtime's rule,
-/// [`lod_policy::footlock::soft_reach`]: no correction, no change).
+/// [`lod_policy::offline::soft_reach`]: no correction, no change).
 fn soft_reach(reach: f64, current: f64, len: f64) -> f64 {
     let start = (SOFT_REACH * len).max(current);
     if reach <= start {
@@ -250,7 +250,7 @@ const MAX_REACH: f64 = 0.9999;
 /// Two-bone IK with the hip fixed: the world rotations to apply to the thigh (`r_hip`, about the hip)
 /// and then to the shin (`r_knee`, about the moved knee) so that the ankle reaches `target`, the knee
 /// staying on the side it bends to now; a nearly straight leg bends toward `pole` (the runtime's
-/// rule, [`lod_policy::footlock::two_bone`], with its [`lod_policy::footlock::POLE_WEIGHT`]).
+/// rule, [`lod_policy::offline::two_bone`], with its [`lod_policy::offline::POLE_WEIGHT`]).
 fn two_bone(hip: DVec3, knee: DVec3, ankle: DVec3, target: DVec3, pole: DVec3) -> (DQuat, DQuat) {
     let (l1, l2) = ((knee - hip).length(), (ankle - knee).length());
     let to_target = target - hip;
@@ -263,7 +263,7 @@ fn two_bone(hip: DVec3, knee: DVec3, ankle: DVec3, target: DVec3, pole: DVec3) -
     // The bend direction: the current knee's offset from the hip-target line, leaning toward the
     // pole (decisive only when the leg is nearly straight).
     let kh = knee - hip;
-    let side = kh + f64::from(lod_policy::footlock::POLE_WEIGHT) * l1 * pole;
+    let side = kh + f64::from(lod_policy::offline::POLE_WEIGHT) * l1 * pole;
     let mut w = side - side.dot(u) * u;
     if w.length_squared() < 1e-12 {
         w = (ankle - hip).cross(DVec3::Y).cross(u);
@@ -284,7 +284,7 @@ mod tests {
 
     #[test]
     fn thresholds_are_the_runtime_locks() {
-        use lod_policy::footlock as runtime;
+        use lod_policy::offline as runtime;
         assert_eq!(LOCK_HEIGHT_M as f32, runtime::LOCK_HEIGHT_M);
         assert_eq!(LOCK_SPEED_M_S as f32, runtime::LOCK_SPEED_M_S);
         assert_eq!(SOFT_REACH as f32, runtime::SOFT_REACH);

@@ -47,7 +47,7 @@
 //!     .detail(12.0, true, &ViewParams::default()) // 12 m from the camera
 //!     .resolve(lod.levels().len(), lod.joints())
 //!     .ok_or("no such level")?;
-//! lod.build_kernel(&controls.to_array(), detail, &mut scratch, &mut kernel)?;
+//! lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)?;
 //! let mut cycle_frame = CycleFrame::default(); // the first cycle starts at the origin, facing +z
 //! let mut t = 0.0f64; // seconds into the current cycle
 //! for _frame in 0..600 {
@@ -55,7 +55,7 @@
 //!         // Chain the next cycle where this one's root went.
 //!         t -= kernel.duration();
 //!         cycle_frame = cycle_frame.next(&kernel.root_motion());
-//!         lod.build_kernel(&controls.to_array(), detail, &mut scratch, &mut kernel)?;
+//!         lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)?;
 //!     }
 //!     lod.pose(&kernel, kernel.phase_at(t), &mut pose)?;
 //!     // For skinning: each joint's rotation relative to its parent, and the root in the world.

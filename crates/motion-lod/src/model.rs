@@ -185,7 +185,7 @@ impl MotionModel {
     }
 
     /// The skeleton's feet and the data's floor, for the runtime foot lock
-    /// ([`lod_policy::footlock`]); `None` when the build found no feet.
+    /// ([`lod_policy::FootLock`]); `None` when the build found no feet.
     pub fn feet(&self) -> Option<&lod_policy::FootRig> {
         self.runtime.feet()
     }
@@ -335,7 +335,7 @@ impl MotionModel {
     /// vectors (row-major) with the time row back in seconds. Allocates; meant for offline work.
     pub fn synthesize_aligned(
         &self,
-        controls: &[f32; 4],
+        controls: &lod_policy::Controls,
         detail: Detail,
     ) -> Result<Vec<f64>, lod_policy::KernelError> {
         let mut ev = Evaluator::new(self);

@@ -168,9 +168,7 @@ impl ClipSource for NaiveSource<'_> {
         let (mut start, mut end) = ([0.0f32; 6], [0.0f32; 6]);
         self.frame(clip, 0.0, &mut start);
         self.frame(clip, (t - 1) as f64, &mut end);
-        clip.root_motion = lod
-            .controls()
-            .root_motion(&controls.to_array(), &start, &end);
+        clip.root_motion = lod.controls().root_motion(controls, &start, &end);
         clip.body_scale = self.model.body_scale(controls);
         Ok(())
     }

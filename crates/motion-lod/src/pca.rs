@@ -299,9 +299,7 @@ impl ClipSource for PcaSource<'_> {
         let (mut start, mut end) = ([0.0f32; ALWAYS_ROWS], [0.0f32; ALWAYS_ROWS]);
         self.expand(coeffs, t, r, 0, &mut start[..root]);
         self.expand(coeffs, t, r, t - 1, &mut end[..root]);
-        clip.root_motion = lod
-            .controls()
-            .root_motion(&controls.to_array(), &start, &end);
+        clip.root_motion = lod.controls().root_motion(controls, &start, &end);
         clip.body_scale = self.model.body_scale(controls);
         Ok(())
     }

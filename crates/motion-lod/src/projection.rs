@@ -413,11 +413,11 @@ mod implied_tests {
             vec![1.0, 0.0, 0.0],
         )
         .unwrap();
-        assert!((cs.implied(1, &[0.3, 9.0, 0.0]) - 1.1).abs() < 1e-5);
-        assert_eq!(cs.implied(2, &[0.3, 9.0, 0.0]), 3.0);
-        assert_eq!(cs.implied(0, &[0.3, 9.0, 0.0]), 0.3);
+        assert!((cs.implied_values(1, &[0.3, 9.0, 0.0]) - 1.1).abs() < 1e-5);
+        assert_eq!(cs.implied_values(2, &[0.3, 9.0, 0.0]), 3.0);
+        assert_eq!(cs.implied_values(0, &[0.3, 9.0, 0.0]), 0.3);
         // Clamped into the data's range: c0 = 5 reads as 1, giving 2.5.
-        assert!((cs.implied(1, &[5.0, 0.0, 0.0]) - 2.5).abs() < 1e-5);
+        assert!((cs.implied_values(1, &[5.0, 0.0, 0.0]) - 2.5).abs() < 1e-5);
     }
 }
 

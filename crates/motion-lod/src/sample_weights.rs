@@ -161,7 +161,7 @@ mod tests {
     #[test]
     fn avx2_and_baseline_blends_give_the_same_bits() {
         let (s, d, outputs) = (150usize, 4usize, 70usize);
-        let mut rng = lod_policy::rng::SplitMix64::new(0x2545_f491);
+        let mut rng = lod_policy::SplitMix64::new(0x2545_f491);
         let mut next = move || rng.next_f64();
         // The last control is constant (as the Bandai height is), so it is dropped.
         let params = Mat::from_fn(s, d, |_, k| if k == 3 { 1.3 } else { 2.0 * next() - 1.0 });

@@ -56,10 +56,11 @@ pub struct LodClip {
 /// [`LodSource::new`] is the crowd's fast path: every clip's `G(c)` is sized for its own level
 /// ([`ClipKernel::compact`]), so a root-only clip holds `7 r_T` floats, and `pose` writes only the
 /// rows the clip evaluates (a root-only walker: the 7 root rows, `7 r_T` multiply-adds, and no
-/// forward kinematics beyond copying the root). [`LodSource::reference`] keeps the straightforward
-/// path to check against: kernels sized for the largest level and built with the kriging projections
-/// summed column by column ([`lod_policy::LodModel::build_kernel_reference`]), poses completed with the
-/// mean pose. The two differ by rounding in the kriging sums only.
+/// forward kinematics beyond copying the root). `LodSource::reference` (feature `reference`, for
+/// tests) keeps the straightforward path to check against: kernels sized for the largest level and
+/// built with the kriging projections summed column by column
+/// (`lod_policy::LodModel::build_kernel_reference`), poses completed with the mean pose. The two
+/// differ by rounding in the kriging sums only.
 #[derive(Debug)]
 pub struct LodSource<'m> {
     model: &'m MotionModel,
@@ -89,7 +90,8 @@ impl<'m> LodSource<'m> {
     /// The reference source over `model`: every kernel preallocated for the largest level, built with
     /// the straightforward column-order kriging sums, and every pose completed with the mean pose
     /// beyond the evaluated rows. The same rows as [`LodSource::new`] up to rounding; slower and
-    /// about `4 P max R_T` bytes per walker.
+    /// about `4 P max R_T` bytes per walker. For tests (feature `reference`).
+    #[cfg(feature = "reference")]
     pub fn reference(model: &'m MotionModel) -> LodSource<'m> {
         LodSource {
             compact: false,
@@ -231,15 +233,15 @@ impl ClipSource for LodSource<'_> {
         detail: Detail,
         clip: &mut LodClip,
     ) -> Result<(), ClipError> {
-        let c = controls.to_array();
         let lod = self.model.lod();
         let detail = detail.evaluated();
         self.with_scratch(|s| {
-            if self.compact {
-                lod.build_kernel(&c, detail, s, &mut clip.kernel)
-            } else {
-                lod.build_kernel_reference(&c, detail, s, &mut clip.kernel)
+            #[cfg(feature = "reference")]
+            if !self.compact {
+                let c = controls.to_array();
+                return lod.build_kernel_reference(&c, detail, s, &mut clip.kernel);
             }
+            lod.build_kernel(controls, detail, s, &mut clip.kernel)
         })
         .map_err(|e| ClipError(format!("model kernel: {e}")))?;
         clip.duration = (clip.kernel.duration() as f32).max(1e-3);

@@ -1,14 +1,14 @@
 //! Walks from the model: cycles synthesized at given controls, chained end to start, played back at any
 //! frame rate through the incremental inverse timewarp, and turned into a BVH motion.
 //!
-//! Chaining is the runtime's one routine ([`lod_policy::chain`]): cycle `k + 1`'s frame is cycle `k`'s
+//! Chaining is the runtime's one routine ([`lod_policy::SeamTransition`]): cycle `k + 1`'s frame is cycle `k`'s
 //! advanced by the clip's root motion (ground displacement and travel turn), and with `blend` the seam
 //! is inertialized, so every joint and the whole root are continuous in position and velocity; without
 //! it, cycles are switched as they are (what the crowd does for distant walkers). With `plant_feet`,
 //! feet on the floor are held in place by two-bone IK ([`crate::footlock`]).
 
-use lod_policy::chain::{self, CycleFrame, SeamScratch, SeamTransition};
 use lod_policy::{Controls, Detail};
+use lod_policy::{CycleFrame, DEFAULT_HALFLIFE_S, SeamScratch, SeamTransition};
 use motion_io::Motion;
 
 use crate::model::{Evaluator, MotionModel, TIME_ROW};
@@ -32,7 +32,7 @@ pub struct WalkRequest {
     pub cycles: usize,
     /// Output frames per second.
     pub fps: f64,
-    /// Seamless transitions between cycles ([`lod_policy::chain`]); without, cycles switch as they
+    /// Seamless transitions between cycles ([`lod_policy::SeamTransition`]); without, cycles switch as they
     /// are (what the crowd does for distant walkers).
     pub blend: bool,
     /// Keep planted feet planted ([`crate::footlock`]; needs the model's quality reference).
@@ -84,12 +84,7 @@ impl MotionModel {
         let lod = self.lod();
         let p = lod.p();
         let mut ev = Evaluator::new(self);
-        lod.build_kernel(
-            &req.controls.to_array(),
-            req.detail,
-            &mut ev.scratch,
-            &mut ev.kernel,
-        )?;
+        lod.build_kernel(&req.controls, req.detail, &mut ev.scratch, &mut ev.kernel)?;
         let kernel = &ev.kernel;
         let duration = kernel.duration();
         let motion = kernel.root_motion();
@@ -123,7 +118,7 @@ impl MotionModel {
         }
         let frames = frames_f as usize;
         let mut poses = Vec::with_capacity(frames * p);
-        let mut transition = SeamTransition::new(p, chain::DEFAULT_HALFLIFE_S);
+        let mut transition = SeamTransition::new(p, DEFAULT_HALFLIFE_S);
         let mut seam = SeamScratch::new(p);
         let mut pose = vec![0.0f32; p];
         let rows = kernel.rows();

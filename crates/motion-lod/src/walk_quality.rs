@@ -3,6 +3,7 @@
 //! against the model's reference ([`measure_walk`]). Crowd tracks are measured by
 //! [`crate::crowd::measure_track`].
 
+use lod_policy::Controls;
 use motion_io::PoseLayout;
 use serde::{Deserialize, Serialize};
 
@@ -16,7 +17,7 @@ pub struct GridWalk {
     /// What the walk is (`straight`, `turn +30`, `corner +turn`, ...).
     pub name: String,
     /// Controls of every cycle.
-    pub controls: [f32; 4],
+    pub controls: Controls,
 }
 
 /// The walks the `quality` command and the tables measure, covering the data's hull: straight at the
@@ -87,7 +88,10 @@ pub fn walk_grid(model: &MotionModel) -> Vec<GridWalk> {
         }
     }
     grid.into_iter()
-        .map(|(name, controls)| GridWalk { name, controls })
+        .map(|(name, controls)| GridWalk {
+            name,
+            controls: Controls::from_array(controls),
+        })
         .collect()
 }
 

@@ -264,7 +264,10 @@ fn cmu_drops_the_noise_controls_and_its_duration_ignores_them() {
     let dz = 0.5 * (range[1].0 + range[1].1);
     let duration = |dx: f32, turn: f32| {
         let poses = model
-            .synthesize_aligned(&[dx, dz, turn, range[3].0], Detail::full())
+            .synthesize_aligned(
+                &lod_policy::Controls::from_array([dx, dz, turn, range[3].0]),
+                Detail::full(),
+            )
             .unwrap();
         let p = model.lod().p();
         poses

@@ -363,7 +363,7 @@ fn avx2_and_baseline_builds_of_the_kernels_give_the_same_bits() {
     let levels = lod.levels().len();
     let mut compared = 0;
     for (i, c) in analysis.controls.iter().step_by(7).enumerate() {
-        let c: Vec<f32> = c.iter().map(|&v| v as f32).collect();
+        let c = lod_policy::Controls::from_f64(*c);
         for level in 0..levels {
             for joints in [usize::MAX, 3, 0] {
                 let detail = if joints == 0 {
@@ -373,7 +373,7 @@ fn avx2_and_baseline_builds_of_the_kernels_give_the_same_bits() {
                 };
                 lod.build_kernel(&c, detail, &mut scratch, &mut fast)
                     .unwrap();
-                lod.build_kernel_baseline(&c, detail, &mut scratch, &mut base)
+                lod.build_kernel_baseline(&c.to_array(), detail, &mut scratch, &mut base)
                     .unwrap();
                 let what = format!("controls {i}, level {level}, {joints} joints");
                 assert_eq!(bits(fast.g()), bits(base.g()), "G, {what}");

@@ -7,7 +7,7 @@
 //! most 1.25x the data's median, foot skate at most 1.5x, floor offset within 1 cm, facing against
 //! travel within the data's range; the same on CMU (33 cycles, its control ranges). On the embedded
 //! data (always present): the foot lock measurably
-//! beats the sliding feet. (Seam continuity itself is tested in `lod_policy::chain`.)
+//! beats the sliding feet. (Seam continuity itself is tested in `lod_policy::SeamTransition`.)
 //!
 //! The screen check, on both: every detail the distance and screen-space policies use, measured
 //! anew at controls the build did not measure (midpoints between training samples), shows at most
@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
-use lod_policy::{Detail, DistancePolicy, LevelPolicy, ScreenSpacePolicy, ViewParams};
+use lod_policy::{Controls, Detail, DistancePolicy, LevelPolicy, ScreenSpacePolicy, ViewParams};
 use motion_lod::MotionModel;
 use motion_lod::build::foot_slide_cm;
 use motion_lod::dataset::DataSpec;
@@ -35,9 +35,9 @@ fn mocap(name: &str) -> Option<PathBuf> {
     motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), name)
 }
 
-fn walk(model: &MotionModel, controls: [f32; 4], blend: bool, plant_feet: bool) -> MotionQuality {
+fn walk(model: &MotionModel, controls: Controls, blend: bool, plant_feet: bool) -> MotionQuality {
     let req = WalkRequest {
-        controls: lod_policy::Controls::from_array(controls),
+        controls,
         detail: Detail::full(),
         cycles: 4,
         fps: 30.0,
@@ -118,14 +118,18 @@ fn details_stay_under_a_pixel(model: &MotionModel, controls: &[[f64; 4]]) {
         nearest.len()
     );
     let stride = controls.len().div_ceil(6).max(1);
-    let probes: Vec<[f32; 4]> = (0..controls.len() - 1)
+    let probes: Vec<Controls> = (0..controls.len() - 1)
         .step_by(stride)
-        .map(|i| std::array::from_fn(|k| (0.5 * (controls[i][k] + controls[i + 1][k])) as f32))
+        .map(|i| {
+            Controls::from_f64(std::array::from_fn(|k| {
+                0.5 * (controls[i][k] + controls[i + 1][k])
+            }))
+        })
         .collect();
     let full = Detail::full();
     let full_slides: Vec<f64> = probes
         .iter()
-        .map(|&c| foot_slide_cm(model, c, full).expect("full-detail slide"))
+        .map(|c| foot_slide_cm(model, c, full).expect("full-detail slide"))
         .collect();
     for (&(level, active), &d) in &nearest {
         if (level, active) == (0, joints) {
@@ -138,7 +142,7 @@ fn details_stay_under_a_pixel(model: &MotionModel, controls: &[[f64; 4]]) {
             let reference = model.synthesize_aligned(c, full).expect("synthesizes");
             let poses = model.synthesize_aligned(c, detail).expect("synthesizes");
             meter.compare_sequences(&reference, &poses);
-            slide = slide.max(foot_slide_cm(model, *c, detail).expect("slide") - full_slide);
+            slide = slide.max(foot_slide_cm(model, c, detail).expect("slide") - full_slide);
         }
         let shell = meter.total().shell_cm;
         let px = |cm: f64| cm / 100.0 / f64::from(view.metres_per_pixel(d));
@@ -371,7 +375,7 @@ fn embedded_crowd_walkers_stand_on_the_floor_and_fade_joints_at_seams() {
 
 /// How far near crowd walkers (levels 0-2, both legs evaluated: the runtime foot lock's) may stand
 /// from the data's floor, cm: the lock's soft ground margin
-/// ([`lod_policy::footlock::GROUND_MARGIN_M`]), half issue 12's 1 cm.
+/// ([`lod_policy::offline::GROUND_MARGIN_M`]), half issue 12's 1 cm.
 const FLOOR_CM: f64 = 0.5;
 
 /// Asserts that the crowd walkers the runtime lock held for their whole stretch (levels 0-2, at

@@ -118,6 +118,7 @@ fn a_built_model_loads_in_the_runtime_with_the_same_poses_and_joints() {
         ([-0.2, 0.9, -0.5, 1.6], levels - 1, 3),
         ([0.0, 1.0, 0.0, 1.7], Detail::SMALLEST, 0),
     ] {
+        let controls = lod_policy::Controls::from_array(controls);
         let detail = Detail::new(accuracy, joints);
         lod.build_kernel(&controls, detail, &mut s1, &mut k1)
             .unwrap();

@@ -125,7 +125,7 @@ impl FrameSeq {
 /// Splits a fractional frame position into `(k, f)` with `k + f = phase` clamped to
 /// `[0, frames - 1]`, `0 <= f < 1` and `k + 1 < frames` whenever `f > 0` (NaN gives `(0, 0)`):
 /// the rule by which resampling and playback interpolate between frames (the runtime's
-/// `lod_policy::time_table::split_phase` is the same rule; a test checks they agree). `frames`
+/// `lod_policy::offline::split_phase` is the same rule; a test checks they agree). `frames`
 /// must be at least 1.
 pub(crate) fn split_position(phase: f64, frames: usize) -> (usize, f64) {
     debug_assert!(frames >= 1);
@@ -166,12 +166,12 @@ mod tests {
             for k in -20..=500 {
                 let phase = k as f64 * 0.0973;
                 let (a, f) = split_position(phase, frames);
-                let (b, g) = lod_policy::time_table::split_phase(phase, frames);
+                let (b, g) = lod_policy::offline::split_phase(phase, frames);
                 assert_eq!((a, f.to_bits()), (b, g.to_bits()), "{phase} of {frames}");
             }
             assert_eq!(
                 split_position(f64::NAN, frames),
-                lod_policy::time_table::split_phase(f64::NAN, frames)
+                lod_policy::offline::split_phase(f64::NAN, frames)
             );
         }
     }

@@ -76,7 +76,7 @@ pub fn walk(
         .ok_or("the policy chose a level the model lacks")?;
     // The first cycle starts at the world origin facing +z.
     let mut cycle_frame = CycleFrame::default();
-    lod.build_kernel(&controls.to_array(), detail, &mut scratch, &mut kernel)?;
+    lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)?;
     let mut t_in_cycle = 0.0f64;
     let frames = (seconds * fps).round() as usize;
     for f in 0..frames {
@@ -85,7 +85,7 @@ pub fn walk(
         while t_in_cycle >= kernel.duration() {
             t_in_cycle -= kernel.duration();
             cycle_frame = cycle_frame.next(&kernel.root_motion());
-            lod.build_kernel(&controls.to_array(), detail, &mut scratch, &mut kernel)?;
+            lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)?;
             frame.cycle += 1;
         }
         // Per frame: the pose vector, then the root in the world and the joints' local rotations.

@@ -418,7 +418,7 @@ pub fn run(config: &TablesConfig) -> Result<()> {
             .filter(|p| p.level == 0)
             .map(|p| {
                 (
-                    f64::from(p.walk.controls[0]).hypot(f64::from(p.walk.controls[1])),
+                    f64::from(p.walk.controls.dx).hypot(f64::from(p.walk.controls.dz)),
                     p.quality.pop_cm / m.pop_cm,
                     p.quality.skate_cm_s / m.skate_cm_s,
                 )

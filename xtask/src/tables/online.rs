@@ -65,7 +65,7 @@ impl<'m> OnlineTruncation<'m> {
 
     /// Builds the kernel for raw `controls` (length `d`, clamped to the data range) at `ranks` (each at
     /// most key 0's, clamped) for the first `rows` pose rows (at least 7, at most `P`).
-    pub fn build(&mut self, controls: &[f32], ranks: Ranks, rows: usize) {
+    pub fn build(&mut self, controls: &lod_policy::Controls, ranks: Ranks, rows: usize) {
         let m = self.model;
         let key = &m.keys()[0];
         let big = key.ranks;
@@ -95,9 +95,9 @@ impl<'m> OnlineTruncation<'m> {
         }
 
         // Kriging weights of key 0's first r_S sample components: the runtime's own (its reference
-        // summation order, lod_policy::kernel steps 1-4).
+        // summation order, the runtime kernel's steps 1-4).
         let w = m
-            .kriging_weights_reference(controls, 0, r.s, &mut self.scratch)
+            .kriging_weights_reference(&controls.to_array(), 0, r.s, &mut self.scratch)
             .expect("online truncation: controls of the model's length, finite");
 
         // Steps 3-4: K(c) = w^T Z_(3)[:r_S, sub], folded to r_P x r_T (column order (i, j) = i + r_P j).

@@ -41,7 +41,7 @@ pub fn measure(
     for level in 0..levels {
         for walk in &grid {
             let req = WalkRequest {
-                controls: lod_policy::Controls::from_array(walk.controls),
+                controls: walk.controls,
                 detail: Detail::new(level, model.lod().joints()),
                 cycles: CYCLES,
                 fps: 30.0,

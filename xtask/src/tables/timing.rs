@@ -37,7 +37,7 @@ pub fn data_error(
 ) -> Result<f64> {
     let mut meter = ErrorMeter::new(&analysis.layout);
     for &k in picks {
-        let c = analysis.controls[k].map(|v| v as f32);
+        let c = lod_policy::Controls::from_f64(analysis.controls[k]);
         let poses = model
             .synthesize_aligned(&c, detail)
             .with_context(|| format!("synthesizing sample {k} at {detail:?}"))?;
@@ -67,7 +67,7 @@ impl Timed {
 /// Times kernels (cycling over `controls`) and poses (over the `T` aligned frames) of a runtime model.
 pub fn time_lod(
     lod: &LodModel,
-    controls: &[[f32; 4]],
+    controls: &[lod_policy::Controls],
     detail: Detail,
     budget: Budget,
 ) -> Result<Timed> {
@@ -101,7 +101,12 @@ pub fn time_lod(
 
 /// Times the online-truncation kernel and pose at level `level` of `lod` (ranks of that level, every
 /// row).
-pub fn time_online(lod: &LodModel, controls: &[[f32; 4]], level: usize, budget: Budget) -> Timed {
+pub fn time_online(
+    lod: &LodModel,
+    controls: &[lod_policy::Controls],
+    level: usize,
+    budget: Budget,
+) -> Timed {
     let ranks = lod.levels()[level].ranks;
     let rows = lod.p();
     let mut online = OnlineTruncation::new(lod);
@@ -169,9 +174,9 @@ pub fn figure4(
     budget: Budget,
     progress: &dyn Progress,
 ) -> Result<Figure4> {
-    let controls: Vec<[f32; 4]> = picks
+    let controls: Vec<lod_policy::Controls> = picks
         .iter()
-        .map(|&k| analysis.controls[k].map(|v| v as f32))
+        .map(|&k| lod_policy::Controls::from_f64(analysis.controls[k]))
         .collect();
     let n = schemes.hybrid.lod().levels().len();
     progress.stage("figure 4: three schemes", 3 * n as u64);
@@ -256,9 +261,9 @@ pub fn figure5(
     progress: &dyn Progress,
 ) -> Result<Vec<DistancePoint>> {
     let lod = model.lod();
-    let controls: Vec<[f32; 4]> = picks
+    let controls: Vec<lod_policy::Controls> = picks
         .iter()
-        .map(|&k| analysis.controls[k].map(|v| v as f32))
+        .map(|&k| lod_policy::Controls::from_f64(analysis.controls[k]))
         .collect();
     let policy = DistancePolicy::for_model(lod);
     let view = ViewParams::default();

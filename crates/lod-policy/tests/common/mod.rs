@@ -2,7 +2,7 @@
 //! and a kriging system solved here, plus an independent direct f64 evaluation of eq. 4/7/8.
 #![allow(dead_code, clippy::needless_range_loop)]
 
-use lod_policy::model::{AccuracyLevel, ControlSpace, KeyTensor, LevelError, ModelParts, Ranks};
+use lod_policy::{AccuracyLevel, ControlSpace, KeyTensor, LevelError, ModelParts, Ranks};
 use lod_policy::{LodModel, Variogram};
 
 /// SplitMix64: deterministic, dependency-free.
@@ -194,7 +194,7 @@ pub fn random_truth(seed: u64, nugget: f64) -> Truth {
         .map(|v| v as f32 as f64)
         .collect();
     let variogram = Variogram::new(
-        lod_policy::model::VariogramModel::Exponential,
+        lod_policy::VariogramModel::Exponential,
         nugget,
         1.0,
         0.7,

@@ -100,7 +100,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     for &level in &chosen {
         for walk in &grid {
             let req = WalkRequest {
-                controls: lod_policy::Controls::from_array(walk.controls),
+                controls: walk.controls,
                 detail: Detail::new(level, joints),
                 cycles: args.cycles,
                 fps: 30.0,
@@ -112,7 +112,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
                 .with_context(|| format!("synthesizing `{}` at level {level}", walk.name))?;
             let q = walk_quality::measure_walk(&model, &w)
                 .with_context(|| format!("measuring `{}` at level {level}", walk.name))?;
-            let step = f64::from(walk.controls[0]).hypot(f64::from(walk.controls[1]));
+            let step = f64::from(walk.controls.dx).hypot(f64::from(walk.controls.dz));
             rows.push(Row {
                 walk: walk.clone(),
                 level,

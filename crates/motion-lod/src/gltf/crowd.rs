@@ -94,7 +94,7 @@ fn world_pose(
     let (x, z) = (pose[0], pose[2]);
     out[0] = f64::from(base.x + x * ch + z * sh);
     out[2] = f64::from(base.y - x * sh + z * ch);
-    let q = lod_policy::rig::exp_to_quat(Vec3::new(pose[3], pose[4], pose[5]));
+    let q = lod_policy::offline::exp_to_quat(Vec3::new(pose[3], pose[4], pose[5]));
     let world = (Quat::from_rotation_y(heading) * q).normalize();
     let e = quat_to_exp(world.as_dquat());
     out[3..6].copy_from_slice(&e.to_array());
