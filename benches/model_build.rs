@@ -31,9 +31,9 @@ fn build(c: &mut Criterion) {
     let last = lod.levels().len() - 1;
     let mut group = c.benchmark_group("fixture model");
     for (name, detail) in [
-        ("first level", Detail::full()),
-        ("last level", Detail::new(last, usize::MAX)),
-        ("root only", Detail::root_only()),
+        ("first level", lod.full_detail()),
+        ("last level", Detail::new(last, lod.joints())),
+        ("root only", lod.root_only()),
     ] {
         group.bench_function(format!("kernel, {name}"), |b| {
             b.iter(|| {

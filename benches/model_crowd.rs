@@ -40,9 +40,9 @@ fn kernels_and_poses(c: &mut Criterion, model: &MotionModel, analysis: &Analysis
     let last = lod.levels().len() - 1;
     let mut g = c.benchmark_group("model_fixtures");
     for (name, detail) in [
-        ("level0_all_joints", Detail::full()),
-        ("last_level_all_joints", Detail::new(last, usize::MAX)),
-        ("root_only", Detail::root_only()),
+        ("level0_all_joints", lod.full_detail()),
+        ("last_level_all_joints", Detail::new(last, lod.joints())),
+        ("root_only", lod.root_only()),
     ] {
         let mut i = 0;
         g.bench_function(BenchmarkId::new("build_kernel", name), |b| {
@@ -64,7 +64,7 @@ fn kernels_and_poses(c: &mut Criterion, model: &MotionModel, analysis: &Analysis
             })
         });
     }
-    lod.build_kernel(&controls[0], Detail::full(), &mut scratch, &mut kernel)
+    lod.build_kernel(&controls[0], lod.full_detail(), &mut scratch, &mut kernel)
         .unwrap();
     lod.pose(&kernel, 10.0, &mut pose).unwrap();
     let layout = &model.layout;
@@ -81,7 +81,7 @@ fn kernels_and_poses(c: &mut Criterion, model: &MotionModel, analysis: &Analysis
 fn crowd_frame(c: &mut Criterion, model: &MotionModel, analysis: &Analysis) {
     let lod = model.lod();
     let lod_policy = DistancePolicy::for_model(lod);
-    let full = FullDetail;
+    let full = FullDetail::for_model(lod);
     let walkers = 1_000;
     let config = CrowdConfig {
         seed: 7,

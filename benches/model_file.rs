@@ -42,9 +42,9 @@ fn bench(c: &mut Criterion) {
         .map_or("model".into(), |s| s.to_string_lossy().into_owned());
     let mut g = c.benchmark_group(format!("model_file/{name}"));
     for (case, detail) in [
-        ("root_only", Detail::root_only()),
-        ("last_level_all_joints", Detail::new(last, usize::MAX)),
-        ("level0_all_joints", Detail::full()),
+        ("root_only", lod.root_only()),
+        ("last_level_all_joints", Detail::new(last, lod.joints())),
+        ("level0_all_joints", lod.full_detail()),
     ] {
         let mut i = 0;
         g.bench_function(BenchmarkId::new("build_kernel", case), |b| {
@@ -57,7 +57,7 @@ fn bench(c: &mut Criterion) {
         });
         let mut i = 0;
         g.bench_function(BenchmarkId::new("kriging_weights", case), |b| {
-            let level = detail.level_in(lod).unwrap();
+            let level = lod.check_detail(detail).unwrap().accuracy;
             let lv = lod.levels()[level];
             b.iter(|| {
                 i = (i + 1) % controls.len();
@@ -99,7 +99,8 @@ fn root_only_crowd(c: &mut Criterion, model: &MotionModel, name: &str, walkers: 
         ..CrowdConfig::with_density(walkers, 0.01)
     };
     let source = LodSource::new(model);
-    let policy = |_: f32, _: bool, _: &ViewParams| Detail::root_only();
+    let root_only = model.lod().root_only();
+    let policy = move |_: f32, _: bool, _: &ViewParams| root_only;
     let scene = Scene::Ground;
     let path = scene.path(config.field_size_m);
     let lens = scene.lens(Camera::default(), config.field_size_m);

@@ -76,9 +76,9 @@ fn bench_pose(c: &mut Criterion) {
     let mut out = vec![0.0f32; P];
     let controls = [0.1f32, -0.3, 0.2];
     let cases = [
-        ("first_level_all_joints", Detail::new(0, usize::MAX)),
-        ("last_level_all_joints", Detail::new(1, usize::MAX)),
-        ("root_only", Detail::root_only()),
+        ("first_level_all_joints", Detail::new(0, model.joints())),
+        ("last_level_all_joints", Detail::new(1, model.joints())),
+        ("root_only", model.root_only()),
     ];
     let mut group = c.benchmark_group("pose");
     for (name, detail) in cases {

@@ -262,12 +262,10 @@ impl<C: Send> Crowd<C> {
             config.field_size_m = needed;
             from
         });
-        let root_only = levels
-            .resolve(&Detail::root_only())
-            .ok_or(CrowdError::NoLevels {
-                accuracy_levels: levels.accuracy_levels,
-                pose_len: levels.pose_len,
-            })?;
+        let root_only = levels.root_only().ok_or(CrowdError::NoLevels {
+            accuracy_levels: levels.accuracy_levels,
+            pose_len: levels.pose_len,
+        })?;
         let make = |i: usize| -> Result<Walker<C>, CrowdError> {
             let mut g = SplitMix64::for_walker(config.seed, i);
             let path =
@@ -405,8 +403,8 @@ impl<C: Send> Crowd<C> {
     /// (4) forward kinematics into world positions. Stages 2-4 run as one parallel pass over chunks
     /// of walkers (each chunk runs the three in turn while its walkers are in cache; the pass's wall
     /// time is split between them in proportion to their summed times) and give the same bytes for
-    /// any thread count. The policy's detail is resolved against the source's [`LevelTable`]
-    /// ([`LevelTable::resolve`]); a clip the source cannot build is counted in
+    /// any thread count. The policy's detail is checked against the source's [`LevelTable`]
+    /// ([`LevelTable::check`]); a clip the source cannot build is counted in
     /// `stats.clip_faults` and the walker keeps its previous clip (a level the source does not
     /// have, or a clip of unusable duration, is an error).
     pub fn step_into<S, P>(

@@ -39,11 +39,17 @@ pub struct LevelTable {
 }
 
 impl LevelTable {
-    /// A policy's `detail` for this table ([`Detail::resolve`]: the smallest-level sentinel
-    /// becomes the last level, joints are clamped to `joints`); `None` for a level the source
-    /// does not have.
-    pub fn resolve(&self, detail: &Detail) -> Option<Detail> {
-        detail.resolve(self.accuracy_levels, self.joints)
+    /// A policy's `detail`, checked to exist in this table ([`Detail::fits`]); `None` for a level or
+    /// a joint count the source does not have.
+    pub fn check(&self, detail: &Detail) -> Option<Detail> {
+        detail
+            .fits(self.accuracy_levels, self.joints)
+            .then_some(*detail)
+    }
+
+    /// Root only at the smallest (last) level; `None` for a table without levels.
+    pub fn root_only(&self) -> Option<Detail> {
+        Some(Detail::new(self.accuracy_levels.checked_sub(1)?, 0))
     }
 
     /// Number of bins of a level histogram: one per accuracy level, plus one (the last) for
@@ -98,8 +104,14 @@ mod tests {
         assert_eq!(t.bin(&Detail::new(2, 3)), 2);
         assert_eq!(t.bin(&Detail::new(2, 0)), 4);
         assert_eq!(t.histogram_bins(), 5);
-        assert_eq!(t.resolve(&Detail::root_only()), Some(Detail::new(3, 0)));
-        assert_eq!(t.resolve(&Detail::full()), Some(Detail::new(0, 10)));
-        assert_eq!(t.resolve(&Detail::new(4, 1)), None);
+        assert_eq!(t.root_only(), Some(Detail::new(3, 0)));
+        assert_eq!(t.check(&Detail::new(0, 10)), Some(Detail::new(0, 10)));
+        assert_eq!(t.check(&Detail::new(0, 11)), None);
+        assert_eq!(t.check(&Detail::new(4, 1)), None);
+        let empty = LevelTable {
+            accuracy_levels: 0,
+            ..t
+        };
+        assert_eq!(empty.root_only(), None);
     }
 }

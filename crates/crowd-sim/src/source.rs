@@ -37,7 +37,7 @@ pub trait ClipSource: Sync {
     fn new_clip(&self) -> Self::Clip;
 
     /// Synthesises the clip for `controls` at `detail` into `clip` (the per-cycle kernel).
-    /// `detail` is resolved ([`LevelTable::resolve`]): `detail.accuracy < levels().accuracy_levels`
+    /// `detail` is checked ([`LevelTable::check`]): `detail.accuracy < levels().accuracy_levels`
     /// and `detail.active_joints <= levels().joints`.
     ///
     /// Errors: the clip cannot be built. An implementation must then leave `clip` as it was (check

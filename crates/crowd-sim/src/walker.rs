@@ -221,7 +221,7 @@ impl<C> Walker<C> {
     /// inertialized seam at the first `seam_levels` levels; mid-cycle, rebuild at once when `d` is
     /// finer than the clip held (inertialized likewise), except while `hold_s` (a new crowd's
     /// spread of first builds) runs. `scratch` is the thread's seam scratch. `d` is the policy's
-    /// answer, resolved here against the source's level table ([`LevelTable::resolve`]).
+    /// answer, checked here against the source's level table ([`LevelTable::check`]).
     /// Returns the kernels built and the builds that failed.
     pub fn advance<S: ClipSource<Clip = C>>(
         &mut self,
@@ -231,7 +231,7 @@ impl<C> Walker<C> {
         dt: f32,
         scratch: &mut SeamScratch,
     ) -> Result<Advance, WalkerFault> {
-        let d = p.levels.resolve(&d).ok_or(WalkerFault::Level(d.accuracy))?;
+        let d = p.levels.check(&d).ok_or(WalkerFault::Level(d.accuracy))?;
         let mut done = Advance::default();
         self.t += dt;
         while self.t >= self.cur_dur {

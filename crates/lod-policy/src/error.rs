@@ -133,6 +133,14 @@ pub enum KernelError {
         /// Number of levels.
         levels: usize,
     },
+    /// The requested detail evaluates more joints than the model has.
+    #[error("{joints} joints requested; the model animates {max}")]
+    Joints {
+        /// Joints requested.
+        joints: usize,
+        /// Joints of the model.
+        max: usize,
+    },
     /// The pose output slice has the wrong length.
     #[error("pose output: expected {expected} values, found {found}")]
     OutputLength {

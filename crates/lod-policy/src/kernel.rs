@@ -144,7 +144,6 @@ pub struct ClipKernel {
     p: usize,
     t: usize,
     detail: Detail,
-    level: usize,
     ranks: Ranks,
     rows: usize,
     clamped: bool,
@@ -168,8 +167,7 @@ impl ClipKernel {
         ClipKernel {
             p: model.p(),
             t: model.t(),
-            detail: Detail::root_only(),
-            level: last,
+            detail: model.root_only(),
             ranks: model.levels()[last].ranks,
             rows: model.always_rows(),
             clamped: false,
@@ -196,8 +194,7 @@ impl ClipKernel {
             times: TimeTable::with_capacity(model.t()),
             p: model.p(),
             t: model.t(),
-            detail: Detail::root_only(),
-            level: last,
+            detail: model.root_only(),
             ranks,
             rows,
             clamped: false,
@@ -216,15 +213,15 @@ impl ClipKernel {
             + self.times.len() * std::mem::size_of::<f64>()
     }
 
-    /// The detail this kernel was built with (as requested).
+    /// The detail this kernel was built with.
     pub fn detail(&self) -> Detail {
         self.detail
     }
-    /// The resolved accuracy level index.
+    /// The accuracy level index of its detail.
     pub fn level(&self) -> usize {
-        self.level
+        self.detail.accuracy
     }
-    /// Ranks of the resolved accuracy level.
+    /// Ranks of its accuracy level.
     pub fn ranks(&self) -> Ranks {
         self.ranks
     }
@@ -507,7 +504,7 @@ impl LodModel {
             || kernel.t != self.t()
             || (!kernel.compact && kernel.g.len() < self.p() * self.max_ranks().t)
             || kernel.g.len() < kernel.rows * kernel.ranks.t
-            || kernel.level >= self.levels().len()
+            || kernel.detail.accuracy >= self.levels().len()
         {
             return Err(KernelError::Capacity {
                 what: "kernel",
@@ -846,10 +843,7 @@ impl LodModel {
     ) -> Result<(), KernelError> {
         let (p, t) = (self.p(), self.t());
         self.check_query_controls(controls)?;
-        let level = detail.level_in(self).ok_or(KernelError::Level {
-            level: detail.accuracy,
-            levels: self.levels().len(),
-        })?;
+        let level = self.check_detail(detail)?.accuracy;
         scratch.fits(self)?;
         self.check_kernel(out)?;
 
@@ -910,7 +904,6 @@ impl LodModel {
         out.times.fill_from_iter(dt.iter().map(|&d| inv_scale * d));
 
         out.detail = detail;
-        out.level = level;
         out.ranks = r;
         out.rows = rows;
         out.clamped = clamped;
@@ -1015,7 +1008,7 @@ impl LodModel {
         if !phase.is_finite() {
             return Err(KernelError::NonFinitePhase { phase });
         }
-        let key_index = self.levels()[kernel.level].key;
+        let key_index = self.levels()[kernel.detail.accuracy].key;
         let key = &self.keys()[key_index];
         let rows = kernel.rows;
         let used = rows.min(out.len());

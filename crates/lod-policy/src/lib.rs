@@ -66,7 +66,7 @@
 //! let (mut scratch, mut kernel) = (KernelScratch::new(lod), ClipKernel::new(lod));
 //! let mut pose = vec![0.0f32; lod.p()];
 //! let mut joints = vec![glam::Vec3::ZERO; rig.joint_count()];
-//! lod.build_kernel(&lod_policy::Controls::from_array([0.0, 1.4, 0.0, 1.7]), Detail::full(), &mut scratch, &mut kernel)?;
+//! lod.build_kernel(&lod_policy::Controls::from_array([0.0, 1.4, 0.0, 1.7]), lod.full_detail(), &mut scratch, &mut kernel)?;
 //! lod.pose(&kernel, kernel.phase_at(0.25), &mut pose)?;
 //! rig.joint_positions(&pose, kernel.detail().active_joints, &mut joints)?; // metres, cycle frame
 //! # Ok(())

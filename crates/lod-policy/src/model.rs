@@ -13,7 +13,7 @@ use crate::chain::RootMotion;
 use crate::controls::Controls;
 use crate::detail::Detail;
 
-use crate::error::ModelError;
+use crate::error::{KernelError, ModelError};
 
 pub use crate::variogram::{Variogram, VariogramModel};
 
@@ -668,6 +668,46 @@ impl LodModel {
     pub fn joints(&self) -> usize {
         (self.parts.p - self.parts.always_rows) / self.parts.rows_per_joint
     }
+    /// Full detail: the most accurate level and every joint.
+    pub fn full_detail(&self) -> Detail {
+        Detail::new(0, self.joints())
+    }
+
+    /// Root only: rows `0..7` (root position, root orientation, time increment) at the smallest
+    /// (last) accuracy level, the cheapest clip; every other row takes the mean pose.
+    pub fn root_only(&self) -> Detail {
+        Detail::new(self.levels().len() - 1, 0)
+    }
+
+    /// The detail a clip source evaluates for `detail`: a root-only detail (no joints) at the
+    /// smallest level, [`LodModel::root_only`], whatever level the policy gave it (every root-only
+    /// clip is then the same, and the cheapest); any other detail as it is.
+    pub fn evaluated(&self, detail: Detail) -> Detail {
+        if detail.is_root_only() {
+            self.root_only()
+        } else {
+            detail
+        }
+    }
+
+    /// `detail`, checked to exist in this model ([`Detail::fits`]): its level among the accuracy
+    /// levels and its joints at most [`LodModel::joints`].
+    pub fn check_detail(&self, detail: Detail) -> Result<Detail, KernelError> {
+        if detail.accuracy >= self.levels().len() {
+            return Err(KernelError::Level {
+                level: detail.accuracy,
+                levels: self.levels().len(),
+            });
+        }
+        if detail.active_joints > self.joints() {
+            return Err(KernelError::Joints {
+                joints: detail.active_joints,
+                max: self.joints(),
+            });
+        }
+        Ok(detail)
+    }
+
     /// Evaluated rows `P' = always_rows + rows_per_joint * active_joints`.
     pub fn active_rows(&self, active_joints: usize) -> usize {
         self.parts.always_rows + self.parts.rows_per_joint * active_joints.min(self.joints())
@@ -723,14 +763,15 @@ impl LodModel {
         self.max_ranks
     }
 
-    /// Multiply-adds to build a clip kernel at `detail` ([`LodModel::kernel_cost_rows`] of its
-    /// evaluated rows); `None` for a level the model lacks.
+    /// Multiply-adds to build a clip kernel at `detail` for its `P'` evaluated rows:
+    /// `(r_S + d + 1)(S + 1) + r_S (d + 1)` for the kriging weights, `r_P r_T r_S` for `K(c)`,
+    /// `P' r_P r_T` for `G(c)` and `T r_T` for the time table; `None` for a level the model lacks.
     pub fn kernel_cost(&self, detail: Detail) -> Option<usize> {
         self.kernel_cost_rows(detail.accuracy, self.active_rows(detail.active_joints))
     }
 
-    /// Multiply-adds per evaluated pose at `detail` ([`LodModel::pose_cost_rows`] of its evaluated
-    /// rows); `None` for a level the model lacks.
+    /// Multiply-adds per evaluated pose at `detail`: `P' r_T` for its `P'` evaluated rows; `None`
+    /// for a level the model lacks.
     pub fn pose_cost(&self, detail: Detail) -> Option<usize> {
         self.pose_cost_rows(detail.accuracy, self.active_rows(detail.active_joints))
     }

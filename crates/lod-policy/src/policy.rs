@@ -60,12 +60,23 @@ where
 }
 
 /// Full detail for every character, visible or not: the baseline without level of detail.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub struct FullDetail;
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FullDetail {
+    detail: Detail,
+}
+
+impl FullDetail {
+    /// Full detail of `model` ([`LodModel::full_detail`]) for every character.
+    pub fn for_model(model: &LodModel) -> FullDetail {
+        FullDetail {
+            detail: model.full_detail(),
+        }
+    }
+}
 
 impl LevelPolicy for FullDetail {
     fn detail(&self, _distance_m: f32, _visible: bool, _view: &ViewParams) -> Detail {
-        Detail::full()
+        self.detail
     }
 }
 
@@ -298,8 +309,10 @@ impl DistancePolicy {
 
 impl LevelPolicy for DistancePolicy {
     fn detail(&self, distance_m: f32, visible: bool, view: &ViewParams) -> Detail {
+        // Root only at the smallest level (the schedule has one position per accuracy level).
+        let root_only = Detail::new(self.positions.len().saturating_sub(1), 0);
         if !visible || distance_m.is_nan() {
-            return Detail::root_only();
+            return root_only;
         }
         let c = &self.config;
         let beyond = distance_m - c.near_m;
@@ -308,7 +321,7 @@ impl LevelPolicy for DistancePolicy {
         }
         let x = beyond / c.key_step_m;
         if x >= self.groups as f32 {
-            return Detail::root_only();
+            return root_only;
         }
         // Last level whose position is <= x (position 0 always qualifies).
         let level = self.positions.partition_point(|&p| p <= x).max(1) - 1;
@@ -467,7 +480,8 @@ impl ScreenSpacePolicy {
 impl LevelPolicy for ScreenSpacePolicy {
     fn detail(&self, distance_m: f32, visible: bool, view: &ViewParams) -> Detail {
         if !visible || distance_m.is_nan() {
-            return Detail::root_only();
+            // Root only at the smallest level.
+            return Detail::new(self.level_err_m.len().saturating_sub(1), 0);
         }
         let full = Detail::new(0, self.joints);
         let mpp = view.metres_per_pixel(distance_m.max(0.0));
@@ -512,8 +526,9 @@ mod tests {
         assert_eq!(p.detail(10.0, true, &v), Detail::new(0, 5));
         assert_eq!(p.detail(60.0, true, &v), Detail::new(1, 2));
         assert_eq!(p.detail(85.0, true, &v), Detail::new(2, 0));
-        assert_eq!(p.detail(131.0, true, &v), Detail::root_only());
-        assert_eq!(p.detail(10.0, false, &v), Detail::root_only());
+        // Beyond the last level and out of view: root only at the smallest level.
+        assert_eq!(p.detail(131.0, true, &v), Detail::new(2, 0));
+        assert_eq!(p.detail(10.0, false, &v), Detail::new(2, 0));
         assert_eq!(
             DistancePolicy::for_level_keys(&[1, 0], 5, config),
             Err(PolicyError::LevelKeys)
@@ -537,6 +552,9 @@ mod tests {
         let v = ViewParams::default();
         let near = |d: f32, _: bool, _: &ViewParams| Detail::new(usize::from(d > 10.0), 3);
         assert_eq!(near.detail(20.0, true, &v), Detail::new(1, 3));
-        assert_eq!(FullDetail.detail(1e6, false, &v), Detail::full());
+        let full = FullDetail {
+            detail: Detail::new(0, 7),
+        };
+        assert_eq!(full.detail(1e6, false, &v), Detail::new(0, 7));
     }
 }

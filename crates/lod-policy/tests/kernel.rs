@@ -42,7 +42,7 @@ fn pose_matches_direct_universal_kriging_at_every_level() {
                 for phase in [0.0f32, 3.3, 7.5, (T - 1) as f32] {
                     let want = direct_pose(&truth, level, &c, phase as f64);
                     let (kernel, got) =
-                        kernel_pose(&model, &c32, Detail::new(level, usize::MAX), phase);
+                        kernel_pose(&model, &c32, Detail::new(level, model.joints()), phase);
                     assert!(!kernel.clamped());
                     assert_eq!(kernel.rows(), P);
                     let e = rel_err(&got, &want);
@@ -62,8 +62,8 @@ fn truncated_level_differs_from_its_key() {
     let truth = random_truth(3, 0.0);
     let model = build_model(&truth);
     let c = [0.1f32, 1.2];
-    let (_, full) = kernel_pose(&model, &c, Detail::new(0, usize::MAX), 4.0);
-    let (_, trunc) = kernel_pose(&model, &c, Detail::new(1, usize::MAX), 4.0);
+    let (_, full) = kernel_pose(&model, &c, Detail::new(0, model.joints()), 4.0);
+    let (_, trunc) = kernel_pose(&model, &c, Detail::new(1, model.joints()), 4.0);
     let diff = full
         .iter()
         .zip(&trunc)
@@ -103,7 +103,7 @@ fn interpolates_samples_exactly_without_nugget() {
                 v
             })
             .collect();
-        let (_, got) = kernel_pose(&model, &c, Detail::full(), j as f32);
+        let (_, got) = kernel_pose(&model, &c, model.full_detail(), j as f32);
         let e = rel_err(&got, &want);
         assert!(e < 1e-4, "sample {i}: relative error {e}");
     }
@@ -135,7 +135,7 @@ fn root_only_uses_smallest_level_and_seven_rows() {
     let truth = random_truth(6, 0.02);
     let model = build_model(&truth);
     let c = [-0.2f64, 0.9];
-    let (kernel, got) = kernel_pose(&model, &[-0.2, 0.9], Detail::root_only(), 5.0);
+    let (kernel, got) = kernel_pose(&model, &[-0.2, 0.9], model.root_only(), 5.0);
     assert_eq!(kernel.level(), truth.levels.len() - 1);
     assert_eq!(kernel.rows(), 7);
     let want = direct_pose(&truth, truth.levels.len() - 1, &c, 5.0);
@@ -178,7 +178,7 @@ fn playback_time_increases_strictly() {
     // A random model has increments of either sign; negative ones are raised to MIN_INCREMENT.
     let truth = random_truth(8, 0.0);
     let model = build_model(&truth);
-    let (kernel, _) = kernel_pose(&model, &[0.0, 1.0], Detail::full(), 0.0);
+    let (kernel, _) = kernel_pose(&model, &[0.0, 1.0], model.full_detail(), 0.0);
     let times = kernel.time_table().times();
     assert!(
         times.windows(2).all(|w| w[1] > w[0]),
@@ -194,8 +194,8 @@ fn out_of_range_controls_are_clamped_and_flagged() {
     let model = build_model(&truth);
     let outside = [10.0f32, -3.0];
     let clamped = [truth.max[0] as f32, truth.min[1] as f32];
-    let (k1, p1) = kernel_pose(&model, &outside, Detail::full(), 3.0);
-    let (k2, p2) = kernel_pose(&model, &clamped, Detail::full(), 3.0);
+    let (k1, p1) = kernel_pose(&model, &outside, model.full_detail(), 3.0);
+    let (k2, p2) = kernel_pose(&model, &clamped, model.full_detail(), 3.0);
     assert!(k1.clamped());
     assert!(!k2.clamped());
     assert_eq!(p1, p2);
@@ -208,20 +208,25 @@ fn bad_inputs_are_errors() {
     let mut scratch = KernelScratch::new(&model);
     let mut kernel = ClipKernel::new(&model);
     assert!(matches!(
-        model.build_kernel_values(&[f32::NAN, 1.0], Detail::full(), &mut scratch, &mut kernel),
+        model.build_kernel_values(
+            &[f32::NAN, 1.0],
+            model.full_detail(),
+            &mut scratch,
+            &mut kernel
+        ),
         Err(KernelError::NonFiniteControl { index: 0, .. })
     ));
     assert!(matches!(
         model.build_kernel_values(
             &[0.0, f32::INFINITY],
-            Detail::full(),
+            model.full_detail(),
             &mut scratch,
             &mut kernel
         ),
         Err(KernelError::NonFiniteControl { index: 1, .. })
     ));
     assert!(matches!(
-        model.build_kernel_values(&[0.0], Detail::full(), &mut scratch, &mut kernel),
+        model.build_kernel_values(&[0.0], model.full_detail(), &mut scratch, &mut kernel),
         Err(KernelError::ControlLength {
             expected: 2,
             found: 1
@@ -235,7 +240,7 @@ fn bad_inputs_are_errors() {
         })
     ));
     model
-        .build_kernel_values(&[0.0, 1.0], Detail::full(), &mut scratch, &mut kernel)
+        .build_kernel_values(&[0.0, 1.0], model.full_detail(), &mut scratch, &mut kernel)
         .unwrap();
     let mut short = vec![0.0; P - 1];
     assert!(matches!(
@@ -274,7 +279,7 @@ fn kernel_from_another_model_is_rejected() {
     let mut scratch = KernelScratch::new(&model);
     let mut kernel = ClipKernel::new(&other);
     assert!(matches!(
-        model.build_kernel_values(&[0.0, 1.0], Detail::full(), &mut scratch, &mut kernel),
+        model.build_kernel_values(&[0.0, 1.0], model.full_detail(), &mut scratch, &mut kernel),
         Err(KernelError::Capacity { what: "kernel", .. })
     ));
 }
@@ -287,7 +292,7 @@ fn rebuilding_a_kernel_is_deterministic_and_independent_of_history() {
     model
         .build_kernel_values(
             &[0.1, 1.3],
-            Detail::new(0, usize::MAX),
+            Detail::new(0, model.joints()),
             &mut scratch,
             &mut k1,
         )
@@ -295,12 +300,12 @@ fn rebuilding_a_kernel_is_deterministic_and_independent_of_history() {
     let g1 = k1.g().to_vec();
     // Build at a different level and controls in between, then rebuild.
     model
-        .build_kernel_values(&[-0.4, 0.7], Detail::root_only(), &mut scratch, &mut k1)
+        .build_kernel_values(&[-0.4, 0.7], model.root_only(), &mut scratch, &mut k1)
         .unwrap();
     model
         .build_kernel_values(
             &[0.1, 1.3],
-            Detail::new(0, usize::MAX),
+            Detail::new(0, model.joints()),
             &mut scratch,
             &mut k1,
         )
@@ -310,7 +315,7 @@ fn rebuilding_a_kernel_is_deterministic_and_independent_of_history() {
     model
         .build_kernel_values(
             &[0.1, 1.3],
-            Detail::new(0, usize::MAX),
+            Detail::new(0, model.joints()),
             &mut fresh_scratch,
             &mut k2,
         )
@@ -326,7 +331,7 @@ fn pose_rows_equal_the_leading_rows_of_pose() {
     let mut scratch = KernelScratch::new(&model);
     let mut kernel = ClipKernel::new(&model);
     let c: Vec<f32> = (0..D).map(|k| 0.3 + 0.1 * k as f32).collect();
-    for detail in [Detail::full(), Detail::new(1, 2), Detail::root_only()] {
+    for detail in [model.full_detail(), Detail::new(1, 2), model.root_only()] {
         model
             .build_kernel_values(&c, detail, &mut scratch, &mut kernel)
             .unwrap();
@@ -355,10 +360,10 @@ fn compact_kernels_hold_their_level_and_give_the_same_bits() {
     let levels = model.levels().len();
     // Coarse to fine and back: the compact buffer grows and shrinks.
     let details = [
-        Detail::root_only(),
-        Detail::new(0, usize::MAX),
+        model.root_only(),
+        Detail::new(0, model.joints()),
         Detail::new(levels - 1, 1),
-        Detail::root_only(),
+        model.root_only(),
         Detail::new(1.min(levels - 1), 2),
     ];
     for (i, &detail) in details.iter().enumerate() {
@@ -399,7 +404,7 @@ fn fast_kernel_agrees_with_the_column_order_reference() {
         let mut scratch = KernelScratch::new(&model);
         let (mut fast, mut reference) = (ClipKernel::compact(&model), ClipKernel::new(&model));
         let mut rng = Rng::new(seed + 9);
-        for detail in [Detail::full(), Detail::new(1, 3), Detail::root_only()] {
+        for detail in [model.full_detail(), Detail::new(1, 3), model.root_only()] {
             let c: Vec<f32> = (0..truth.d)
                 .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
                 .collect();
@@ -429,7 +434,7 @@ fn kernel_phase_lookup_equals_the_time_table_bitwise() {
             .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
             .collect();
         model
-            .build_kernel_values(&c, Detail::full(), &mut scratch, &mut kernel)
+            .build_kernel_values(&c, model.full_detail(), &mut scratch, &mut kernel)
             .unwrap();
         let table: &TimeTable = kernel.time_table();
         let d = kernel.duration();
@@ -551,7 +556,7 @@ fn time_table_is_the_per_frame_sum_of_the_time_row() {
     let mut rng = Rng::new(9);
     let t = model.t();
     for level in 0..model.levels().len() {
-        for joints in [0, usize::MAX] {
+        for joints in [0, model.joints()] {
             let c: Vec<f32> = (0..truth.d)
                 .map(|k| rng.uniform(truth.min[k], truth.max[k]) as f32)
                 .collect();

@@ -415,28 +415,20 @@ fn control_values(c: &MlodControls, name: &str) -> Result<[f32; 4], Failure> {
     Ok(values)
 }
 
-/// `detail` for `m`: the level checked, the joints clamped to the model's.
+/// `detail` for `m`, checked: a level the model has and at most its animated joints.
 fn checked_detail(m: &MlodModel, detail: MlodDetail, name: &str) -> Result<Detail, Failure> {
     let lod = m.model.lod();
-    Detail::new(detail.level as usize, detail.joints as usize)
-        .resolve(lod.levels().len(), lod.joints())
-        .ok_or_else(|| {
-            Failure::invalid(format!(
-                "{name}: level {} is out of range (the model has {})",
-                detail.level,
-                lod.levels().len()
-            ))
-        })
+    lod.check_detail(Detail::new(detail.level as usize, detail.joints as usize))
+        .map_err(|e| Failure::invalid(format!("{name}: {e}")))
 }
 
 /// A policy's detail as the C ABI gives it: a root-only detail at the smallest level (the cheapest
-/// clip, as the crowd evaluates it, [`Detail::evaluated`]), resolved for the model.
+/// clip, as the crowd evaluates it, `LodModel::evaluated`), checked for the model.
 fn policy_detail(m: &MlodModel, detail: Detail) -> Result<MlodDetail, Failure> {
     let lod = m.model.lod();
-    let d = detail
-        .evaluated()
-        .resolve(lod.levels().len(), lod.joints())
-        .ok_or_else(|| Failure::invalid("the policy chose a level the model lacks"))?;
+    let d = lod
+        .check_detail(lod.evaluated(detail))
+        .map_err(|e| Failure::invalid(format!("the policy chose a detail the model lacks: {e}")))?;
     Ok(MlodDetail {
         level: d.accuracy as u32,
         joints: d.active_joints as u32,
@@ -882,8 +874,8 @@ pub unsafe extern "C" fn mlod_walker_new(
                 t: 0.0,
                 cycle: 0,
                 next_controls: [0.0; 4],
-                next_detail: Detail::root_only(),
-                detail: Detail::root_only(),
+                next_detail: lod.root_only(),
+                detail: lod.root_only(),
                 root: Vec3::ZERO,
                 root_rotation: Quat::IDENTITY,
                 locked: false,

@@ -133,10 +133,8 @@ fn camera_detail(model: &RuntimeModel, policy: &DistancePolicy, p: Vec3) -> (Det
         image_height_px: CAMERA.image_height_px,
     };
     let lod = model.lod();
-    let detail = policy
-        .detail(distance, visible, &view)
-        .evaluated()
-        .resolve(lod.levels().len(), lod.joints())
+    let detail = lod
+        .check_detail(lod.evaluated(policy.detail(distance, visible, &view)))
         .expect("policy level");
     (detail, visible)
 }

@@ -645,7 +645,7 @@ impl MotionModel {
             .step_by(stride)
             .map(|&c| Controls::from_f64(c))
             .collect();
-        let full = Detail::full();
+        let full = self.lod().full_detail();
         let reference: Vec<Vec<f64>> = picked
             .iter()
             .map(|c| self.synthesize_aligned(c, full))
@@ -691,7 +691,7 @@ impl MotionModel {
         };
         debug_assert!(p > 0 && t > 0);
         let levels = (0..lod.levels().len())
-            .map(|l| measure(Detail::new(l, usize::MAX)))
+            .map(|l| measure(Detail::new(l, lod.joints())))
             .collect::<Result<Vec<_>, _>>()?;
         let joints = (0..=lod.joints())
             .map(|j| measure(Detail::new(0, j)))

@@ -43,10 +43,8 @@
 //! let mut local = vec![Quat::IDENTITY; rig.joint_count()];
 //! // One gait cycle (two steps): metres, radians, metres.
 //! let controls = Controls { dx: 0.0, dz: 1.3, turn: 0.2, height: 1.75 };
-//! let detail = DistancePolicy::for_model(lod)
-//!     .detail(12.0, true, &ViewParams::default()) // 12 m from the camera
-//!     .resolve(lod.levels().len(), lod.joints())
-//!     .ok_or("no such level")?;
+//! // The policy answers with a detail of its model (a level it has, at most its joints).
+//! let detail = DistancePolicy::for_model(lod).detail(12.0, true, &ViewParams::default()); // 12 m
 //! lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)?;
 //! let mut cycle_frame = CycleFrame::default(); // the first cycle starts at the origin, facing +z
 //! let mut t = 0.0f64; // seconds into the current cycle

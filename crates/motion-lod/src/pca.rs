@@ -256,8 +256,9 @@ impl ClipSource for PcaSource<'_> {
         }
     }
 
-    /// Builds the clip at `detail` evaluated as [`Detail::evaluated`] (a root-only clip at the
-    /// last level); an unknown level is refused before anything is written.
+    /// Builds the clip at `detail` (a root-only detail at the last level, as
+    /// [`lod_policy::LodModel::evaluated`] does); an unknown level or joint count is refused before
+    /// anything is written.
     fn build_clip(
         &self,
         controls: &Controls,
@@ -266,16 +267,18 @@ impl ClipSource for PcaSource<'_> {
     ) -> Result<(), ClipError> {
         let (p, t, _) = self.dims();
         let lod = self.model.lod();
-        let d = detail
-            .evaluated()
-            .resolve(self.level_ranks.len(), lod.joints())
-            .ok_or_else(|| {
-                ClipError(format!(
-                    "PCA source: no accuracy level {} (it has {})",
-                    detail.accuracy,
-                    self.level_ranks.len()
-                ))
-            })?;
+        let levels = self.level_ranks.len();
+        let d = if detail.is_root_only() {
+            Detail::new(levels.saturating_sub(1), 0)
+        } else {
+            detail
+        };
+        if !d.fits(levels, lod.joints()) {
+            return Err(ClipError(format!(
+                "PCA source: no detail {detail:?} (it has {levels} accuracy levels and {} joints)",
+                lod.joints()
+            )));
+        }
         let r = self.level_ranks[d.accuracy];
         clip.rank = r;
         clip.active_joints = d.active_joints;

@@ -224,7 +224,7 @@ impl ClipSource for LodSource<'_> {
         }
     }
 
-    /// Builds the kernel at `detail` evaluated as [`Detail::evaluated`] (a root-only clip at the
+    /// Builds the kernel at `detail` evaluated as [`lod_policy::LodModel::evaluated`] (a root-only clip at the
     /// smallest level). The kernel checks controls, level and buffers before it writes, so a
     /// refused build leaves the clip as it was.
     fn build_clip(
@@ -234,7 +234,7 @@ impl ClipSource for LodSource<'_> {
         clip: &mut LodClip,
     ) -> Result<(), ClipError> {
         let lod = self.model.lod();
-        let detail = detail.evaluated();
+        let detail = lod.evaluated(detail);
         self.with_scratch(|s| {
             #[cfg(feature = "reference")]
             if !self.compact {

@@ -16,7 +16,6 @@
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
-use lod_policy::Detail;
 use motion_io::expmap::exp_to_quat;
 use motion_lod::build::{Analysis, RowWeights};
 use motion_lod::dataset::{DataSpec, Preset};
@@ -111,7 +110,7 @@ fn assert_walks_travel(what: &str, spec: &DataSpec) {
     for (n, ctl) in picks.iter().chain(&mids).enumerate() {
         let req = WalkRequest {
             controls: lod_policy::Controls::from_f64(*ctl),
-            detail: Detail::full(),
+            detail: model.lod().full_detail(),
             cycles: 3,
             fps,
             blend: true,

@@ -21,7 +21,6 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 
 use glam::{DQuat, DVec3};
-use lod_policy::Detail;
 use motion_lod::dataset::{DataSpec, Preset};
 use motion_lod::gltf::crowd::{CrowdClip, export_crowd};
 use motion_lod::progress::NoProgress;
@@ -177,7 +176,7 @@ impl ReadBack {
 fn check_walk(what: &str, model: &MotionModel, controls: [f32; 4]) {
     let req = WalkRequest {
         controls: lod_policy::Controls::from_array(controls),
-        detail: Detail::full(),
+        detail: model.lod().full_detail(),
         cycles: 3,
         fps: 30.0,
         blend: true,

@@ -15,7 +15,6 @@ use std::path::PathBuf;
 
 use glam::DVec3;
 use kriging::DimDecision;
-use lod_policy::Detail;
 use motion_io::{FootNames, PoseLayout, find_feet, mirrored_names, side_of};
 use motion_lod::build::{JointLayout, TrainingSet};
 use motion_lod::dataset::{DataSpec, Preset};
@@ -266,7 +265,7 @@ fn cmu_drops_the_noise_controls_and_its_duration_ignores_them() {
         let poses = model
             .synthesize_aligned(
                 &lod_policy::Controls::from_array([dx, dz, turn, range[3].0]),
-                Detail::full(),
+                model.lod().full_detail(),
             )
             .unwrap();
         let p = model.lod().p();

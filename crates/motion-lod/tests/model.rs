@@ -104,7 +104,7 @@ fn out_of_range_controls_are_clamped_and_reported() {
     let range = model.control_range();
     let req = WalkRequest {
         controls: lod_policy::Controls::from_array([0.0, range[1].1 * 3.0, 0.0, range[3].0]),
-        detail: Detail::full(),
+        detail: model.lod().full_detail(),
         cycles: 1,
         fps: 30.0,
         blend: false,
@@ -177,7 +177,12 @@ fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_cou
     );
     assert!(dz > 0.3, "a walk travels forward: dz = {dz}");
     let naive = NaiveSource::new(model, analysis).unwrap();
-    let n = run_crowd(&naive, &lod_policy::FullDetail, &run).unwrap();
+    let n = run_crowd(
+        &naive,
+        &lod_policy::FullDetail::for_model(model.lod()),
+        &run,
+    )
+    .unwrap();
     assert_eq!(n.last.level_histogram[0], 300);
 }
 
@@ -365,9 +370,9 @@ fn avx2_and_baseline_builds_of_the_kernels_give_the_same_bits() {
     for (i, c) in analysis.controls.iter().step_by(7).enumerate() {
         let c = lod_policy::Controls::from_f64(*c);
         for level in 0..levels {
-            for joints in [usize::MAX, 3, 0] {
+            for joints in [lod.joints(), 3, 0] {
                 let detail = if joints == 0 {
-                    Detail::root_only()
+                    lod.root_only()
                 } else {
                     Detail::new(level, joints)
                 };

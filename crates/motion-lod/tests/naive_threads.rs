@@ -13,7 +13,7 @@ use common::built;
 fn naive_crowd_poses_are_bit_identical_for_1_2_and_8_threads() {
     let (model, analysis) = built();
     let source = NaiveSource::new(model, analysis).unwrap();
-    let policy = FullDetail;
+    let policy = FullDetail::for_model(model.lod());
     let config = CrowdConfig {
         seed: 17,
         ..CrowdConfig::with_density(120, 0.05)

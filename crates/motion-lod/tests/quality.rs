@@ -38,7 +38,7 @@ fn mocap(name: &str) -> Option<PathBuf> {
 fn walk(model: &MotionModel, controls: Controls, blend: bool, plant_feet: bool) -> MotionQuality {
     let req = WalkRequest {
         controls,
-        detail: Detail::full(),
+        detail: model.lod().full_detail(),
         cycles: 4,
         fps: 30.0,
         blend,
@@ -102,11 +102,13 @@ fn details_stay_under_a_pixel(model: &MotionModel, controls: &[[f64; 4]]) {
         let d = i as f32 * 0.5;
         for policy in policies {
             let detail = policy.detail(d, true, &view);
-            if detail == Detail::root_only() {
+            if detail == lod.root_only() {
                 continue;
             }
             let key = (
-                detail.level_in(lod).expect("a level of the model"),
+                lod.check_detail(detail)
+                    .expect("a detail of the model")
+                    .accuracy,
                 detail.active_joints.min(joints),
             );
             nearest.entry(key).or_insert(d);
@@ -126,7 +128,7 @@ fn details_stay_under_a_pixel(model: &MotionModel, controls: &[[f64; 4]]) {
             }))
         })
         .collect();
-    let full = Detail::full();
+    let full = lod.full_detail();
     let full_slides: Vec<f64> = probes
         .iter()
         .map(|c| foot_slide_cm(model, c, full).expect("full-detail slide"))
@@ -294,7 +296,7 @@ fn crowd_tracks(model: &MotionModel, foot_lock_levels: usize) -> Vec<MotionQuali
         model,
         config,
         Scene::Overview,
-        &lod_policy::FullDetail,
+        &lod_policy::FullDetail::for_model(model.lod()),
         300,
         &walkers,
     )

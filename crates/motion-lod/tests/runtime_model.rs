@@ -113,10 +113,10 @@ fn a_built_model_loads_in_the_runtime_with_the_same_poses_and_joints() {
     let levels = lod.levels().len();
     let mut compared = 0;
     for (controls, accuracy, joints) in [
-        ([0.0, 1.4, 0.0, 1.7], 0, usize::MAX),
+        ([0.0, 1.4, 0.0, 1.7], 0, lod.joints()),
         ([0.1, 1.2, 0.3, 1.7], levels / 2, 9),
         ([-0.2, 0.9, -0.5, 1.6], levels - 1, 3),
-        ([0.0, 1.0, 0.0, 1.7], Detail::SMALLEST, 0),
+        ([0.0, 1.0, 0.0, 1.7], levels - 1, 0),
     ] {
         let controls = lod_policy::Controls::from_array(controls);
         let detail = Detail::new(accuracy, joints);

@@ -70,10 +70,8 @@ pub fn walk(
         body_scale: model.body_scale(&controls),
     };
     // The level of detail for this distance (in a crowd: per character, re-asked per cycle).
+    // The policy answers with a detail of its model: a level it has, at most its joints.
     let detail = DistancePolicy::for_model(lod).detail(distance_m, true, &ViewParams::default());
-    let detail = detail
-        .resolve(lod.levels().len(), lod.joints())
-        .ok_or("the policy chose a level the model lacks")?;
     // The first cycle starts at the world origin facing +z.
     let mut cycle_frame = CycleFrame::default();
     lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)?;

@@ -21,7 +21,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, CrowdReport, Culling, FrameStats, Scene};
-use lod_policy::{Detail, DistancePolicy, FullDetail, LevelPolicy, ViewParams};
+use lod_policy::{DistancePolicy, FullDetail, LevelPolicy, ViewParams};
 use motion_lod::progress::Progress;
 use motion_lod::{Analysis, LodSource, MotionModel, NaiveSource, PcaSource};
 
@@ -269,7 +269,7 @@ pub fn measure(
     let naive = NaiveSource::new(model, analysis).context("naive baseline")?;
     let pca = PcaSource::new(model, analysis, PCA_RANK).context("PCA baseline")?;
     let lod_policy = DistancePolicy::for_model(model.lod());
-    let full = FullDetail;
+    let full = FullDetail::for_model(model.lod());
     let runs_per_size = 6 + threads.iter().filter(|&&t| t != MAIN_THREADS).count();
     progress.stage(
         "crowds (2 scenes; LOD, naive, PCA; LOD policy and full detail; threads)",
@@ -340,7 +340,8 @@ pub fn measure(
             threads: 1,
             culling: Culling::Scan,
         };
-        let root_only = |_: f32, _: bool, _: &ViewParams| Detail::root_only();
+        let root = model.lod().root_only();
+        let root_only = move |_: f32, _: bool, _: &ViewParams| root;
         let mut warm = None;
         rows.push(timed_or_skipped(
             spec,

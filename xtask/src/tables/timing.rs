@@ -186,7 +186,7 @@ pub fn figure4(
         hybrid: Vec::with_capacity(n),
     };
     for level in 0..n {
-        let detail = Detail::new(level, usize::MAX);
+        let detail = Detail::new(level, schemes.hybrid.lod().joints());
         let point = |m: &MotionModel, timed: Timed| -> Result<LevelPoint> {
             let r = m.lod().levels()[level].ranks;
             Ok(LevelPoint {
@@ -274,9 +274,10 @@ pub fn figure5(
     let mut out = Vec::with_capacity(ds.len());
     for &d in &ds {
         let detail = policy.detail(d, true, &view);
-        let level = detail
-            .level_in(lod)
-            .with_context(|| format!("policy detail {detail:?} at {d} m"))?;
+        let level = lod
+            .check_detail(detail)
+            .with_context(|| format!("policy detail {detail:?} at {d} m"))?
+            .accuracy;
         let (timed, error_cm) = match cache.get(&detail) {
             Some(v) => *v,
             None => {

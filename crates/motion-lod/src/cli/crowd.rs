@@ -465,7 +465,7 @@ fn run_with_policy<S: ClipSource>(
     run: &CrowdRun,
 ) -> anyhow::Result<CrowdOutcome> {
     if full_detail {
-        return Ok(run_crowd(source, &FullDetail, run)?);
+        return Ok(run_crowd(source, &FullDetail::for_model(lod), run)?);
     }
     Ok(match policy {
         PolicyArg::Distance => run_crowd(source, &DistancePolicy::for_model(lod), run)?,

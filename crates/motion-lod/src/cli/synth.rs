@@ -127,7 +127,11 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     }
     let req = WalkRequest {
         controls,
-        detail: Detail::new(args.level, args.joints.unwrap_or(usize::MAX)),
+        detail: Detail::new(
+            args.level,
+            args.joints
+                .map_or(model.lod().joints(), |j| j.min(model.lod().joints())),
+        ),
         cycles: args.cycles,
         fps: args.fps,
         blend: !args.no_blend,

@@ -6,7 +6,6 @@ use std::sync::Arc;
 
 use crowd_sim::{Camera, CameraPath, Crowd, CrowdConfig};
 use glam::{Quat, Vec3};
-use lod_policy::Detail as ModelDetail;
 use lod_policy::LevelPolicy;
 use motion_io::PoseLayout;
 use motion_io::expmap::quat_to_exp;
@@ -263,7 +262,7 @@ fn reference_walk(model: &MotionModel) -> Result<crate::synth::Walk, GltfError> 
             0.0f32.clamp(range[2].0, range[2].1),
             mid(3),
         ]),
-        detail: ModelDetail::full(),
+        detail: model.lod().full_detail(),
         cycles: 1,
         fps: 30.0,
         blend: false,
