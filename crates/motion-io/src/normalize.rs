@@ -184,6 +184,19 @@ pub enum RootPositions {
     Same,
 }
 
+impl std::fmt::Display for RootPositions {
+    /// What the reader did with the root's position channels, in words for reports.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            RootPositions::Absolute => "absolute (channels hold the position)",
+            RootPositions::Relative => "relative to the OFFSET (made absolute)",
+            RootPositions::Same => {
+                "either reading (the OFFSET is zero or there is no position channel)"
+            }
+        })
+    }
+}
+
 /// Choices that [`normalize_take`] would otherwise make from the data.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct NormalizeOptions {

@@ -1092,9 +1092,9 @@ impl DataSpec {
         })
     }
 
-    /// A short description for reports: the folders (or "embedded fixtures") and the options.
-    pub fn describe(&self) -> String {
-        let data = if self.dirs.is_empty() {
+    /// The data alone: the folders, or "embedded fixtures" (what an error while loading names).
+    pub fn describe_data(&self) -> String {
+        if self.dirs.is_empty() {
             "embedded fixtures".to_string()
         } else {
             self.dirs
@@ -1102,7 +1102,12 @@ impl DataSpec {
                 .map(|d| d.display().to_string())
                 .collect::<Vec<_>>()
                 .join(", ")
-        };
+        }
+    }
+
+    /// A short description for reports: the folders (or "embedded fixtures") and the options.
+    pub fn describe(&self) -> String {
+        let data = self.describe_data();
         let align = match self.align {
             AlignSpec::Dtw { band, max_slope } => format!("dtw (band {band}, slope {max_slope})"),
             AlignSpec::Uniform => "uniform".into(),

@@ -10,7 +10,9 @@ use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 #[command(
     name = "motion-lod",
     version,
-    about,
+    about = "Walking characters from motion capture at a cost that falls with distance: build a \
+             multilinear model from BVH takes, synthesize walks for any controls, run and render crowds \
+             with levels of detail.",
     after_help = "Terms in the output (accuracy level, key level, shell error, pop, ...): motion-lod explain TERM"
 )]
 struct Cli {
@@ -64,11 +66,21 @@ fn main() -> std::process::ExitCode {
     };
     match run(cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,
+        // The reader went away (`motion-lod info m.mlod | head -1`): not an error of ours.
+        Err(e) if broken_pipe(&e) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprint!("{}", report(&e));
             std::process::ExitCode::from(1)
         }
     }
+}
+
+/// True when the error is a write to a closed pipe (anywhere in its chain).
+fn broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// A user error as the user reads it: `error: ` and what failed (with where), then each cause once,

@@ -220,3 +220,91 @@ fn quality_measures_crowd_walkers_as_the_crowd_plays_them() {
     assert!(!ok && stderr.contains("(0, 3600]"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 36's noise list, each item as it can fail: a default build says nothing about accuracy
+/// levels it was not asked for; an unwritable output is refused before the build; a load error
+/// names the data, not the alignment settings; `info | head -1` ends quietly; the top-level help
+/// describes the command, not the library crate.
+#[test]
+fn the_output_says_only_what_was_asked_or_must_be_known() {
+    let dir = std::env::temp_dir().join(format!("motion-lod-cli-quiet-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("m.mlod");
+    let (ok, _, stderr) = run(&[
+        "build",
+        "--samples",
+        "12",
+        "--json",
+        "-o",
+        model.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(!stderr.contains("--accuracy-levels"), "{stderr}");
+
+    // A folder that does not exist: refused before the build, naming the path.
+    let missing = dir.join("no-such-folder/m.mlod");
+    let (ok, _, stderr) = run(&["build", "-o", missing.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("cannot write") && stderr.contains("no-such-folder"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("building the model"), "{stderr}");
+
+    let (ok, _, stderr) = run(&["build", "/nonexistent/takes", "-o", model.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(stderr.contains("loading /nonexistent/takes"), "{stderr}");
+    assert!(!stderr.contains("dtw (band"), "{stderr}");
+
+    // `info m.mlod | head -1`, as a reader that goes away at once (`true` reads nothing): every
+    // write of the report then meets a closed pipe.
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "set -o pipefail; '{BIN}' info '{}' | true",
+            model.display()
+        ))
+        .output()
+        .expect("bash runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("Broken pipe"), "{stderr}");
+
+    // The conventions line says in words what was done with the root's positions (it printed the
+    // variant's name, `Same`, which `explain` did not know).
+    let (ok, stdout, stderr) = run(&["cycles"]);
+    assert!(ok, "{stderr}");
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("conventions:"))
+        .unwrap_or_else(|| panic!("a conventions line: {stdout}"));
+    let roots = line
+        .split("root positions ")
+        .nth(1)
+        .expect("root positions");
+    assert!(
+        !["Same", "Absolute", "Relative"]
+            .iter()
+            .any(|v| roots.starts_with(v)),
+        "{line}"
+    );
+
+    // Every number states its range in the help, and a value outside it is refused.
+    let (_, help, _) = run(&["demo", "--help"]);
+    assert!(
+        help.contains("1..=1000000") && help.contains("(0, 3600]"),
+        "{help}"
+    );
+    let (_, help, _) = run(&["quality", "--help"]);
+    assert!(help.matches("0..=10000").count() >= 2, "{help}");
+    let (ok, _, stderr) = run(&["quality", model.to_str().unwrap(), "--level", "20000"]);
+    assert!(!ok && stderr.contains("--level"), "{stderr}");
+
+    let (_, help, _) = run(&["--help"]);
+    assert!(
+        help.starts_with("Walking characters from motion capture"),
+        "{help}"
+    );
+    assert!(!help.contains("re-exporting the runtime"), "{help}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

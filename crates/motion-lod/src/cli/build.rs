@@ -19,11 +19,11 @@ pub struct ModelArgs {
     #[arg(long, default_value_t = BuildConfig::default().key_levels,
           value_parser = super::ranges::count(super::ranges::KEY_LEVELS))]
     pub levels: usize,
-    /// Accuracy levels N_A (at least N; 1..=1000); levels between keys are truncations of the
-    /// larger key.
-    #[arg(long, default_value_t = BuildConfig::default().accuracy_levels,
+    /// Accuracy levels N_A (at least N; 1..=1000; default 28); levels between keys are
+    /// truncations of the larger key.
+    #[arg(long, value_name = "NA",
           value_parser = super::ranges::count(super::ranges::ACCURACY_LEVELS))]
-    pub accuracy_levels: usize,
+    pub accuracy_levels: Option<usize>,
     /// Ranks (R_P, R_T, R_S) of the first key level, clamped to the data (paper: 40,40,60; each
     /// 1..=10000).
     #[arg(long, value_parser = parse_ranks, default_value = "40,40,60")]
@@ -68,7 +68,9 @@ impl ModelArgs {
     pub fn config(&self) -> BuildConfig {
         BuildConfig {
             key_levels: self.levels,
-            accuracy_levels: self.accuracy_levels,
+            accuracy_levels: self
+                .accuracy_levels
+                .unwrap_or(BuildConfig::default().accuracy_levels),
             max_ranks: self.max_ranks,
             min_ranks: self.min_ranks,
             dof_rank_reference: (self.dof_rank_reference > 0).then_some(self.dof_rank_reference),
@@ -129,7 +131,8 @@ pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::R
     built.report.data = Some(spec);
     let config = model.config();
     let made = built.lod().levels().len();
-    if made != config.accuracy_levels {
+    // Said only when the user asked for a count: the default is a target the data may not meet.
+    if model.accuracy_levels.is_some() && made != config.accuracy_levels {
         let why = if config.accuracy_levels < config.key_levels {
             format!(
                 "every one of the {} key levels is an accuracy level",
@@ -148,8 +151,31 @@ pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::R
     Ok(built)
 }
 
+/// Checks that a file can be created beside `path` (its folder exists and takes new files), by
+/// creating and removing an empty probe file there; nothing at `path` itself is touched.
+pub fn check_writable(path: &std::path::Path) -> anyhow::Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => std::path::Path::new("."),
+    };
+    let name = path
+        .file_name()
+        .map_or("model".into(), |n| n.to_string_lossy().into_owned());
+    let probe = dir.join(format!(".{name}.probe-{}", std::process::id()));
+    std::fs::File::create(&probe).with_context(|| {
+        format!(
+            "cannot write {}: its folder does not take new files",
+            path.display()
+        )
+    })?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
 /// Runs the subcommand.
 pub fn run(args: BuildArgs) -> anyhow::Result<()> {
+    // Say now, not after the build, when the model cannot be written where asked.
+    check_writable(&args.output)?;
     let started = std::time::Instant::now();
     let model = build_model(&args.data, &args.model, args.json)?;
     // The build time goes to stdout only: the file holds what the data and settings determine.

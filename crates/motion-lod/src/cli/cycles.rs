@@ -156,7 +156,7 @@ fn print_report(
     if let Some(c) = &set.conventions {
         writeln!(
             out,
-            "conventions: units {} ({}; standing height {:.3} m), up {} ({}), forward {}, root positions {:?}{}",
+            "conventions: units {} ({}; standing height {:.3} m), up {} ({}), forward {}, root positions {}{}",
             c.units,
             if c.units_detected {
                 "detected"

@@ -167,7 +167,7 @@ pub fn load(spec: &DataSpec, quiet: bool) -> anyhow::Result<LoadedData> {
             bar.set_length(total as u64);
             bar.inc(1);
         })
-        .with_context(|| format!("loading {}", spec.describe()))?;
+        .with_context(|| format!("loading {}", spec.describe_data()))?;
     bar.finish_and_clear();
     for f in &loaded.cycles.failed {
         eprintln!("warning: skipped {}: {}", f.path.display(), f.error);

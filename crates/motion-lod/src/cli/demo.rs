@@ -11,10 +11,10 @@ use super::crowd::{CrowdArgs, PolicyArg};
 /// Arguments of `motion-lod demo`.
 #[derive(Debug, Args)]
 pub struct DemoArgs {
-    /// Number of walkers.
+    /// Number of walkers (1..=1000000).
     #[arg(long, default_value_t = 1000, value_parser = super::ranges::count(super::ranges::WALKERS))]
     pub walkers: usize,
-    /// Simulated seconds.
+    /// Simulated seconds ((0, 3600]).
     #[arg(long, default_value_t = 10.0, value_parser = super::ranges::seconds)]
     pub seconds: f32,
     /// Where to write the rendered frames, maps, GIF and the glTF clip `crowd.glb`.

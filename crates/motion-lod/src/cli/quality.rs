@@ -20,11 +20,12 @@ pub struct QualityArgs {
     /// The model file.
     #[arg(value_name = "MODEL")]
     pub model: PathBuf,
-    /// Only this accuracy level (0 = full detail; default: every level).
-    #[arg(long)]
+    /// Only this accuracy level (0 = full detail; default: every level; 0..=10000, and below the
+    /// model's count).
+    #[arg(long, value_parser = super::ranges::count(super::ranges::LEVEL))]
     pub level: Option<usize>,
-    /// Evaluated joints (default: all).
-    #[arg(long)]
+    /// Evaluated joints (default: all; 0..=10000, more than the model has means all).
+    #[arg(long, value_parser = super::ranges::count(super::ranges::JOINTS))]
     pub joints: Option<usize>,
     /// Cycles per walk (2 to 64).
     #[arg(long, default_value_t = 4)]

@@ -35,7 +35,15 @@ pub struct ViewArgs {
 fn viewer_dir(arg: Option<&Path>) -> PathBuf {
     arg.map(Path::to_path_buf)
         .or_else(|| std::env::var_os("MOTION_LOD_VIEWER").map(PathBuf::from))
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../viewer"))
+        .unwrap_or_else(|| {
+            // The source tree's `viewer/`, two folders above this crate, named without `..`.
+            let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+            manifest
+                .ancestors()
+                .nth(2)
+                .unwrap_or(manifest)
+                .join("viewer")
+        })
 }
 
 /// Checks that `file` is a readable glTF binary (its magic number), before serving anything.
