@@ -20,7 +20,7 @@ use crate::time_table::TimeTable;
 use crate::chain::{RootMotion, exp_map_to_quat};
 use crate::controls::Controls;
 use crate::detail::Detail;
-use crate::model::{LodModel, Ranks, TIME_ROW};
+use crate::model::{ALWAYS_ROWS, LodModel, Ranks, TIME_ROW};
 
 /// Index of the control that is a clip's travel turn (radians, + = left): the heading of the
 /// direction of travel changes by it over one cycle (the data's definition; the pelvis may turn by more
@@ -389,9 +389,6 @@ fn dot_rows(a: &[f64], x: &[f64], out: &mut [f64]) {
         l += size;
     }
 }
-
-/// Rows of a root-only pose: root position, root orientation, time increment.
-const ROOT_ROWS: usize = 7;
 
 /// Largest `r_T` whose time weights a pose holds on the stack (larger ones take the column loop).
 const POSE_COLUMNS: usize = 128;
@@ -913,7 +910,7 @@ impl LodModel {
         //    imply for the other controls, `ControlSpace::implied`; the pelvis's yaw change for a model
         //    without a turn dimension).
         // The seven root rows (the register path of `pose_rows`; root motion reads the first six).
-        let mut ends = [[0.0f32; ROOT_ROWS]; 2];
+        let mut ends = [[0.0f32; ALWAYS_ROWS]; 2];
         for (e, phase) in ends.iter_mut().zip([0.0, (t - 1) as f32]) {
             self.pose_rows_body(out, phase, e)?;
         }
@@ -1030,16 +1027,16 @@ impl LodModel {
                 *v = wb(b);
             }
             combine_columns(head, &w[..rt], &kernel.g, rows);
-        } else if used == ROOT_ROWS {
+        } else if used == ALWAYS_ROWS {
             // Root only: the seven sums held in registers over the columns (the same sums in the
             // same order as the column loop below).
-            let mut acc = [0.0f32; ROOT_ROWS];
+            let mut acc = [0.0f32; ALWAYS_ROWS];
             for b in 0..rt {
                 let w = wb(b);
-                let gcol: &[f32; ROOT_ROWS] = kernel.g[rows * b..][..ROOT_ROWS]
+                let gcol: &[f32; ALWAYS_ROWS] = kernel.g[rows * b..][..ALWAYS_ROWS]
                     .try_into()
                     .expect("seven rows");
-                for r in 0..ROOT_ROWS {
+                for r in 0..ALWAYS_ROWS {
                     acc[r] += w * gcol[r];
                 }
             }

@@ -50,7 +50,7 @@ use crate::contacts::{
 };
 use crate::expmap::{exp_to_quat, quat_to_exp, wrap_angle};
 use crate::motion::Motion;
-use crate::pose::{PoseLayout, ROOT_ROWS, align_sequence};
+use crate::pose::{ALWAYS_ROWS, PoseLayout, align_sequence};
 use crate::skeleton::Transform;
 
 /// Settings of contact detection and cycle selection. Lengths are relative to the leg length
@@ -592,7 +592,7 @@ pub fn segment_cycles(
         }
         align_sequence(&mut poses, &reference)?;
         debug_assert_eq!(poses.len() % p, 0);
-        debug_assert!(p >= ROOT_ROWS);
+        debug_assert!(p >= ALWAYS_ROWS);
         report.cycles.push(GaitCycle {
             source: source.to_path_buf(),
             first_frame: a,

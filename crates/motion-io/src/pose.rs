@@ -16,9 +16,9 @@ use crate::expmap::{exp_to_quat, nearest_branch, quat_to_exp};
 use crate::motion::Motion;
 use crate::skeleton::{Skeleton, SkeletonError, Transform};
 
-/// Rows before the first joint: root position (3), root orientation (3), time increment (1)
-/// (the runtime's [`lod_policy::ALWAYS_ROWS`]).
-pub const ROOT_ROWS: usize = lod_policy::ALWAYS_ROWS;
+/// Rows before the first joint: root position (3), root orientation (3), time increment (1): the
+/// runtime's constant, one name for it everywhere.
+pub use lod_policy::ALWAYS_ROWS;
 /// Row of the time increment (the runtime's constant).
 pub use lod_policy::TIME_ROW;
 
@@ -605,13 +605,13 @@ impl PoseLayout {
 
     /// Pose dimension `P = 7 + 3 * rotating joints`.
     pub fn dof(&self) -> usize {
-        ROOT_ROWS + 3 * self.order.len()
+        ALWAYS_ROWS + 3 * self.order.len()
     }
 
     /// Rows of skeleton joint `j` (`None` unless it is a rotating joint).
     pub fn joint_rows(&self, j: usize) -> Option<Range<usize>> {
         match self.role.get(j) {
-            Some(Role::Rotating(k)) => Some(ROOT_ROWS + 3 * k..ROOT_ROWS + 3 * k + 3),
+            Some(Role::Rotating(k)) => Some(ALWAYS_ROWS + 3 * k..ALWAYS_ROWS + 3 * k + 3),
             _ => None,
         }
     }
@@ -647,7 +647,7 @@ impl PoseLayout {
         let mut p = vec![0.0; self.dof()];
         for (k, &j) in self.order.iter().enumerate() {
             let e = quat_to_exp(self.rest[j]);
-            p[ROOT_ROWS + 3 * k..ROOT_ROWS + 3 * k + 3].copy_from_slice(&e.to_array());
+            p[ALWAYS_ROWS + 3 * k..ALWAYS_ROWS + 3 * k + 3].copy_from_slice(&e.to_array());
         }
         p
     }
@@ -666,7 +666,7 @@ impl PoseLayout {
             let mut sum = glam::DVec4::ZERO;
             let mut r: Option<DQuat> = None;
             for pose in poses.chunks_exact(p) {
-                let v = DVec3::from_slice(&pose[ROOT_ROWS + 3 * k..]);
+                let v = DVec3::from_slice(&pose[ALWAYS_ROWS + 3 * k..]);
                 let q = exp_to_quat(v);
                 let rr = *r.get_or_insert(q);
                 sum += glam::DVec4::from(if q.dot(rr) < 0.0 { -q } else { q });
@@ -742,7 +742,7 @@ impl PoseLayout {
             let s = self.channel_starts[j];
             let ch = &sk.joints[j].channels;
             let q = channels_to_quat(ch, &fr[s..s + ch.len()]);
-            out[ROOT_ROWS + 3 * k..ROOT_ROWS + 3 * k + 3]
+            out[ALWAYS_ROWS + 3 * k..ALWAYS_ROWS + 3 * k + 3]
                 .copy_from_slice(&quat_to_exp(q).to_array());
         }
         Ok(())
@@ -838,7 +838,7 @@ impl PoseLayout {
         for (k, &j) in self.order.iter().enumerate() {
             let s = self.channel_starts[j];
             let ch = &sk.joints[j].channels;
-            let q = exp_to_quat(DVec3::from_slice(&pose[ROOT_ROWS + 3 * k..]));
+            let q = exp_to_quat(DVec3::from_slice(&pose[ALWAYS_ROWS + 3 * k..]));
             quat_to_channels(
                 q,
                 ch,
@@ -948,7 +948,7 @@ impl PoseLayout {
                     let p = self.skeleton.joints[j].parent.unwrap_or(0);
                     let local = match role {
                         Role::Rotating(k) => {
-                            exp_to_quat(DVec3::from_slice(&pose[ROOT_ROWS + 3 * k..]))
+                            exp_to_quat(DVec3::from_slice(&pose[ALWAYS_ROWS + 3 * k..]))
                         }
                         _ => self.rest[j],
                     };
@@ -1011,7 +1011,7 @@ fn make_rig(
 }
 
 fn check_shape(len: usize, dof: usize) -> Result<(), PoseError> {
-    if dof < ROOT_ROWS || (dof - ROOT_ROWS) % 3 != 0 || len % dof != 0 {
+    if dof < ALWAYS_ROWS || (dof - ALWAYS_ROWS) % 3 != 0 || len % dof != 0 {
         return Err(PoseError::BadShape { dof, len });
     }
     Ok(())
@@ -1019,7 +1019,7 @@ fn check_shape(len: usize, dof: usize) -> Result<(), PoseError> {
 
 /// The exp-map triples of a pose of dimension `dof`: rows `3..6`, then `7 + 3k ..`.
 fn exp_triples(dof: usize) -> impl Iterator<Item = usize> {
-    std::iter::once(3).chain((ROOT_ROWS..dof).step_by(3))
+    std::iter::once(3).chain((ALWAYS_ROWS..dof).step_by(3))
 }
 
 /// Makes every exp-map of a sequence of pose vectors (`frames x dof`, row-major) continuous over

@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 use glam::{DQuat, DVec3, Vec3};
 use motion_io::euler::{channels_to_quat, quat_to_channels, quat_to_euler};
 use motion_io::expmap::{exp_to_quat, nearest_branch, quat_to_exp};
-use motion_io::pose::{PoseError, ROOT_ROWS};
+use motion_io::pose::{ALWAYS_ROWS, PoseError};
 use motion_io::{
     Channel, Joint, Motion, PoseLayout, Skeleton, Transform, align_exp_maps, unwrap_exp_maps,
 };
@@ -75,19 +75,19 @@ fn gimbal_lock_still_reproduces_the_rotation() {
 #[test]
 fn unwrapping_removes_jumps_at_pi() {
     // A rotation about y sweeping through 180 degrees: principal logs jump from +pi to -pi.
-    let dof = ROOT_ROWS + 3;
+    let dof = ALWAYS_ROWS + 3;
     let n = 40;
     let mut poses = vec![0.0; n * dof];
     for f in 0..n {
         let ang = 2.6 + 0.03 * f as f64;
         let v = quat_to_exp(DQuat::from_rotation_y(ang));
-        poses[f * dof + ROOT_ROWS..f * dof + ROOT_ROWS + 3].copy_from_slice(&v.to_array());
+        poses[f * dof + ALWAYS_ROWS..f * dof + ALWAYS_ROWS + 3].copy_from_slice(&v.to_array());
         let r = quat_to_exp(DQuat::from_rotation_x(-ang));
         poses[f * dof + 3..f * dof + 6].copy_from_slice(&r.to_array());
     }
     let jumps = |p: &[f64]| {
         (1..n)
-            .map(|f| (p[f * dof + ROOT_ROWS + 1] - p[(f - 1) * dof + ROOT_ROWS + 1]).abs())
+            .map(|f| (p[f * dof + ALWAYS_ROWS + 1] - p[(f - 1) * dof + ALWAYS_ROWS + 1]).abs())
             .fold(0.0, f64::max)
     };
     assert!(jumps(&poses) > 6.0);
@@ -97,7 +97,7 @@ fn unwrapping_removes_jumps_at_pi() {
         assert!((poses[f * dof + 3] - poses[(f - 1) * dof + 3]).abs() < 0.031);
         let want = DQuat::from_rotation_y(2.6 + 0.03 * f as f64);
         assert!(same_rotation(
-            exp_to_quat(DVec3::from_slice(&poses[f * dof + ROOT_ROWS..])),
+            exp_to_quat(DVec3::from_slice(&poses[f * dof + ALWAYS_ROWS..])),
             want,
             1e-12
         ));
@@ -105,10 +105,10 @@ fn unwrapping_removes_jumps_at_pi() {
     // Alignment across samples: a principal-branch pose moves next to the reference.
     let mut one = poses[(n - 1) * dof..].to_vec();
     let last = one.clone();
-    let v = quat_to_exp(exp_to_quat(DVec3::from_slice(&one[ROOT_ROWS..])));
-    one[ROOT_ROWS..ROOT_ROWS + 3].copy_from_slice(&v.to_array());
+    let v = quat_to_exp(exp_to_quat(DVec3::from_slice(&one[ALWAYS_ROWS..])));
+    one[ALWAYS_ROWS..ALWAYS_ROWS + 3].copy_from_slice(&v.to_array());
     align_exp_maps(&mut one, &last).unwrap();
-    assert!((one[ROOT_ROWS + 1] - last[ROOT_ROWS + 1]).abs() < 1e-9);
+    assert!((one[ALWAYS_ROWS + 1] - last[ALWAYS_ROWS + 1]).abs() < 1e-9);
     assert!(matches!(
         unwrap_exp_maps(&mut poses[..9], 8),
         Err(PoseError::BadShape { .. })

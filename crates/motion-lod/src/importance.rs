@@ -106,7 +106,7 @@ pub fn static_joints(layout: &PoseLayout, poses: &[f64], tol_deg: f64) -> Vec<St
         return Vec::new();
     }
     let rotation = |pose: &[f64], k: usize| {
-        let r = motion_io::pose::ROOT_ROWS + 3 * k;
+        let r = lod_policy::ALWAYS_ROWS + 3 * k;
         exp_to_quat(DVec3::from_slice(&pose[r..r + 3]))
     };
     layout

@@ -3,8 +3,8 @@
 use std::sync::Arc;
 
 use glam::{DQuat, DVec3};
+use lod_policy::ALWAYS_ROWS;
 use motion_io::expmap::exp_to_quat;
-use motion_io::pose::ROOT_ROWS;
 use motion_io::{PoseLayout, Transform};
 
 use super::GltfError;
@@ -227,7 +227,7 @@ impl Character {
             root_translation.push(local.position.as_vec3().to_array());
             push_continuous(&mut root_rot, local.rotation);
             for (k, track) in rots.iter_mut().enumerate() {
-                let r = ROOT_ROWS + 3 * k;
+                let r = ALWAYS_ROWS + 3 * k;
                 push_continuous(track, exp_to_quat(DVec3::from_slice(&pose[r..r + 3])));
             }
         }
