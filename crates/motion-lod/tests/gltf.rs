@@ -5,7 +5,7 @@
 //! when absent, a failure under `MOTION_LOD_REQUIRE_DATA=1` as in CI):
 //!
 //! - every joint's world position, evaluated from the glb's node hierarchy and animation at every
-//!   sample time, equals the BVH's forward kinematics within 1 mm;
+//!   sample time, equals the BVH's forward kinematics within 0.01 mm;
 //! - the rest pose has the hips above the origin, and the skin's inverse bind matrices are the
 //!   rest pose's world transforms inverted;
 //! - the BVH's rest pose is at the origin too, with the skeleton's own OFFSETs below the root;
@@ -271,9 +271,10 @@ fn check_walk(what: &str, model: &MotionModel, controls: [f32; 4]) {
         worst * 1e3,
         layout_worst * 1e3
     );
-    assert!(worst < 1e-3, "{what}: glb joints {worst} m from the BVH's");
+    // README quotes the measured 0.0003 mm; the bound leaves f32 rounding of longer takes room.
+    assert!(worst < 1e-5, "{what}: glb joints {worst} m from the BVH's");
     assert!(
-        layout_worst < 1e-3,
+        layout_worst < 1e-5,
         "{what}: glb joints {layout_worst} m from FK"
     );
 
