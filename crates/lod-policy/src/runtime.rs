@@ -125,33 +125,19 @@ impl RuntimeModel {
     /// checks the model; `path` only labels errors. For a reader that has already split the file
     /// into its sections ([`file::sections`]).
     pub fn from_section_bytes(section: &[u8], path: &Path) -> Result<RuntimeModel, FileError> {
-        let parts: Parts = file::decode_payload(section, path)?;
-        parts.into_model().map_err(|source| FileError::Invalid {
-            path: path.to_path_buf(),
-            source,
-        })
+        file::decode_payload::<Parts>(section, path)?.into_model_at(path)
     }
 
     /// [`RuntimeModel::from_bytes`] with errors naming `path` (which only labels them).
     pub fn decode(bytes: &[u8], path: &Path) -> Result<RuntimeModel, FileError> {
-        let section = file::find_section(
+        let parts: Parts = file::decode_section(
             bytes,
             Self::SECTION,
             Self::SECTION_VERSION,
             "the runtime model",
             path,
         )?;
-        Self::from_section_bytes(section.bytes, path).map_err(|e| match e {
-            FileError::Decode { path, message } => FileError::Decode {
-                path,
-                message: format!(
-                    "section {} (offset {}..): {message}",
-                    section.tag_name(),
-                    section.offset
-                ),
-            },
-            other => other,
-        })
+        parts.into_model_at(path)
     }
 
     /// The bytes of the runtime's section (bincode of the control names, the rig's joints, the
@@ -244,6 +230,14 @@ struct Parts {
 }
 
 impl Parts {
+    /// [`Parts::into_model`], its error naming the file.
+    fn into_model_at(self, path: &Path) -> Result<RuntimeModel, FileError> {
+        self.into_model().map_err(|source| FileError::Invalid {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
     fn into_model(self) -> Result<RuntimeModel, InvalidModel> {
         if self.control_names != Controls::NAMES {
             return Err(InvalidModel(format!(
