@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release -p kriging --example krige -- PARAMS.csv VALUES.npy \
-//!     [--method universal|ordinary|rbf] \
+//!     [--method regression|ordinary|rbf] \
 //!     [--model auto|linear|spherical|exponential|gaussian|power] [--query QUERY.csv]
 //! ```
 //! PARAMS.csv: one row of comma-separated numbers per sample (an optional non-numeric header line
@@ -11,6 +11,13 @@
 //! `{"method":..,"model":..,"loo_rmse":X,"weights":[[..],..]}` with the leave-one-out RMSE over the
 //! samples and, for each query row, the weights b(c). `auto` chooses the variogram model with the
 //! smallest leave-one-out error; for `rbf` the model is the radial function (cubic).
+//!
+//! `regression` (the default) is the regression kriging of Mukai and Kuriyama's motion model
+//! ([`kriging::Method::Regression`]: an ordinary least-squares trend over the parameters, then
+//! ordinary kriging of its residuals), which the paper calls universal kriging; it is not textbook
+//! universal kriging (the drift inside the kriging system: [`kriging::Krige`] with a
+//! [`kriging::Drift`]). The old option value `universal` is still read as `regression` (with a note
+//! on stderr), and the JSON line then says `"method":"regression"`.
 
 use std::path::Path;
 use std::process::ExitCode;
@@ -22,7 +29,7 @@ use kriging::{
 
 type Error = Box<dyn std::error::Error>;
 
-const USAGE: &str = "usage: krige PARAMS.csv VALUES.npy [--method universal|ordinary|rbf] \
+const USAGE: &str = "usage: krige PARAMS.csv VALUES.npy [--method regression|ordinary|rbf] \
 [--model auto|linear|spherical|exponential|gaussian|power] [--query QUERY.csv]";
 
 /// Reads rows of numbers; the first line may be a header.
@@ -84,14 +91,23 @@ struct Args {
 fn parse_args() -> Result<Args, Error> {
     let mut it = std::env::args().skip(1);
     let mut pos = Vec::new();
-    let (mut method, mut model, mut query) = ("universal".to_string(), "auto".to_string(), None);
+    let (mut method, mut model, mut query) = ("regression".to_string(), "auto".to_string(), None);
     while let Some(a) = it.next() {
         let mut value = || {
             it.next()
                 .ok_or_else(|| format!("{a} needs a value\n{USAGE}"))
         };
         match a.as_str() {
-            "--method" => method = value()?,
+            "--method" => {
+                method = value()?;
+                if method == "universal" {
+                    eprintln!(
+                        "krige: --method universal is the old name of --method regression \
+                         (regression kriging: OLS trend plus ordinary kriging of the residuals)"
+                    );
+                    method = "regression".to_string();
+                }
+            }
             "--model" => model = value()?,
             "--query" => query = Some(value()?),
             "-h" | "--help" => return Err(USAGE.into()),
@@ -132,7 +148,7 @@ fn run() -> Result<String, Error> {
         (r.kernel().name().to_string(), r.leave_one_out()?.rmse)
     } else {
         let method = match args.method.as_str() {
-            "universal" => Method::Regression,
+            "regression" => Method::Regression,
             "ordinary" => Method::Ordinary,
             m => return Err(format!("unknown method {m}\n{USAGE}").into()),
         };

@@ -18,6 +18,33 @@ use crate::error::KrigingError;
 /// (positive dip points the major axis down, towards -z), then the frame is rolled by `roll` about
 /// the major axis; `ratios = [r1, r2]` are the second and third axes' ranges over the major range.
 /// The frame is `R = Rz(azimuth) Ry(dip) Rx(roll)` and `u = diag(1, 1/r1, 1/r2) R^t (x - centre)`.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{Anisotropy, Krige, NestedVariogram, VariogramModel};
+///
+/// // Major axis along y (90 degrees), minor range half the major one.
+/// let aniso = Anisotropy::TwoD { angle: 90.0, ratio: 0.5 };
+/// let m = aniso.matrix(2)?; // row-major: u = (y, -2x)
+/// let expect = [0.0, 1.0, -2.0, 0.0];
+/// assert!(m.iter().zip(expect).all(|(a, b)| (a - b).abs() < 1e-15));
+///
+/// // Kriging with it is isotropic kriging on coordinates with x stretched by 2.
+/// let xy = [[0.0, 0.0], [30.0, 0.0], [0.0, 30.0], [30.0, 30.0], [10.0, 20.0], [25.0, 5.0]];
+/// let z = [0.3, 1.2, 0.8, 1.9, 1.0, 1.1];
+/// let v = NestedVariogram::single(VariogramModel::Exponential, 0.0, 1.0, 50.0)?;
+/// let coords = Mat::from_fn(6, 2, |i, k| xy[i][k]);
+/// let stretched = Mat::from_fn(6, 2, |i, k| xy[i][k] * [2.0, 1.0][k]);
+/// let a = Krige::new().variogram(v.clone()).anisotropy(aniso).fit(coords.as_ref(), &z)?;
+/// let b = Krige::new().variogram(v).fit(stretched.as_ref(), &z)?;
+/// let (pa, pb) = (a.predict(&[12.0, 14.0])?, b.predict(&[24.0, 14.0])?);
+/// assert!((pa.value - pb.value).abs() < 1e-10 && (pa.variance - pb.variance).abs() < 1e-10);
+///
+/// // A 2-D anisotropy does not fit 3-D coordinates, and ratios lie in (0, 1].
+/// assert!(aniso.matrix(3).is_err());
+/// assert!(Anisotropy::TwoD { angle: 0.0, ratio: 2.0 }.matrix(2).is_err());
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub enum Anisotropy {
     /// The same range in every direction.

@@ -6,7 +6,38 @@ use crate::fit::FitWeights;
 use crate::scaling::ScalingChoice;
 use crate::variogram::{Variogram, VariogramModel};
 
-/// Which kriging estimator to build.
+/// Which kriging estimator [`crate::Kriging`] builds.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{Kriging, KrigingConfig, Method, ModelChoice, ScalingChoice};
+/// use kriging::{Variogram, VariogramModel};
+///
+/// // Samples of a plane over a 2-D parameter space.
+/// let c: [[f64; 2]; 6] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.3, 0.6], [0.7, 0.2]];
+/// let plane = |p: [f64; 2]| 2.0 + p[0] - 3.0 * p[1];
+/// let params = Mat::from_fn(6, 2, |i, k| c[i][k]);
+/// let values = Mat::from_fn(6, 1, |i, _| plane(c[i]));
+/// // Plane values leave nothing to fit a variogram to under regression kriging: give one.
+/// let v = Variogram::new(VariogramModel::Spherical, 0.0, 1.0, 1.5, 1.0)?;
+/// let fit = |method| {
+///     let config = KrigingConfig {
+///         method,
+///         model: ModelChoice::Given(v),
+///         scaling: ScalingChoice::None,
+///         ..KrigingConfig::default()
+///     };
+///     Kriging::fit(params.as_ref(), values.as_ref(), &config)
+/// };
+/// let mut x = [0.0];
+/// // Regression kriging: the least-squares trend carries the plane, even far from the samples.
+/// fit(Method::Regression)?.predict(&[5.0, -4.0], &mut x)?;
+/// assert!((x[0] - plane([5.0, -4.0])).abs() < 1e-9);
+/// // Ordinary kriging falls back to a constant beyond the range.
+/// fit(Method::Ordinary)?.predict(&[5.0, -4.0], &mut x)?;
+/// assert!((x[0] - plane([5.0, -4.0])).abs() > 10.0);
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum Method {
     /// Ordinary kriging of the values (appendix A system with the Lagrange multiplier).

@@ -232,6 +232,21 @@ impl EmpiricalVariogram {
     /// rows in parallel with a fixed reduction order, so the result does not depend on the number
     /// of threads). Interval `u` covers `[u dh, (u+1) dh)` with `dh = max_lag / bins` (the pair at
     /// exactly `max_lag` goes to the last interval); its centre is reported as `h_u = dh (u + 1/2)`.
+    ///
+    /// ```
+    /// use kriging::faer::Mat;
+    /// use kriging::{Binning, EmpiricalVariogram, MaxLag};
+    ///
+    /// // z = x on 10 points 1 apart: every pair at lag h has semi-variance h^2 / 2.
+    /// let x = Mat::from_fn(10, 1, |i, _| i as f64);
+    /// let binning = Binning { bins: 4, max_lag: MaxLag::Distance(4.5) }; // one lag per interval
+    /// let emp = EmpiricalVariogram::compute_binned(x.as_ref(), x.as_ref(), &binning)?;
+    /// assert_eq!(emp.counts, [9, 8, 7, 6]); // pairs at lags 1, 2, 3, 4 (lags 5-9 left out)
+    /// assert_eq!(emp.gamma, [0.5, 2.0, 4.5, 8.0]);
+    /// assert_eq!(emp.bin_width, 1.125);
+    /// assert_eq!(emp.centers[0], 0.5625);
+    /// # Ok::<(), kriging::KrigingError>(())
+    /// ```
     pub fn compute_binned(
         coords: MatRef<'_, f64>,
         values: MatRef<'_, f64>,

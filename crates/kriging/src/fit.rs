@@ -67,6 +67,32 @@ struct Points {
 ///
 /// Errors: no non-empty interval, an all-zero empirical variogram (the values do not vary), or a
 /// best fit with zero sill (no spatial correlation: a pure nugget).
+///
+/// ```
+/// use kriging::{fit_variogram, EmpiricalVariogram, FitOptions, Variogram, VariogramModel};
+///
+/// // An empirical variogram that follows a known spherical model exactly.
+/// let truth = Variogram::new(VariogramModel::Spherical, 0.2, 1.5, 400.0, 1.0)?;
+/// let centers: Vec<f64> = (0..20).map(|u| 25.0 * (u as f64 + 0.5)).collect();
+/// let emp = EmpiricalVariogram {
+///     bin_width: 25.0,
+///     gamma: centers.iter().map(|&h| truth.eval(h)).collect(),
+///     counts: vec![50; 20],
+///     centers,
+/// };
+/// let fit = fit_variogram(&emp, VariogramModel::Spherical, &FitOptions::default())?;
+/// let v = fit.variogram;
+/// assert!((v.nugget - 0.2).abs() < 1e-3 && (v.sill - 1.5).abs() < 1e-3);
+/// assert!((v.range - 400.0).abs() < 1.0);
+/// assert!(fit.wsse < 1e-6);
+/// // A worse shape fits worse.
+/// let gauss = fit_variogram(&emp, VariogramModel::Gaussian, &FitOptions::default())?;
+/// assert!(gauss.wsse > 100.0 * fit.wsse);
+/// // Without a nugget the fit must make do with nugget 0.
+/// let no_nugget = FitOptions { nugget: false, ..FitOptions::default() };
+/// assert_eq!(fit_variogram(&emp, VariogramModel::Spherical, &no_nugget)?.variogram.nugget, 0.0);
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 pub fn fit_variogram(
     emp: &EmpiricalVariogram,
     model: VariogramModel,

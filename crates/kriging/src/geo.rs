@@ -66,6 +66,31 @@ const GLOBAL_MAX_BYTES: usize = 4 << 30;
 
 /// The deterministic part of the model (the drift) of universal kriging; external drift variables
 /// come on top through [`Krige::fit_with_external`].
+///
+/// Universal kriging reproduces its drift exactly: samples of a plane are predicted without error
+/// with a linear drift, even far outside the samples, whatever the variogram.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{Drift, Krige, NestedVariogram, VariogramModel};
+///
+/// let plane = |x: f64, y: f64| 3.0 + 0.5 * x - 0.25 * y;
+/// let xy = [[0.0, 0.0], [10.0, 0.0], [0.0, 10.0], [10.0, 10.0], [3.0, 7.0], [6.0, 2.0]];
+/// let coords = Mat::from_fn(6, 2, |i, k| xy[i][k]);
+/// let z: Vec<f64> = xy.iter().map(|p| plane(p[0], p[1])).collect();
+/// let v = NestedVariogram::single(VariogramModel::Gaussian, 0.0, 1.0, 8.0)?;
+/// let uk = Krige::new().drift(Drift::Linear).variogram(v.clone()).fit(coords.as_ref(), &z)?;
+/// let far = uk.predict(&[40.0, -25.0])?;
+/// assert!((far.value - plane(40.0, -25.0)).abs() < 1e-8);
+/// assert!(far.variance > 0.0);
+/// assert_eq!(uk.drift_coefficients().map(|b| b.len()), Some(Drift::Linear.n_terms(2)));
+/// // Ordinary kriging (constant drift) reverts to the mean far away instead.
+/// let ok = Krige::new().variogram(v).fit(coords.as_ref(), &z)?;
+/// let mean = z.iter().sum::<f64>() / 6.0;
+/// assert!((ok.predict(&[40.0, -25.0])?.value - plane(40.0, -25.0)).abs() > 5.0);
+/// assert!((ok.predict(&[400.0, -250.0])?.value - mean).abs() < 1.0);
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum Drift {
     /// An unknown constant mean: ordinary kriging.
@@ -89,6 +114,37 @@ impl Drift {
 }
 
 /// Which samples enter the kriging system of a query.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{Krige, KrigingError, Neighbourhood, NestedVariogram, VariogramModel};
+///
+/// // 40 samples along a line, 1 m apart.
+/// let coords = Mat::from_fn(40, 1, |i, _| i as f64);
+/// let z: Vec<f64> = (0..40).map(|i| (i as f64 / 5.0).sin()).collect();
+/// let v = NestedVariogram::single(VariogramModel::Exponential, 0.0, 1.0, 6.0)?;
+/// let krige = Krige::new().variogram(v);
+/// let global = krige.clone().fit(coords.as_ref(), &z)?;
+///
+/// // k = n nearest neighbours is the global system.
+/// let all = krige.clone().neighbourhood(Neighbourhood::Nearest { k: 40 }).fit(coords.as_ref(), &z)?;
+/// let (a, b) = (global.predict(&[12.5])?, all.predict(&[12.5])?);
+/// assert!((a.value - b.value).abs() < 1e-10 && (a.variance - b.variance).abs() < 1e-10);
+///
+/// // A few neighbours: a local system per query (with its own local mean), still exact at the
+/// // samples, and close to the global answer inside the data (the near samples screen the far).
+/// let local = krige.clone().neighbourhood(Neighbourhood::Nearest { k: 6 }).fit(coords.as_ref(), &z)?;
+/// assert!((local.predict(&[12.5])?.value - a.value).abs() < 0.05);
+/// assert!((local.predict(&[7.0])?.value - z[7]).abs() < 1e-12);
+///
+/// // A radius: a query with too few samples inside it is an error naming the query.
+/// let radius = krige.neighbourhood(Neighbourhood::Radius { radius: 3.0, max: 8 });
+/// let model = radius.fit(coords.as_ref(), &z)?;
+/// assert!(model.predict(&[20.2])?.variance > 0.0);
+/// let far = Mat::from_fn(2, 1, |i, _| [20.2, 100.0][i]);
+/// assert!(matches!(model.predict_many(far.as_ref()), Err(KrigingError::QueryNeighbourhood { .. })));
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub enum Neighbourhood {
     /// Every sample: one system factorised at fit time (memory `8 n^2` bytes).
@@ -280,8 +336,41 @@ struct State {
     warnings: Vec<String>,
 }
 
-/// A fitted geostatistical kriging model (see [`Krige`]). Serialises to its data and settings
-/// (serde); deserialising refactorises the system, which gives the same bits as the original.
+/// A fitted geostatistical kriging model (see [`Krige`]).
+///
+/// Serialises (serde) to its data and settings; deserialising refactorises the system. The
+/// reloaded model predicts the same bits as the original when the format reads every `f64` back
+/// exactly: binary formats such as bincode, and serde_json built with its `float_roundtrip`
+/// feature. serde_json's default float parser can be one ulp off (its documentation says so), and
+/// the predictions of a model reloaded through it then differ in their last few bits; enable
+/// `serde_json = { version = "1", features = ["float_roundtrip"] }` where bits matter.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{Krige, KrigeModel, NestedVariogram, VariogramModel};
+///
+/// let xy = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.3, 0.6]];
+/// let coords = Mat::from_fn(5, 2, |i, k| xy[i][k] * 1234.567);
+/// let z = [0.1, 0.7, 0.3, 1.1, 1.0 / 3.0];
+/// let v = NestedVariogram::single(VariogramModel::Exponential, 0.0, 0.2, 2000.0)?;
+/// let model = Krige::new().variogram(v).fit(coords.as_ref(), &z)?;
+/// let q = Mat::from_fn(20, 2, |i, k| 100.0 * (i as f64) * [0.61, 0.37][k]);
+/// let bits = |m: &KrigeModel| -> Vec<u64> {
+///     let p = m.predict_many(q.as_ref()).unwrap();
+///     p.values.iter().chain(&p.variances).map(|x| x.to_bits()).collect()
+/// };
+///
+/// let cfg = bincode::config::standard();
+/// let bytes = bincode::serde::encode_to_vec(&model, cfg).unwrap();
+/// let (back, _): (KrigeModel, usize) = bincode::serde::decode_from_slice(&bytes, cfg).unwrap();
+/// assert_eq!(bits(&back), bits(&model));
+///
+/// // This crate's tests build serde_json with `float_roundtrip`: exact too.
+/// let json = serde_json::to_string(&model).unwrap();
+/// let back: KrigeModel = serde_json::from_str(&json).unwrap();
+/// assert_eq!(bits(&back), bits(&model));
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(try_from = "ModelData", into = "ModelData")]
 pub struct KrigeModel {
@@ -365,6 +454,27 @@ impl Krige {
     /// As [`Krige::fit`] with external drift variables (n x m: one row per sample, one column per
     /// variable): kriging with external drift. Queries then need the m variables too
     /// ([`KrigeModel::predict_external`], [`KrigeModel::predict_many_with`]).
+    ///
+    /// ```
+    /// use kriging::faer::Mat;
+    /// use kriging::{Krige, NestedVariogram, VariogramModel};
+    ///
+    /// // The field follows an external variable (say, elevation) linearly: 1 + 3 e.
+    /// let xy = [[0.0, 0.0], [50.0, 0.0], [0.0, 50.0], [50.0, 50.0], [20.0, 30.0], [35.0, 10.0]];
+    /// let elevation = [2.0, 5.0, 1.0, 4.0, 3.5, 0.5];
+    /// let z: Vec<f64> = elevation.iter().map(|e| 1.0 + 3.0 * e).collect();
+    /// let coords = Mat::from_fn(6, 2, |i, k| xy[i][k]);
+    /// let ext = Mat::from_fn(6, 1, |i, _| elevation[i]);
+    /// let v = NestedVariogram::single(VariogramModel::Exponential, 0.0, 1.0, 40.0)?;
+    /// let model = Krige::new().variogram(v).fit_with_external(coords.as_ref(), &z, ext.as_ref())?;
+    /// assert_eq!(model.n_external(), 1);
+    /// // Anywhere, with the variable known there, the prediction follows it exactly.
+    /// let p = model.predict_external(&[300.0, -80.0], &[10.0])?;
+    /// assert!((p.value - 31.0).abs() < 1e-9 && p.variance > 0.0);
+    /// // Queries without the variable are an error.
+    /// assert!(model.predict(&[10.0, 10.0]).is_err());
+    /// # Ok::<(), kriging::KrigingError>(())
+    /// ```
     pub fn fit_with_external(
         &self,
         coords: MatRef<'_, f64>,
@@ -1035,6 +1145,35 @@ impl KrigeModel {
 
     /// Predictions and variances at every row of `points` (m x d), in parallel (rayon) over fixed
     /// blocks of 64 points: the same bits whatever the number of threads.
+    ///
+    /// ```
+    /// use kriging::faer::Mat;
+    /// use kriging::{Krige, NestedVariogram, VariogramModel};
+    ///
+    /// let xy = [[0.0, 0.0], [4.0, 0.0], [0.0, 4.0], [4.0, 4.0], [1.0, 3.0]];
+    /// let z = [1.0, 2.0, 3.0, 4.0, 2.5];
+    /// let coords = Mat::from_fn(5, 2, |i, k| xy[i][k]);
+    /// let v = NestedVariogram::single(VariogramModel::Spherical, 0.1, 1.0, 6.0)?;
+    /// let model = Krige::new().variogram(v).fit(coords.as_ref(), &z)?;
+    ///
+    /// // 200 query points (m x 2): the last one is the sample (4, 4).
+    /// let q = Mat::from_fn(200, 2, |i, k| if i == 199 { 4.0 } else { 0.02 * i as f64 * [1.0, 0.5][k] });
+    /// let p = model.predict_many(q.as_ref())?;
+    /// assert_eq!((p.values.len(), p.variances.len()), (200, 200));
+    /// for i in [0, 63, 64, 150] {
+    ///     let one = model.predict(&[q[(i, 0)], q[(i, 1)]])?;
+    ///     assert!((p.values[i] - one.value).abs() < 1e-12);
+    ///     assert!((p.variances[i] - one.variance).abs() < 1e-12);
+    /// }
+    /// // Exact at a sample, where the variance is 0; away from the samples it is at least the nugget.
+    /// assert!((p.values[199] - 4.0).abs() < 1e-12 && p.variances[199].abs() < 1e-12);
+    /// assert!(p.variances[100] >= 0.1);
+    /// // Values alone (no variances) are the same numbers.
+    /// let v_only = model.predict_many_with(q.as_ref(), None, false)?;
+    /// assert!(v_only.variances.is_empty());
+    /// assert!(v_only.values.iter().zip(&p.values).all(|(a, b)| (a - b).abs() < 1e-12));
+    /// # Ok::<(), kriging::KrigingError>(())
+    /// ```
     pub fn predict_many(&self, points: MatRef<'_, f64>) -> Result<Predictions, KrigingError> {
         self.predict_many_with(points, None, true)
     }
@@ -1184,6 +1323,30 @@ impl KrigeModel {
     /// `sigma^2_{-k}(x_k) = 1 / B_kk`, where `B_kk = (C^-1)_kk - g_k^t (F^t C^-1 F)^-1 g_k`,
     /// `g_k = (F^t C^-1)_{:, k}` (cost: one `L^-1`, `n^3 / 3`). Moving neighbourhood: each sample is
     /// predicted from its own neighbours without it.
+    ///
+    /// ```
+    /// use kriging::faer::Mat;
+    /// use kriging::{Drift, Krige, NestedVariogram, VariogramModel};
+    ///
+    /// let xy = [[0.0, 0.0], [9.0, 1.0], [1.0, 8.0], [10.0, 10.0], [4.0, 6.0], [7.0, 3.0], [2.0, 3.0]];
+    /// let z = [1.0, 2.5, 1.8, 3.9, 2.2, 2.6, 1.1];
+    /// let coords = Mat::from_fn(7, 2, |i, k| xy[i][k]);
+    /// let v = NestedVariogram::single(VariogramModel::Spherical, 0.05, 1.0, 12.0)?;
+    /// let krige = Krige::new().drift(Drift::Linear).variogram(v);
+    /// let loo = krige.fit(coords.as_ref(), &z)?.leave_one_out()?;
+    /// // The closed form is the refit without the sample.
+    /// let k = 4;
+    /// let rest: Vec<usize> = (0..7).filter(|&i| i != k).collect();
+    /// let without = Mat::from_fn(6, 2, |i, c| xy[rest[i]][c]);
+    /// let z_without: Vec<f64> = rest.iter().map(|&i| z[i]).collect();
+    /// let p = krige.fit(without.as_ref(), &z_without)?.predict(&xy[k])?;
+    /// assert!((loo.errors[k] - (z[k] - p.value)).abs() < 1e-10);
+    /// assert!((loo.variances[k] - p.variance).abs() < 1e-10);
+    /// assert!((loo.standardised[k] - loo.errors[k] / p.variance.sqrt()).abs() < 1e-9);
+    /// let mse = loo.errors.iter().map(|e| e * e).sum::<f64>() / 7.0;
+    /// assert!((loo.rmse - mse.sqrt()).abs() < 1e-12);
+    /// # Ok::<(), kriging::KrigingError>(())
+    /// ```
     pub fn leave_one_out(&self) -> Result<LooStats, KrigingError> {
         let n = self.data.values.len();
         let d = self.data.dim;

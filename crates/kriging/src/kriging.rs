@@ -1,4 +1,5 @@
-//! The fitted kriging model: ordinary kriging (appendix A) and the paper's universal kriging (eq. 8).
+//! The fitted kriging model: ordinary kriging (appendix A) and the paper's regression kriging (eq. 8,
+//! which the paper calls universal kriging).
 
 use faer::{Mat, MatRef};
 
@@ -10,12 +11,13 @@ use crate::linalg::{checked_inverse, matmul, matmul_par_cols, sym_pinv};
 use crate::scaling::ParamScaling;
 use crate::variogram::{Variogram, VariogramModel};
 
-/// A fitted ordinary or universal kriging model over S samples with d parameters and D values.
+/// A fitted ordinary or regression kriging model over S samples with d parameters and D values.
 ///
 /// The kriging matrix `A = [Gamma 1; 1^t 0]` ((S+1) x (S+1), `Gamma_ij = gamma(|c_i - c_j|)` for
 /// `i != j`, 0 on the diagonal) is factorised once at fit time and kept as its inverse `A^-1`, so
 /// that the weights of appendix A, `[b(c); lambda] = A^-1 [gamma(c); 1]`, cost `S (S+1)`
-/// multiply-adds plus S variogram evaluations. For universal kriging the values are first reduced
+/// multiply-adds plus S variogram evaluations. For regression kriging ([`Method::Regression`]) the
+/// values are first reduced
 /// by the trend hyperplane `F [c; 1]` (eq. 8) and `b(c)` are the ordinary-kriging weights of the
 /// residuals.
 #[derive(Debug, Clone)]
@@ -34,7 +36,7 @@ pub struct Kriging {
     trend: Option<Mat<f64>>,
     /// Numerical rank of `C C^t` (regression kriging only).
     trend_rank: Option<usize>,
-    /// (d+1) x (d+1) Gram matrix C C^t and (d+1) x D product C X (universal only, for the LOO).
+    /// (d+1) x (d+1) Gram matrix C C^t and (d+1) x D product C X (regression only, for the LOO).
     gram: Option<Mat<f64>>,
     cx: Option<Mat<f64>>,
     /// (S+1) x (S+1) symmetric inverse of the kriging matrix.
@@ -77,6 +79,14 @@ pub(crate) fn check_inputs(
 }
 
 /// The augmented parameter matrix `C` ((d+1) x S): column i is `[c_i; 1]` (scaled).
+///
+/// ```
+/// use kriging::faer::Mat;
+/// let p = Mat::from_fn(3, 2, |i, k| (10 * i + k) as f64); // rows (0, 1), (10, 11), (20, 21)
+/// let c = kriging::augmented_params(p.as_ref());
+/// assert_eq!(c.shape(), (3, 3));
+/// assert_eq!([c[(0, 2)], c[(1, 2)], c[(2, 2)]], [20.0, 21.0, 1.0]);
+/// ```
 pub fn augmented_params(scaled: MatRef<'_, f64>) -> Mat<f64> {
     let (s, d) = scaled.shape();
     Mat::from_fn(d + 1, s, |k, i| if k < d { scaled[(i, k)] } else { 1.0 })
@@ -125,7 +135,7 @@ fn fit_trend(
 
 /// Fails when the residuals (values for ordinary kriging) vanish relative to the spread of the
 /// values around their mean (`|R|_F <= 1e-10 |X - mean X|_F`, or both zero): there is nothing to fit
-/// a variogram to (constant values, or values exactly linear in the parameters under universal
+/// a variogram to (constant values, or values exactly linear in the parameters under regression
 /// kriging). [`ModelChoice::Given`] skips this check.
 fn check_residuals_vary(
     values: MatRef<'_, f64>,
@@ -146,7 +156,7 @@ fn check_residuals_vary(
             model: None,
             reason:
                 "the kriged quantities do not vary over the samples (constant values, or values \
-                     exactly linear in the parameters under universal kriging); give a variogram \
+                     exactly linear in the parameters under regression kriging); give a variogram \
                      with ModelChoice::Given to get blending weights anyway"
                     .into(),
         });
@@ -206,7 +216,7 @@ impl Kriging {
     /// dimensions are handled) and take residuals; bin the empirical variogram of the residuals;
     /// fit or take the variogram; factorise the kriging system.
     ///
-    /// Errors: shape mismatch, NaN/inf, too few samples (ordinary: 2; universal: d' + 2 with d'
+    /// Errors: shape mismatch, NaN/inf, too few samples (ordinary: 2; regression: d' + 2 with d'
     /// the non-dropped dimensions), coinciding parameters without nugget
     /// ([`KrigingError::DuplicateParams`], both indices), no usable variogram, singular system.
     /// With a positive nugget duplicates are allowed: the nugget then acts as independent noise
@@ -446,7 +456,7 @@ impl Kriging {
         self.method
     }
 
-    /// The variogram of the kriging system (of the residuals for universal kriging).
+    /// The variogram of the kriging system (of the residuals for regression kriging).
     pub fn variogram(&self) -> &Variogram {
         &self.variogram
     }
@@ -474,7 +484,7 @@ impl Kriging {
 
     /// `C^+ = C^t (C C^t)^+` (S x (d+1)), the pseudo-inverse of [`Kriging::augmented_params`] with
     /// the same tolerance as the trend ([`PINV_RTOL`](crate::PINV_RTOL)): the trend of eq. 8 is
-    /// `F = X^t C^+`, and the sample weights equivalent to a universal kriging prediction at `c` are
+    /// `F = X^t C^+`, and the sample weights equivalent to a regression kriging prediction at `c` are
     /// `C^+ [c; 1] + (I - C^+ C) b(c)`.
     pub fn augmented_pinv(&self) -> Mat<f64> {
         let c = self.augmented_params();
@@ -495,7 +505,7 @@ impl Kriging {
         self.trend.as_ref().map(|t| t.as_ref())
     }
 
-    /// The kriged quantities (S x D): residuals `x_i - F [c_i; 1]` for universal kriging, the values
+    /// The kriged quantities (S x D): residuals `x_i - F [c_i; 1]` for regression kriging, the values
     /// for ordinary kriging.
     pub fn residuals(&self) -> MatRef<'_, f64> {
         self.residuals.as_ref()
@@ -581,7 +591,7 @@ impl Kriging {
     ///
     /// Ordinary kriging (Dubrule 1983): with `B = A^-1` and `alpha = B[:S, :S] R`,
     /// `e_k = alpha_k / B_kk`; the weights of the system without sample k at `c_k` are
-    /// `-B_ki / B_kk`. Universal kriging adds the refit of the trend without sample k:
+    /// `-B_ki / B_kk`. Regression kriging adds the refit of the trend without sample k:
     /// `e_k = alpha_k / B_kk + (F - F_{-k}) v_k` with `v_k = [c_k; 1] - sum_{i != k} b_i [c_i; 1]`
     /// and `F_{-k} = (X^t C^t - x_k z_k^t) (C C^t - z_k z_k^t)^+`, a (d+1) x (d+1) pseudo-inverse
     /// per sample. The variogram and the scaling stay fixed. Agrees with refitting S times except
@@ -700,6 +710,19 @@ pub(crate) fn check_query(
 /// sample), the right-hand side of the kriging system without its trailing 1. The one evaluation
 /// of it offline, shared by [`crate::ProjectedQuery::query`] and the motion baselines' dual form.
 /// No allocation.
+///
+/// ```
+/// use kriging::{ParamScaling, Variogram, VariogramModel, variogram_column};
+///
+/// let v = Variogram::new(VariogramModel::Linear, 0.0, 2.0, 0.0, 1.0)?; // gamma(h) = 2 h
+/// // Parameters scaled by (0.5, 1): the samples (0, 0) and (2, 4) are stored as (0, 0), (1, 4).
+/// let scaling = ParamScaling::given(vec![0.0, 0.0], vec![0.5, 1.0])?;
+/// let scaled = [0.0, 0.0, 1.0, 4.0];
+/// let mut out = [0.0; 2];
+/// variogram_column(&v, &scaling, &scaled, &[8.0, 4.0], &mut out); // scaled query (4, 4)
+/// assert_eq!(out, [2.0 * 32f64.sqrt(), 6.0]);
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 pub fn variogram_column(
     variogram: &Variogram,
     scaling: &ParamScaling,

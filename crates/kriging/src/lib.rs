@@ -27,7 +27,7 @@
 //! - [`EmpiricalVariogram`]: the binned semi-variance of appendix A ([`EmpiricalVariogram::compute`],
 //!   bins up to the largest distance) or with a chosen maximum lag ([`Binning`], [`MaxLag`]);
 //! - [`Variogram`] / [`VariogramModel`]: linear, power, spherical, exponential, gaussian, Matérn and
-//!   hole-effect models with nugget, partial sill and range, fitted by weighted least squares
+//!   cardinal-sine (wave; formerly called hole-effect) models with nugget, partial sill and range, fitted by weighted least squares
 //!   ([`fit_variogram`], pair-count or Cressie weights); [`NestedVariogram`]: sums of them;
 //! - [`Krige`] / [`KrigeModel`]: ordinary, universal and external-drift kriging with variances,
 //!   [`Anisotropy`], [`Neighbourhood`], [`LooStats`] (see [`geo`] for the formulas);
@@ -83,6 +83,11 @@
 //! ```
 
 #![warn(missing_docs)]
+
+// The README's Rust snippets run as doc tests (`cargo test --doc -p kriging`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+mod readme {}
 
 mod anisotropy;
 mod config;

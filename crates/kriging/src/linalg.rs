@@ -160,6 +160,21 @@ pub const PINV_RTOL: f64 = 1e-12;
 /// Moore-Penrose pseudo-inverse of a symmetric positive semi-definite matrix through its
 /// eigen-decomposition, eigenvalues `<= PINV_RTOL * max(eig)` treated as zero. Returns the
 /// pseudo-inverse and the numerical rank.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::sym_pinv;
+///
+/// // A rank-1 matrix v v^t with v = (1, 2): its pseudo-inverse is v v^t / |v|^4.
+/// let g = Mat::from_fn(2, 2, |i, j| [1.0, 2.0][i] * [1.0, 2.0][j]);
+/// let (p, rank) = sym_pinv(g.as_ref());
+/// assert_eq!(rank, 1);
+/// for i in 0..2 {
+///     for j in 0..2 {
+///         assert!((p[(i, j)] - g[(i, j)] / 25.0).abs() < 1e-14);
+///     }
+/// }
+/// ```
 pub fn sym_pinv(g: MatRef<'_, f64>) -> (Mat<f64>, usize) {
     let n = g.nrows();
     let (vals, vecs) = sym_eigen(g);

@@ -13,8 +13,8 @@ pub struct Structure {
     pub model: VariogramModel,
     /// Partial sill of this structure (slope for `Linear`, coefficient for `Power`), `> 0`.
     pub sill: f64,
-    /// Range (practical range for spherical, exponential, gaussian; scale for Matérn and hole
-    /// effect), in the coordinates' units; ignored (0) for `Linear` and `Power`.
+    /// Range (practical range for spherical, exponential, gaussian; scale for Matérn and
+    /// cardinal sine), in the coordinates' units; ignored (0) for `Linear` and `Power`.
     pub range: f64,
     /// Exponent of `Power`, smoothness `nu` of `Matern`; ignored (1) otherwise.
     pub exponent: f64,
@@ -25,6 +25,27 @@ pub struct Structure {
 /// `nugget` is the discontinuity at the origin (micro-scale variation: kriging stays an exact
 /// interpolator, the variance jumps to at least the nugget away from the samples). The total sill of
 /// a bounded variogram is `nugget + sum_k sill_k`. A single [`Variogram`] converts with `From`.
+///
+/// ```
+/// use kriging::{NestedVariogram, Variogram, VariogramModel};
+///
+/// // A short spherical structure plus a long exponential one.
+/// let v = NestedVariogram::single(VariogramModel::Spherical, 0.1, 0.5, 50.0)?
+///     .with(VariogramModel::Exponential, 1.0, 600.0, 1.0);
+/// v.validate()?;
+/// assert!(v.is_bounded());
+/// assert!((v.total_sill() - 1.6).abs() < 1e-15);
+/// let sph = Variogram::new(VariogramModel::Spherical, 0.0, 0.5, 50.0, 1.0)?;
+/// let exp = Variogram::new(VariogramModel::Exponential, 0.0, 1.0, 600.0, 1.0)?;
+/// for h in [10.0, 50.0, 300.0] {
+///     assert!((v.eval(h) - (0.1 + sph.eval(h) + exp.eval(h))).abs() < 1e-12);
+/// }
+/// assert_eq!(v.eval(0.0), 0.0);
+/// assert!(v.as_single().is_none());
+/// let one = NestedVariogram::from(sph);
+/// assert_eq!(one.as_single(), Some(sph));
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct NestedVariogram {
     /// Discontinuity at the origin, `>= 0`.

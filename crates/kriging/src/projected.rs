@@ -15,6 +15,34 @@ use crate::variogram::Variogram;
 /// Everything is stored in plain vectors so that a runtime can copy it into its own (f32) arrays:
 /// [`ProjectedQuery::matrix`] is **row-major** (row r holds `Q[r, 0..=S]`, the last entry of each row
 /// multiplies the constant 1), [`ProjectedQuery::scaled_params`] is row-major S x d.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{Kriging, KrigingConfig, ModelChoice, ProjectedQuery, VariogramModel};
+///
+/// let c = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.4, 0.7], [0.8, 0.2]];
+/// let params = Mat::from_fn(6, 2, |i, k| c[i][k]);
+/// let values = Mat::from_fn(6, 1, |i, _| c[i][0] * c[i][0] + c[i][1]);
+/// let config = KrigingConfig {
+///     model: ModelChoice::Fixed(VariogramModel::Gaussian),
+///     ..KrigingConfig::default() // regression kriging, standardised parameters
+/// };
+/// let k = Kriging::fit(params.as_ref(), values.as_ref(), &config)?;
+/// // L (R x S = 2 x 6): e.g. two basis vectors the values were projected on.
+/// let l = Mat::from_fn(2, 6, |r, i| if r == 0 { 1.0 } else { i as f64 - 2.5 });
+/// let pq = ProjectedQuery::new(&k, l.as_ref())?;
+/// let (mut scratch, mut out) = (vec![0.0; 7], [0.0; 2]);
+/// pq.query(&[0.3, 0.6], &mut scratch, &mut out)?;
+/// // The same as L times the weights b(c), without forming them.
+/// let mut b = [0.0; 6];
+/// k.weights(&[0.3, 0.6], &mut b)?;
+/// for r in 0..2 {
+///     let lb: f64 = (0..6).map(|i| l[(r, i)] * b[i]).sum();
+///     assert!((out[r] - lb).abs() < 1e-10);
+/// }
+/// assert!((out[0] - 1.0).abs() < 1e-10); // the weights sum to one
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ProjectedQuery {
     rows: usize,

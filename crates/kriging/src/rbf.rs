@@ -123,6 +123,36 @@ pub struct SmoothingCandidate {
 /// (also with smoothing, because `Q^t w = 0` keeps linear data out of the kernel part).
 /// (Rose et al. first fit the hyperplane by least squares and then interpolate the residuals; the
 /// augmented system gives the same kind of interpolant and is regular for any distinct samples.)
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{Rbf, RbfConfig, RbfSmoothing, ScalingChoice};
+///
+/// let c: [[f64; 2]; 6] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.5, 0.5], [0.2, 0.9]];
+/// let params = Mat::from_fn(6, 2, |i, k| c[i][k]);
+/// // Two value columns: a plane and a curved function.
+/// let values = Mat::from_fn(6, 2, |i, j| {
+///     if j == 0 { 1.0 + 2.0 * c[i][0] - c[i][1] } else { (3.0 * c[i][0]).sin() * c[i][1] }
+/// });
+/// let config = RbfConfig {
+///     smoothing: RbfSmoothing::None, // exact interpolation
+///     scaling: ScalingChoice::None,
+///     ..RbfConfig::default()         // cubic kernel
+/// };
+/// let rbf = Rbf::fit(params.as_ref(), values.as_ref(), &config)?;
+/// let mut x = [0.0; 2];
+/// rbf.predict(&[0.2, 0.9], &mut x)?; // exact at a sample
+/// assert!((x[0] - values[(5, 0)]).abs() < 1e-10 && (x[1] - values[(5, 1)]).abs() < 1e-10);
+/// rbf.predict(&[0.7, 0.3], &mut x)?; // reproduces the plane anywhere
+/// assert!((x[0] - (1.0 + 1.4 - 0.3)).abs() < 1e-10);
+/// let mut b = [0.0; 6];
+/// rbf.weights(&[0.7, 0.3], &mut b)?; // the same prediction as weights on the samples
+/// assert!((b.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+/// let xb: f64 = (0..6).map(|i| b[i] * values[(i, 1)]).sum();
+/// assert!((xb - x[1]).abs() < 1e-12);
+/// assert_eq!(rbf.leave_one_out()?.per_sample.len(), 6);
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Rbf {
     kernel: RbfKernel,

@@ -41,6 +41,21 @@ impl ParamScaling {
     /// Standardises each column of `params` (S x d): offset = mean, scale = 1 / standard deviation
     /// (population). A column whose standard deviation is at most `1e-12 * max(1, |mean|)` is
     /// constant: scale 0 (dropped). Fails on an empty matrix or a non-finite entry.
+    ///
+    /// ```
+    /// use kriging::faer::Mat;
+    /// use kriging::ParamScaling;
+    ///
+    /// // Column 0 has mean 2 and standard deviation 1; column 1 is constant.
+    /// let p = Mat::from_fn(2, 2, |i, k| if k == 0 { [1.0, 3.0][i] } else { 7.0 });
+    /// let s = ParamScaling::standardise(p.as_ref())?;
+    /// assert_eq!((s.offset.as_slice(), s.scale.as_slice()), ([2.0, 7.0].as_slice(), [1.0, 0.0].as_slice()));
+    /// assert_eq!(s.dropped(), [1]);
+    /// let mut out = [0.0; 2];
+    /// s.apply(&[4.0, 100.0], &mut out); // (c - offset) * scale
+    /// assert_eq!(out, [2.0, 0.0]);
+    /// # Ok::<(), kriging::KrigingError>(())
+    /// ```
     pub fn standardise(params: MatRef<'_, f64>) -> Result<Self, KrigingError> {
         let (s, d) = params.shape();
         if s == 0 {

@@ -1,7 +1,7 @@
 //! Which parameter dimensions carry signal: backward elimination by leave-one-out error.
 //!
 //! A dimension that varies over the samples only by noise (a control that the data set holds nearly
-//! constant, measured with jitter) still tilts the universal-kriging trend and stretches the distances:
+//! constant, measured with jitter) still tilts the regression-kriging trend and stretches the distances:
 //! predictions then change with it although the data cannot say how. [`select_dims`] drops such
 //! dimensions the way a constant one is dropped (scale 0: out of the trend and out of the distances).
 //!
@@ -132,6 +132,26 @@ fn paired_t(with: &[f64], without: &[f64]) -> f64 {
 /// Errors: those of [`Kriging::fit`] on all dimensions, a negative or non-finite threshold, a mask of
 /// the wrong length or scoring nothing. A fit without some dimension that fails (e.g. duplicate
 /// points) only means that dimension is kept. Deterministic.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{select_dims, KrigingConfig, SelectRule};
+///
+/// // 40 samples over 2 parameters: the values depend on the first only; the second is jitter.
+/// let halton = |i: usize, b: usize| {
+///     let (mut f, mut r, mut n) = (1.0, 0.0, i + 1);
+///     while n > 0 { f /= b as f64; r += f * (n % b) as f64; n /= b; }
+///     r
+/// };
+/// let params = Mat::from_fn(40, 2, |i, k| if k == 0 { halton(i, 2) } else { 0.01 * halton(i, 3) });
+/// let values = Mat::from_fn(40, 1, |i, _| (4.0 * params[(i, 0)]).sin());
+/// let rule = SelectRule { margin: 0.05, min_t: 2.0 };
+/// let sel = select_dims(params.as_ref(), values.as_ref(), &KrigingConfig::default(), rule, None)?;
+/// assert!(!sel.decisions[0].dropped());
+/// assert!(sel.decisions[1].dropped());
+/// assert_eq!(sel.kriging.dropped_dims(), [1]);
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 pub fn select_dims(
     params: MatRef<'_, f64>,
     values: MatRef<'_, f64>,

@@ -16,10 +16,37 @@ use crate::error::KrigingError;
 ///   (`a` is the *scale* parameter, as in gstat's `"Mat"`: `nu = 1/2` gives `n + s (1 - exp(-h/a))`,
 ///   `nu -> infinity` tends to a gaussian shape; the practical range grows with `nu`, about `3a` at
 ///   `nu = 1/2`, `4.7a` at `nu = 3/2`),
-/// - `HoleEffect`: `n + s (1 - sin(t)/t)`, `t = h/a` (cardinal sine; valid in up to three
-///   dimensions; the variogram overshoots the sill first at `h = 4.49 a` and oscillates around it).
+/// - `CardinalSine`: `n + s (1 - sin(t)/t)`, `t = h/a` (the cardinal sine or *wave* model, one of
+///   the hole-effect family; valid in up to three dimensions; the variogram crosses the sill at
+///   `h = pi a`, peaks at `h = 4.49 a` (21.7 % of the partial sill above it) and oscillates around
+///   it with a decaying amplitude). This is *not*
+///   PyKrige's `"hole-effect"` model, which is `n + s (1 - (1 - 3h/a) exp(-3h/a))`. Before this
+///   crate named it for its formula the variant was called `HoleEffect`: that name remains as an
+///   alias ([`VariogramModel::HoleEffect`], serde name `"HoleEffect"`, and `"hole-effect"` in
+///   [`VariogramModel::from_name`]).
 ///
 /// New variants are appended at the end so that serialised variograms keep their meaning.
+///
+/// ```
+/// use kriging::{Variogram, VariogramModel};
+///
+/// // Spherical: reaches nugget + partial sill at the range and stays there.
+/// let sph = Variogram::new(VariogramModel::Spherical, 0.1, 2.0, 100.0, 1.0)?;
+/// assert_eq!(sph.eval(0.0), 0.0); // gamma(0) = 0: the nugget is a jump at the origin
+/// assert!((sph.eval(50.0) - (0.1 + 2.0 * (0.75 - 0.0625))).abs() < 1e-12);
+/// assert_eq!(sph.eval(100.0), 2.1);
+/// assert_eq!(sph.eval(500.0), 2.1);
+/// // Cardinal sine: overshoots the sill (the "hole"), first maximum at h = 4.4934 a.
+/// let sinc = Variogram::new(VariogramModel::CardinalSine, 0.0, 1.0, 10.0, 1.0)?;
+/// let t: f64 = 4.4934;
+/// assert!((sinc.eval(10.0 * t) - (1.0 - t.sin() / t)).abs() < 1e-12);
+/// assert!(sinc.eval(10.0 * t) > 1.2);
+/// // Names print and parse; the old name still parses to the same model.
+/// assert_eq!(VariogramModel::from_name("cardinal-sine"), Some(VariogramModel::CardinalSine));
+/// assert_eq!(VariogramModel::from_name("hole-effect"), Some(VariogramModel::CardinalSine));
+/// assert_eq!(VariogramModel::HoleEffect, VariogramModel::CardinalSine);
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum VariogramModel {
     /// Unbounded, proportional to the distance.
@@ -34,8 +61,18 @@ pub enum VariogramModel {
     Gaussian,
     /// Bounded asymptotically, smoothness set by the exponent `nu` (Matérn class).
     Matern,
-    /// Bounded, periodic oscillation around the sill (cardinal sine).
-    HoleEffect,
+    /// Bounded, damped oscillation around the sill: `1 - sin(t)/t` (cardinal sine, or *wave*,
+    /// model). Serialised as `"CardinalSine"`; the older `"HoleEffect"` is read as this.
+    #[serde(alias = "HoleEffect")]
+    CardinalSine,
+}
+
+#[allow(non_upper_case_globals)]
+impl VariogramModel {
+    /// The old name of [`VariogramModel::CardinalSine`] (`1 - sin(h/a)/(h/a)`), kept so that code
+    /// and files that use it go on working. It is not PyKrige's `"hole-effect"` model
+    /// (`1 - (1 - 3h/a) exp(-3h/a)`), which this crate does not provide.
+    pub const HoleEffect: VariogramModel = VariogramModel::CardinalSine;
 }
 
 impl VariogramModel {
@@ -50,7 +87,7 @@ impl VariogramModel {
         VariogramModel::Gaussian,
     ];
 
-    /// Every model, including the [`VariogramModel::Matern`] and [`VariogramModel::HoleEffect`]
+    /// Every model, including the [`VariogramModel::Matern`] and [`VariogramModel::CardinalSine`]
     /// shapes that automatic selection does not try.
     pub const EVERY: [VariogramModel; 7] = [
         VariogramModel::Linear,
@@ -59,10 +96,11 @@ impl VariogramModel {
         VariogramModel::Exponential,
         VariogramModel::Gaussian,
         VariogramModel::Matern,
-        VariogramModel::HoleEffect,
+        VariogramModel::CardinalSine,
     ];
 
-    /// Lower-case name (`"linear"`, `"power"`, `"spherical"`, `"exponential"`, `"gaussian"`).
+    /// Lower-case name (`"linear"`, `"power"`, `"spherical"`, `"exponential"`, `"gaussian"`,
+    /// `"matern"`, `"cardinal-sine"`).
     pub fn name(self) -> &'static str {
         match self {
             VariogramModel::Linear => "linear",
@@ -71,12 +109,16 @@ impl VariogramModel {
             VariogramModel::Exponential => "exponential",
             VariogramModel::Gaussian => "gaussian",
             VariogramModel::Matern => "matern",
-            VariogramModel::HoleEffect => "hole-effect",
+            VariogramModel::CardinalSine => "cardinal-sine",
         }
     }
 
-    /// Parses a name as printed by [`VariogramModel::name`] (case-insensitive).
+    /// Parses a name as printed by [`VariogramModel::name`] (case-insensitive); the old name
+    /// `"hole-effect"` and `"wave"` also give [`VariogramModel::CardinalSine`].
     pub fn from_name(name: &str) -> Option<Self> {
+        if name.eq_ignore_ascii_case("hole-effect") || name.eq_ignore_ascii_case("wave") {
+            return Some(VariogramModel::CardinalSine);
+        }
         Self::EVERY
             .into_iter()
             .find(|m| m.name().eq_ignore_ascii_case(name))
@@ -194,6 +236,18 @@ impl Variogram {
 }
 
 /// The unit shape `f(h)` of a model (0 at `h = 0`), so that `gamma(h) = nugget + sill f(h)`.
+///
+/// ```
+/// use kriging::{shape, VariogramModel};
+///
+/// assert_eq!(shape(VariogramModel::Spherical, 50.0, 100.0, 1.0), 0.6875);
+/// assert_eq!(shape(VariogramModel::Spherical, 150.0, 100.0, 1.0), 1.0);
+/// // Exponential and gaussian: 95 % of the sill at the (practical) range.
+/// assert!((shape(VariogramModel::Exponential, 100.0, 100.0, 1.0) - (1.0 - (-3f64).exp())).abs() < 1e-15);
+/// assert_eq!(shape(VariogramModel::Power, 4.0, 0.0, 1.5), 8.0);
+/// let pi = std::f64::consts::PI;
+/// assert!((shape(VariogramModel::CardinalSine, pi, 1.0, 1.0) - 1.0).abs() < 1e-15); // sin(pi) = 0
+/// ```
 #[inline]
 pub fn shape(model: VariogramModel, h: f64, range: f64, exponent: f64) -> f64 {
     if h <= 0.0 {
@@ -215,7 +269,7 @@ pub fn shape(model: VariogramModel, h: f64, range: f64, exponent: f64) -> f64 {
             1.0 - (-3.0 * t * t).exp()
         }
         VariogramModel::Matern => 1.0 - crate::special::matern_correlation(h / range, exponent),
-        VariogramModel::HoleEffect => {
+        VariogramModel::CardinalSine => {
             let t = h / range;
             if t < 1e-4 {
                 // 1 - sin(t)/t = t^2/6 - t^4/120 + ...

@@ -93,7 +93,7 @@ fn weights_and_predictions_match_naive_for_every_model() {
     for model in VariogramModel::ALL {
         for nugget in [0.0, 0.2] {
             let v = var(model, nugget);
-            for (method, universal) in [(Method::Ordinary, false), (Method::Regression, true)] {
+            for (method, regression) in [(Method::Ordinary, false), (Method::Regression, true)] {
                 let k = Kriging::fit(
                     pm.as_ref(),
                     xm.as_ref(),
@@ -103,14 +103,14 @@ fn weights_and_predictions_match_naive_for_every_model() {
                 for q in &queries {
                     let mut b = vec![0.0; 9];
                     k.weights(q, &mut b).unwrap();
-                    // Universal kriging: the ordinary weights of the residuals (same system).
+                    // Regression kriging: the ordinary weights of the residuals (same system).
                     let nb = ok_weights(&p, &v, q);
                     for (a, e) in b.iter().zip(&nb) {
                         assert!((a - e).abs() < 1e-10, "{model:?} {method:?} {a} vs {e}");
                     }
                     let mut y = vec![0.0; 3];
                     k.predict(q, &mut y).unwrap();
-                    let ny = predict(&p, &x, &v, universal, q);
+                    let ny = predict(&p, &x, &v, regression, q);
                     for (a, e) in y.iter().zip(&ny) {
                         assert!(
                             (a - e).abs() < 1e-10,
@@ -170,7 +170,7 @@ fn closed_form_loo_matches_refitting_s_times() {
     ] {
         for nugget in [0.0, 0.3] {
             let v = var(model, nugget);
-            for (method, universal) in [(Method::Ordinary, false), (Method::Regression, true)] {
+            for (method, regression) in [(Method::Ordinary, false), (Method::Regression, true)] {
                 let k = Kriging::fit(
                     pm.as_ref(),
                     xm.as_ref(),
@@ -178,7 +178,7 @@ fn closed_form_loo_matches_refitting_s_times() {
                 )
                 .unwrap();
                 let e = k.loo_errors().unwrap();
-                let ne = loo(&p, &x, &v, universal);
+                let ne = loo(&p, &x, &v, regression);
                 for i in 0..11 {
                     for j in 0..3 {
                         assert!(

@@ -242,7 +242,7 @@ fn nan_and_infinity_are_rejected_with_their_position() {
 
 #[test]
 fn unfittable_variogram_is_a_clear_error() {
-    // Values exactly linear in c: universal residuals are zero, nothing to fit.
+    // Values exactly linear in c: regression-kriging residuals are zero, nothing to fit.
     let (p, _) = data(8, 2, 6);
     let x: Vec<Vec<f64>> = p.iter().map(|c| vec![2.0 * c[0] - c[1] + 0.5]).collect();
     let cfg = KrigingConfig {

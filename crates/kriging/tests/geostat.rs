@@ -331,16 +331,20 @@ fn batch_predictions_are_identical_for_any_thread_count_and_after_serde() {
         let (back, _): (KrigeModel, usize) =
             bincode::serde::decode_from_slice(&bytes, cfg).unwrap();
         assert_eq!(bits(&one), bits(&back.predict_many(q.as_ref()).unwrap()));
-        // JSON too (serde_json parses floats to within an ulp, so compare with a tolerance).
+        // JSON too: with serde_json's `float_roundtrip` feature (a dev-dependency feature of this
+        // crate) every f64 reads back exactly, so the reloaded model gives the same bits.
         let json = serde_json::to_string(&model).unwrap();
         let back_json: KrigeModel = serde_json::from_str(&json).unwrap();
-        let pj = back_json.predict_many(q.as_ref()).unwrap();
-        assert!(
-            pj.values
-                .iter()
-                .zip(&one.values)
-                .all(|(a, b)| (a - b).abs() < 1e-9)
+        assert_eq!(
+            bits(&one),
+            bits(&back_json.predict_many(q.as_ref()).unwrap())
         );
+        // ... also on a grid (the case a user found off by up to 7e-15 without the feature).
+        let xs: Vec<f64> = (0..40).map(|i| 5e5 + 25.0 * i as f64).collect();
+        let ys: Vec<f64> = (0..40).map(|j| 5e5 + 25.0 * j as f64).collect();
+        let g = model.predict_grid(&xs, &ys).unwrap();
+        let gj = back_json.predict_grid(&xs, &ys).unwrap();
+        assert_eq!(bits(&g), bits(&gj));
         assert_eq!(back.variogram(), model.variogram());
         assert!(back.fit_report().is_some());
         // Without variances: the same predictions.
@@ -486,7 +490,7 @@ fn fitted_variograms_recover_the_model_in_the_input_units() {
     let truths = [
         Variogram::new(VariogramModel::Matern, 0.1, 2.0, 300.0, 1.5).unwrap(),
         Variogram::new(VariogramModel::Matern, 0.0, 1.0, 150.0, 0.5).unwrap(),
-        Variogram::new(VariogramModel::HoleEffect, 0.05, 1.0, 120.0, 1.0).unwrap(),
+        Variogram::new(VariogramModel::CardinalSine, 0.05, 1.0, 120.0, 1.0).unwrap(),
         Variogram::new(VariogramModel::Spherical, 0.2, 1.0, 900.0, 1.0).unwrap(),
     ];
     for t in truths {
@@ -603,4 +607,25 @@ fn nested_variograms_add_their_structures() {
     let pl = ml.predict(&pts[3]).unwrap();
     assert!((pl.value - z[3]).abs() < 1e-8 && pl.variance.abs() < 1e-8);
     assert!(ml.predict(&[500.0, 500.0]).unwrap().variance > 0.0);
+}
+
+#[test]
+fn cardinal_sine_keeps_its_old_hole_effect_names() {
+    // The variant was called `HoleEffect`: files and code with that name still work.
+    let old: VariogramModel = serde_json::from_str("\"HoleEffect\"").unwrap();
+    assert_eq!(old, VariogramModel::CardinalSine);
+    assert_eq!(
+        serde_json::to_string(&VariogramModel::CardinalSine).unwrap(),
+        "\"CardinalSine\""
+    );
+    // Binary formats store the variant index, which did not change (the seventh model).
+    let cfg = bincode::config::standard();
+    let bytes = bincode::serde::encode_to_vec(VariogramModel::CardinalSine, cfg).unwrap();
+    assert_eq!(bytes, [6]);
+    assert_eq!(VariogramModel::HoleEffect, VariogramModel::CardinalSine);
+    assert_eq!(
+        VariogramModel::from_name("Hole-Effect"),
+        Some(VariogramModel::CardinalSine)
+    );
+    assert_eq!(VariogramModel::CardinalSine.name(), "cardinal-sine");
 }

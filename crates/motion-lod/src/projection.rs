@@ -28,8 +28,8 @@ pub enum VariogramConversionError {
 }
 
 /// The runtime's form of a fitted variogram: the same model kind and parameters (the runtime
-/// evaluates it to the same bits, and a model file stores the same bytes). Matérn and hole-effect
-/// variograms are refused: the runtime does not evaluate them.
+/// evaluates it to the same bits, and a model file stores the same bytes). Matérn and cardinal
+/// sine (hole-effect) variograms are refused: the runtime does not evaluate them.
 pub fn runtime_variogram(v: &kriging::Variogram) -> Result<Variogram, VariogramConversionError> {
     let model = match v.model {
         kriging::VariogramModel::Linear => VariogramModel::Linear,
@@ -37,7 +37,7 @@ pub fn runtime_variogram(v: &kriging::Variogram) -> Result<Variogram, VariogramC
         kriging::VariogramModel::Spherical => VariogramModel::Spherical,
         kriging::VariogramModel::Exponential => VariogramModel::Exponential,
         kriging::VariogramModel::Gaussian => VariogramModel::Gaussian,
-        other @ (kriging::VariogramModel::Matern | kriging::VariogramModel::HoleEffect) => {
+        other @ (kriging::VariogramModel::Matern | kriging::VariogramModel::CardinalSine) => {
             return Err(VariogramConversionError::Unsupported {
                 model: other.name(),
             });

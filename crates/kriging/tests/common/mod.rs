@@ -31,7 +31,7 @@ pub fn gamma_pair(v: &Variogram, h: f64) -> f64 {
         // Only the half-integer closed forms (the crate's general-nu path is unit tested).
         VariogramModel::Matern if v.exponent == 1.5 => 1.0 - (1.0 + h / a) * (-h / a).exp(),
         VariogramModel::Matern => panic!("naive Matern only for nu = 3/2"),
-        VariogramModel::HoleEffect => 1.0 - (h / a).sin() / (h / a),
+        VariogramModel::CardinalSine => 1.0 - (h / a).sin() / (h / a),
     };
     v.nugget + v.sill * f
 }
@@ -116,17 +116,17 @@ pub fn trend(p: &[Vec<f64>], x: &[Vec<f64>]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Ordinary (trend = None) or universal kriging prediction at c.
+/// Ordinary (trend = None) or regression kriging prediction at c.
 pub fn predict(
     p: &[Vec<f64>],
     x: &[Vec<f64>],
     v: &Variogram,
-    universal: bool,
+    regression: bool,
     c: &[f64],
 ) -> Vec<f64> {
     let dv = x[0].len();
     let b = ok_weights(p, v, c);
-    if !universal {
+    if !regression {
         return (0..dv)
             .map(|j| b.iter().zip(x).map(|(bi, xi)| bi * xi[j]).sum())
             .collect();
@@ -157,11 +157,11 @@ pub fn without(v: &[Vec<f64>], k: usize) -> Vec<Vec<f64>> {
 }
 
 /// Leave-one-out errors by refitting S times.
-pub fn loo(p: &[Vec<f64>], x: &[Vec<f64>], v: &Variogram, universal: bool) -> Vec<Vec<f64>> {
+pub fn loo(p: &[Vec<f64>], x: &[Vec<f64>], v: &Variogram, regression: bool) -> Vec<Vec<f64>> {
     (0..p.len())
         .map(|k| {
             let (pk, xk) = (without(p, k), without(x, k));
-            let pred = predict(&pk, &xk, v, universal, &p[k]);
+            let pred = predict(&pk, &xk, v, regression, &p[k]);
             x[k].iter().zip(&pred).map(|(a, b)| a - b).collect()
         })
         .collect()
