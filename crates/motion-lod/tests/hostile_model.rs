@@ -322,7 +322,11 @@ fn real_model_file_is_checked_like_any_other() {
                 match read(&file) {
                     Ok(m) => {
                         assert!(!is_cut, "section {which} cut at {i} was read");
-                        assert_eq!(runtime_read.as_ref().ok(), Some(m.runtime()));
+                        // As bytes: an edited model may hold NaN, never equal to itself.
+                        assert_eq!(
+                            runtime_read.as_ref().ok().map(RuntimeModel::section_bytes),
+                            Some(m.runtime().section_bytes())
+                        );
                         decoded += 1;
                     }
                     Err(e) => assert!(e.to_string().contains("hostile.mlod"), "{e}"),
