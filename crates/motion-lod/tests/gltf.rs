@@ -316,6 +316,7 @@ fn check_crowd(what: &str, model: &MotionModel) {
             aspect: 960.0 / 540.0,
             ..crowd_sim::Camera::default()
         },
+        scene: crowd_sim::Scene::Ground,
         seconds: 2.0,
         exported: 12,
     };
@@ -369,6 +370,28 @@ fn check_crowd(what: &str, model: &MotionModel) {
         legend.as_array().map(Vec::len),
         Some(model.lod().levels().len() + 1)
     );
+
+    // The same crowd seen from the overview camera (`crowd --camera overview --export`): the
+    // clip records that camera, above the field (it recorded the ground camera's whatever the
+    // scene, issue 34).
+    let overview = CrowdClip {
+        scene: crowd_sim::Scene::Overview,
+        ..clip.clone()
+    };
+    let (over, over_summary) = export_crowd(model, &policy, &overview).expect("overview export");
+    let over_bytes = over.to_glb().unwrap();
+    assert!(
+        over_bytes != bytes,
+        "{what}: the overview clip is another clip"
+    );
+    let camera = |b: &[u8]| read_back(b).doc["scenes"][0]["extras"]["motion_lod"]["camera"].clone();
+    let (ground_cam, over_cam) = (camera(&bytes), camera(&over_bytes));
+    let height = |c: &serde_json::Value| c["position"][1].as_f64().expect("camera position");
+    assert!(
+        height(&over_cam) > 10.0 * height(&ground_cam).max(1.0),
+        "{what}: overview camera {over_cam} against ground {ground_cam}"
+    );
+    assert_eq!(over_summary.walkers, 12, "{what}");
 }
 
 fn mid_controls(model: &MotionModel, turn_fraction: f32) -> [f32; 4] {

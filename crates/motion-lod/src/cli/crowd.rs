@@ -410,6 +410,7 @@ fn export_clip(
     let clip = CrowdClip {
         config: run.config,
         lens: run.lens,
+        scene: run.scene,
         seconds: args.export_seconds,
         exported: args.export_walkers,
     };

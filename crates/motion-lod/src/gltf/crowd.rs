@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use crowd_sim::{Camera, CameraPath, Crowd, CrowdConfig};
+use crowd_sim::{Camera, Crowd, CrowdConfig, Scene as CameraScene};
 use glam::{Quat, Vec3};
 use lod_policy::LevelPolicy;
 use motion_io::PoseLayout;
@@ -22,8 +22,11 @@ use crate::synth::WalkRequest;
 pub struct CrowdClip {
     /// The crowd (walkers, field, seed, frame rate).
     pub config: CrowdConfig,
-    /// The camera's lens; its position follows [`CameraPath::inside_crowd`] as in `motion-lod crowd`.
+    /// The camera's lens (its far plane as the scene sets it, [`CameraScene::lens`]).
     pub lens: Camera,
+    /// The scene whose camera path the clip is seen from ([`CameraScene::path`]: inside the crowd on
+    /// the ground, or circling above it), as in `motion-lod crowd --camera`.
+    pub scene: CameraScene,
     /// Seconds recorded from the start.
     pub seconds: f32,
     /// Walkers written to the file (at most the crowd's), chosen evenly over their distance from
@@ -125,11 +128,14 @@ pub fn export_crowd<P: LevelPolicy + Sync>(
         .build()
         .map_err(|e| GltfError::Recording(format!("thread pool: {e}")))?;
     let mut crowd = pool.install(|| Crowd::new(&source, clip.config))?;
-    let path = CameraPath::inside_crowd(clip.config.field_size_m);
+    // The field the crowd uses (enlarged when the model's turn range needs larger paths).
+    let field = crowd.config().field_size_m;
+    let path = clip.scene.path(field);
+    let lens = clip.scene.lens(clip.lens, field);
     let fps = clip.config.fps;
     let frames = ((clip.seconds * fps).round() as usize).max(2);
     let dt = 1.0 / fps;
-    let start_camera = path.camera_at(0.0, &clip.lens);
+    let start_camera = path.camera_at(0.0, &lens);
     let mut picked = Vec::new();
     let mut scales: Vec<f64> = Vec::new();
     let layout = &model.layout;
@@ -139,7 +145,7 @@ pub fn export_crowd<P: LevelPolicy + Sync>(
     let mut bins: Vec<Vec<usize>> = vec![Vec::with_capacity(frames); exported];
     let mut stats = crowd_sim::FrameStats::default();
     for f in 0..frames {
-        let camera = path.camera_at(f as f32 * dt, &clip.lens);
+        let camera = path.camera_at(f as f32 * dt, &lens);
         pool.install(|| crowd.step_into(&source, policy, &camera, dt, &mut stats))?;
         if f == 0 {
             picked = pick_walkers(&crowd, start_camera.position, clip.exported);
