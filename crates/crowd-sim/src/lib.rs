@@ -59,4 +59,4 @@ pub use crowd::{Crowd, CrowdConfig, Culling};
 pub use error::{ClipError, CrowdError, RenderError};
 pub use levels::{LevelTable, check_control_range};
 pub use source::ClipSource;
-pub use stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
+pub use stats::{ClipFaults, CrowdReport, FrameStats, FrameTimes, StageTimings};

@@ -109,6 +109,30 @@ pub struct CrowdReport {
     pub clip_faults: u64,
     /// The first failed clip build of the run: frame index (from 0), walker and error.
     pub first_clip_fault: Option<(usize, usize, ClipError)>,
+    /// Every frame's time (simulation, synthesis, forward kinematics), seconds, in frame order:
+    /// what [`CrowdReport::frame_times`] takes its percentiles from.
+    pub frame_s: Vec<f64>,
+}
+
+/// Percentiles of frame times after a warm-up ([`CrowdReport::frame_times`]), milliseconds:
+/// what a game drops frames at, beside the mean.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameTimes {
+    /// Frames counted (after the warm-up).
+    pub frames: usize,
+    /// Median frame time (nearest rank).
+    pub p50_ms: f64,
+    /// 99th percentile (nearest rank: the frame below which 99 % of frames fall).
+    pub p99_ms: f64,
+    /// The slowest frame.
+    pub worst_ms: f64,
+}
+
+impl FrameTimes {
+    /// The slowest frame over the median (1 for perfectly even frames).
+    pub fn worst_over_median(&self) -> f64 {
+        self.worst_ms / self.p50_ms.max(1e-12)
+    }
 }
 
 impl CrowdReport {
@@ -143,6 +167,26 @@ impl CrowdReport {
         }
         self.visible_sum += f.visible as u64;
         self.kernels_built += f.kernels_built as u64;
+        self.frame_s.push(secs);
+    }
+
+    /// Median, 99th percentile and worst frame time of the frames after the first `warmup`
+    /// (nearest-rank percentiles: the value at rank `ceil(q n)` of the `n` sorted times); `None`
+    /// when no frame is left.
+    pub fn frame_times(&self, warmup: usize) -> Option<FrameTimes> {
+        let mut v: Vec<f64> = self.frame_s.get(warmup..)?.to_vec();
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        let rank = |q: f64| v[((q * n as f64).ceil() as usize).clamp(1, n) - 1] * 1e3;
+        Some(FrameTimes {
+            frames: n,
+            p50_ms: rank(0.5),
+            p99_ms: rank(0.99),
+            worst_ms: v[n - 1] * 1e3,
+        })
     }
 
     /// Mean stage timings per frame.
@@ -227,6 +271,33 @@ mod tests {
         assert_eq!(r.mean_visible(), 3.0);
         assert!(r.to_string().contains("fps worst 25.0"));
         assert!(!r.to_string().contains("clip faults"));
+    }
+
+    #[test]
+    fn frame_times_are_nearest_rank_percentiles_after_the_warm_up() {
+        let mut r = CrowdReport::new();
+        let frame = |ms: u64| FrameStats {
+            timings: StageTimings {
+                poses: Duration::from_millis(ms),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        // A slow first frame (the warm-up), then 1..=100 ms in shuffled order.
+        r.add(&frame(5000));
+        for i in 0..100u64 {
+            r.add(&frame((i * 37) % 100 + 1));
+        }
+        let t = r.frame_times(1).unwrap();
+        assert_eq!(t.frames, 100);
+        assert!((t.p50_ms - 50.0).abs() < 1e-9, "{t:?}");
+        assert!((t.p99_ms - 99.0).abs() < 1e-9, "{t:?}");
+        assert!((t.worst_ms - 100.0).abs() < 1e-9, "{t:?}");
+        assert!((t.worst_over_median() - 2.0).abs() < 1e-9);
+        // Counting the warm-up frame makes it the worst.
+        assert!((r.frame_times(0).unwrap().worst_ms - 5000.0).abs() < 1e-9);
+        assert_eq!(r.frame_times(101), None);
+        assert_eq!(r.frame_times(500), None);
     }
 
     #[test]

@@ -308,3 +308,43 @@ fn the_output_says_only_what_was_asked_or_must_be_known() {
     assert!(!help.contains("re-exporting the runtime"), "{help}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `crowd --json` reports frame-time percentiles after the first second (issue 35's meter): the
+/// median, the 99th percentile and the worst frame, in order, over the frames after the warm-up.
+#[test]
+fn the_crowd_reports_frame_time_percentiles_after_its_warm_up() {
+    let (ok, stdout, stderr) = run(&[
+        "crowd",
+        "--walkers",
+        "300",
+        "--seconds",
+        "2",
+        "--fps",
+        "30",
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let line: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
+    let t = &line["frame_ms"];
+    let (p50, p99, worst) = (
+        t["p50"].as_f64().unwrap(),
+        t["p99"].as_f64().unwrap(),
+        t["worst"].as_f64().unwrap(),
+    );
+    assert!(0.0 < p50 && p50 <= p99 && p99 <= worst, "{t}");
+    assert_eq!(t["after_s"].as_f64(), Some(1.0), "{t}");
+    assert_eq!(
+        t["frames"].as_u64(),
+        Some(line["frames"].as_u64().unwrap() - 30),
+        "{line}"
+    );
+    // The worst frame of the whole run (warm-up included) is at least the worst after it.
+    let fps_worst = line["fps"]["worst"].as_f64().unwrap();
+    assert!(1e3 / fps_worst >= worst - 1e-9, "{line}");
+    let (ok, stdout, _) = run(&["crowd", "--walkers", "300", "--seconds", "2"]);
+    assert!(ok);
+    assert!(
+        stdout.contains("frame times after the first 1 s (30 frames): median"),
+        "{stdout}"
+    );
+}

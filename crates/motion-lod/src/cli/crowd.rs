@@ -181,6 +181,37 @@ struct Summary {
     field_enlarged_from: Option<f32>,
     /// Clips the main source failed to build over the run (the walkers kept their previous clips).
     clip_faults: u64,
+    /// Frame times of the main source after the first second of simulated time (milliseconds):
+    /// median, 99th percentile and worst; `None` when the run is not longer than a second.
+    frame_ms: Option<FrameMs>,
+}
+
+/// Frame-time percentiles after the warm-up, milliseconds.
+#[derive(Debug, Serialize)]
+struct FrameMs {
+    /// Simulated seconds left out at the start (the first cycle's clip builds).
+    after_s: f64,
+    /// Frames counted.
+    frames: usize,
+    p50: f64,
+    p99: f64,
+    worst: f64,
+}
+
+/// Simulated seconds a run's first frames are left out of its frame-time percentiles: the first
+/// second, where every walker builds its first clips.
+const WARMUP_S: f64 = 1.0;
+
+/// The frame-time percentiles of `report` after [`WARMUP_S`] at `fps`.
+fn frame_ms(report: &CrowdReport, fps: f32) -> Option<FrameMs> {
+    let warmup = (WARMUP_S * f64::from(fps)).round() as usize;
+    report.frame_times(warmup).map(|t| FrameMs {
+        after_s: WARMUP_S,
+        frames: t.frames,
+        p50: t.p50_ms,
+        p99: t.p99_ms,
+        worst: t.worst_ms,
+    })
 }
 
 /// The model to animate and, when the naive or PCA source is needed, the analysis it was built from.
@@ -324,6 +355,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             pca_ratio,
             levels: main.last.level_histogram.clone(),
             clip_faults: main.report.clip_faults,
+            frame_ms: frame_ms(&main.report, args.fps),
         };
         println!("{}", serde_json::to_string(&summary)?);
         if let Some(msg) = exported {
@@ -369,6 +401,17 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         );
     }
     println!("{}", main.report);
+    if let Some(t) = frame_ms(&main.report, args.fps) {
+        println!(
+            "frame times after the first {WARMUP_S} s ({} frames): median {:.2} ms, p99 {:.2} ms, \
+             worst {:.2} ms ({:.2}x the median)",
+            t.frames,
+            t.p50,
+            t.p99,
+            t.worst,
+            t.worst / t.p50.max(1e-12)
+        );
+    }
     println!(
         "levels in the last frame (accuracy 0.., then root only): {:?}",
         main.last.level_histogram
