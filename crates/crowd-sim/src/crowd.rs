@@ -375,6 +375,68 @@ impl<C: Send> Crowd<C> {
             .for_each(|(b, w)| *b = walker_bounds(w, m));
     }
 
+    /// Starts every walker mid-stride at the detail `policy` gives it seen from `camera`, before
+    /// the first frame: a walker the policy wants finer than its starting root-only clip gets that
+    /// clip at once, at its own phase, instead of snapping into walking over its first cycle
+    /// ([`CrowdConfig::spread_first_builds`] spreads those builds over the first frames). For
+    /// recordings and renders that start at frame 0; a game calls it while loading (it builds the
+    /// clips of every walker in view in one go). Returns the kernels built; a clip the source
+    /// cannot build leaves the walker with its root-only clip (counted in the returned faults).
+    pub fn prime<S, P>(
+        &mut self,
+        source: &S,
+        policy: &P,
+        camera: &Camera,
+    ) -> Result<(usize, ClipFaults), CrowdError>
+    where
+        S: ClipSource<Clip = C>,
+        P: LevelPolicy + Sync + ?Sized,
+    {
+        let frustum = Frustum::from_camera(camera)?;
+        lod_policy::offline::clear_avx_upper_state();
+        let params = self.params;
+        let (eye, view) = (camera.position, camera.view());
+        let (built, faults, fault) = self
+            .walkers
+            .par_chunks_mut(CHUNK)
+            .zip(self.placed_bounds.par_chunks(CHUNK))
+            .enumerate()
+            .map(|(c, (walkers, boxes))| {
+                let mut out = (0usize, ClipFaults::default(), None);
+                for (k, (w, b)) in walkers.iter_mut().zip(boxes).enumerate() {
+                    let d = policy.detail(w.root.distance(eye), frustum.intersects(b), &view);
+                    match w.prime(source, &params, d) {
+                        Ok(a) => {
+                            out.0 += a.built;
+                            if let Some(e) = a.fault {
+                                out.1.record(c * CHUNK + k, a.faults, e);
+                            }
+                        }
+                        Err(e) => {
+                            out.2.get_or_insert((c * CHUNK + k, e));
+                        }
+                    }
+                }
+                out
+            })
+            .reduce(
+                || (0, ClipFaults::default(), None),
+                |a, b| (a.0 + b.0, ClipFaults::merge(a.1, b.1), a.2.or(b.2)),
+            );
+        self.update_bounds();
+        if let Some((walker, e)) = fault {
+            return Err(match e {
+                WalkerFault::Duration(duration) => CrowdError::BadClipDuration { walker, duration },
+                WalkerFault::Level(level) => CrowdError::BadLevel {
+                    walker,
+                    level,
+                    levels: params.levels.accuracy_levels,
+                },
+            });
+        }
+        Ok((built, faults))
+    }
+
     /// Advances the crowd by `dt` seconds seen from `camera` and returns the frame's statistics.
     pub fn step<S, P>(
         &mut self,

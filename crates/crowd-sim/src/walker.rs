@@ -216,6 +216,30 @@ impl<C> Walker<C> {
         Ok(failed)
     }
 
+    /// Before a crowd's first frame: the clip held becomes one at `d` (the policy's answer for where
+    /// the walker starts, checked against the level table) when that is finer, built at once
+    /// without a seam (nothing was shown yet) at the same phase of the cycle, and the spread of
+    /// first builds is cancelled. Returns the kernels built and the builds that failed.
+    pub fn prime<S: ClipSource<Clip = C>>(
+        &mut self,
+        src: &S,
+        p: &StageParams,
+        d: Detail,
+    ) -> Result<Advance, WalkerFault> {
+        let d = p.levels.check(&d).ok_or(WalkerFault::Level(d.accuracy))?;
+        let mut done = Advance::default();
+        self.hold_s = 0.0;
+        if d.is_finer_than(&self.cur_detail) {
+            let u = self.t / self.cur_dur;
+            let failed = self.switch(src, d, None, self.t, None, u)?;
+            if failed.is_none() {
+                self.t = (u * self.cur_dur).min(self.cur_dur * 0.999_999);
+            }
+            done.count(failed);
+        }
+        Ok(done)
+    }
+
     /// Kernel stage: advance time by `dt`; at each cycle end move the cycle frame by the clip's
     /// root motion, pick controls from the path ahead and build the next clip at `d`, with an
     /// inertialized seam at the first `seam_levels` levels; mid-cycle, rebuild at once when `d` is

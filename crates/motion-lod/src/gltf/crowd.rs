@@ -136,6 +136,9 @@ pub fn export_crowd<P: LevelPolicy + Sync>(
     let frames = ((clip.seconds * fps).round() as usize).max(2);
     let dt = 1.0 / fps;
     let start_camera = path.camera_at(0.0, &lens);
+    // Every walker starts mid-stride at its detail, so that frame 0 looks like frame 100 (a new
+    // crowd's walkers otherwise start root-only and take their joints over the first cycle).
+    pool.install(|| crowd.prime(&source, policy, &start_camera))?;
     let mut picked = Vec::new();
     let mut scales: Vec<f64> = Vec::new();
     let layout = &model.layout;
