@@ -425,14 +425,7 @@ impl<C: Send> Crowd<C> {
             );
         self.update_bounds();
         if let Some((walker, e)) = fault {
-            return Err(match e {
-                WalkerFault::Duration(duration) => CrowdError::BadClipDuration { walker, duration },
-                WalkerFault::Level(level) => CrowdError::BadLevel {
-                    walker,
-                    level,
-                    levels: params.levels.accuracy_levels,
-                },
-            });
+            return Err(walker_error(walker, e, &params));
         }
         Ok((built, faults))
     }
@@ -609,14 +602,7 @@ impl<C: Send> Crowd<C> {
         if let Some((walker, e)) = pass.fault {
             // Chunks after the fault placed nobody: recompute every box from the roots.
             self.update_bounds();
-            return Err(match e {
-                WalkerFault::Duration(duration) => CrowdError::BadClipDuration { walker, duration },
-                WalkerFault::Level(level) => CrowdError::BadLevel {
-                    walker,
-                    level,
-                    levels: params.levels.accuracy_levels,
-                },
-            });
+            return Err(walker_error(walker, e, &params));
         }
         let t4 = Instant::now();
         let wall = t4 - t1;
@@ -788,5 +774,16 @@ impl<C> Crowd<C> {
     /// Whether walker `i` is inside a seam transition.
     pub fn in_transition(&self, i: usize) -> bool {
         self.walkers[i].in_transition()
+    }
+}
+/// The crowd error for walker `walker`'s fault.
+fn walker_error(walker: usize, e: WalkerFault, params: &StageParams) -> CrowdError {
+    match e {
+        WalkerFault::Duration(duration) => CrowdError::BadClipDuration { walker, duration },
+        WalkerFault::Level(level) => CrowdError::BadLevel {
+            walker,
+            level,
+            levels: params.levels.accuracy_levels,
+        },
     }
 }
