@@ -347,4 +347,6 @@ fn the_crowd_reports_frame_time_percentiles_after_its_warm_up() {
         stdout.contains("frame times after the first 1 s (30 frames): median"),
         "{stdout}"
     );
+    let (ok, text, _) = run(&["explain", "p99"]);
+    assert!(ok && text.starts_with("frame times:"), "{text}");
 }

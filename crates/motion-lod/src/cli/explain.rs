@@ -186,6 +186,11 @@ pub const GLOSSARY: &[Entry] = &[
         aliases: &["--row-weights", "weights"],
         text: "How much each DOF row counts in the decomposition: how far it moves the joints per unit (metres per radian for rotations), so that tensor error follows joint error. `--row-weights unit` is the paper's plain tensor.",
     },
+    Entry {
+        term: "frame times",
+        aliases: &["frame_ms", "p50", "p99", "median", "worst", "fps"],
+        text: "What `crowd` timed per frame: culling, clip kernels, poses and forward kinematics of every walker (not rendering). `fps worst / mean / best` count every frame from the first (the first cycle's clip builds included); `frame times after the first 1 s` (JSON `frame_ms`) are the median, the 99th percentile (nearest rank) and the slowest frame of the frames after the first simulated second, in milliseconds, and the slowest over the median: a game drops frames where the worst is far above the median.",
+    },
 ];
 
 /// Lower-case, `-`, `_` and `.` as spaces, single spaces.
