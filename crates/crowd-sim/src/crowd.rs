@@ -653,7 +653,7 @@ impl<C: Send> Crowd<C> {
         P: LevelPolicy + Sync + ?Sized,
     {
         let dt = 1.0 / self.config.fps;
-        let mut report = CrowdReport::new();
+        let mut report = CrowdReport::with_frames(frames);
         let mut stats = FrameStats::default();
         for _ in 0..frames {
             let cam = path.camera_at(self.time_s as f32, lens);

@@ -141,6 +141,15 @@ impl CrowdReport {
         Self::default()
     }
 
+    /// An empty report with room for `frames` frame times, so that adding that many frames does
+    /// not allocate inside a frame loop.
+    pub fn with_frames(frames: usize) -> Self {
+        Self {
+            frame_s: Vec::with_capacity(frames),
+            ..Self::default()
+        }
+    }
+
     /// Adds one frame.
     pub fn add(&mut self, f: &FrameStats) {
         let secs = f.timings.total().as_secs_f64().max(1e-9);

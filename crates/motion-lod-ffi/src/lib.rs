@@ -1028,6 +1028,30 @@ pub unsafe extern "C" fn mlod_walker_pose(
     })
 }
 
+/// The end of `mlod_walker_start` and `mlod_walker_advance`: shows the walk's current frame
+/// ([`show_frame`], `dt` seconds after the previous one); when that succeeds the walker walks on,
+/// and `*state` (when not null) receives where it is, with `begun` cycles begun by the call. When
+/// it fails the walk ends.
+///
+/// # Safety
+/// `state` is null or writable.
+unsafe fn finish_step(
+    w: &mut MlodWalker,
+    m: &MlodModel,
+    dt: f32,
+    begun: u32,
+    state: *mut MlodWalkerState,
+) -> Result<(), Failure> {
+    w.walking = false;
+    show_frame(w, m, dt)?;
+    w.walking = true;
+    // SAFETY: null or writable per the caller's contract.
+    if let Some(out) = unsafe { state.as_mut() } {
+        *out = state_of(w, begun);
+    }
+    Ok(())
+}
+
 /// The walker's pose for the current time of its walk, with the foot lock, and its root in the
 /// world (step 4 of `examples/engine`'s loop). `dt` is the time since the previous frame (s).
 fn show_frame(w: &mut MlodWalker, m: &MlodModel, dt: f32) -> Result<(), Failure> {
@@ -1136,13 +1160,8 @@ pub unsafe extern "C" fn mlod_walker_start(
             root_rotation: Quat::IDENTITY,
             locked: false,
         };
-        show_frame(w, m, FIRST_FRAME_STEP_S)?;
-        w.walking = true;
-        // SAFETY: null or writable per the contract.
-        if let Some(out) = unsafe { state.as_mut() } {
-            *out = state_of(w, 0);
-        }
-        Ok(())
+        // SAFETY: `state` is null or writable per the contract.
+        unsafe { finish_step(w, m, FIRST_FRAME_STEP_S, 0, state) }
     })
 }
 
@@ -1211,14 +1230,8 @@ pub unsafe extern "C" fn mlod_walker_advance(
             w.walk.cycle += 1;
             begun += 1;
         }
-        w.walking = false;
-        show_frame(w, m, dt_s as f32)?;
-        w.walking = true;
-        // SAFETY: null or writable per the contract.
-        if let Some(out) = unsafe { state.as_mut() } {
-            *out = state_of(w, begun);
-        }
-        Ok(())
+        // SAFETY: `state` is null or writable per the contract.
+        unsafe { finish_step(w, m, dt_s as f32, begun, state) }
     })
 }
 

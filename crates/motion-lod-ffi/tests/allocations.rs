@@ -8,6 +8,10 @@ use std::ptr::{null, null_mut};
 
 use motion_lod_ffi::*;
 
+mod common;
+
+use common::model_bytes;
+
 /// The system allocator, counting the allocations of each thread.
 struct Counting;
 
@@ -38,28 +42,6 @@ static GLOBAL: Counting = Counting;
 
 fn allocations() -> usize {
     ALLOCATIONS.with(Cell::get)
-}
-
-/// The model bytes of a model built from the checkout's fixtures (small settings).
-fn model_bytes() -> Vec<u8> {
-    use motion_lod::BuildConfig;
-    use motion_lod::dataset::DataSpec;
-    let spec = DataSpec {
-        samples: Some(12),
-        ..DataSpec::default()
-    };
-    let data = spec
-        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
-        .expect("fixtures load");
-    let config = BuildConfig {
-        key_levels: 3,
-        accuracy_levels: 4,
-        ..BuildConfig::default()
-    };
-    let model =
-        motion_lod::MotionModel::build(&data.training, &config, &motion_lod::progress::NoProgress)
-            .expect("builds");
-    motion_lod::model_file::encode(&model, std::path::Path::new("m")).expect("encodes")
 }
 
 #[test]

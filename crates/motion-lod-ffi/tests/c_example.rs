@@ -92,15 +92,15 @@ fn write_model(path: &Path) {
 }
 
 /// `controls_for` of `examples/crowd.c`: walker `i`'s controls for its cycle `k`.
-fn controls_for(lo: &[f32], hi: &[f32], i: usize, k: u64) -> [f32; 4] {
+fn controls_for(lo: &[f32], hi: &[f32], i: usize, k: u64) -> Controls {
     let u = ((i as i64 * 7 + k as i64 * 3) % 11) as f32 / 10.0;
     let v = ((i as i64 * 5 + k as i64 * 2) % 7) as f32 / 6.0;
-    [
+    Controls::from_array([
         lo[0] + (hi[0] - lo[0]) * (0.25 + 0.5 * v),
         lo[1] + (hi[1] - lo[1]) * u,
         lo[2] + (hi[2] - lo[2]) * (1.0 - u),
         lo[3] + (hi[3] - lo[3]) * v,
-    ]
+    ])
 }
 
 /// Whether a sphere of `radius` around `p` is in the camera's view: the cone through the image's
@@ -179,14 +179,9 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
         let heading = (i % 16) as f32 * std::f32::consts::FRAC_PI_8 - 3.0;
         let (mut detail, mut visible) = camera_detail(model, &policy, Vec3::new(x, 1.0, z));
         let mut controls = controls_for(lo, hi, i, 0);
-        lod.build_kernel(
-            &Controls::from_array(controls),
-            detail,
-            &mut scratch,
-            &mut kernel,
-        )
-        .expect("kernel");
-        let mut body_scale = model.body_scale(&Controls::from_array(controls));
+        lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
+            .expect("kernel");
+        let mut body_scale = model.body_scale(&controls);
         let mut cycle_detail = detail;
         let mut frame = CycleFrame {
             x,
@@ -209,14 +204,9 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
                 while t >= kernel.duration() {
                     t -= kernel.duration();
                     frame = frame.next(&kernel.root_motion());
-                    lod.build_kernel(
-                        &Controls::from_array(controls),
-                        detail,
-                        &mut scratch,
-                        &mut kernel,
-                    )
-                    .expect("kernel");
-                    body_scale = model.body_scale(&Controls::from_array(controls));
+                    lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
+                        .expect("kernel");
+                    body_scale = model.body_scale(&controls);
                     cycle_detail = detail;
                     cycle += 1;
                     begun += 1;

@@ -5,39 +5,15 @@ use std::ptr::{null, null_mut};
 
 use motion_lod_ffi::*;
 
+mod common;
+
+use common::model_bytes;
+
 fn message() -> String {
     // SAFETY: mlod_last_error returns a valid NUL-terminated string for this thread.
     unsafe { CStr::from_ptr(mlod_last_error()) }
         .to_string_lossy()
         .into_owned()
-}
-
-/// The model bytes of a model built from the checkout's fixtures (small settings), built once for
-/// every test of this file.
-fn model_bytes() -> Vec<u8> {
-    static BYTES: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
-    BYTES.get_or_init(build_model_bytes).clone()
-}
-
-fn build_model_bytes() -> Vec<u8> {
-    use motion_lod::BuildConfig;
-    use motion_lod::dataset::DataSpec;
-    let spec = DataSpec {
-        samples: Some(12),
-        ..DataSpec::default()
-    };
-    let data = spec
-        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
-        .expect("fixtures load");
-    let config = BuildConfig {
-        key_levels: 3,
-        accuracy_levels: 4,
-        ..BuildConfig::default()
-    };
-    let model =
-        motion_lod::MotionModel::build(&data.training, &config, &motion_lod::progress::NoProgress)
-            .expect("builds");
-    motion_lod::model_file::encode(&model, std::path::Path::new("m")).expect("encodes")
 }
 
 #[test]

@@ -612,19 +612,22 @@ impl MotionModel {
             .as_ref()
             .and_then(|q| q.stature_m)
             .map(|h| h as f32);
-        model.runtime = model
-            .runtime
-            .clone()
-            .with_feet(feet)?
-            .with_stature(stature_m)?;
+        let (runtime, layout, report) = model.into_parts();
+        let model = MotionModel {
+            runtime: runtime.with_feet(feet)?.with_stature(stature_m)?,
+            layout,
+            report,
+        };
         // 6. Measured errors of every accuracy level and joint count.
         progress.stage("level errors", 1);
         let (level_errors, joint_errors) =
             model.measure_lod_errors(&set.controls, config.error_samples)?;
-        model.runtime = model
-            .runtime
-            .clone()
-            .with_errors(level_errors, joint_errors)?;
+        let (runtime, layout, report) = model.into_parts();
+        let model = MotionModel {
+            runtime: runtime.with_errors(level_errors, joint_errors)?,
+            layout,
+            report,
+        };
         progress.inc(1);
         Ok((model, analysis))
     }

@@ -86,7 +86,7 @@ where
         Some((dir, _)) => Some(Recorder::new(dir, render_style(source))?),
         None => None,
     };
-    let mut report = CrowdReport::new();
+    let mut report = CrowdReport::with_frames(frames);
     let mut last = FrameStats::default();
     let mut rendered = 0;
     for f in 0..frames {

@@ -175,7 +175,7 @@ fn run_one<S: ClipSource, P: LevelPolicy + Sync>(
         warmup_s += s;
         worst = worst.max(s);
     }
-    let mut report = CrowdReport::new();
+    let mut report = CrowdReport::with_frames(size.frames);
     for f in warmup..warmup + size.frames {
         let cam = path.camera_at(f as f32 * dt, &lens);
         crowd
