@@ -394,7 +394,7 @@ impl FootLock {
     ///
     /// Validates and then runs: a non-positive `dt`, a body scale that is not finite and positive,
     /// feet that do not fit the rig, or a pose shorter than its active rows is an error and changes
-    /// nothing. No allocation for rigs of up to [`STACK_JOINTS`] joints.
+    /// nothing. No allocation for rigs of up to 128 joints (`STACK_JOINTS`).
     #[allow(clippy::too_many_arguments)]
     pub fn apply(
         &mut self,

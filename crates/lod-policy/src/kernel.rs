@@ -258,7 +258,7 @@ impl ClipKernel {
         self.times.duration()
     }
     /// Hints the CPU to fetch the memory [`ClipKernel::phase_at`] and [`LodModel::pose_rows`] read
-    /// (the time table and the evaluated `G(c)`, at most [`PREFETCH_G_BYTES`] of it) without waiting
+    /// (the time table and the evaluated `G(c)`, at most `PREFETCH_G_BYTES` (1 KiB) of it) without waiting
     /// for it ([`crate::math::prefetch_bytes`]), so that a caller can start those cache misses a few
     /// walkers ahead. No effect on any result.
     pub fn prefetch(&self) {

@@ -31,9 +31,10 @@ const UNIT_TOLERANCE: f32 = 1e-4;
 /// `q = (sin(|v|/2) v/|v|, cos(|v|/2))`, with a Taylor series of `sin(|v|/2)/|v|` below `1e-3`, for
 /// forward kinematics (smooth through 0, no division by a tiny `|v|`).
 ///
-/// [`crate::chain::exp_map_to_quat`] is the same rotation by `Quat::from_axis_angle` for the root's
-/// heading in cycle chaining and root motion; they can differ in the last bits and each one's rounding is
-/// part of results checked bit for bit (joint positions here, chained paths there), so both stay.
+/// The chaining code's `exp_map_to_quat` is the same rotation by `Quat::from_axis_angle` for the
+/// root's heading in cycle chaining and root motion; they can differ in the last bits and each
+/// one's rounding is part of results checked bit for bit (joint positions here, chained paths
+/// there), so both stay.
 #[inline]
 pub fn exp_to_quat(v: Vec3) -> Quat {
     let theta = v.length();
@@ -288,7 +289,7 @@ impl Rig {
     ///
     /// Only the first `active_joints` rotating joints are read from `pose` (which may be truncated
     /// to `7 + 3 * active_joints` rows, a level's `P'`; 6 rows with no active joint); the others
-    /// take their rest rotation. No allocation for rigs of up to [`STACK_JOINTS`] joints. Errors: a
+    /// take their rest rotation. No allocation for rigs of up to 128 joints (`STACK_JOINTS`). Errors: a
     /// pose shorter than the active joints' rows, an output shorter than the joint count.
     pub fn joint_positions(
         &self,
