@@ -11,7 +11,7 @@ use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
 use glam::{Vec2, Vec3};
 use lod_policy::SeamScratch;
 use lod_policy::SplitMix64;
-use lod_policy::{Controls, Detail, LevelPolicy};
+use lod_policy::{Controls, Detail, LevelPolicy, StyleMix};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
@@ -114,6 +114,43 @@ pub struct CrowdConfig {
     /// (uniform in `[0, duration)`) before it rebuilds mid-cycle, instead of every such walker
     /// building in the first frame. Later refinements are immediate. Default on.
     pub spread_first_builds: bool,
+    /// The walkers' styles ([`CrowdStyle`]; default [`CrowdStyle::DataMix`]: each walker walks one
+    /// style, drawn with the data's shares). Ignored by a source without styles.
+    pub style: CrowdStyle,
+}
+
+/// How a crowd's walkers get their style ([`lod_policy::StyleMix`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum CrowdStyle {
+    /// Each walker walks one of the source's styles ([`ClipSource::style_mix`]), drawn from its
+    /// generator with the data's shares: a crowd of the data's mix.
+    #[default]
+    DataMix,
+    /// Every walker walks this style or blend of styles.
+    Each(StyleMix),
+}
+
+impl CrowdStyle {
+    /// The style of a walker for a source whose data mix is `mix` (style `j` has share `mix[j]`),
+    /// with `u` uniform in `[0, 1)` from the walker's generator.
+    pub fn for_walker(&self, mix: &[f32], u: f32) -> StyleMix {
+        match self {
+            CrowdStyle::Each(style) => *style,
+            CrowdStyle::DataMix => {
+                let total: f32 = mix.iter().sum();
+                let mut acc = 0.0;
+                for (j, &share) in mix.iter().enumerate() {
+                    acc += share;
+                    if u * total < acc {
+                        return StyleMix::one(j);
+                    }
+                }
+                mix.len()
+                    .checked_sub(1)
+                    .map_or(StyleMix::DATA_MIX, StyleMix::one)
+            }
+        }
+    }
 }
 
 impl Default for CrowdConfig {
@@ -131,6 +168,7 @@ impl Default for CrowdConfig {
             culling: Culling::Scan,
             tree_rebuild_interval: 240,
             spread_first_builds: true,
+            style: CrowdStyle::DataMix,
         }
     }
 }
@@ -173,6 +211,14 @@ impl CrowdConfig {
         }
         if self.tree_rebuild_interval == 0 {
             return bad("tree_rebuild_interval", 0.0);
+        }
+        if let CrowdStyle::Each(style) = &self.style
+            && let Some(j) = style
+                .weights
+                .iter()
+                .position(|w| !(w.is_finite() && *w >= 0.0))
+        {
+            return bad("style", style.weights[j]);
         }
         Ok(())
     }
@@ -280,7 +326,16 @@ impl<C: Send> Crowd<C> {
             let phase = g.next_f32();
             let base = path.point(s);
             let heading = heading_of(path.velocity(s));
-            let controls = path_controls(&path, s, base, heading, stride, height, &bounds);
+            // Drawn after the path, phase and stride, and only for a source with styles, so that
+            // a crowd without styles is the same walk for walk.
+            let mix = source.style_mix();
+            let style = if mix.is_empty() {
+                StyleMix::DATA_MIX
+            } else {
+                config.style.for_walker(mix, g.next_f32())
+            };
+            let controls =
+                path_controls(&path, s, base, heading, stride, height, &bounds).with_style(style);
             let mut cur = source.new_clip();
             source
                 .build_clip(&controls, root_only, &mut cur)

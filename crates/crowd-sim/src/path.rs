@@ -212,12 +212,12 @@ pub fn path_controls(
     let target = path.point(s_t);
     let d = target - pos;
     let turn = wrap_angle(heading_of(path.velocity(s_t)) - heading);
-    bounds.clamp(&Controls {
-        dx: d.dot(left(heading)),
-        dz: d.dot(forward(heading)),
+    bounds.clamp(&Controls::from_array([
+        d.dot(left(heading)),
+        d.dot(forward(heading)),
         turn,
         height,
-    })
+    ]))
 }
 
 #[cfg(test)]

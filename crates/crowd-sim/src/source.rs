@@ -33,6 +33,13 @@ pub trait ClipSource: Sync {
     /// The range of controls the source covers; the crowd clamps every request into it.
     fn control_range(&self) -> ControlRange;
 
+    /// The data's mix of styles, each style's share (summing to 1), in the order of
+    /// [`lod_policy::StyleMix`]'s weights; empty (the default) for a source without styles. A
+    /// crowd of [`crate::CrowdStyle::DataMix`] draws each walker's style from it.
+    fn style_mix(&self) -> &[f32] {
+        &[]
+    }
+
     /// A fresh clip buffer (its content is unspecified until `build_clip`).
     fn new_clip(&self) -> Self::Clip;
 

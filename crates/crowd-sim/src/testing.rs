@@ -139,18 +139,8 @@ impl ClipSource for ProceduralSource {
 
     fn control_range(&self) -> ControlRange {
         ControlRange {
-            min: Controls {
-                dx: -0.4,
-                dz: 0.6,
-                turn: -0.9,
-                height: 1.5,
-            },
-            max: Controls {
-                dx: 0.4,
-                dz: 1.8,
-                turn: 0.9,
-                height: 1.95,
-            },
+            min: Controls::from_array([-0.4, 0.6, -0.9, 1.5]),
+            max: Controls::from_array([0.4, 1.8, 0.9, 1.95]),
         }
     }
 
@@ -304,6 +294,10 @@ impl<S: ClipSource> ClipSource for FailingSource<S> {
         self.inner.control_range()
     }
 
+    fn style_mix(&self) -> &[f32] {
+        self.inner.style_mix()
+    }
+
     fn new_clip(&self) -> S::Clip {
         self.inner.new_clip()
     }
@@ -349,12 +343,7 @@ mod tests {
     use super::*;
 
     fn controls() -> Controls {
-        Controls {
-            dx: 0.1,
-            dz: 1.3,
-            turn: 0.3,
-            height: 1.75,
-        }
+        Controls::from_array([0.1, 1.3, 0.3, 1.75])
     }
 
     #[test]

@@ -275,7 +275,8 @@ impl<C> Walker<C> {
                 self.stride,
                 self.height,
                 &p.bounds,
-            );
+            )
+            .with_style(held.style);
             let seam = Self::seams(p, &d, &self.cur_detail).then_some((&mut *scratch, p));
             let failed = self.switch(src, d, seam, end, Some(&m), 0.0)?;
             if failed.is_some() {

@@ -1,4 +1,5 @@
-//! The runtime's controls: what a gait cycle is asked to do, `c = (dx, dz, turn, height)`.
+//! The runtime's controls: what a gait cycle is asked to do, `c = (dx, dz, turn, height)` and,
+//! for a model built with style labels, the performer's style ([`StyleMix`]).
 //!
 //! Mukai and Kuriyama parameterise each sample of the motion tensor by the controls of one gait
 //! cycle (two steps): where the root goes over the cycle, how much the heading turns, and the
@@ -16,7 +17,10 @@ use serde::{Deserialize, Serialize};
 use crate::model::ControlSpace;
 
 /// Controls of one gait cycle (two steps), the paper's `c`; the model's control dimensions in this
-/// order ([`Controls::NAMES`]).
+/// order ([`Controls::NAMES`]), then the style.
+///
+/// The style weighs the model's styles ([`crate::RuntimeModel::styles`]); a model without styles
+/// ignores it, and the default (every weight 0) asks for the data's own mix of styles.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Controls {
     /// Root displacement to the character's left over the cycle, in the start heading frame (m).
@@ -27,6 +31,77 @@ pub struct Controls {
     pub turn: f32,
     /// Standing height of the character's skeleton (m).
     pub height: f32,
+    /// The performer's style: a weight per style of the model ([`StyleMix`]).
+    #[serde(default)]
+    pub style: StyleMix,
+}
+
+/// The most styles a model holds (the style weights of [`Controls`] are a fixed array, so that
+/// controls stay plain `Copy` data an engine and the C ABI pass by value).
+pub const MAX_STYLES: usize = 8;
+
+/// The style of a walk: a non-negative weight per style of the model, in the model's style order
+/// ([`crate::RuntimeModel::styles`]). The kernel normalises the weights to sum 1 (a blend of
+/// styles); every weight 0, the default, is the data's own mix of styles (each style weighted by
+/// its share of the training cycles). Weights beyond the model's style count are ignored.
+///
+/// The model conditions on style as extra control dimensions: style `j` is dimension
+/// `Controls::COUNT + j` of the control space, `1` for a sample of that style and `0` otherwise
+/// (a one-hot code), scaled by the build's style weight; a blend is a point between the corners.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct StyleMix {
+    /// Weight of each style (finite, `>= 0`).
+    pub weights: [f32; MAX_STYLES],
+}
+
+impl StyleMix {
+    /// The data's own mix of styles (every weight 0).
+    pub const DATA_MIX: StyleMix = StyleMix {
+        weights: [0.0; MAX_STYLES],
+    };
+
+    /// Style `index` alone (`index < MAX_STYLES`; a larger one gives [`StyleMix::DATA_MIX`]).
+    pub fn one(index: usize) -> StyleMix {
+        let mut weights = [0.0; MAX_STYLES];
+        if let Some(w) = weights.get_mut(index) {
+            *w = 1.0;
+        }
+        StyleMix { weights }
+    }
+
+    /// Whether every weight is 0: the data's mix.
+    pub fn is_data_mix(&self) -> bool {
+        self.weights.iter().all(|&w| w == 0.0)
+    }
+
+    /// The first problem of the weights as a phrase, if any: a weight NaN, infinite or negative.
+    pub fn problem(&self) -> Option<String> {
+        self.weights
+            .iter()
+            .enumerate()
+            .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
+            .map(|(j, w)| format!("style weight {j} is {w} (weights are finite and >= 0)"))
+    }
+
+    /// The normalised weights of the first `n` styles (`n <= MAX_STYLES`) into `out[..n]`: the
+    /// weights over their sum, or `data_mix` when they are all 0. `None` when a weight is not
+    /// finite and non-negative ([`StyleMix::problem`]).
+    pub fn normalised(&self, n: usize, data_mix: &[f32], out: &mut [f32]) -> Option<()> {
+        debug_assert!(n <= MAX_STYLES && out.len() >= n && data_mix.len() >= n);
+        let w = &self.weights[..n];
+        if w.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+            return None;
+        }
+        let sum: f32 = w.iter().sum();
+        if sum > 0.0 {
+            for (o, &v) in out.iter_mut().zip(w) {
+                *o = v / sum;
+            }
+        } else {
+            out[..n].copy_from_slice(&data_mix[..n]);
+        }
+        Some(())
+    }
 }
 
 impl Controls {
@@ -40,13 +115,21 @@ impl Controls {
     pub const LABELS: [&'static str; 4] = ["dx (m)", "dz (m)", "turn (rad)", "height (m)"];
 
     /// Controls from `[dx, dz, turn, height]`.
+    /// The style is the data's mix ([`StyleMix::DATA_MIX`]); see [`Controls::with_style`].
     pub const fn from_array(a: [f32; 4]) -> Controls {
         Controls {
             dx: a[0],
             dz: a[1],
             turn: a[2],
             height: a[3],
+            style: StyleMix::DATA_MIX,
         }
+    }
+
+    /// These controls with the style `style`.
+    pub const fn with_style(mut self, style: StyleMix) -> Controls {
+        self.style = style;
+        self
     }
 
     /// Controls from `[dx, dz, turn, height]` in `f64`, as the offline analysis measures them
@@ -56,8 +139,9 @@ impl Controls {
         Controls::from_array(a.map(|v| v as f32))
     }
 
-    /// `[dx, dz, turn, height]`: the raw control vector the kernel takes
-    /// ([`LodModel::build_kernel`](crate::LodModel::build_kernel)).
+    /// `[dx, dz, turn, height]`: the first four dimensions of the raw control vector the kernel
+    /// takes ([`LodModel::build_kernel`](crate::LodModel::build_kernel); the style dimensions
+    /// follow them).
     pub const fn to_array(&self) -> [f32; 4] {
         [self.dx, self.dz, self.turn, self.height]
     }
@@ -83,10 +167,12 @@ pub struct ControlRange {
 }
 
 impl ControlRange {
-    /// Each control clamped into `[min, max]` ([`clamp_control`]: NaN becomes the midpoint).
+    /// Each control clamped into `[min, max]` ([`clamp_control`]: NaN becomes the midpoint); the
+    /// style is kept as it is.
     pub fn clamp(&self, c: &Controls) -> Controls {
         let (v, lo, hi) = (c.to_array(), self.min.to_array(), self.max.to_array());
         Controls::from_array(std::array::from_fn(|k| clamp_control(v[k], lo[k], hi[k])))
+            .with_style(c.style)
     }
 
     /// Whether every control lies in `[min, max]` (false for NaN).
@@ -109,12 +195,17 @@ impl ControlRange {
 }
 
 impl ControlSpace {
-    /// The range of the raw sample controls as [`Controls`], or `None` when the model does not
-    /// have the four control dimensions of [`Controls::NAMES`].
+    /// The range of the raw sample controls as [`Controls`] (the four of [`Controls::NAMES`]; the
+    /// style dimensions after them are not part of it), or `None` when the model does not have
+    /// those four control dimensions.
     pub fn range(&self) -> Option<ControlRange> {
+        let n = Controls::COUNT;
+        if self.min.len() < n || self.max.len() < n || self.min.len() > n + MAX_STYLES {
+            return None;
+        }
         let (lo, hi) = (
-            <[f32; 4]>::try_from(self.min.as_slice()).ok()?,
-            <[f32; 4]>::try_from(self.max.as_slice()).ok()?,
+            <[f32; 4]>::try_from(&self.min[..n]).ok()?,
+            <[f32; 4]>::try_from(&self.max[..n]).ok()?,
         );
         Some(ControlRange {
             min: Controls::from_array(lo),
@@ -154,6 +245,30 @@ mod tests {
         assert_eq!(c, Controls::from_array([0.3, 0.5, 0.0, 1.7]));
         assert!(r.contains(&c));
         assert!(!r.contains(&Controls::from_array([0.0, 1.0, f32::NAN, 1.7])));
+    }
+
+    #[test]
+    fn style_weights_normalise_or_read_the_data_mix() {
+        let mix = [0.5, 0.25, 0.25];
+        let mut out = [0.0; 3];
+        StyleMix::DATA_MIX.normalised(3, &mix, &mut out).unwrap();
+        assert_eq!(out, mix);
+        let mut w = StyleMix::DATA_MIX;
+        w.weights[0] = 3.0;
+        w.weights[2] = 1.0;
+        w.weights[5] = 9.0; // beyond the model's 3 styles: ignored
+        w.normalised(3, &mix, &mut out).unwrap();
+        assert_eq!(out, [0.75, 0.0, 0.25]);
+        assert_eq!(StyleMix::one(1).weights[..3], [0.0, 1.0, 0.0]);
+        assert!(StyleMix::one(99).is_data_mix());
+        for bad in [f32::NAN, -0.5, f32::INFINITY] {
+            w.weights[1] = bad;
+            assert!(w.normalised(3, &mix, &mut out).is_none());
+            assert!(w.problem().unwrap().contains("style weight 1"));
+        }
+        // The clamp of the four controls keeps the style.
+        let c = Controls::from_array([0.0, 1.0, 0.0, 1.7]).with_style(StyleMix::one(2));
+        assert_eq!(range().clamp(&c).style, StyleMix::one(2));
     }
 
     #[test]

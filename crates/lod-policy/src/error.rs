@@ -104,6 +104,14 @@ pub enum KernelError {
         /// Length given.
         found: usize,
     },
+    /// A style weight of [`crate::StyleMix`] is NaN, infinite or negative.
+    #[error("style weight {index} is {value}: style weights are finite and >= 0")]
+    Style {
+        /// Style index.
+        index: usize,
+        /// The weight given.
+        value: f32,
+    },
     /// A control value is NaN or infinite.
     #[error("control {index} is not finite ({value})")]
     NonFiniteControl {

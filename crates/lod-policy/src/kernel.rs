@@ -20,7 +20,7 @@ use crate::time_table::TimeTable;
 use crate::chain::{RootMotion, exp_map_to_quat};
 use crate::controls::Controls;
 use crate::detail::Detail;
-use crate::model::{ALWAYS_ROWS, LodModel, Ranks, TIME_ROW};
+use crate::model::{ALWAYS_ROWS, CONTROL_VALUES, LodModel, Ranks, TIME_ROW};
 
 /// Index of the control that is a clip's travel turn (radians, + = left): the heading of the
 /// direction of travel changes by it over one cycle (the data's definition; the pelvis may turn by more
@@ -532,8 +532,9 @@ impl LodModel {
         scratch: &mut KernelScratch,
         out: &mut ClipKernel,
     ) -> Result<(), KernelError> {
-        let values = controls.to_array();
-        self.build_kernel_isa(Isa::current(), &values, detail, scratch, out, false)
+        let mut values = [0.0f32; CONTROL_VALUES];
+        let d = self.control_values(controls, &mut values)?;
+        self.build_kernel_isa(Isa::current(), &values[..d], detail, scratch, out, false)
     }
 
     /// [`LodModel::build_kernel`] for a raw control vector of the model's `d` dimensions (any
@@ -596,7 +597,9 @@ impl LodModel {
         r_s: usize,
         scratch: &'s mut KernelScratch,
     ) -> Result<&'s [f32], KernelError> {
-        self.kriging_weights_checked(&controls.to_array(), key, r_s, scratch, false)
+        let mut values = [0.0f32; CONTROL_VALUES];
+        let d = self.control_values(controls, &mut values)?;
+        self.kriging_weights_checked(&values[..d], key, r_s, scratch, false)
     }
 
     /// [`LodModel::kriging_weights`] for a raw control vector of length `d` (any `d`; feature

@@ -95,7 +95,7 @@ mod variogram;
 // The jobs an engine runs, in call order (docs/architecture.md, "How an engine uses it").
 
 // 1. Load: the one model type, read from its section of a model file.
-pub use runtime::RuntimeModel;
+pub use runtime::{RuntimeModel, STYLE_PREFIX, style_name_problem};
 
 // 2. Per character, once: the buffers every job writes into.
 pub use kernel::{ClipKernel, KernelScratch};
@@ -118,7 +118,7 @@ pub use chain::{
 };
 
 // The one vocabulary: controls, detail, the pose rows, time, errors.
-pub use controls::{ControlRange, Controls, clamp_control};
+pub use controls::{ControlRange, Controls, MAX_STYLES, StyleMix, clamp_control};
 pub use detail::Detail;
 pub use error::{KernelError, ModelError, RigError, VariogramError};
 pub use file::{FileError, InvalidModel};
@@ -126,7 +126,7 @@ pub use file::{FileError, InvalidModel};
 pub use glam;
 pub use kernel::TURN_CONTROL;
 pub use math::{ease_in_out, wrap_angle};
-pub use model::{ALWAYS_ROWS, HEIGHT_CONTROL, ROWS_PER_JOINT, TIME_ROW};
+pub use model::{ALWAYS_ROWS, CONTROL_VALUES, HEIGHT_CONTROL, ROWS_PER_JOINT, TIME_ROW};
 pub use rng::SplitMix64;
 pub use time_table::{MIN_INCREMENT, TimeTable};
 

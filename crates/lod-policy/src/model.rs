@@ -10,7 +10,11 @@
 use serde::{Deserialize, Serialize};
 
 use crate::chain::RootMotion;
-use crate::controls::Controls;
+use crate::controls::{Controls, MAX_STYLES};
+
+/// The longest raw control vector of a walk model: the four controls and [`MAX_STYLES`] style
+/// weights ([`LodModel::control_vector`]).
+pub const CONTROL_VALUES: usize = Controls::COUNT + MAX_STYLES;
 use crate::detail::Detail;
 
 use crate::error::{KernelError, ModelError};
@@ -134,7 +138,104 @@ impl ControlSpace {
     /// change for a control space without a turn dimension). The one rule every clip source
     /// chains by ([`crate::CycleFrame::next`]).
     pub fn root_motion(&self, controls: &Controls, start: &[f32], end: &[f32]) -> RootMotion {
-        self.root_motion_of(&controls.to_array(), start, end)
+        let (values, d) = self.values_lossy(controls);
+        self.root_motion_of(&values[..d], start, end)
+    }
+
+    /// The number of styles of this control space: its dimensions after the walk's four
+    /// ([`Controls::COUNT`]), 0 when it has none or is not the walk's.
+    pub fn style_count(&self) -> usize {
+        let d = self.scale.len();
+        if (Controls::COUNT..=Controls::COUNT + MAX_STYLES).contains(&d) {
+            d - Controls::COUNT
+        } else {
+            0
+        }
+    }
+
+    /// The raw control vector of `c` in this control space, into `out[..d]` (returns `d`): the
+    /// four controls, then the style weights normalised to sum 1 ([`crate::StyleMix::normalised`];
+    /// the data's mix `data_mix` when they are all 0). The one place [`Controls`] become the
+    /// kernel's control vector. Errors: a control space that is not the walk's (fewer than four or
+    /// more than `4 + MAX_STYLES` dimensions), a style weight NaN, infinite or negative.
+    pub(crate) fn values_into(
+        &self,
+        c: &Controls,
+        data_mix: &[f32],
+        out: &mut [f32; CONTROL_VALUES],
+    ) -> Result<usize, KernelError> {
+        let d = self.scale.len();
+        if !(Controls::COUNT..=CONTROL_VALUES).contains(&d) {
+            return Err(KernelError::ControlLength {
+                expected: d,
+                found: Controls::COUNT,
+            });
+        }
+        out[..Controls::COUNT].copy_from_slice(&c.to_array());
+        let n = d - Controls::COUNT;
+        if c.style
+            .normalised(n, data_mix, &mut out[Controls::COUNT..])
+            .is_none()
+        {
+            let (index, value) = c.style.weights[..n]
+                .iter()
+                .enumerate()
+                .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
+                .map_or((0, f32::NAN), |(j, w)| (j, *w));
+            return Err(KernelError::Style { index, value });
+        }
+        Ok(d)
+    }
+
+    /// [`ControlSpace::values_into`] for the infallible readers (root motion, body scale,
+    /// implied controls): a style that is not valid reads as the data's mix, a control space that
+    /// is not the walk's as the four controls alone.
+    fn values_lossy(&self, c: &Controls) -> ([f32; CONTROL_VALUES], usize) {
+        let mut out = [0.0f32; CONTROL_VALUES];
+        let mix = self.data_style_mix();
+        match self.values_into(c, &mix, &mut out) {
+            Ok(d) => (out, d),
+            Err(_) => {
+                let d = match self.values_into(
+                    &c.with_style(crate::StyleMix::DATA_MIX),
+                    &mix,
+                    &mut out,
+                ) {
+                    Ok(d) => d,
+                    Err(_) => {
+                        out[..Controls::COUNT].copy_from_slice(&c.to_array());
+                        Controls::COUNT
+                    }
+                };
+                (out, d)
+            }
+        }
+    }
+
+    /// The data's mix of styles: each style dimension's raw sample mean (`scaled / scale + offset`,
+    /// each style's share of the samples), zeros beyond [`ControlSpace::style_count`].
+    pub fn data_style_mix(&self) -> [f32; MAX_STYLES] {
+        let mut mix = [0.0f32; MAX_STYLES];
+        let n = self.style_count();
+        let d = self.scale.len();
+        if n == 0 || self.samples.is_empty() || self.samples.len() % d != 0 {
+            return mix;
+        }
+        let s = self.samples.len() / d;
+        for (j, m) in mix.iter_mut().enumerate().take(n) {
+            let k = Controls::COUNT + j;
+            let (offset, scale) = (f64::from(self.offset[k]), f64::from(self.scale[k]));
+            if scale == 0.0 {
+                *m = self.min[k];
+                continue;
+            }
+            let sum: f64 = self.samples[s * k..s * (k + 1)]
+                .iter()
+                .map(|&v| f64::from(v) / scale + offset)
+                .sum();
+            *m = (sum / s as f64) as f32;
+        }
+        mix
     }
 
     /// [`ControlSpace::root_motion`] for a raw control vector of length `d`.
@@ -166,7 +267,8 @@ impl ControlSpace {
     /// the control space has no height dimension, `stature_m` is `None`, or the ratio is not finite
     /// and positive.
     pub fn body_scale(&self, stature_m: Option<f32>, c: &Controls) -> f32 {
-        let c = &c.to_array();
+        let (values, d) = self.values_lossy(c);
+        let c = &values[..d];
         let k = HEIGHT_CONTROL;
         let Some(stature) = stature_m else {
             return 1.0;
@@ -183,7 +285,8 @@ impl ControlSpace {
     /// ones ([`ControlSpace::implied`] field), clamped to the data's range of `c_k`. `k` must be a
     /// dimension of the control space, which must be the walk's.
     pub fn implied(&self, k: usize, c: &Controls) -> f32 {
-        self.implied_of(k, &c.to_array())
+        let (values, d) = self.values_lossy(c);
+        self.implied_of(k, &values[..d])
     }
 
     /// [`ControlSpace::implied`] for a raw control vector of length `d` (any `d`; the tests of
@@ -312,6 +415,10 @@ pub struct LodModel {
     /// Each key's `U_T` row-major (`T x R_T`, row `i` at `[i R_T..(i + 1) R_T]`): the two rows a
     /// pose blends are contiguous runs (derived by [`LodModel::new`]; not stored in the model file).
     time_rows: Vec<Vec<f32>>,
+    /// The data's mix of styles: the mean of the samples' raw style dimensions (dimensions
+    /// `Controls::COUNT..d`), each style's share of the samples; zeros beyond the model's styles
+    /// (derived by [`LodModel::new`]; not stored in the model file).
+    data_style_mix: [f32; MAX_STYLES],
 }
 
 /// Each key's kriging projection with the trend folded in, row-major in f64: row `l` of key `k` is
@@ -550,11 +657,13 @@ impl LodModel {
                 rows
             })
             .collect();
+        let data_style_mix = parts.controls.data_style_mix();
         Ok(LodModel {
             parts,
             max_ranks,
             folded,
             time_rows,
+            data_style_mix,
         })
     }
 
@@ -655,6 +764,45 @@ impl LodModel {
     /// Control dimension `d`.
     pub fn d(&self) -> usize {
         self.parts.d
+    }
+
+    /// Number of styles the model conditions on: the control dimensions after the walk's four
+    /// ([`Controls::COUNT`]), each a style's one-hot code ([`crate::StyleMix`]); 0 for a model
+    /// without style labels (or a control space that is not the walk's).
+    pub fn style_count(&self) -> usize {
+        self.parts.controls.style_count()
+    }
+
+    /// The data's mix of styles: each style's share of the training samples (the first
+    /// [`LodModel::style_count`] entries; they sum to 1), what [`crate::StyleMix::DATA_MIX`] asks for.
+    pub fn data_style_mix(&self) -> &[f32] {
+        &self.data_style_mix[..self.style_count()]
+    }
+
+    /// The raw control vector of `controls` in this model's control space into `out[..d]`
+    /// (returns `d`): the four controls of [`Controls::NAMES`], then the style weights normalised
+    /// to sum 1, or the data's mix ([`LodModel::data_style_mix`]) when they are all 0. What the
+    /// kernel interpolates over, and what another interpolator over the same samples (a baseline)
+    /// must take to agree with it. Errors: a control space that is not a walk's
+    /// ([`KernelError::ControlLength`]), a style weight NaN, infinite or negative
+    /// ([`KernelError::Style`]).
+    pub fn control_vector(
+        &self,
+        controls: &Controls,
+        out: &mut [f32; CONTROL_VALUES],
+    ) -> Result<usize, KernelError> {
+        self.control_values(controls, out)
+    }
+
+    /// [`LodModel::control_vector`]: [`ControlSpace::values_into`] with the cached data mix.
+    pub(crate) fn control_values(
+        &self,
+        controls: &Controls,
+        out: &mut [f32; CONTROL_VALUES],
+    ) -> Result<usize, KernelError> {
+        self.parts
+            .controls
+            .values_into(controls, &self.data_style_mix, out)
     }
     /// Rows always evaluated (root and time increment).
     pub fn always_rows(&self) -> usize {

@@ -13,7 +13,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::controls::Controls;
+use crate::controls::{Controls, MAX_STYLES};
 use crate::file::{self, FileError, InvalidModel, Section};
 use crate::footlock::FootRig;
 use crate::model::{ALWAYS_ROWS, LodModel, ROWS_PER_JOINT};
@@ -26,23 +26,59 @@ use crate::rig::{Rig, RigJoint};
 pub struct RuntimeModel {
     rig: Rig,
     lod: LodModel,
+    styles: Vec<String>,
     feet: Option<FootRig>,
     stature_m: Option<f32>,
 }
+
+/// The prefix of a style's control name in the runtime section: style `elderly` is the control
+/// `style:elderly`, after the walk's four ([`Controls::NAMES`]).
+pub const STYLE_PREFIX: &str = "style:";
 
 impl RuntimeModel {
     /// A runtime model from its parts, checking that they fit: the rig drives the model's pose
     /// rows (`7 + 3 n` rows for its `n` rotating joints, the model's `P`, with the model's 7 always
     /// evaluated rows and 3 rows per joint).
     ///
-    /// The model's controls are the walk's four, [`Controls::NAMES`].
+    /// The model's controls are the walk's four, [`Controls::NAMES`]; for a model that also
+    /// conditions on style, see [`RuntimeModel::with_styles`].
     pub fn new(rig: Rig, lod: LodModel) -> Result<RuntimeModel, InvalidModel> {
-        if lod.d() != Controls::COUNT {
+        Self::with_styles(rig, lod, Vec::new())
+    }
+
+    /// [`RuntimeModel::new`] for a model whose control space has a dimension per style after the
+    /// walk's four ([`crate::StyleMix`]): `styles` names them in order (at most [`MAX_STYLES`],
+    /// distinct, not empty, printable, no `=` or `,`, which the command line's blends use).
+    pub fn with_styles(
+        rig: Rig,
+        lod: LodModel,
+        styles: Vec<String>,
+    ) -> Result<RuntimeModel, InvalidModel> {
+        if styles.len() > MAX_STYLES {
             return Err(InvalidModel(format!(
-                "the runtime model has {} controls; a walk model has {} ({})",
+                "the runtime model has {} styles; at most {MAX_STYLES} are supported",
+                styles.len()
+            )));
+        }
+        for (j, name) in styles.iter().enumerate() {
+            if let Some(why) = style_name_problem(name) {
+                return Err(InvalidModel(format!("style {j} {name:?}: {why}")));
+            }
+            if styles[..j].contains(name) {
+                return Err(InvalidModel(format!("style {name:?} is named twice")));
+            }
+        }
+        if lod.d() != Controls::COUNT + styles.len() {
+            return Err(InvalidModel(format!(
+                "the runtime model has {} controls; a walk model with {} styles has {} ({}{})",
                 lod.d(),
-                Controls::COUNT,
-                Controls::NAMES.join(", ")
+                styles.len(),
+                Controls::COUNT + styles.len(),
+                Controls::NAMES.join(", "),
+                styles
+                    .iter()
+                    .map(|s| format!(", {STYLE_PREFIX}{s}"))
+                    .collect::<String>()
             )));
         }
         if lod.always_rows() != ALWAYS_ROWS || lod.rows_per_joint() != ROWS_PER_JOINT {
@@ -62,6 +98,7 @@ impl RuntimeModel {
         Ok(RuntimeModel {
             rig,
             lod,
+            styles,
             feet: None,
             stature_m: None,
         })
@@ -105,7 +142,7 @@ impl RuntimeModel {
     /// a request to rebuild the model.
     ///
     /// History: 1 (the first sectioned file, format 8: control names, rig joints, the multilinear
-    /// model, feet, stature).
+    /// model, feet, stature; a model with styles names them among the controls, [`STYLE_PREFIX`]).
     pub const SECTION_VERSION: u32 = 1;
 
     /// Decodes the runtime model from the bytes of a model file: the framing and checksums
@@ -144,8 +181,13 @@ impl RuntimeModel {
     /// multilinear model, the feet and the stature), what [`RuntimeModel::from_section_bytes`]
     /// reads back. The same model gives the same bytes.
     pub fn section_bytes(&self) -> Vec<u8> {
+        let control_names: Vec<String> = Controls::NAMES
+            .iter()
+            .map(|n| n.to_string())
+            .chain(self.styles.iter().map(|s| format!("{STYLE_PREFIX}{s}")))
+            .collect();
         let parts = PartsRef {
-            control_names: &Controls::NAMES,
+            control_names: &control_names,
             joints: self.rig.joints(),
             lod: &self.lod,
             feet: &self.feet,
@@ -203,6 +245,23 @@ impl RuntimeModel {
         self.lod.controls().body_scale(self.stature_m, controls)
     }
 
+    /// The names of the styles the model conditions on, in the order of [`crate::StyleMix`]'s
+    /// weights; empty for a model built without style labels.
+    pub fn styles(&self) -> &[String] {
+        &self.styles
+    }
+
+    /// The index of the style named `name` (exact match), if the model has it.
+    pub fn style_index(&self, name: &str) -> Option<usize> {
+        self.styles.iter().position(|s| s == name)
+    }
+
+    /// The data's mix of styles: each style's share of the training cycles, in style order (what
+    /// [`crate::StyleMix::DATA_MIX`] asks for); empty without styles.
+    pub fn data_style_mix(&self) -> &[f32] {
+        self.lod.data_style_mix()
+    }
+
     /// The parts.
     pub fn into_parts(self) -> (Rig, LodModel, Option<FootRig>) {
         (self.rig, self.lod, self.feet)
@@ -212,7 +271,7 @@ impl RuntimeModel {
 /// The runtime section as written: borrowed parts, in the order [`Parts`] reads them.
 #[derive(Serialize)]
 struct PartsRef<'a> {
-    control_names: &'static [&'static str],
+    control_names: &'a [String],
     joints: &'a [RigJoint],
     lod: &'a LodModel,
     feet: &'a Option<FootRig>,
@@ -239,17 +298,45 @@ impl Parts {
     }
 
     fn into_model(self) -> Result<RuntimeModel, InvalidModel> {
-        if self.control_names != Controls::NAMES {
+        let n = Controls::COUNT;
+        let styles: Option<Vec<String>> = self.control_names.get(n..).and_then(|rest| {
+            rest.iter()
+                .map(|name| name.strip_prefix(STYLE_PREFIX).map(str::to_string))
+                .collect()
+        });
+        let (Some(styles), true) = (
+            styles,
+            self.control_names.get(..n) == Some(&Controls::NAMES.map(String::from)[..]),
+        ) else {
             return Err(InvalidModel(format!(
-                "the model's controls are {:?}; this build plays walks with {:?}",
+                "the model's controls are {:?}; this build plays walks with {:?} and styles named {STYLE_PREFIX}NAME",
                 self.control_names,
                 Controls::NAMES
             )));
-        }
+        };
         let rig = Rig::new(self.joints).map_err(|e| InvalidModel(format!("rig: {e}")))?;
-        RuntimeModel::new(rig, self.lod)?
+        RuntimeModel::with_styles(rig, self.lod, styles)?
             .with_feet(self.feet)?
             .with_stature(self.stature_m)
+    }
+}
+
+/// Why `name` cannot name a style, if it cannot: empty, longer than 64 bytes, a control character,
+/// leading or trailing white space, or one of `=` and `,` (the command line's blend syntax,
+/// `elderly=0.5,youthful=0.5`).
+pub fn style_name_problem(name: &str) -> Option<&'static str> {
+    if name.is_empty() {
+        Some("a style name is not empty")
+    } else if name.len() > 64 {
+        Some("a style name has at most 64 bytes")
+    } else if name.chars().any(char::is_control) {
+        Some("a style name has no control characters")
+    } else if name.trim() != name {
+        Some("a style name has no leading or trailing white space")
+    } else if name.contains(['=', ',']) {
+        Some("a style name has no '=' or ','")
+    } else {
+        None
     }
 }
 
@@ -262,5 +349,27 @@ pub fn check_stature(h: f32) -> Result<(), String> {
         Err(format!(
             "stature {h} m is not a standing height (finite, 0.01 to 100 m)"
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn style_names_are_printable_and_free_of_the_blend_syntax() {
+        assert_eq!(style_name_problem("elderly"), None);
+        assert_eq!(style_name_problem("p160"), None);
+        for bad in [
+            "",
+            " old",
+            "old ",
+            "a=b",
+            "a,b",
+            "tab\there",
+            &"x".repeat(65),
+        ] {
+            assert!(style_name_problem(bad).is_some(), "{bad:?}");
+        }
     }
 }

@@ -43,7 +43,9 @@ static void check(MlodStatus status, const char *what) {
     }
 }
 
-/* Walker i's controls for its cycle k: spread over the model's range, different every cycle. */
+/* Walker i's controls for its cycle k: spread over the model's range, different every cycle. The
+ * style weights the initializer leaves 0 ask for the data's own mix of styles (a model with
+ * styles, mlod_model_style_count > 0, takes a weight per style instead, for example 1 for one). */
 static MlodControls controls_for(const MlodControls *lo, const MlodControls *hi, int i,
                                  uint64_t k) {
     float u = (float)((i * 7 + (int)k * 3) % 11) / 10.0f;

@@ -5,7 +5,8 @@
  1. Check the library: mlod_abi_version() == MLOD_ABI_VERSION; mlod_version() names the release.
  2. Load a model once: mlod_model_load or mlod_model_from_bytes; then mlod_model_sizes,
     mlod_model_joint, mlod_model_joint_rest and mlod_model_root_joint (the skeleton) and
-    mlod_model_control_range.
+    mlod_model_control_range; for a model with styles, mlod_model_style_count,
+    mlod_model_style_name and mlod_model_style_share (what MlodControls.style weighs).
  3. Per character: mlod_walker_new (allocates its buffers, once).
  4. Start its walk: mlod_model_detail_from_camera at its start position, then mlod_walker_start.
  5. Every frame: mlod_walker_detail_from_camera, then mlod_walker_advance with the frame's step and
@@ -14,7 +15,8 @@
  6. Release: mlod_walker_free, then mlod_model_free.
  Lower level (the engine chains cycles): mlod_walker_prepare, mlod_walker_pose, mlod_model_detail_at.
 
- Units: metres, seconds, radians; +y up, a heading of 0 faces +z.
+ Units: metres, seconds, radians; +y up, a heading of 0 faces +z. A zero-initialised
+ MlodControls.style (every weight 0) asks for the data's own mix of styles.
  */
 
 #ifndef MOTION_LOD_H
@@ -31,7 +33,12 @@
  `motion_lod.h`. It changes whenever any of them changes; a program compiled against a header
  whose `MLOD_ABI_VERSION` differs from what `mlod_abi_version` returns must not use the library.
  */
-#define MLOD_ABI_VERSION 2
+#define MLOD_ABI_VERSION 3
+
+/*
+ The most styles a model holds: the length of [`MlodControls`]'s `style` weights.
+ */
+#define MLOD_MAX_STYLES 8
 
 /*
  The longest step [`mlod_walker_advance`] takes, seconds.
@@ -122,6 +129,15 @@ typedef struct MlodControls {
    Standing height of the performer, metres.
    */
   float height;
+  /*
+   The performer's style: a weight per style of the model, in the order of
+   `mlod_model_style_name` (finite and `>= 0`, every one of the `MLOD_MAX_STYLES`, or the
+   controls are refused). The weights are normalised to sum 1, a blend of styles; all 0 (a
+   zero-initialised struct) is the data's own mix, each style weighted by its share of the
+   training cycles (`mlod_model_style_share`). Weights beyond the model's
+   `mlod_model_style_count` are ignored, and so is the whole array by a model without styles.
+   */
+  float style[MLOD_MAX_STYLES];
 } MlodControls;
 
 /*
@@ -389,7 +405,8 @@ enum MlodStatus mlod_model_root_joint(const struct MlodModel *model, size_t *out
 
 /*
  The range of every control over the model's training data (`*min`, `*max`). Controls outside
- it are extrapolated, and clamped to the model's margin when a clip is built.
+ it are extrapolated, and clamped to the model's margin when a clip is built. The style weights
+ of both are 0 (the data's mix; see `mlod_model_style_share` for the styles).
 
  # Safety
  `model` is a live model; `min` and `max` are writable.
@@ -397,6 +414,42 @@ enum MlodStatus mlod_model_root_joint(const struct MlodModel *model, size_t *out
 enum MlodStatus mlod_model_control_range(const struct MlodModel *model,
                                          struct MlodControls *min,
                                          struct MlodControls *max);
+
+/*
+ The number of styles the model conditions on into `*out`: the leading weights of an
+ `MlodControls`'s `style` it reads (at most `MLOD_MAX_STYLES`); 0 for a model built without
+ style labels, which ignores the weights.
+
+ # Safety
+ `model` is a live model; `out` is writable.
+ */
+enum MlodStatus mlod_model_style_count(const struct MlodModel *model, size_t *out);
+
+/*
+ The style index `index` weighs (`index <` the count of `mlod_model_style_count`): its name
+ (NUL-terminated, truncated to `capacity` bytes with the NUL) into `name`, as the model's labels
+ gave it (for example a performer's name). `name` may be null with `capacity` 0 to ask only for
+ `*name_len`, the name's length in bytes without the NUL; any output may be null.
+
+ # Safety
+ `model` is a live model; `name` is null or holds `capacity` bytes; `name_len` is null or
+ writable.
+ */
+enum MlodStatus mlod_model_style_name(const struct MlodModel *model,
+                                      size_t index,
+                                      char *name,
+                                      size_t capacity,
+                                      size_t *name_len);
+
+/*
+ The share of the model's training cycles that have style `index` (`index <` the count of
+ `mlod_model_style_count`) into `*out`: its weight in the data's mix, what a `style` of all 0
+ asks for. The shares of a model's styles sum to 1.
+
+ # Safety
+ `model` is a live model; `out` is writable.
+ */
+enum MlodStatus mlod_model_style_share(const struct MlodModel *model, size_t index, float *out);
 
 /*
  The level of detail the model's distance policy gives a visible character `distance_m` metres

@@ -21,7 +21,9 @@
 //! 2. **Load a model** once: [`mlod_model_load`] (a file) or [`mlod_model_from_bytes`]; then
 //!    [`mlod_model_sizes`] (levels, joints, animated joints, pose length), [`mlod_model_joint`]
 //!    and [`mlod_model_joint_rest`] (each joint's name, parent, offset and rest rotation, to bind
-//!    a skeleton), [`mlod_model_root_joint`] and [`mlod_model_control_range`].
+//!    a skeleton), [`mlod_model_root_joint`] and [`mlod_model_control_range`]; for a model built
+//!    with style labels, [`mlod_model_style_count`], [`mlod_model_style_name`] and
+//!    [`mlod_model_style_share`] (the styles a walk's `style` weights, in order).
 //! 3. **Create a walker** per character: [`mlod_walker_new`] allocates its buffers, once.
 //! 4. **Start its walk**: its first level of detail from the camera at its start position
 //!    ([`mlod_model_detail_from_camera`]), then [`mlod_walker_start`] with its first cycle's
@@ -52,7 +54,9 @@
 //!   ignored). A walker must be used with the model it was created for and must not outlive it;
 //!   passing another model is an error (`MLOD_STATUS_INVALID_ARGUMENT`), never undefined behaviour.
 //! - Units: metres, seconds, radians. Controls describe one gait cycle (two steps): `dx` sideways and
-//!   `dz` forward displacement (m), `turn` (rad, positive towards +x), `height` of the performer (m).
+//!   `dz` forward displacement (m), `turn` (rad, positive towards +x), `height` of the performer (m),
+//!   and the performer's `style`: a weight per style of the model (all 0, as a zero-initialised
+//!   struct has them, is the data's own mix of styles; a model without styles ignores them).
 //!   The world is +y up; a heading is a rotation about +y, 0 facing +z.
 //! - Poses are the model's pose vectors (the `pose_len` of [`mlod_model_sizes`] floats: root
 //!   position, root exponential map, the time row, then three exponential-map rows per animated
@@ -72,13 +76,16 @@ use std::path::Path;
 use lod_policy::glam::{Quat, Vec3};
 use lod_policy::{
     ClipKernel, Controls, CycleFrame, Detail, DistancePolicy, FileError, FootLock, JointTransform,
-    KernelScratch, LevelPolicy, RuntimeModel, ViewParams, wrap_angle,
+    KernelScratch, LevelPolicy, RuntimeModel, StyleMix, ViewParams, wrap_angle,
 };
 
 /// The version of this C ABI: the functions, their arguments and the layouts of the structs in
 /// `motion_lod.h`. It changes whenever any of them changes; a program compiled against a header
 /// whose `MLOD_ABI_VERSION` differs from what `mlod_abi_version` returns must not use the library.
-pub const MLOD_ABI_VERSION: u32 = 2;
+pub const MLOD_ABI_VERSION: u32 = 3;
+
+/// The most styles a model holds: the length of [`MlodControls`]'s `style` weights.
+pub const MLOD_MAX_STYLES: usize = 8;
 
 /// The longest step [`mlod_walker_advance`] takes, seconds.
 pub const MLOD_MAX_STEP_S: f64 = 10.0;
@@ -131,6 +138,13 @@ pub struct MlodControls {
     pub turn: f32,
     /// Standing height of the performer, metres.
     pub height: f32,
+    /// The performer's style: a weight per style of the model, in the order of
+    /// `mlod_model_style_name` (finite and `>= 0`, every one of the `MLOD_MAX_STYLES`, or the
+    /// controls are refused). The weights are normalised to sum 1, a blend of styles; all 0 (a
+    /// zero-initialised struct) is the data's own mix, each style weighted by its share of the
+    /// training cycles (`mlod_model_style_share`). Weights beyond the model's
+    /// `mlod_model_style_count` are ignored, and so is the whole array by a model without styles.
+    pub style: [f32; MLOD_MAX_STYLES],
 }
 
 /// A level of detail: an accuracy level (0 = the most accurate) and the number of animated joints,
@@ -273,7 +287,7 @@ struct Walk {
     t: f64,
     cycle: u64,
     /// Controls and detail of the next cycle.
-    next_controls: [f32; 4],
+    next_controls: Controls,
     next_detail: Detail,
     /// The current cycle's detail (resolved).
     detail: Detail,
@@ -402,8 +416,9 @@ unsafe fn out_slice<'a, T>(
     Ok(unsafe { std::slice::from_raw_parts_mut(ptr, len) })
 }
 
-/// The controls as the kernel takes them, checked to be finite.
-fn control_values(c: &MlodControls, name: &str) -> Result<[f32; 4], Failure> {
+/// The controls as the kernel takes them, checked: every control finite, every style weight
+/// finite and `>= 0` (all of them, also those the model ignores).
+fn control_values(c: &MlodControls, name: &str) -> Result<Controls, Failure> {
     let values = [c.dx, c.dz, c.turn, c.height];
     if let Some(k) = values.iter().position(|v| !v.is_finite()) {
         return Err(Failure::invalid(format!(
@@ -412,7 +427,12 @@ fn control_values(c: &MlodControls, name: &str) -> Result<[f32; 4], Failure> {
             values[k]
         )));
     }
-    Ok(values)
+    // The two arrays have the same length (this does not compile otherwise).
+    let style = StyleMix { weights: c.style };
+    if let Some(problem) = style.problem() {
+        return Err(Failure::invalid(format!("{name}: {problem}")));
+    }
+    Ok(Controls::from_array(values).with_style(style))
 }
 
 /// `detail` for `m`, checked: a level the model has and at most its animated joints.
@@ -665,7 +685,8 @@ pub unsafe extern "C" fn mlod_model_root_joint(
 }
 
 /// The range of every control over the model's training data (`*min`, `*max`). Controls outside
-/// it are extrapolated, and clamped to the model's margin when a clip is built.
+/// it are extrapolated, and clamped to the model's margin when a clip is built. The style weights
+/// of both are 0 (the data's mix; see `mlod_model_style_share` for the styles).
 ///
 /// # Safety
 /// `model` is a live model; `min` and `max` are writable.
@@ -686,10 +707,104 @@ pub unsafe extern "C" fn mlod_model_control_range(
             dz: v[1],
             turn: v[2],
             height: v[3],
+            style: [0.0; MLOD_MAX_STYLES],
         };
         *lo = pick(&c.min);
         *hi = pick(&c.max);
         Ok(())
+    })
+}
+
+/// The number of styles the model conditions on into `*out`: the leading weights of an
+/// `MlodControls`'s `style` it reads (at most `MLOD_MAX_STYLES`); 0 for a model built without
+/// style labels, which ignores the weights.
+///
+/// # Safety
+/// `model` is a live model; `out` is writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_model_style_count(
+    model: *const MlodModel,
+    out: *mut usize,
+) -> MlodStatus {
+    guard("mlod_model_style_count", || {
+        // SAFETY: per this function's contract.
+        let m = unsafe { reference(model, "model") }?;
+        // SAFETY: per this function's contract.
+        let out = unsafe { mutable(out, "out") }?;
+        *out = m.model.styles().len();
+        Ok(())
+    })
+}
+
+/// The style index `index` weighs (`index <` the count of `mlod_model_style_count`): its name
+/// (NUL-terminated, truncated to `capacity` bytes with the NUL) into `name`, as the model's labels
+/// gave it (for example a performer's name). `name` may be null with `capacity` 0 to ask only for
+/// `*name_len`, the name's length in bytes without the NUL; any output may be null.
+///
+/// # Safety
+/// `model` is a live model; `name` is null or holds `capacity` bytes; `name_len` is null or
+/// writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_model_style_name(
+    model: *const MlodModel,
+    index: usize,
+    name: *mut c_char,
+    capacity: usize,
+    name_len: *mut usize,
+) -> MlodStatus {
+    guard("mlod_model_style_name", || {
+        // SAFETY: per this function's contract.
+        let m = unsafe { reference(model, "model") }?;
+        let text = style(m, index)?.as_bytes();
+        // SAFETY: null or writable per the contract.
+        if let Some(len) = unsafe { name_len.as_mut() } {
+            *len = text.len();
+        }
+        if !name.is_null() && capacity > 0 {
+            let n = text.len().min(capacity - 1);
+            // SAFETY: `name` holds `capacity` bytes and `n + 1 <= capacity`.
+            unsafe {
+                std::ptr::copy_nonoverlapping(text.as_ptr(), name.cast::<u8>(), n);
+                *name.add(n) = 0;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// The share of the model's training cycles that have style `index` (`index <` the count of
+/// `mlod_model_style_count`) into `*out`: its weight in the data's mix, what a `style` of all 0
+/// asks for. The shares of a model's styles sum to 1.
+///
+/// # Safety
+/// `model` is a live model; `out` is writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_model_style_share(
+    model: *const MlodModel,
+    index: usize,
+    out: *mut f32,
+) -> MlodStatus {
+    guard("mlod_model_style_share", || {
+        // SAFETY: per this function's contract.
+        let m = unsafe { reference(model, "model") }?;
+        // SAFETY: per this function's contract.
+        let out = unsafe { mutable(out, "out") }?;
+        style(m, index)?;
+        *out = *m.model.data_style_mix().get(index).ok_or_else(|| {
+            Failure::invalid(format!("the model holds no share of style {index}"))
+        })?;
+        Ok(())
+    })
+}
+
+/// The name of the model's style `index`, or an out-of-range failure.
+fn style(m: &MlodModel, index: usize) -> Result<&str, Failure> {
+    let styles = m.model.styles();
+    styles.get(index).map(String::as_str).ok_or_else(|| {
+        Failure::invalid(format!(
+            "style {index} is out of range (the model has {} styles)",
+            styles.len()
+        ))
     })
 }
 
@@ -873,7 +988,7 @@ pub unsafe extern "C" fn mlod_walker_new(
                 lock: FootLock::new(),
                 t: 0.0,
                 cycle: 0,
-                next_controls: [0.0; 4],
+                next_controls: Controls::default(),
                 next_detail: lod.root_only(),
                 detail: lod.root_only(),
                 root: Vec3::ZERO,
@@ -917,12 +1032,12 @@ unsafe fn walker_and_model<'a>(
     Ok((w, m))
 }
 
-/// Builds the walker's clip for `values` at `detail` (checked), with its body scale. On failure
-/// the walker has no clip (and no walk).
+/// Builds the walker's clip for `controls` (checked, [`control_values`]) at `detail` (checked),
+/// with its body scale. On failure the walker has no clip (and no walk).
 fn build_clip(
     w: &mut MlodWalker,
     m: &MlodModel,
-    values: &[f32; 4],
+    controls: &Controls,
     detail: Detail,
 ) -> Result<(), Failure> {
     w.prepared = false;
@@ -930,14 +1045,9 @@ fn build_clip(
     w.walking = false;
     m.model
         .lod()
-        .build_kernel(
-            &Controls::from_array(*values),
-            detail,
-            &mut w.scratch,
-            &mut w.kernel,
-        )
+        .build_kernel(controls, detail, &mut w.scratch, &mut w.kernel)
         .map_err(|e| Failure::invalid(e.to_string()))?;
-    w.body_scale = m.model.body_scale(&Controls::from_array(*values));
+    w.body_scale = m.model.body_scale(controls);
     w.prepared = true;
     Ok(())
 }

@@ -126,6 +126,7 @@ fn walking_allocates_nothing_after_creation() {
                 dz: lo.dz + (hi.dz - lo.dz) * u,
                 turn: hi.turn - (hi.turn - lo.turn) * u,
                 height: lo.height + (hi.height - lo.height) * u,
+                ..lo
             };
             assert_eq!(
                 mlod_walker_advance(walker, model, 1.0 / 30.0, &next, &detail, &mut state),

@@ -227,6 +227,7 @@ fn middle(model: *const MlodModel) -> MlodControls {
         dz: 0.5 * (lo.dz + hi.dz),
         turn: 0.5 * (lo.turn + hi.turn),
         height: 0.5 * (lo.height + hi.height),
+        ..MlodControls::default()
     }
 }
 

@@ -99,6 +99,9 @@ fn known() -> Known {
         mlod_model_joint_rest,
         mlod_model_root_joint,
         mlod_model_control_range,
+        mlod_model_style_count,
+        mlod_model_style_name,
+        mlod_model_style_share,
         mlod_model_detail_at,
         mlod_model_detail_from_camera,
         mlod_walker_new,
@@ -135,11 +138,12 @@ fn known() -> Known {
         NotPrepared,
         Panic,
     ];
-    let _ = (MLOD_ABI_VERSION, MLOD_MAX_STEP_S);
+    let _ = (MLOD_ABI_VERSION, MLOD_MAX_STEP_S, MLOD_MAX_STYLES);
     let mut others: BTreeSet<String> = types.iter().map(|t| t.to_string()).collect();
     others.extend([
         "MLOD_ABI_VERSION".to_string(),
         "MLOD_MAX_STEP_S".to_string(),
+        "MLOD_MAX_STYLES".to_string(),
     ]);
     others.extend(
         statuses

@@ -24,7 +24,7 @@ use tensor_ops::Tensor3;
 
 pub use crate::config::{
     BuildConfig, CONTROL_DEFINED_ROWS, CONTROL_MARGIN, CONTROL_MIN_T, MIN_SAMPLES, PAPER_DOF,
-    RowWeights,
+    RowWeights, STYLE_FOLDS, STYLE_WEIGHTS,
 };
 pub use crate::dataset::TrainingSet;
 use crate::importance::{
@@ -38,6 +38,7 @@ use crate::projection::{
     KeyFactors, VariogramConversionError, control_space, key_tensor, runtime_variogram,
     with_projection,
 };
+use crate::style::{StyleLabels, WeightTrial};
 
 /// Why a model could not be built.
 #[derive(Debug, thiserror::Error)]
@@ -143,6 +144,9 @@ impl TrainingSet {
             controls: indices.iter().map(|&k| self.controls[k]).collect(),
             sources: indices.iter().map(|&k| self.sources[k].clone()).collect(),
             quality: self.quality.clone(),
+            styles: self.styles.as_ref().map(|l| l.select(indices)),
+            style_spec: self.style_spec.clone(),
+            take_quality: self.take_quality.clone(),
         }
     }
 }
@@ -188,9 +192,131 @@ fn fit_to_sample_count(
     Ok((out, dropped))
 }
 
-/// Controls as an `S x d` matrix, one row per sample.
+/// Controls as an `S x 4` matrix, one row per sample (the controls alone, without styles).
 fn control_matrix(controls: &[[f64; 4]]) -> Mat<f64> {
-    Mat::from_fn(controls.len(), CONTROL_NAMES.len(), |i, k| controls[i][k])
+    crate::dataset::control_matrix(controls, None)
+}
+
+/// The kriging over the controls kept (`base`, fitted by the control selection) and the style
+/// code: the same scaling of the controls, each style's one-hot column scaled by the weight `w`,
+/// and a variogram chosen anew ([`KrigingConfig::model`] of `kriging_config`). The weight is
+/// [`BuildConfig::style_weight`], or the one of [`STYLE_WEIGHTS`] whose universal kriging predicts
+/// held-out takes best: [`STYLE_FOLDS`] folds by take, each fold's cycles predicted by a kriging
+/// refitted on the others (with the variogram chosen on every sample at that weight), the error
+/// the root mean square over the held-out cycles of the scored value columns (ties: the smaller
+/// weight). Returns the kriging, the weight and the trials.
+fn style_kriging(
+    base: &Kriging,
+    set: &TrainingSet,
+    labels: &StyleLabels,
+    values: faer::MatRef<'_, f64>,
+    scored: &[bool],
+    config: &BuildConfig,
+    kriging_config: &KrigingConfig,
+) -> Result<(Kriging, f64, Vec<WeightTrial>), BuildError> {
+    use rayon::prelude::*;
+    let params = crate::dataset::control_matrix(&set.controls, Some(labels));
+    let n = labels.len();
+    let scaling = |w: f64| {
+        let mut sc = base.scaling().clone();
+        sc.offset.extend(std::iter::repeat_n(0.0, n));
+        sc.scale.extend(std::iter::repeat_n(w, n));
+        kriging::ScalingChoice::Given(sc)
+    };
+    let fit_config = |w: f64| KrigingConfig {
+        scaling: scaling(w),
+        ..kriging_config.clone()
+    };
+    if let Some(w) = config.style_weight {
+        if !(w.is_finite() && w > 0.0) {
+            return Err(BuildError::Data(format!(
+                "style weight {w}: it must be finite and positive"
+            )));
+        }
+        let kriging = Kriging::fit(params.as_ref(), values, &fit_config(w))?;
+        return Ok((kriging, w, Vec::new()));
+    }
+    let mut takes: Vec<&str> = set
+        .sources
+        .iter()
+        .map(|s| crate::dataset::take_of(s))
+        .collect();
+    takes.sort_unstable();
+    takes.dedup();
+    let folds = STYLE_FOLDS.min(takes.len());
+    if folds < 2 {
+        return Err(BuildError::Data(format!(
+            "{} take(s): choosing the style weight needs at least 2 (give the weight)",
+            takes.len()
+        )));
+    }
+    let fold = crate::folds::fold_of_samples(&set.sources, folds, crate::folds::FoldBy::Take)
+        .map_err(BuildError::Data)?;
+    // Per weight: the kriging on every sample (its own variogram search), then each fold predicted
+    // by a refit on the others with that variogram. Weights in parallel, results in weight order.
+    let fits = STYLE_WEIGHTS
+        .par_iter()
+        .map(|&w| -> Result<(Kriging, WeightTrial), BuildError> {
+            let full = Kriging::fit(params.as_ref(), values, &fit_config(w))?;
+            let given = KrigingConfig {
+                model: kriging::ModelChoice::Given(*full.variogram()),
+                ..fit_config(w)
+            };
+            let (mut sq, mut count) = (0.0, 0);
+            for f in 0..folds {
+                let (e, n) = fold_squared_error(&params, values, scored, &given, &fold, f)?;
+                sq += e;
+                count += n;
+            }
+            let rmse = (sq / count.max(1) as f64).sqrt();
+            Ok((full, WeightTrial { weight: w, rmse }))
+        })
+        .collect::<Result<Vec<_>, BuildError>>()?;
+    let best = (0..fits.len())
+        .filter(|&i| fits[i].1.rmse.is_finite())
+        .min_by(|&a, &b| fits[a].1.rmse.total_cmp(&fits[b].1.rmse))
+        .ok_or_else(|| BuildError::Data("no style weight could be cross-validated".into()))?;
+    let trials: Vec<WeightTrial> = fits.iter().map(|f| f.1).collect();
+    let weight = trials[best].weight;
+    let kriging = fits.into_iter().nth(best).expect("best is an index").0;
+    Ok((kriging, weight, trials))
+}
+
+/// The squared prediction error (scored columns, summed) of fold `f`'s samples by universal
+/// kriging fitted with `config` on the other folds' samples, and the number of samples held out.
+fn fold_squared_error(
+    params: &Mat<f64>,
+    values: faer::MatRef<'_, f64>,
+    scored: &[bool],
+    config: &KrigingConfig,
+    fold: &[usize],
+    f: usize,
+) -> Result<(f64, usize), BuildError> {
+    let (test, train): (Vec<usize>, Vec<usize>) = (0..fold.len()).partition(|&i| fold[i] == f);
+    let rows = |idx: &[usize], m: faer::MatRef<'_, f64>| {
+        Mat::from_fn(idx.len(), m.ncols(), |i, j| m[(idx[i], j)])
+    };
+    let k = Kriging::fit(
+        rows(&train, params.as_ref()).as_ref(),
+        rows(&train, values).as_ref(),
+        config,
+    )?;
+    let mut out = vec![0.0; values.ncols()];
+    let mut c = vec![0.0; params.ncols()];
+    let mut sq = 0.0;
+    for &i in &test {
+        for (k, v) in c.iter_mut().enumerate() {
+            *v = params[(i, k)];
+        }
+        k.predict(&c, &mut out)?;
+        sq += out
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| scored[*j])
+            .map(|(j, v)| (v - values[(i, j)]).powi(2))
+            .sum::<f64>();
+    }
+    Ok((sq, test.len()))
 }
 
 /// Column-major copy of a faer matrix.
@@ -307,6 +433,11 @@ pub struct Analysis {
     pub controls: Vec<[f64; 4]>,
     /// Source of every sample.
     pub sources: Vec<String>,
+    /// The style of every sample, for a model built with style labels: the kriging's parameters
+    /// are then the four controls and the style's one-hot code ([`Analysis::control_matrix`]).
+    pub styles: Option<StyleLabels>,
+    /// The scale of the style code and how it was chosen (`None` without styles).
+    pub style_weight: Option<(f64, Vec<WeightTrial>)>,
 }
 
 impl Analysis {
@@ -432,6 +563,24 @@ impl Analysis {
             control_decisions[k] = DimDecision::Constant;
         }
         progress.inc(1);
+        // 4b. The style code beside the controls kept.
+        let (kriging, style_weight) = match &set.styles {
+            None => (kriging, None),
+            Some(labels) => {
+                progress.stage("style weight (cross-validation by take)", 1);
+                let fitted = style_kriging(
+                    &kriging,
+                    set,
+                    labels,
+                    values.as_ref(),
+                    &scored,
+                    config,
+                    &kriging_config,
+                )?;
+                progress.inc(1);
+                (fitted.0, Some((fitted.1, fitted.2)))
+            }
+        };
         Ok(Analysis {
             dropped_for_samples,
             layout,
@@ -447,6 +596,23 @@ impl Analysis {
             kriging,
             controls: set.controls.clone(),
             sources: set.sources.clone(),
+            styles: set.styles.clone(),
+            style_weight,
+        })
+    }
+
+    /// The style report of a model built from this analysis of `set` (`None` without styles).
+    pub fn style_report(&self, set: &TrainingSet) -> Option<crate::style::StyleReport> {
+        let (labels, (weight, trials)) = (self.styles.as_ref()?, self.style_weight.as_ref()?);
+        Some(crate::style::StyleReport {
+            spec: set.style_spec.clone()?,
+            names: labels.names.clone(),
+            cycles: labels.counts(),
+            takes: crate::style::StyleReport::takes_per_style(labels, &self.sources),
+            weight: *weight,
+            trials: trials.clone(),
+            posture: set.style_postures().unwrap_or_default(),
+            quality: set.style_references().unwrap_or_default(),
         })
     }
 
@@ -474,9 +640,10 @@ impl Analysis {
         Ok((tucker, report))
     }
 
-    /// The raw controls as an `S x d` matrix (what the kriging was fitted on).
+    /// The raw parameters as an `S x d` matrix (what the kriging was fitted on): the four
+    /// controls, then the style's one-hot code for a model with styles.
     pub fn control_matrix(&self) -> Mat<f64> {
-        control_matrix(&self.controls)
+        crate::dataset::control_matrix(&self.controls, self.styles.as_ref())
     }
 
     /// Step 5: the runtime model (level errors not yet measured).
@@ -516,8 +683,11 @@ impl Analysis {
             progress.inc(1);
         }
         let scaling = krig.scaling();
-        let raw: Vec<f32> = (0..CONTROL_NAMES.len())
-            .flat_map(|k| self.controls.iter().map(move |c| c[k] as f32))
+        let params = self.control_matrix();
+        let d = params.ncols();
+        let raw: Vec<f32> = (0..d)
+            .flat_map(|k| (0..s).map(move |i| (k, i)))
+            .map(|(k, i)| params[(i, k)] as f32)
             .collect();
         let controls = control_space(
             runtime_variogram(krig.variogram())?,
@@ -532,7 +702,7 @@ impl Analysis {
             p,
             t,
             s,
-            d: CONTROL_NAMES.len(),
+            d,
             always_rows: lod_policy::ALWAYS_ROWS,
             rows_per_joint: lod_policy::ROWS_PER_JOINT,
             keys: key_tensors,
@@ -543,7 +713,12 @@ impl Analysis {
             level_errors: Vec::new(),
             joint_errors: Vec::new(),
         };
-        let runtime = RuntimeModel::new(self.layout.rig().clone(), LodModel::new(parts)?)?;
+        let styles = self
+            .styles
+            .as_ref()
+            .map_or_else(Vec::new, |l| l.names.clone());
+        let runtime =
+            RuntimeModel::with_styles(self.layout.rig().clone(), LodModel::new(parts)?, styles)?;
         Ok(MotionModel::new(
             runtime,
             self.layout.clone(),
@@ -617,17 +792,21 @@ impl MotionModel {
             runtime: runtime.with_feet(feet)?.with_stature(stature_m)?,
             layout,
             report,
+            style: None,
         };
         // 6. Measured errors of every accuracy level and joint count.
         progress.stage("level errors", 1);
         let (level_errors, joint_errors) =
             model.measure_lod_errors(&set.controls, config.error_samples)?;
         let (runtime, layout, report) = model.into_parts();
+        let style = analysis.style_report(set);
         let model = MotionModel {
             runtime: runtime.with_errors(level_errors, joint_errors)?,
             layout,
             report,
-        };
+            style: None,
+        }
+        .with_style_report(style)?;
         progress.inc(1);
         Ok((model, analysis))
     }

@@ -45,7 +45,22 @@ pub struct BuildConfig {
     pub control_min_t: f64,
     /// Select the controls as above; when false every non-constant control is kept (the paper).
     pub select_controls: bool,
+    /// For a training set with style labels: the scale of each style's one-hot code in the
+    /// kriging's standardised control space; `None` (the default) chooses it among
+    /// [`STYLE_WEIGHTS`] by cross-validation by take ([`crate::build`]). Recorded in the model's
+    /// style section, not in this report (so that a model without styles is unchanged).
+    #[serde(skip)]
+    pub style_weight: Option<f64>,
 }
+
+/// The style weights the build tries when none is given ([`BuildConfig::style_weight`]): a
+/// one-hot code at weight `w` puts two styles `w sqrt(2)` apart in the standardised control space,
+/// where one standard deviation of a control is 1.
+pub const STYLE_WEIGHTS: [f64; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
+
+/// Folds of the build's cross-validation of the style weight (by take; fewer when the data have
+/// fewer takes).
+pub const STYLE_FOLDS: usize = 5;
 
 impl Default for BuildConfig {
     fn default() -> Self {
@@ -64,6 +79,7 @@ impl Default for BuildConfig {
             control_margin: CONTROL_MARGIN,
             control_min_t: CONTROL_MIN_T,
             select_controls: true,
+            style_weight: None,
         }
     }
 }

@@ -25,7 +25,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use tensor_ops::Tensor3;
 
+pub use crate::folds::take_of;
 use crate::quality::{self, FootJoints, MotionQuality, QualityReference};
+use crate::style::{StyleError, StyleLabels, StyleSpec};
 use timewarp::{AlignConfig, AlignMethod, FrameSeq, TimewarpError, align};
 
 /// Aligned training data: the motion tensor and what each sample is (what [`DataSpec::load`]
@@ -42,7 +44,91 @@ pub struct TrainingSet {
     pub sources: Vec<String>,
     /// The motion-quality meter on the data's own takes, when they were measured.
     pub quality: Option<QualityReference>,
+    /// The style of every sample, when the takes were labelled ([`TrainingSet::with_styles`]);
+    /// `None` builds a model without styles.
+    pub styles: Option<StyleLabels>,
+    /// Where the labels came from (recorded in the model's style report).
+    pub style_spec: Option<StyleSpec>,
+    /// The motion-quality meter on each take (its file as in `sources`, its quality and floor):
+    /// what `quality` pools, and what [`TrainingSet::style_references`] pools per style.
+    pub take_quality: Vec<(String, MotionQuality, f64)>,
 }
+
+impl TrainingSet {
+    /// The set with every sample labelled by `spec` ([`StyleSpec::label`] on its sources), or
+    /// without labels for `None`.
+    pub fn with_styles(mut self, spec: Option<&StyleSpec>) -> Result<TrainingSet, StyleError> {
+        self.styles = spec.map(|s| s.label(&self.sources)).transpose()?;
+        self.style_spec = spec.cloned();
+        Ok(self)
+    }
+
+    /// The motion-quality reference of each style's own takes (in style order; `None` for a style
+    /// none of whose takes was measured), pooled as the data's reference is
+    /// ([`quality::reference_from_takes`]: the median of the takes, the style's cycles' steps).
+    /// `None` without styles or without the data's reference.
+    pub fn style_references(&self) -> Option<Vec<Option<QualityReference>>> {
+        let (labels, pooled) = (self.styles.as_ref()?, self.quality.as_ref()?);
+        let style_of_take: BTreeMap<&str, usize> = self
+            .sources
+            .iter()
+            .zip(&labels.of_sample)
+            .map(|(s, &j)| (take_of(s), j))
+            .collect();
+        let [p, t, _] = self.tensor.dims();
+        Some(
+            (0..labels.len())
+                .map(|j| {
+                    let takes: Vec<(MotionQuality, f64)> = self
+                        .take_quality
+                        .iter()
+                        .filter(|(take, _, _)| style_of_take.get(take.as_str()) == Some(&j))
+                        .map(|(_, q, floor)| (*q, *floor))
+                        .collect();
+                    let steps = (0..self.controls.len())
+                        .filter(|&i| labels.of_sample[i] == j)
+                        .map(|i| {
+                            let c = self.controls[i];
+                            let x = self.tensor.sample(i);
+                            let duration: f64 = (0..t).map(|f| x[f * p + TIME_ROW_SECONDS]).sum();
+                            (c[0].hypot(c[1]), duration)
+                        })
+                        .collect();
+                    quality::reference_from_takes(&pooled.feet, pooled.stature_m, &takes, steps)
+                })
+                .collect(),
+        )
+    }
+
+    /// The posture of each style's cycles ([`crate::posture::style_postures`]); `None` without
+    /// styles or without clear knees and head.
+    pub fn style_postures(&self) -> Option<Vec<crate::posture::StylePosture>> {
+        let labels = self.styles.as_ref()?;
+        crate::posture::style_postures(&self.layout, &self.tensor, &labels.names, &labels.of_sample)
+    }
+
+    /// The kriging's raw parameters, `S x d`: the four controls of each sample, then its style's
+    /// one-hot code when the set has styles.
+    pub fn control_matrix(&self) -> faer::Mat<f64> {
+        control_matrix(&self.controls, self.styles.as_ref())
+    }
+}
+
+/// The raw parameter matrix of samples with `controls` and optional style `labels` (`S x d`,
+/// `d = 4 + styles`): what the build's kriging and every baseline interpolate over.
+pub fn control_matrix(controls: &[[f64; 4]], labels: Option<&StyleLabels>) -> faer::Mat<f64> {
+    let n = labels.map_or(0, StyleLabels::len);
+    faer::Mat::from_fn(controls.len(), 4 + n, |i, k| {
+        if k < 4 {
+            controls[i][k]
+        } else {
+            labels.map_or(0.0, |l| f64::from(u8::from(l.of_sample[i] == k - 4)))
+        }
+    })
+}
+
+/// Row of a training set's pose vectors holding the time increment in seconds.
+const TIME_ROW_SECONDS: usize = lod_policy::TIME_ROW;
 
 /// Errors of the dataset pipeline. Failures of single files are not errors: they are reported in
 /// [`CycleSet::failed`] and the file is skipped.
@@ -227,6 +313,11 @@ pub struct TakeSummary {
     pub skipped: Vec<SkippedFrames>,
     /// Why the file gave no cycle (`None` when it gave some).
     pub reason: Option<String>,
+    /// The motion-quality meter on the take's steady stretch and the take's floor (m), when it was
+    /// measured (what the data's reference pools; a style's reference pools its takes'). Not
+    /// written by `cycles --json`.
+    #[serde(skip)]
+    pub quality: Option<(MotionQuality, f64)>,
 }
 
 impl CycleSet {
@@ -590,7 +681,7 @@ fn cycles_from_takes(
             take_quality(&layout.scaled(scale).ok()?, feet, &n.motion, &report.cycles)
         })
         .collect();
-    let takes_quality: Vec<(MotionQuality, f64)> = measured.into_iter().flatten().collect();
+    let takes_quality: Vec<(MotionQuality, f64)> = measured.iter().flatten().copied().collect();
     let mut takes: Vec<TakeSummary> = failed
         .iter()
         .map(|f| TakeSummary {
@@ -599,9 +690,10 @@ fn cycles_from_takes(
             dropped: 0,
             skipped: Vec::new(),
             reason: Some(f.error.clone()),
+            quality: None,
         })
         .collect();
-    for ((p, n), r) in motions.iter().zip(segmented) {
+    for (((p, n), r), q) in motions.iter().zip(segmented).zip(measured) {
         match r {
             Ok(report) => {
                 let reason = report
@@ -614,6 +706,7 @@ fn cycles_from_takes(
                     dropped: report.dropped.len(),
                     skipped: n.skipped.clone(),
                     reason,
+                    quality: q,
                 });
                 cycles.extend(report.cycles);
                 dropped.extend(report.dropped.into_iter().map(|d| (p.to_path_buf(), d)));
@@ -626,6 +719,7 @@ fn cycles_from_takes(
                     dropped: 0,
                     skipped: n.skipped.clone(),
                     reason: Some(error.clone()),
+                    quality: None,
                 });
                 failed.push(FailedFile {
                     path: p.to_path_buf(),
@@ -1075,6 +1169,14 @@ impl DataSpec {
         let aligned = align_cycles(&cycles, self.frames, self.align.method())?;
         let mut all = aligned.training_set();
         all.quality = cycles.quality.clone();
+        all.take_quality = cycles
+            .takes
+            .iter()
+            .filter_map(|t| {
+                let (q, floor) = t.quality?;
+                Some((t.path.display().to_string(), q, floor))
+            })
+            .collect();
         let training = match self.samples {
             Some(n) if n > all.tensor.dims()[2] => {
                 return Err(DatasetError::TooManySamples {
@@ -1175,15 +1277,6 @@ fn relative_path(path: &Path, base: &Path) -> Option<PathBuf> {
     Some(out)
 }
 
-/// The take (source file) of a training sample's source as [`AlignedSet::training_set`] writes it
-/// (`<file> [<first>..=<last>]`): the file part, or the whole string when it has no frame range.
-pub fn take_of(source: &str) -> &str {
-    match source.rsplit_once(" [") {
-        Some((file, range)) if range.ends_with(']') => file,
-        _ => source,
-    }
-}
-
 impl AlignedSet {
     /// The training set of every aligned sample, for `MotionModel::build`; each source reads
     /// `<file> [<first>..=<last>]` ([`take_of`] gives the file back).
@@ -1193,6 +1286,9 @@ impl AlignedSet {
             tensor: self.tensor.clone(),
             controls: self.controls.iter().map(|c| c.to_array()).collect(),
             quality: None,
+            styles: None,
+            style_spec: None,
+            take_quality: Vec::new(),
             sources: self
                 .sources
                 .iter()

@@ -85,6 +85,23 @@ pub struct EvalReport {
     pub model_bytes: usize,
     /// One entry per method (multilinear once per key level).
     pub methods: Vec<MethodError>,
+    /// For a model with styles: the error of each style's held-out cycles at level 0 and by the
+    /// best of the baselines (left out of the JSON without styles).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub styles: Vec<StyleError>,
+}
+
+/// The error of one style's held-out cycles ([`EvalReport::styles`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StyleError {
+    /// The style.
+    pub style: String,
+    /// Its held-out cycles evaluated.
+    pub evaluated: usize,
+    /// Mean joint position error of the multilinear model's level 0 (first key) (cm).
+    pub level0_cm: f64,
+    /// Mean joint position error of naive kriging of the raw samples (cm).
+    pub naive_cm: f64,
 }
 
 /// `W = I - E(I)`: leave-one-out weights from the leave-one-out errors of the identity values.
@@ -158,7 +175,7 @@ fn loo_weights(analysis: &Analysis, rbf: Option<f64>) -> Result<Mat<f64>, BuildE
 /// fitted to the identity values predicts exactly its weights on the samples (H x S).
 fn prediction_weights(
     analysis: &Analysis,
-    controls: &[[f64; 4]],
+    controls: &[Vec<f64>],
     rbf: Option<f64>,
 ) -> Result<Mat<f64>, BuildError> {
     let k = &analysis.kriging;
@@ -195,7 +212,7 @@ fn prediction_weights(
 }
 
 /// Weight 1 on the training sample nearest each of `controls` in scaled control space.
-fn nearest_to(analysis: &Analysis, controls: &[[f64; 4]]) -> Mat<f64> {
+fn nearest_to(analysis: &Analysis, controls: &[Vec<f64>]) -> Mat<f64> {
     let k = &analysis.kriging;
     let c = k.scaled_params();
     let mut w = Mat::zeros(controls.len(), c.nrows());
@@ -264,6 +281,21 @@ fn score(analysis: &Analysis, targets: &Tensor3, predicted: &Tensor3, stride: us
     (e.mean_joint_cm, e.shell_cm)
 }
 
+/// Mean joint error of the predicted samples (every `stride`-th) that `keep` selects.
+fn score_where(
+    analysis: &Analysis,
+    targets: &Tensor3,
+    predicted: &Tensor3,
+    stride: usize,
+    keep: &dyn Fn(usize) -> bool,
+) -> f64 {
+    let mut meter = ErrorMeter::new(&analysis.layout);
+    for i in (0..targets.dims()[2]).step_by(stride).filter(|&i| keep(i)) {
+        meter.compare_sequences(targets.sample(i), predicted.sample(i));
+    }
+    meter.total().mean_joint_cm
+}
+
 /// Reconstruction of every predicted sample at a multilinear level from sample weights `W` (one row per
 /// prediction): `Z x1 U_P x2 U_T x3 (W U_S)`.
 fn multilinear_prediction(tucker: &Tucker, w: MatRef<'_, f64>) -> Tensor3 {
@@ -286,11 +318,14 @@ struct Weights {
     nearest: Mat<f64>,
 }
 
-/// Every method's error when predicting `targets` (P x T x H, in the analysis's layout) with `weights`.
+/// Every method's error when predicting `targets` (P x T x H, in the analysis's layout) with `weights`;
+/// with `styles` (each target's style, an index into the analysis's style names), also each style's.
+#[allow(clippy::too_many_arguments)]
 fn compare(
     analysis: &Analysis,
     weights: &Weights,
     targets: &Tensor3,
+    styles: Option<&[usize]>,
     model_bytes: usize,
     key_bytes: &[usize],
     config: &EvalConfig,
@@ -305,6 +340,28 @@ fn compare(
         .map_or(1, |m| h.div_ceil(m.max(1)).max(1));
     let evaluated = (0..h).step_by(stride).count();
     let keys = &analysis.keys.levels;
+    let mut per_style = Vec::new();
+    if let (Some(labels), Some(of)) = (&analysis.styles, styles) {
+        let level0 = keys
+            .first()
+            .map(|k| multilinear_prediction(&k.tucker, weights.kriging.as_ref()));
+        let naive = blend_samples(x, weights.kriging.as_ref());
+        for (j, name) in labels.names.iter().enumerate() {
+            let keep = |i: usize| of.get(i) == Some(&j);
+            let n = (0..h).step_by(stride).filter(|&i| keep(i)).count();
+            if n == 0 {
+                continue;
+            }
+            per_style.push(StyleError {
+                style: name.clone(),
+                evaluated: n,
+                level0_cm: level0.as_ref().map_or(f64::NAN, |p| {
+                    score_where(analysis, targets, p, stride, &keep)
+                }),
+                naive_cm: score_where(analysis, targets, &naive, stride, &keep),
+            });
+        }
+    }
     progress.stage("evaluation", (keys.len() + 5) as u64);
     let w_krig = weights.kriging.as_ref();
     let mut methods = Vec::new();
@@ -372,6 +429,7 @@ fn compare(
         raw_bytes,
         model_bytes,
         methods,
+        styles: per_style,
     })
 }
 
@@ -389,10 +447,12 @@ pub fn leave_one_out(
         rbf_smoothed: loo_weights(analysis, Some(rbf_smoothing(analysis)?))?,
         nearest: nearest_weights(analysis),
     };
+    let styles = analysis.styles.as_ref().map(|l| l.of_sample.clone());
     compare(
         analysis,
         &weights,
         &analysis.tensor,
+        styles.as_deref(),
         model_bytes,
         key_bytes,
         config,
@@ -401,11 +461,14 @@ pub fn leave_one_out(
 }
 
 /// Errors of every method on held-out cycles: `targets` (P x T x H, prepared with
-/// [`Analysis::prepare`]) predicted from all training samples at their `controls`.
+/// [`Analysis::prepare`]) predicted from all training samples at their `controls` and, for an
+/// analysis with styles, their `styles` (each an index into the analysis's style names).
+#[allow(clippy::too_many_arguments)]
 pub fn held_out(
     analysis: &Analysis,
     targets: &Tensor3,
     controls: &[[f64; 4]],
+    styles: Option<&[usize]>,
     model_bytes: usize,
     key_bytes: &[usize],
     config: &EvalConfig,
@@ -419,6 +482,27 @@ pub fn held_out(
             analysis.tensor.dims()
         )));
     }
+    let n_styles = analysis.styles.as_ref().map_or(0, |l| l.len());
+    let controls: Vec<Vec<f64>> = match (n_styles, styles) {
+        (0, _) => controls.iter().map(|c| c.to_vec()).collect(),
+        (n, Some(st)) if st.len() == controls.len() && st.iter().all(|&j| j < n) => controls
+            .iter()
+            .zip(st)
+            .map(|(c, &j)| {
+                let mut v = c.to_vec();
+                v.extend((0..n).map(|k| f64::from(u8::from(k == j))));
+                v
+            })
+            .collect(),
+        (n, st) => {
+            return Err(BuildError::Data(format!(
+                "the model has {n} styles: every held-out cycle needs one of them ({} given for {} cycles)",
+                st.map_or(0, <[usize]>::len),
+                controls.len()
+            )));
+        }
+    };
+    let controls = controls.as_slice();
     let weights = Weights {
         kriging: prediction_weights(analysis, controls, None)?,
         rbf: prediction_weights(analysis, controls, Some(0.0))?,
@@ -429,6 +513,7 @@ pub fn held_out(
         analysis,
         &weights,
         targets,
+        styles,
         model_bytes,
         key_bytes,
         config,
@@ -436,67 +521,17 @@ pub fn held_out(
     )
 }
 
-/// How [`k_fold`] splits the samples.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum FoldBy {
-    /// Whole takes (source files) stay together: no cycle is predicted from cycles of its own take.
-    Take,
-    /// Sample `i` goes to fold `i mod K`.
-    Sample,
-}
-
-impl FoldBy {
-    /// The name the CLI's `--by` takes (`take`, `sample`).
-    pub fn name(self) -> &'static str {
-        match self {
-            FoldBy::Take => "take",
-            FoldBy::Sample => "sample",
-        }
-    }
-}
+pub use crate::folds::FoldBy;
 
 /// The fold of every sample: by take, the distinct takes in name order dealt round-robin to the
-/// `folds` folds; by sample, `i mod folds`. Errors when there are fewer takes (or samples) than
-/// folds.
+/// `folds` folds; by sample, `i mod folds` ([`crate::folds::fold_of_samples`]). Errors when there
+/// are fewer takes (or samples) than folds.
 pub fn fold_of_samples(
     sources: &[String],
     folds: usize,
     by: FoldBy,
 ) -> Result<Vec<usize>, BuildError> {
-    if folds < 2 {
-        return Err(BuildError::Data(format!(
-            "{folds} folds: cross-validation needs at least 2"
-        )));
-    }
-    match by {
-        FoldBy::Sample => {
-            if sources.len() < folds {
-                return Err(BuildError::Data(format!(
-                    "{} samples cannot fill {folds} folds",
-                    sources.len()
-                )));
-            }
-            Ok((0..sources.len()).map(|i| i % folds).collect())
-        }
-        FoldBy::Take => {
-            let mut takes: Vec<&str> = sources.iter().map(|s| crate::dataset::take_of(s)).collect();
-            takes.sort_unstable();
-            takes.dedup();
-            if takes.len() < folds {
-                return Err(BuildError::Data(format!(
-                    "{} takes cannot fill {folds} folds (use fewer folds or split by sample)",
-                    takes.len()
-                )));
-            }
-            Ok(sources
-                .iter()
-                .map(|s| {
-                    let take = crate::dataset::take_of(s);
-                    takes.binary_search(&take).map_or(0, |t| t % folds)
-                })
-                .collect())
-        }
-    }
+    crate::folds::fold_of_samples(sources, folds, by).map_err(BuildError::Data)
 }
 
 /// The result of [`k_fold`]: every method's error over all held-out cycles, each predicted by a
@@ -550,6 +585,7 @@ pub fn k_fold(
             &analysis,
             &targets,
             &held.controls,
+            held.styles.as_ref().map(|l| l.of_sample.as_slice()),
             model_bytes,
             &key_bytes,
             config,
@@ -577,6 +613,17 @@ pub fn k_fold(
                     )));
                 }
                 p.evaluated += report.evaluated;
+                for r in &report.styles {
+                    match p.styles.iter_mut().find(|q| q.style == r.style) {
+                        Some(q) => {
+                            let (a, b) = (q.evaluated as f64, r.evaluated as f64);
+                            q.level0_cm = (q.level0_cm * a + r.level0_cm * b) / (a + b);
+                            q.naive_cm = (q.naive_cm * a + r.naive_cm * b) / (a + b);
+                            q.evaluated += r.evaluated;
+                        }
+                        None => p.styles.push(r.clone()),
+                    }
+                }
                 for ((m, w), r) in p.methods.iter_mut().zip(&mut weights).zip(&report.methods) {
                     m.error_cm = (m.error_cm * *w + r.error_cm * n) / (*w + n);
                     m.shell_cm = m.shell_cm.max(r.shell_cm);

@@ -48,6 +48,59 @@ pub struct Summary {
     pub levels: Vec<LevelSummary>,
     /// Storage in bytes.
     pub storage: Storage,
+    /// The styles the model conditions on, with their training cycles and takes (empty without
+    /// style labels; left out of the JSON then).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub styles: Vec<StyleSummary>,
+    /// The scale of the style code, when the model has styles (left out of the JSON otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub style_weight: Option<f64>,
+}
+
+/// One style of the model in the JSON summary.
+#[derive(Debug, Serialize)]
+pub struct StyleSummary {
+    /// Its name.
+    pub name: String,
+    /// Training cycles of that style.
+    pub cycles: usize,
+    /// Takes of that style.
+    pub takes: usize,
+}
+
+/// The style lines of the report: where the labels came from, each style with its cycles and
+/// takes, and how the weight of the code was chosen. Empty without styles.
+pub fn style_notes(model: &MotionModel) -> Vec<String> {
+    let Some(st) = &model.style else {
+        return Vec::new();
+    };
+    let mut lines = vec![format!(
+        "styles ({}, from {}): {}",
+        st.names.len(),
+        st.spec.describe(),
+        st.names
+            .iter()
+            .zip(&st.cycles)
+            .zip(&st.takes)
+            .map(|((n, c), t)| format!("{n} {c} cycles/{t} takes"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )];
+    if st.trials.is_empty() {
+        lines.push(format!("style weight {} (given)", st.weight));
+    } else {
+        lines.push(format!(
+            "style weight {} (chosen by {}-fold cross-validation by take, RMSE of the held-out cycles: {})",
+            st.weight,
+            crate::config::STYLE_FOLDS,
+            st.trials
+                .iter()
+                .map(|t| format!("{} -> {:.4}", t.weight, t.rmse))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    lines
 }
 
 /// The nearest distance (m) at which `e`'s visible error (the larger of shell error and foot slide,
@@ -82,6 +135,19 @@ pub fn summary(model: &MotionModel) -> Summary {
             })
             .collect(),
         storage: Storage::of(model),
+        styles: model.style.as_ref().map_or_else(Vec::new, |st| {
+            st.names
+                .iter()
+                .zip(&st.cycles)
+                .zip(&st.takes)
+                .map(|((name, &cycles), &takes)| StyleSummary {
+                    name: name.clone(),
+                    cycles,
+                    takes,
+                })
+                .collect()
+        }),
+        style_weight: model.style.as_ref().map(|st| st.weight),
     }
 }
 
@@ -114,7 +180,7 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
         range[3].0,
         range[3].1
     )?;
-    for line in control_notes(r) {
+    for line in control_notes(r).into_iter().chain(style_notes(model)) {
         writeln!(out, "{line}")?;
     }
     if let Some(stature) = model.stature_m() {

@@ -42,7 +42,7 @@
 //! let mut pose = vec![0.0f32; lod.p()];
 //! let mut local = vec![Quat::IDENTITY; rig.joint_count()];
 //! // One gait cycle (two steps): metres, radians, metres.
-//! let controls = Controls { dx: 0.0, dz: 1.3, turn: 0.2, height: 1.75 };
+//! let controls = Controls::from_array([0.0, 1.3, 0.2, 1.75]); // dx, dz, turn, height
 //! // The policy answers with a detail of its model (a level it has, at most its joints).
 //! let detail = DistancePolicy::for_model(lod).detail(12.0, true, &ViewParams::default()); // 12 m
 //! lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)?;
@@ -90,6 +90,7 @@ pub mod config;
 pub mod crowd;
 pub mod dataset;
 pub mod eval;
+pub mod folds;
 pub mod footlock;
 pub mod gltf;
 pub mod importance;
@@ -99,13 +100,16 @@ pub mod model;
 pub mod model_file;
 pub mod naive;
 pub mod pca;
+pub mod posture;
 pub mod progress;
 pub mod projection;
 pub mod quality;
 mod sample_weights;
 pub mod source;
 pub mod storage;
+pub mod style;
 pub mod synth;
+pub mod track;
 pub mod walk_quality;
 
 pub use build::{Analysis, BuildConfig, BuildError, TrainingSet};

@@ -1,6 +1,7 @@
 //! [`MotionModel`]: the runtime multilinear model with its skeleton, the model file, and synthesis of
 //! aligned cycles and of played-back walks.
 
+use crate::style::StyleReport;
 use kriging::Variogram;
 use lod_policy::{ClipKernel, Detail, KernelScratch, LodModel, Rig, RuntimeModel};
 use motion_io::PoseLayout;
@@ -134,6 +135,9 @@ pub struct MotionModel {
     pub layout: PoseLayout,
     /// What the build measured.
     pub report: BuildReport,
+    /// For a model built with style labels: where they came from, the styles and the weight of
+    /// their code (the model file's style section); `None` without styles.
+    pub style: Option<StyleReport>,
 }
 
 /// Everything needed to evaluate clips of one model without allocating.
@@ -169,9 +173,56 @@ impl MotionModel {
             runtime,
             layout,
             report,
+            style: None,
         };
         model.validate()?;
         Ok(model)
+    }
+
+    /// The model with its style report: `Some` exactly when the runtime model has styles, with
+    /// the same names in the same order.
+    pub fn with_style_report(
+        mut self,
+        style: Option<StyleReport>,
+    ) -> Result<MotionModel, InvalidModel> {
+        let names = self.runtime.styles();
+        match &style {
+            None if !names.is_empty() => {
+                return Err(InvalidModel(format!(
+                    "the model has styles ({}) but no style report",
+                    names.join(", ")
+                )));
+            }
+            Some(r) if r.names != names => {
+                return Err(InvalidModel(format!(
+                    "the style report names {:?}; the runtime model's styles are {names:?}",
+                    r.names
+                )));
+            }
+            Some(r) if r.cycles.len() != names.len() || r.takes.len() != names.len() => {
+                return Err(InvalidModel(format!(
+                    "the style report counts {} and {} styles for {}",
+                    r.cycles.len(),
+                    r.takes.len(),
+                    names.len()
+                )));
+            }
+            Some(r) if !(r.weight.is_finite() && r.weight > 0.0) => {
+                return Err(InvalidModel(format!(
+                    "style weight {} is not finite and positive",
+                    r.weight
+                )));
+            }
+            _ => {}
+        }
+        self.style = style;
+        Ok(self)
+    }
+
+    /// The styles the model conditions on (the runtime model's), in [`lod_policy::StyleMix`]
+    /// order; empty without style labels.
+    pub fn styles(&self) -> &[String] {
+        self.runtime.styles()
     }
 
     /// The runtime model: what [`RuntimeModel::load`] reads from this model's file.
@@ -201,17 +252,19 @@ impl MotionModel {
     /// ([`RuntimeModel::new`]). The report is not checked against `lod`: it describes the model
     /// that was built.
     pub fn with_lod(&self, lod: LodModel) -> Result<MotionModel, InvalidModel> {
-        let runtime = RuntimeModel::new(self.rig().clone(), lod)?
+        let runtime = RuntimeModel::with_styles(self.rig().clone(), lod, self.styles().to_vec())?
             .with_feet(self.feet().copied())?
             .with_stature(self.stature_m())?;
         Ok(MotionModel {
             runtime,
             layout: self.layout.clone(),
             report: self.report.clone(),
+            style: self.style.clone(),
         })
     }
 
-    /// The parts: the runtime model, the pose layout and the report.
+    /// The parts: the runtime model, the pose layout and the report (the style report, if any, is
+    /// dropped: take it first).
     pub fn into_parts(self) -> (RuntimeModel, PoseLayout, BuildReport) {
         (self.runtime, self.layout, self.report)
     }
@@ -357,6 +410,36 @@ impl MotionModel {
     pub fn ignored_controls(&self) -> [bool; 4] {
         let scale = &self.lod().controls().scale;
         std::array::from_fn(|k| scale.get(k).is_none_or(|&v| v == 0.0))
+    }
+
+    /// Why the build left control `k` (of [`lod_policy::Controls::NAMES`]) out of the model, as
+    /// a phrase with the figures that decided it ([`kriging::DimDecision`]); `None` when the
+    /// model uses it.
+    pub fn why_ignored(&self, k: usize) -> Option<String> {
+        use kriging::DimDecision;
+        if !self.ignored_controls().get(k).copied().unwrap_or(false) {
+            return None;
+        }
+        let r = &self.report;
+        Some(match r.control_decisions.get(k) {
+            Some(DimDecision::Constant) if r.dropped_for_samples.contains(&k) => {
+                format!("too few samples ({}) for a trend over it too", r.samples)
+            }
+            Some(DimDecision::NoSignal {
+                loo_with,
+                loo_without,
+                t,
+            }) => format!(
+                "dropped at build as no signal: leave-one-out RMSE {loo_with:.4} with it, \
+                    {loo_without:.4} without, t = {t:.2} (kept only above {:.1}% and t >= {})",
+                100.0 * r.config.control_margin,
+                r.config.control_min_t
+            ),
+            _ => {
+                let (lo, _) = self.control_range()[k];
+                format!("constant over the data ({lo:.3})")
+            }
+        })
     }
 
     /// The range `[min, max]` of every control over the training data.

@@ -3,12 +3,13 @@
 //! the runtime's ([`lod_policy::file`], [`lod_policy::RuntimeModel`]), re-exported here so that
 //! there is one copy of each rule.
 //!
-//! A model file holds two sections (see [`lod_policy::file`] for the byte layout):
+//! A model file holds two or three sections (see [`lod_policy::file`] for the byte layout):
 //!
 //! | tag | version | content | read by |
 //! |---|---|---|---|
 //! | `RTIM` | [`RuntimeModel::SECTION_VERSION`] | the runtime model: control names, rig, multilinear model, feet, stature | every reader ([`RuntimeModel::from_bytes`]) |
 //! | `RPRT` | [`REPORT_VERSION`] | the offline report: the pose layout (skeleton with its BVH channels, units, joint order) and the [`BuildReport`] | the offline side ([`MotionModel::from_bytes`]) |
+//! | `STYL` | [`STYLE_VERSION`] | only in a model built with style labels: the [`StyleReport`] (where the labels came from, the styles, their counts, the weight of their code and its cross-validation) | the offline side |
 //!
 //! A wrong magic, a newer version, a length that disagrees with the file, a checksum mismatch or a
 //! section that does not decode is a [`ModelFileError`] naming the path and the offset; nothing
@@ -24,6 +25,7 @@ use lod_policy::file::Section;
 use motion_io::PoseLayout;
 
 use crate::model::{BuildReport, MotionModel};
+use crate::style::StyleReport;
 
 /// Why a model file could not be read or written (the runtime's [`lod_policy::FileError`]).
 pub use lod_policy::file::FileError as ModelFileError;
@@ -34,6 +36,12 @@ pub const REPORT_SECTION: [u8; 4] = *b"RPRT";
 /// The format version of the report section; another version is refused with a request to
 /// rebuild. History: 1 (format 8: the pose layout, then the build report).
 pub const REPORT_VERSION: u32 = 1;
+
+/// The tag of the style report's section, written only for a model with styles (a model without
+/// them is byte for byte what it was before styles existed).
+pub const STYLE_SECTION: [u8; 4] = *b"STYL";
+/// The format version of the style section. History: 1 (the first).
+pub const STYLE_VERSION: u32 = 1;
 
 /// The runtime's payload decoder ([`lod_policy::file::decode_payload`]): the entry point for fuzzing
 /// the decoder itself.
@@ -67,10 +75,47 @@ pub fn report_section(bytes: &[u8]) -> Section<'_> {
 pub fn encode(model: &MotionModel, path: &Path) -> Result<Vec<u8>, ModelFileError> {
     let runtime = model.runtime().section_bytes();
     let report = report_bytes(model, path)?;
-    Ok(lod_policy::file::frame(&[
-        RuntimeModel::section(&runtime),
-        report_section(&report),
-    ]))
+    let style = model
+        .style
+        .as_ref()
+        .map(|s| {
+            bincode::serde::encode_to_vec(s, bincode::config::standard()).map_err(|e| {
+                ModelFileError::Encode {
+                    path: path.to_path_buf(),
+                    message: e.to_string(),
+                }
+            })
+        })
+        .transpose()?;
+    let mut sections = vec![RuntimeModel::section(&runtime), report_section(&report)];
+    if let Some(bytes) = &style {
+        sections.push(Section {
+            tag: STYLE_SECTION,
+            version: STYLE_VERSION,
+            bytes,
+            offset: 0,
+        });
+    }
+    Ok(lod_policy::file::frame(&sections))
+}
+
+/// The style report of a model file, when it has a style section ([`STYLE_SECTION`]); the
+/// framing must already have been checked ([`decode`]). `path` only labels errors.
+pub fn decode_style(bytes: &[u8], path: &Path) -> Result<Option<StyleReport>, ModelFileError> {
+    let has = lod_policy::file::sections(bytes, path)?
+        .iter()
+        .any(|s| s.tag == STYLE_SECTION);
+    if !has {
+        return Ok(None);
+    }
+    lod_policy::file::decode_section(
+        bytes,
+        STYLE_SECTION,
+        STYLE_VERSION,
+        "the style report",
+        path,
+    )
+    .map(Some)
 }
 
 /// Decodes the parts of a model file: the runtime model ([`RuntimeModel::decode`]: framing,
@@ -163,10 +208,13 @@ impl MotionModel {
     /// report section ([`decode`]), then [`MotionModel::validate`].
     pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<MotionModel, ModelFileError> {
         let (runtime, layout, report) = decode(bytes, path)?;
-        MotionModel::new(runtime, layout, report).map_err(|source| ModelFileError::Invalid {
-            path: path.to_path_buf(),
-            source,
-        })
+        let style = decode_style(bytes, path)?;
+        MotionModel::new(runtime, layout, report)
+            .and_then(|m| m.with_style_report(style))
+            .map_err(|source| ModelFileError::Invalid {
+                path: path.to_path_buf(),
+                source,
+            })
     }
 }
 

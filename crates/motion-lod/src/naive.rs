@@ -158,8 +158,12 @@ impl ClipSource for NaiveSource<'_> {
             clip.values = Vec::with_capacity(need);
         }
         clip.values.resize(need, 0.0);
-        self.blend
-            .eval(&controls.to_array().map(f64::from), &mut clip.values);
+        let mut raw = [0.0f32; lod_policy::CONTROL_VALUES];
+        let d = lod
+            .control_vector(controls, &mut raw)
+            .map_err(|e| ClipError(e.to_string()))?;
+        let raw = raw.map(f64::from);
+        self.blend.eval(&raw[..d], &mut clip.values);
         clip.times.fill_from_iter(
             clip.values[TIME_ROW * t..][..t]
                 .iter()

@@ -285,7 +285,12 @@ impl ClipSource for PcaSource<'_> {
         clip.rows = lod.active_rows(clip.active_joints).min(p);
         // Y(c): the first r components of every frame, component-major.
         let coeffs = &mut clip.coeffs[..r * t];
-        self.blend.eval(&controls.to_array().map(f64::from), coeffs);
+        let mut raw = [0.0f32; lod_policy::CONTROL_VALUES];
+        let d = lod
+            .control_vector(controls, &mut raw)
+            .map_err(|e| ClipError(e.to_string()))?;
+        let raw = raw.map(f64::from);
+        self.blend.eval(&raw[..d], coeffs);
         let big_r = self.rank;
         let time_basis = &self.basis[TIME_ROW * big_r..][..r];
         clip.times.fill_from_iter((0..t).map(|f| {

@@ -10,8 +10,9 @@
 use faer::Mat;
 use kriging::Kriging;
 
-/// Largest control dimension handled (the project uses `d = 4`).
-const MAX_D: usize = 7;
+/// Largest control dimension handled: the four controls and up to [`lod_policy::MAX_STYLES`]
+/// styles.
+const MAX_D: usize = lod_policy::CONTROL_VALUES;
 
 /// Universal kriging of per-sample values in its dual form (paper eq. 8 rearranged):
 /// `sum_i l_i(c) v_i = Q [gamma(c); 1] + F [c'; 1]`, with `F = V^T C^+` (the trend) and
@@ -82,11 +83,12 @@ impl DualBlend {
         })
     }
 
-    /// The first `out.len()` outputs (at most `D`) at raw controls `c`. Allocation-free once the
+    /// The first `out.len()` outputs (at most `D`) at raw controls `c` (the kriging's `d` values,
+    /// [`lod_policy::LodModel::control_vector`]). Allocation-free once the
     /// thread's scratch has grown. Runs an AVX2 build of the same operations where the CPU has it
     /// (no fused multiply-add, so the same bits), as the model's kernels do
     /// ([`lod_policy::LodModel::build_kernel`]): the baselines get the same instruction set.
-    pub(crate) fn eval(&self, c: &[f64; 4], out: &mut [f32]) {
+    pub(crate) fn eval(&self, c: &[f64], out: &mut [f32]) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2 (checked just above).
@@ -98,18 +100,18 @@ impl DualBlend {
 
     /// [`DualBlend::eval`] by the baseline build (x86-64 SSE2) whatever the CPU.
     #[cfg(test)]
-    pub(crate) fn eval_baseline(&self, c: &[f64; 4], out: &mut [f32]) {
+    pub(crate) fn eval_baseline(&self, c: &[f64], out: &mut [f32]) {
         self.eval_body(c, out);
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn eval_avx2(&self, c: &[f64; 4], out: &mut [f32]) {
+    fn eval_avx2(&self, c: &[f64], out: &mut [f32]) {
         self.eval_body(c, out);
     }
 
     #[inline(always)]
-    fn eval_body(&self, c: &[f64; 4], out: &mut [f32]) {
+    fn eval_body(&self, c: &[f64], out: &mut [f32]) {
         let n = out.len().min(self.outputs);
         let s = self.samples;
         let dims = self.scaling.offset.len().min(c.len());

@@ -211,6 +211,10 @@ impl ClipSource for LodSource<'_> {
         control_range(self.model)
     }
 
+    fn style_mix(&self) -> &[f32] {
+        self.model.runtime().data_style_mix()
+    }
+
     fn new_clip(&self) -> LodClip {
         LodClip {
             kernel: if self.compact {

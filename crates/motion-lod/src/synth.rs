@@ -172,6 +172,181 @@ impl MotionModel {
         })
     }
 
+    /// Synthesizes a walk whose controls change over time: `track` holds `(time in seconds,
+    /// controls)` rows in increasing time (the first at time 0 or earlier); each cycle takes the
+    /// controls of the last row at or before its start, so a change applies at the next cycle
+    /// seam, through the runtime's chaining. The walk ends with the first cycle that starts at or
+    /// after the last row's time (every row takes effect). `req.controls` and `req.cycles` are not
+    /// used; the body scale is the first row's.
+    pub fn synthesize_track(
+        &self,
+        req: &WalkRequest,
+        track: &[(f64, Controls)],
+    ) -> Result<Walk, SynthError> {
+        let Some(&(first, _)) = track.first() else {
+            return Err(SynthError::Request("the track has no rows".into()));
+        };
+        if !first.is_finite() || first > 0.0 {
+            return Err(SynthError::Request(format!(
+                "the track's first row is at {first} s: it must be at 0 s (the walk's start)"
+            )));
+        }
+        if let Some(i) =
+            (1..track.len()).find(|&i| track[i].0 <= track[i - 1].0 || !track[i].0.is_finite())
+        {
+            return Err(SynthError::Request(format!(
+                "track row {} (time {} s) does not come after row {} ({} s): times must increase",
+                i + 1,
+                track[i].0,
+                i,
+                track[i - 1].0
+            )));
+        }
+        let last = track.last().map_or(0.0, |r| r.0);
+        // Set once a cycle starts at or after the last row: that cycle is the walk's last.
+        let mut ended = false;
+        self.synthesize_cycles(req, &mut |_, start| {
+            if ended {
+                return None;
+            }
+            ended = start >= last;
+            let row = track
+                .iter()
+                .rev()
+                .find(|r| r.0 <= start)
+                .unwrap_or(&track[0]);
+            Some(row.1)
+        })
+    }
+
+    /// The walk whose cycle `k`, starting at `start` seconds, has the controls `next(k, start)`;
+    /// the walk ends before the first cycle for which it gives `None` (the first must be given).
+    /// Each seam is [`MotionModel::synthesize_walk`]'s, between two different clips.
+    fn synthesize_cycles(
+        &self,
+        req: &WalkRequest,
+        next: &mut dyn FnMut(usize, f64) -> Option<Controls>,
+    ) -> Result<Walk, SynthError> {
+        if !(req.fps.is_finite() && req.fps > 0.0 && req.fps <= 10_000.0) {
+            return Err(SynthError::Request(format!(
+                "frame rate {} is not in (0, 10000] frames per second",
+                req.fps
+            )));
+        }
+        let lod = self.lod();
+        let p = lod.p();
+        let first = next(0, 0.0)
+            .ok_or_else(|| SynthError::Request("at least one cycle is needed".into()))?;
+        // Two clips: the one playing and the next, built at the seam.
+        let mut ev = Evaluator::new(self);
+        let mut upcoming = Evaluator::new(self);
+        let check = |kernel: &lod_policy::ClipKernel, c: &Controls| -> Result<f64, SynthError> {
+            let duration = kernel.duration();
+            if !(duration.is_finite() && duration > 0.0 && duration <= MAX_CYCLE_S) {
+                return Err(SynthError::Request(format!(
+                    "the model gives a cycle of {duration} s for controls {c:?}, not a walk's (0 to \
+                    {MAX_CYCLE_S} s; a model file with a broken time table?)"
+                )));
+            }
+            Ok(duration)
+        };
+        lod.build_kernel(&first, req.detail, &mut ev.scratch, &mut ev.kernel)?;
+        let mut duration = check(&ev.kernel, &first)?;
+        let frame_time = 1.0 / req.fps;
+        let mut poses = Vec::new();
+        let mut transition = SeamTransition::new(p, DEFAULT_HALFLIFE_S);
+        let mut seam = SeamScratch::new(p);
+        let mut pose = vec![0.0f32; p];
+        let mut frame = CycleFrame::default();
+        let mut clamped = ev.kernel.clamped();
+        let (mut cycle, mut start) = (0usize, 0.0f64);
+        let mut f = 0usize;
+        loop {
+            let time = f as f64 * frame_time;
+            // Past this cycle's end: chain to the next, or stop after the last frame of the walk.
+            while time > start + duration + 1e-12 {
+                let Some(c) = next(cycle + 1, start + duration) else {
+                    break;
+                };
+                lod.build_kernel(&c, req.detail, &mut upcoming.scratch, &mut upcoming.kernel)?;
+                check(&upcoming.kernel, &c)?;
+                clamped |= upcoming.kernel.clamped();
+                let (kernel, new) = (&ev.kernel, &upcoming.kernel);
+                let motion = kernel.root_motion();
+                let rows = kernel.rows().min(new.rows());
+                let end = duration as f32;
+                // The seam: the displayed end of this cycle, in the next cycle's frame, against the
+                // next cycle's own start.
+                seam.capture(end, end, Some(&motion), |t, out| {
+                    lod.pose(kernel, kernel.phase_at(f64::from(t)), out)?;
+                    if req.blend {
+                        transition.apply(t, out);
+                    }
+                    Ok::<usize, SynthError>(rows)
+                })?;
+                seam.start(
+                    0.0,
+                    new.duration() as f32,
+                    |t, out| {
+                        lod.pose(new, new.phase_at(f64::from(t)), out)
+                            .map(|()| rows)
+                    },
+                    &mut transition,
+                )?;
+                frame = frame.next(&motion);
+                start += duration;
+                duration = new.duration();
+                cycle += 1;
+                std::mem::swap(&mut ev, &mut upcoming);
+            }
+            if time > start + duration + 1e-12 {
+                break;
+            }
+            if poses.len() / p.max(1) >= MAX_WALK_FRAMES {
+                return Err(SynthError::Request(format!(
+                    "{} cycles at {} fps are more than {MAX_WALK_FRAMES} frames, the most a walk writes",
+                    cycle + 1,
+                    req.fps
+                )));
+            }
+            let kernel = &ev.kernel;
+            let local = (time - start).clamp(0.0, duration);
+            lod.pose(kernel, kernel.phase_at(local), &mut pose)?;
+            if req.blend {
+                transition.apply(local as f32, &mut pose);
+            }
+            // Place the cycle frame in the world: root position and orientation.
+            frame.place_root(&mut pose);
+            poses.extend(pose.iter().map(|&v| f64::from(v)));
+            poses[f * p + TIME_ROW] /= lod.parts().time_scale;
+            f += 1;
+        }
+        motion_io::unwrap_exp_maps(&mut poses, p)?;
+        let body_scale = f64::from(self.body_scale(&first));
+        if req.plant_feet {
+            if let Some(reference) = &self.report.quality {
+                crate::footlock::plant_feet(
+                    &self.layout.scaled(body_scale)?,
+                    &reference.feet,
+                    reference.floor_m,
+                    &mut poses,
+                    frame_time,
+                );
+            }
+        }
+        Ok(Walk {
+            poses,
+            frame_time,
+            cycle_seconds: if cycle == 0 {
+                duration
+            } else {
+                start / cycle as f64
+            },
+            clamped,
+            body_scale,
+        })
+    }
+
     /// The pose layout a walk is drawn with: the model's, its bones scaled by the walk's body scale
     /// ([`PoseLayout::scaled`](motion_io::PoseLayout::scaled)).
     pub fn walk_layout(&self, walk: &Walk) -> Result<motion_io::PoseLayout, SynthError> {

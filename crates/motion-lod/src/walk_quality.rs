@@ -133,3 +133,15 @@ pub fn measure_walk(model: &MotionModel, walk: &Walk) -> Result<MotionQuality, Q
         &seams,
     )
 }
+
+/// The posture of a synthesized walk, measured on the model's layout scaled to the walk's body
+/// ([`crate::MotionModel::walk_layout`]); `None` when the model's skeleton has no clear knees or
+/// head, or the walk cannot be measured.
+pub fn walk_posture(
+    model: &crate::MotionModel,
+    walk: &crate::synth::Walk,
+) -> Option<crate::posture::Posture> {
+    let joints = crate::posture::PostureJoints::find(&model.layout)?;
+    let layout = model.walk_layout(walk).ok()?;
+    crate::posture::measure_posture(&layout, &walk.poses, &joints)
+}

@@ -350,3 +350,185 @@ fn the_crowd_reports_frame_time_percentiles_after_its_warm_up() {
     let (ok, text, _) = run(&["explain", "p99"]);
     assert!(ok && text.starts_with("frame times:"), "{text}");
 }
+
+/// Issue 33 on the command line: styles from the file names (the embedded walker's performers),
+/// reported by `cycles` and `info`, a walk per style or blend, a track, a crowd of one style; and
+/// on a model without styles, a style is refused and a control the model ignores is said with
+/// the figures that dropped it.
+#[test]
+fn styles_tracks_and_ignored_controls_on_the_command_line() {
+    let dir = std::env::temp_dir().join(format!("motion-lod-cli-style-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let pattern = r"walk_(p\d+)_";
+
+    let (ok, stdout, stderr) = run(&["cycles", "--style-from-name", pattern, "--json"]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    let styles = v["styles"].as_array().expect("styles in cycles --json");
+    assert_eq!(styles.len(), 3);
+    assert_eq!(styles[0]["name"], "p160");
+    assert_eq!(styles[0]["cycles"], 20);
+    assert_eq!(styles[0]["takes"], 5);
+    let (ok, stdout, _) = run(&["cycles", "--json"]);
+    assert!(
+        ok && !stdout.contains("\"styles\""),
+        "no styles without labels"
+    );
+
+    let styled = path("styled.mlod");
+    let (ok, _, stderr) = run(&["build", "--style-from-name", pattern, "-o", &styled]);
+    assert!(ok, "{stderr}");
+    let (ok, stdout, _) = run(&["info", &styled]);
+    assert!(ok);
+    assert!(
+        stdout.contains("styles (3, from file names matching")
+            && stdout.contains("p175 20 cycles/5 takes")
+            && stdout.contains("style weight"),
+        "{stdout}"
+    );
+    let (ok, stdout, _) = run(&["info", &styled, "--json"]);
+    assert!(ok && stdout.contains("\"style_weight\""), "{stdout}");
+
+    let walk = |style: &str, out: &str| {
+        run(&[
+            "synth",
+            &styled,
+            "--dx",
+            "0",
+            "--dz",
+            "1.3",
+            "--turn",
+            "0",
+            "--style",
+            style,
+            "-o",
+            &path(out),
+        ])
+    };
+    for (style, out) in [
+        ("p160", "a.bvh"),
+        ("p190", "b.bvh"),
+        ("p160=0.5,p190=0.5", "ab.bvh"),
+    ] {
+        let (ok, _, stderr) = walk(style, out);
+        assert!(ok, "{style}: {stderr}");
+    }
+    let (a, b) = (
+        std::fs::read(path("a.bvh")).unwrap(),
+        std::fs::read(path("b.bvh")).unwrap(),
+    );
+    assert_ne!(a, b, "two styles, two walks");
+    let (ok, _, stderr) = walk("p999", "x.bvh");
+    assert!(
+        !ok && stderr.contains("its styles are p160, p175, p190"),
+        "{stderr}"
+    );
+    assert!(
+        !dir.join("x.bvh").exists(),
+        "nothing written on a refused style"
+    );
+
+    std::fs::write(
+        dir.join("track.csv"),
+        "time,dx,dz,turn,style\n0,0,1.1,0,p160\n2.5,0,1.5,0,p190\n",
+    )
+    .unwrap();
+    let (ok, stdout, stderr) = run(&[
+        "synth",
+        &styled,
+        "--track",
+        &path("track.csv"),
+        "-o",
+        &path("track.glb"),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("cycles of"), "{stdout}");
+    std::fs::write(
+        dir.join("bad.csv"),
+        "time,dx,dz,turn\n0,0,1.1,0\n0,0,1.2,0\n",
+    )
+    .unwrap();
+    let (ok, _, stderr) = run(&[
+        "synth",
+        &styled,
+        "--track",
+        &path("bad.csv"),
+        "-o",
+        &path("bad.bvh"),
+    ]);
+    assert!(
+        !ok && stderr.contains("line 3") && stderr.contains("must increase"),
+        "{stderr}"
+    );
+
+    let (ok, stdout, stderr) = run(&[
+        "crowd",
+        &styled,
+        "--walkers",
+        "60",
+        "--seconds",
+        "1",
+        "--style",
+        "p175",
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("\"walkers\":60"), "{stdout}");
+
+    // A model without styles: no style, and the dropped turn is said with its figures.
+    let plain = path("plain.mlod");
+    let (ok, _, stderr) = run(&["build", "-o", &plain]);
+    assert!(ok, "{stderr}");
+    let (ok, _, stderr) = run(&[
+        "synth",
+        &plain,
+        "--dx",
+        "0",
+        "--dz",
+        "1.3",
+        "--turn",
+        "0",
+        "--style",
+        "p160",
+        "-o",
+        &path("p.bvh"),
+    ]);
+    assert!(
+        !ok && stderr.contains("the model has no styles"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = run(&[
+        "synth",
+        &plain,
+        "--dx",
+        "0",
+        "--dz",
+        "1.3",
+        "--turn",
+        "20",
+        "-o",
+        &path("t.bvh"),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.contains("warning: turn 20.000 has no effect")
+            && stderr.contains("no signal")
+            && stderr.contains("leave-one-out RMSE"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = run(&[
+        "synth",
+        &plain,
+        "--dx",
+        "0",
+        "--dz",
+        "1.3",
+        "--turn",
+        "0",
+        "-o",
+        &path("t0.bvh"),
+    ]);
+    assert!(ok && !stderr.contains("warning"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -268,6 +268,7 @@ fn held_out_takes_are_predicted_from_the_training_takes() {
         &analysis,
         &targets,
         &controls,
+        None,
         0,
         &[],
         &EvalConfig::default(),

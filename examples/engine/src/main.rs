@@ -116,12 +116,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         .controls()
         .range()
         .ok_or("not a walk model (it lacks the four controls dx, dz, turn, height)")?;
-    let controls = range.clamp(&Controls {
-        dx: 0.0,
-        dz: 1.3,
-        turn: 20f32.to_radians(),
-        height: 1.75,
-    });
+    let controls = range.clamp(&Controls::from_array([0.0, 1.3, 20f32.to_radians(), 1.75]));
     println!(
         "{path}: {} joints, {} accuracy levels; walking dx {:.2} m, dz {:.2} m, turn {:.1} deg per cycle, {:.2} m tall (body scale {:.3})",
         model.rig().joint_count(),
@@ -177,12 +172,7 @@ mod tests {
     fn the_walk_is_continuous_turns_as_asked_and_gives_unit_local_rotations() {
         let model = model();
         let range = model.lod().controls().range().expect("walk controls");
-        let controls = range.clamp(&Controls {
-            dx: 0.0,
-            dz: 1.3,
-            turn: 20f32.to_radians(),
-            height: 1.75,
-        });
+        let controls = range.clamp(&Controls::from_array([0.0, 1.3, 20f32.to_radians(), 1.75]));
         let mut frames = Vec::new();
         walk(&model, controls, 3.0, 6.0, 60.0, |f| frames.push(f.clone())).expect("walks");
         assert_eq!(frames.len(), 360);

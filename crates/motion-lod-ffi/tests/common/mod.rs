@@ -1,4 +1,7 @@
-//! What the C ABI's tests share: a small model built from the checkout's fixtures.
+//! What the C ABI's tests share: small models built from the checkout's fixtures.
+
+// Each test binary compiles this module and uses part of it.
+#![allow(dead_code)]
 
 /// The bytes of a model file built from the checkout's fixtures with small settings (12 cycles,
 /// 3 key levels, 4 accuracy levels), built once per test binary.
@@ -24,6 +27,40 @@ fn build_model_bytes() -> Vec<u8> {
     };
     let model =
         motion_lod::MotionModel::build(&data.training, &config, &motion_lod::progress::NoProgress)
+            .expect("builds");
+    motion_lod::model_file::encode(&model, std::path::Path::new("m")).expect("encodes")
+}
+
+/// The style labels of [`styled_model_bytes`]: the performer in each fixture take's file name
+/// (`walk_p160_t01.bvh` is `p160`).
+pub const STYLE_PATTERN: &str = r"walk_(p\d+)_";
+
+/// The bytes of a model file built from every cycle of the checkout's fixtures, each labelled with
+/// its performer ([`STYLE_PATTERN`]: styles `p160`, `p175`, `p190`), with small settings (3 key
+/// levels, 4 accuracy levels), built once per test binary.
+pub fn styled_model_bytes() -> Vec<u8> {
+    static BYTES: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    BYTES.get_or_init(build_styled_model_bytes).clone()
+}
+
+fn build_styled_model_bytes() -> Vec<u8> {
+    use motion_lod::BuildConfig;
+    use motion_lod::dataset::DataSpec;
+    use motion_lod::style::StyleSpec;
+    let data = DataSpec::default()
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("fixtures load");
+    let training = data
+        .training
+        .with_styles(Some(&StyleSpec::Name(STYLE_PATTERN.into())))
+        .expect("every take is labelled");
+    let config = BuildConfig {
+        key_levels: 3,
+        accuracy_levels: 4,
+        ..BuildConfig::default()
+    };
+    let model =
+        motion_lod::MotionModel::build(&training, &config, &motion_lod::progress::NoProgress)
             .expect("builds");
     motion_lod::model_file::encode(&model, std::path::Path::new("m")).expect("encodes")
 }

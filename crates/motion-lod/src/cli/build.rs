@@ -123,7 +123,7 @@ pub struct BuildArgs {
 /// Loads the data of `data` and builds a model with `model`'s settings (progress on stderr unless quiet).
 pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::Result<MotionModel> {
     let spec = data.spec()?;
-    let loaded = load(&spec, quiet)?;
+    let loaded = load(&spec, data.style_spec().as_ref(), quiet)?;
     let bar = BarProgress::new(!quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bar };
     let mut built = MotionModel::build(&loaded.training, &model.config(), progress)

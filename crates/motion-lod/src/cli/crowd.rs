@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context as _, bail};
 use clap::{Args, ValueEnum};
-use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport, Culling, Scene};
+use crowd_sim::{Camera, ClipSource, CrowdConfig, CrowdReport, CrowdStyle, Culling, Scene};
 use lod_policy::{DistancePolicy, FullDetail, LodModel, ScreenSpacePolicy};
 use motion_lod::build::Analysis;
 use motion_lod::crowd::{CrowdOutcome, CrowdRun, check_render_dir, run_crowd};
@@ -15,6 +15,7 @@ use motion_lod::{LodSource, MotionModel, NaiveSource, PcaSource};
 use serde::Serialize;
 
 use super::data::load;
+use motion_lod::style::parse_style_mix;
 
 /// Level-of-detail policy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -121,6 +122,11 @@ pub struct CrowdArgs {
     /// Print one JSON line instead of the report.
     #[arg(long)]
     pub json: bool,
+    /// The walkers' style, for a model built with style labels: by default each walker walks one
+    /// of the model's styles, drawn with the data's shares (a crowd of the data's mix); a style
+    /// name (`elderly`) or a blend (`elderly=0.5,youthful=0.5`) gives every walker that style.
+    #[arg(long, value_name = "STYLE")]
+    pub style: Option<String>,
     /// Also write a short clip of this crowd as glTF 2.0 binary (`.glb`): one skinned character per
     /// exported walker, coloured by its level of detail (view it with `motion-lod view FILE`).
     #[arg(long, value_name = "FILE.glb")]
@@ -224,7 +230,7 @@ fn model_and_analysis(
         Some(p) => MotionModel::load(p).with_context(|| format!("reading {}", p.display()))?,
         None => {
             let spec = motion_lod::dataset::DataSpec::default();
-            let loaded = load(&spec, quiet)?;
+            let loaded = load(&spec, None, quiet)?;
             let config = motion_lod::BuildConfig::default();
             let (mut model, analysis) =
                 MotionModel::build_with_analysis(&loaded.training, &config, &NoProgress)
@@ -239,7 +245,8 @@ fn model_and_analysis(
     let spec = model.report.data.clone().context(
         "the model does not record its training data, which the naive and PCA sources need",
     )?;
-    let loaded = load(&spec, quiet)?;
+    let style = model.style.as_ref().map(|s| s.spec.clone());
+    let loaded = load(&spec, style.as_ref(), quiet)?;
     let analysis = Analysis::run(&loaded.training, &model.report.config, &NoProgress)
         .context("rebuilding the samples for the naive or PCA source")?;
     Ok((model, Some(analysis)))
@@ -277,6 +284,13 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             seed: args.seed,
             fps: args.fps,
             culling: args.culling.into(),
+            style: match &args.style {
+                None => CrowdStyle::DataMix,
+                Some(text) => match parse_style_mix(model.styles(), text)? {
+                    mix if mix.is_data_mix() => CrowdStyle::DataMix,
+                    mix => CrowdStyle::Each(mix),
+                },
+            },
             ..CrowdConfig::with_density(args.walkers, args.density)
         },
         seconds: args.seconds,

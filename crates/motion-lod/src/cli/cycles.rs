@@ -63,6 +63,28 @@ struct Summary {
     feet_by_hierarchy: Option<bool>,
     /// Every file: cycles, dropped candidates, skipped frames and why it gave no cycle.
     takes: Vec<TakeSummary>,
+    /// With a style option: each style with its cycles and takes (left out without one).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    styles: Vec<motion_lod::info::StyleSummary>,
+}
+
+/// Each style of the training set with its cycles and takes (empty without labels).
+fn style_counts(training: &motion_lod::TrainingSet) -> Vec<motion_lod::info::StyleSummary> {
+    let Some(labels) = &training.styles else {
+        return Vec::new();
+    };
+    let takes = motion_lod::style::StyleReport::takes_per_style(labels, &training.sources);
+    labels
+        .names
+        .iter()
+        .zip(labels.counts())
+        .zip(takes)
+        .map(|((name, cycles), takes)| motion_lod::info::StyleSummary {
+            name: name.clone(),
+            cycles,
+            takes,
+        })
+        .collect()
 }
 
 /// The `--json` line when nothing could be used: the error and every file's reason.
@@ -74,7 +96,11 @@ struct Failure {
 
 /// Runs the subcommand.
 pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
-    let loaded = match load(&args.data.spec()?, args.json) {
+    let loaded = match load(
+        &args.data.spec()?,
+        args.data.style_spec().as_ref(),
+        args.json,
+    ) {
         Ok(l) => l,
         Err(e) => {
             if args.json {
@@ -131,10 +157,28 @@ pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
             feet: set.conventions.as_ref().map(|c| c.feet.clone()),
             feet_by_hierarchy: set.conventions.as_ref().map(|c| c.feet_by_hierarchy),
             takes: set.takes.clone(),
+            styles: style_counts(&loaded.training),
         };
         writeln!(out, "{}", serde_json::to_string(&summary)?)?;
     } else {
         print_report(&mut out, set, aligned, &args)?;
+        let styles = style_counts(&loaded.training);
+        if !styles.is_empty() {
+            writeln!(
+                out,
+                "styles ({}, from {}): {}",
+                styles.len(),
+                args.data
+                    .style_spec()
+                    .map(|s| s.describe())
+                    .unwrap_or_default(),
+                styles
+                    .iter()
+                    .map(|s| format!("{} {} cycles/{} takes", s.name, s.cycles, s.takes))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )?;
+        }
     }
     Ok(())
 }

@@ -7,6 +7,7 @@ use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use motion_io::{SignedAxis, Units};
 use motion_lod::dataset::{AlignSpec, DataSpec, LoadedData, Preset, joint_map_from_toml};
+use motion_lod::style::StyleSpec;
 use timewarp::DtwConfig;
 
 /// Time alignment of the cycles.
@@ -95,9 +96,32 @@ pub struct DataArgs {
     /// them: `left_foot`, `right_foot`, and optionally `left_toe`, `right_toe`, `head`.
     #[arg(long, value_name = "FILE")]
     pub joint_map: Option<PathBuf>,
+    /// Style of each take from its file name: a regular expression whose first capture group is
+    /// the style, e.g. '_([a-z]+)_\d+\.bvh$' for Bandai's `..._elderly_001.bvh`. The model then
+    /// conditions on style (`synth --style`, `crowd --style`).
+    #[arg(long, value_name = "REGEX", group = "style_source")]
+    pub style_from_name: Option<String>,
+    /// Style of each take from the name of the folder that holds it (one folder per style).
+    #[arg(long, group = "style_source")]
+    pub style_from_folder: bool,
+    /// Style of each take from a CSV table of `take,style` rows (take: the file name, with or
+    /// without `.bvh`).
+    #[arg(long, value_name = "CSV", group = "style_source")]
+    pub style_table: Option<PathBuf>,
 }
 
 impl DataArgs {
+    /// Where the takes' styles come from, if a style option was given.
+    pub fn style_spec(&self) -> Option<StyleSpec> {
+        if let Some(pattern) = &self.style_from_name {
+            Some(StyleSpec::Name(pattern.clone()))
+        } else if let Some(path) = &self.style_table {
+            Some(StyleSpec::Csv(path.clone()))
+        } else {
+            self.style_from_folder.then_some(StyleSpec::Folder)
+        }
+    }
+
     /// The data specification these options describe (reads the joint map).
     pub fn spec(&self) -> anyhow::Result<DataSpec> {
         let joint_map = match &self.joint_map {
@@ -157,8 +181,9 @@ pub fn bar(quiet: bool) -> anyhow::Result<ProgressBar> {
     Ok(bar)
 }
 
-/// Loads and aligns the data of `spec` with a progress bar; warns about skipped files on stderr.
-pub fn load(spec: &DataSpec, quiet: bool) -> anyhow::Result<LoadedData> {
+/// Loads and aligns the data of `spec` with a progress bar, the training set labelled with
+/// `style` when given; warns about skipped files on stderr.
+pub fn load(spec: &DataSpec, style: Option<&StyleSpec>, quiet: bool) -> anyhow::Result<LoadedData> {
     let bar = bar(quiet)?;
     // Two steps per take: read, then segmented into cycles.
     bar.set_message("steps (2 per take)");
@@ -169,6 +194,15 @@ pub fn load(spec: &DataSpec, quiet: bool) -> anyhow::Result<LoadedData> {
         })
         .with_context(|| format!("loading {}", spec.describe_data()))?;
     bar.finish_and_clear();
+    let mut loaded = loaded;
+    if style.is_some() {
+        loaded.training = loaded.training.with_styles(style).with_context(|| {
+            format!(
+                "labelling the takes' styles ({})",
+                style.map(StyleSpec::describe).unwrap_or_default()
+            )
+        })?;
+    }
     for f in &loaded.cycles.failed {
         eprintln!("warning: skipped {}: {}", f.path.display(), f.error);
     }

@@ -46,6 +46,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         render: Some(args.render.clone()),
         render_every: 30,
         json: false,
+        style: None,
         export: Some(args.render.join("crowd.glb")),
         export_walkers: 24,
         export_seconds: 3.0,

@@ -85,7 +85,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
                 .display()
         );
     }
-    let (spec, config) = match args.data.dirs.as_slice() {
+    let (spec, config, style) = match args.data.dirs.as_slice() {
         [one] if is_model_file(one) => {
             let model =
                 MotionModel::load(one).with_context(|| format!("reading {}", one.display()))?;
@@ -103,17 +103,23 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
                     ..spec
                 }
             };
-            (spec, model.report.config.clone())
+            // The style weight is chosen anew on every fold's training cycles, as the build did.
+            let config = model.report.config.clone();
+            (spec, config, model.style.map(|s| s.spec))
         }
         _ => {
             if !args.data_dirs.is_empty() {
                 anyhow::bail!("--data replaces a model file's data folders; name a model file");
             }
-            (args.data.spec()?, args.model.config())
+            (
+                args.data.spec()?,
+                args.model.config(),
+                args.data.style_spec(),
+            )
         }
     };
     if let Some(folds) = args.folds {
-        let loaded = load(&spec, args.json)?;
+        let loaded = load(&spec, style.as_ref(), args.json)?;
         let bar = BarProgress::new(!args.json);
         let progress: &dyn Progress = if args.json { &NoProgress } else { &bar };
         let by = match args.by {
@@ -151,6 +157,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     }
     let report = evaluate(
         &spec,
+        style.as_ref(),
         &config,
         &args.holdout,
         args.max_samples,
@@ -171,15 +178,17 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
 }
 
 /// Loads the data, builds the model and runs the leave-one-out evaluation.
+#[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     spec: &motion_lod::dataset::DataSpec,
+    style: Option<&motion_lod::style::StyleSpec>,
     config: &BuildConfig,
     holdout: &[std::path::PathBuf],
     max_samples: Option<usize>,
     pca_rank: usize,
     quiet: bool,
 ) -> anyhow::Result<EvalReport> {
-    let loaded = load(spec, quiet)?;
+    let loaded = load(spec, style, quiet)?;
     let bar = BarProgress::new(!quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bar };
     let analysis =
@@ -211,10 +220,33 @@ pub fn evaluate(
         .context("aligning the held-out cycles")?;
     let targets = analysis.prepare(&loaded.aligned.layout, &aligned.tensor);
     let controls: Vec<[f64; 4]> = aligned.controls.iter().map(|c| c.to_array()).collect();
+    // Held-out takes get their styles by the same rule, and must be styles of the model.
+    let styles = match (style, &analysis.styles) {
+        (Some(rule), Some(labels)) => {
+            let sources: Vec<String> = aligned
+                .sources
+                .iter()
+                .map(|s| {
+                    format!(
+                        "{} [{}..={}]",
+                        s.file.display(),
+                        s.first_frame,
+                        s.last_frame
+                    )
+                })
+                .collect();
+            let held = rule
+                .label_with(&sources, &labels.names)
+                .context("labelling the held-out takes' styles")?;
+            Some(held)
+        }
+        _ => None,
+    };
     held_out(
         &analysis,
         &targets,
         &controls,
+        styles.as_deref(),
         model_bytes,
         &key_bytes,
         &eval_config,
@@ -256,6 +288,15 @@ fn print_methods(r: &EvalReport) {
             m.shell_cm,
             m.bytes
         );
+    }
+    if !r.styles.is_empty() {
+        println!("  per style (held-out cycles):   level 0      naive kriging");
+        for st in &r.styles {
+            println!(
+                "  {:<16} {:>5} cycles  {:>7.3} cm   {:>7.3} cm",
+                st.style, st.evaluated, st.level0_cm, st.naive_cm
+            );
+        }
     }
     println!("  (terms: motion-lod explain \"key level\", \"accuracy level\", \"shell error\")");
 }

@@ -33,7 +33,31 @@ pub const GLOSSARY: &[Entry] = &[
     Entry {
         term: "controls",
         aliases: &["control", "dx", "dz", "turn", "height", "d"],
-        text: "The parameters a walk is synthesized for, per cycle: dx (sideways root displacement, metres, + = the character's left), dz (forward root displacement, metres), turn (heading change, radians in files and the library, degrees on the command line), height (the performer's standing height, metres). A control constant over the data, or carrying no signal (see `leave-one-out`), is ignored by the model and reported by `build` and `info`.",
+        text: "The parameters a walk is synthesized for, per cycle: dx (sideways root displacement, metres, + = the character's left), dz (forward root displacement, metres), turn (heading change, radians in files and the library, degrees on the command line), height (the performer's standing height, metres), and for a model built with style labels the style (see `style`). A control constant over the data, or carrying no signal (see `leave-one-out`), is ignored by the model and reported by `build` and `info`; `synth` warns when such a control is given a value, with the figures that dropped it.",
+    },
+    Entry {
+        term: "style",
+        aliases: &[
+            "styles",
+            "--style",
+            "style weight",
+            "--style-from-name",
+            "--style-from-folder",
+            "--style-table",
+            "data mix",
+            "blend",
+        ],
+        text: "What a performance is (elderly, youthful, ...), named per take by `--style-from-name REGEX` (the first capture group of the file name, e.g. '_([a-z]+)_\\d+\\.bvh$' for Bandai), `--style-from-folder` (the take's folder) or `--style-table CSV` (rows `take,style`). The model then conditions on style: each style is a one-hot control beside dx, dz, turn and height, scaled by the style weight that `build` chooses by 5-fold cross-validation by take (printed with the error of each weight tried). `synth --style elderly` walks one style, `--style elderly=0.5,youthful=0.5` a blend (weights normalised), `--style data` (the default) the data's own mix; `crowd` gives each walker one style drawn with the data's shares, or `--style` to all. At most 8 styles.",
+    },
+    Entry {
+        term: "track",
+        aliases: &["--track", "controls over time"],
+        text: "`synth --track FILE.csv`: controls that change over one walk. A header `time,dx,dz,turn` (optionally `height` and `style`), then one row per change: time in seconds (the first 0, increasing), dx and dz in metres per cycle, turn in degrees per cycle, style a name or a blend with `;` between its parts. Each cycle takes the last row at or before its start, so a change applies at the next cycle seam (chained and inertialized as every seam); the walk ends with the first cycle that starts at or after the last row's time.",
+    },
+    Entry {
+        term: "posture",
+        aliases: &["knee", "knee extension", "head", "head pitch", "looks like"],
+        text: "Two figures of how a walk holds itself, measured by forward kinematics on every frame (`motion_lod::posture`): knee extension, the smallest knee flexion over the walk in degrees (0 = a straight leg; the mean of both legs), and head pitch, the mean angle of the neck-to-head line from vertical in degrees, positive leaning forward. For a model with styles `quality` prints each style's spread over its training cycles (median, 10th-90th percentile), each walk's figures, and `looks like`: the style whose medians are nearest (each figure over its pooled spread).",
     },
     Entry {
         term: "body scale",

@@ -57,6 +57,12 @@ pub struct QualityArgs {
     /// Print one JSON document instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// For a model with styles: the grid's walks in this style (a name, a blend
+    /// `elderly=0.5,youthful=0.5`, or `data`, the default), measured against that style's own
+    /// takes, with each walk's posture (knee extension, head pitch) and the style whose cycles it
+    /// resembles most.
+    #[arg(long, value_name = "STYLE")]
+    pub style: Option<String>,
 }
 
 /// One measured walk.
@@ -68,6 +74,12 @@ struct Row {
     quality: MotionQuality,
     cycle_seconds: f64,
     data_cycle_seconds: Option<f64>,
+    /// Knee extension and head pitch of the walk, for a model with styles.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    posture: Option<motion_lod::posture::Posture>,
+    /// The style whose training cycles' posture is nearest the walk's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    looks_like: Option<String>,
 }
 
 /// Runs the subcommand.
@@ -77,12 +89,28 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     }
     let model = MotionModel::load(&args.model)
         .with_context(|| format!("reading {}", args.model.display()))?;
-    let Some(reference) = model.report.quality.clone() else {
+    let Some(pooled) = model.report.quality.clone() else {
         bail!(
             "{} has no motion-quality reference: the build did not find the feet; rebuild it",
             args.model.display()
         );
     };
+    let style = match &args.style {
+        Some(text) => motion_lod::style::parse_style_mix(model.styles(), text)?,
+        None => lod_policy::StyleMix::DATA_MIX,
+    };
+    // A style's walks are held to that style's own takes.
+    let reference = model
+        .style
+        .as_ref()
+        .and_then(|st| st.reference_for(&style, Some(&pooled)))
+        .unwrap_or(&pooled)
+        .clone();
+    let postures = model
+        .style
+        .as_ref()
+        .map(|st| st.posture.as_slice())
+        .filter(|p| !p.is_empty());
     if args.crowd {
         return run_crowd(&args, &model, &reference);
     }
@@ -101,7 +129,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     for &level in &chosen {
         for walk in &grid {
             let req = WalkRequest {
-                controls: walk.controls,
+                controls: walk.controls.with_style(style),
                 detail: Detail::new(level, joints),
                 cycles: args.cycles,
                 fps: 30.0,
@@ -114,6 +142,10 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             let q = walk_quality::measure_walk(&model, &w)
                 .with_context(|| format!("measuring `{}` at level {level}", walk.name))?;
             let step = f64::from(walk.controls.dx).hypot(f64::from(walk.controls.dz));
+            let posture = postures.and_then(|_| walk_quality::walk_posture(&model, &w));
+            let looks_like = posture.zip(postures).and_then(|(p, styles)| {
+                motion_lod::posture::nearest_style(&p, styles).map(|j| styles[j].style.clone())
+            });
             rows.push(Row {
                 walk: walk.clone(),
                 level,
@@ -121,6 +153,8 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
                 quality: q,
                 cycle_seconds: w.cycle_seconds,
                 data_cycle_seconds: reference.duration_for_step(step),
+                posture,
+                looks_like,
             });
         }
     }
@@ -142,6 +176,22 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let m = &reference.median;
+    if let Some(styles) = postures {
+        println!("posture of each style's cycles (median, 10th-90th percentile):");
+        for st in styles {
+            println!(
+                "  {:<12} knee extension {:5.1} deg ({:.1}-{:.1}), head pitch {:5.1} deg ({:.1}-{:.1}), {} cycles",
+                st.style,
+                st.knee_extension_deg.median,
+                st.knee_extension_deg.p10,
+                st.knee_extension_deg.p90,
+                st.head_pitch_deg.median,
+                st.head_pitch_deg.p10,
+                st.head_pitch_deg.p90,
+                st.cycles
+            );
+        }
+    }
     println!(
         "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s, float {:.2} cm, facing {:.1} deg \
          (range {:.1}..{:.1}), floor at {:.3} m",
@@ -154,8 +204,13 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         reference.facing_range_deg.1,
         reference.floor_m
     );
+    let posture_head = if postures.is_some() {
+        format!(" {:>6} {:>6}  {}", "knee", "head", "looks like")
+    } else {
+        String::new()
+    };
     println!(
-        "{:<16} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>12}",
+        "{:<16} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>12}{posture_head}",
         "walk",
         "level",
         "pop",
@@ -170,8 +225,17 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     );
     for r in &rows {
         let q = &r.quality;
+        let posture = match (&r.posture, &r.looks_like) {
+            (Some(p), looks) => format!(
+                " {:>6.1} {:>6.1}  {}",
+                p.knee_extension_deg,
+                p.head_pitch_deg,
+                looks.as_deref().unwrap_or("-")
+            ),
+            _ => String::new(),
+        };
         println!(
-            "{:<16} {:>5} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.1} {:>12}",
+            "{:<16} {:>5} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.1} {:>12}{posture}",
             r.walk.name,
             r.level,
             q.pop_cm,

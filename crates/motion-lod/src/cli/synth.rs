@@ -5,9 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context as _, bail};
 use clap::Args;
-use lod_policy::{Controls, Detail};
+use lod_policy::{Controls, Detail, StyleMix};
 use motion_lod::MotionModel;
+use motion_lod::style::parse_style_mix;
 use motion_lod::synth::WalkRequest;
+use motion_lod::track::parse_track;
 
 /// Arguments of `motion-lod synth`.
 #[derive(Debug, Args)]
@@ -16,17 +18,26 @@ pub struct SynthArgs {
     #[arg(value_name = "MODEL")]
     pub model: PathBuf,
     /// Sideways root displacement per cycle, metres (+ = to the character's left).
-    #[arg(long, allow_hyphen_values = true)]
-    pub dx: f32,
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "track")]
+    pub dx: Option<f32>,
     /// Forward root displacement per cycle, metres.
-    #[arg(long, allow_hyphen_values = true)]
-    pub dz: f32,
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "track")]
+    pub dz: Option<f32>,
     /// Heading change per cycle, degrees (+ = left).
-    #[arg(long, allow_hyphen_values = true)]
-    pub turn: f32,
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "track")]
+    pub turn: Option<f32>,
     /// Standing height of the character, metres (default: the middle of the data's range).
     #[arg(long)]
     pub height: Option<f32>,
+    /// The performer's style, for a model built with style labels: one style (`elderly`), a blend
+    /// (`elderly=0.5,youthful=0.5`), or `data` for the data's own mix (the default).
+    #[arg(long, value_name = "STYLE")]
+    pub style: Option<String>,
+    /// Controls over time from a CSV file (`time,dx,dz,turn[,height][,style]`, time in seconds,
+    /// turn in degrees; each row applied at the next cycle seam; see `motion-lod explain track`).
+    /// Replaces --dx, --dz, --turn, --style and --cycles.
+    #[arg(long, value_name = "CSV", conflicts_with_all = ["dx", "dz", "turn", "style", "cycles"])]
+    pub track: Option<PathBuf>,
     /// Accuracy level (0 = full detail; 0..=10000, and below the model's level count).
     #[arg(long, default_value_t = 0, value_parser = super::ranges::count(super::ranges::LEVEL))]
     pub level: usize,
@@ -70,53 +81,80 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     let model = MotionModel::load(&args.model)
         .with_context(|| format!("reading {}", args.model.display()))?;
     let range = model.control_range();
-    let height = args.height.unwrap_or(0.5 * (range[3].0 + range[3].1));
-    let controls = Controls {
-        dx: args.dx,
-        dz: args.dz,
-        turn: args.turn.to_radians(),
-        height,
+    let default_height = 0.5 * (range[3].0 + range[3].1);
+    let height = args.height.unwrap_or(default_height);
+    let track = match &args.track {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading the track {}", path.display()))?;
+            let rows = parse_track(&text, model.styles(), height)
+                .with_context(|| format!("track {}", path.display()))?;
+            Some(rows)
+        }
+        None => None,
+    };
+    let style = match &args.style {
+        Some(text) => parse_style_mix(model.styles(), text)?,
+        None => StyleMix::DATA_MIX,
+    };
+    let controls = match &track {
+        Some(rows) => rows[0].1,
+        None => Controls::from_array([
+            args.dx.unwrap_or(0.0),
+            args.dz.unwrap_or(0.0),
+            args.turn.unwrap_or(0.0).to_radians(),
+            height,
+        ])
+        .with_style(style),
+    };
+    let all: Vec<Controls> = match &track {
+        Some(rows) => rows.iter().map(|r| r.1).collect(),
+        None => vec![controls],
+    };
+    // Every control the model ignores, given a value other than its default, is said once.
+    let given = |k: usize, c: &Controls| match k {
+        0 => c.dx != 0.0,
+        1 => track.is_some() || args.dz.is_some(),
+        2 => c.turn != 0.0,
+        _ => args.height.is_some(),
     };
     let names = Controls::NAMES;
     let ignored = model.ignored_controls();
-    for (k, (&c, &(lo, hi))) in controls.to_array().iter().zip(&range).enumerate() {
-        if !c.is_finite() {
-            bail!("--{} is not a finite number", names[k]);
-        }
-        let constant = hi - lo <= f32::EPSILON * hi.abs().max(1.0);
-        if constant && k == 3 {
-            if args.height.is_some() && (c - lo).abs() > 1e-3 {
-                eprintln!(
-                    "warning: the training data has one height ({lo:.3} m); --height {c:.3} has no effect"
-                );
-            }
-            continue;
+    for k in 0..names.len() {
+        let (lo, hi) = range[k];
+        let values: Vec<f32> = all.iter().map(|c| c.to_array()[k]).collect();
+        if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
+            bail!("{} {bad} is not a finite number", names[k]);
         }
         if ignored[k] {
-            // Dropped at build: the data's variation of this control is noise (see `info`).
-            let given = k != 3 || args.height.is_some();
-            if given && (c < lo || c > hi) {
-                let (show, lo_s, hi_s) = if k == 2 {
-                    (c.to_degrees(), lo.to_degrees(), hi.to_degrees())
+            if let Some(c) = all.iter().find(|c| given(k, c)) {
+                let v = c.to_array()[k];
+                let show = if k == 2 { v.to_degrees() } else { v };
+                let implied = model.lod().controls().implied(k, c);
+                let implied = if k == 2 {
+                    implied.to_degrees()
                 } else {
-                    (c, lo, hi)
+                    implied
                 };
                 eprintln!(
-                    "warning: --{} {show:.3} has no effect: the model ignores {} (the data's range \
-                     [{lo_s:.3}, {hi_s:.3}] carries no signal; see `motion-lod info`)",
-                    names[k], names[k]
+                    "warning: {} {show:.3} has no effect: the model ignores {} ({}); the walk takes \
+                    the {} the other controls imply ({implied:.3}); see `motion-lod info`",
+                    names[k],
+                    names[k],
+                    model.why_ignored(k).unwrap_or_default(),
+                    names[k]
                 );
             }
             continue;
         }
-        if c < lo || c > hi {
+        if let Some(&v) = values.iter().find(|&&v| v < lo || v > hi) {
             let (show, lo_s, hi_s) = if k == 2 {
-                (c.to_degrees(), lo.to_degrees(), hi.to_degrees())
+                (v.to_degrees(), lo.to_degrees(), hi.to_degrees())
             } else {
-                (c, lo, hi)
+                (v, lo, hi)
             };
             let msg = format!(
-                "--{} {show:.3} is outside the data's range [{lo_s:.3}, {hi_s:.3}]",
+                "{} {show:.3} is outside the data's range [{lo_s:.3}, {hi_s:.3}]",
                 names[k]
             );
             if args.strict {
@@ -137,9 +175,14 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
         blend: !args.no_blend,
         plant_feet: !args.no_foot_lock,
     };
-    let walk = model
-        .synthesize_walk(&req)
-        .context("synthesizing the walk")?;
+    let walk = match &track {
+        Some(rows) => model.synthesize_track(&req, rows),
+        None => model.synthesize_walk(&req),
+    }
+    .context("synthesizing the walk")?;
+    let cycles = ((walk.poses.len() / model.layout.dof()) as f64 * walk.frame_time
+        / walk.cycle_seconds)
+        .round() as usize;
     if glb {
         let name = args
             .output
@@ -155,7 +198,7 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
             "wrote {}: {} cycles of {:.3} s, {frames} frames at {} fps (glTF 2.0; view it with \
              `motion-lod view {}`)",
             args.output.display(),
-            args.cycles,
+            cycles,
             walk.cycle_seconds,
             args.fps,
             args.output.display()
@@ -170,7 +213,7 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     println!(
         "wrote {}: {} cycles of {:.3} s, {} frames at {} fps",
         args.output.display(),
-        args.cycles,
+        cycles,
         walk.cycle_seconds,
         motion.frame_count(),
         args.fps
