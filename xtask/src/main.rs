@@ -63,6 +63,11 @@ struct TablesArgs {
     /// Thread counts of the crowd scaling rows (default 1,2), e.g. `1,2,4,8,16` on a bigger machine.
     #[arg(long, value_name = "N,N,...", value_delimiter = ',', value_parser = clap::value_parser!(u16).range(1..=1024))]
     crowd_threads: Vec<u16>,
+    /// Also cross-validate a model that conditions on style, the takes' styles read from their file
+    /// names by this regular expression (its first capture group), e.g. '_([a-z]+)_\d+\.bvh$'
+    /// for Bandai: section 5 then has the refitted errors with styles, pooled and per style.
+    #[arg(long, value_name = "REGEX")]
+    style_from_name: Option<String>,
 }
 
 /// Options of `xtask fixtures`.
@@ -154,7 +159,14 @@ fn run_tables(args: &TablesArgs) -> Result<()> {
         let list: Vec<String> = args.crowd_threads.iter().map(u16::to_string).collect();
         command.push_str(&format!(" --crowd-threads {}", list.join(",")));
     }
+    if let Some(p) = &args.style_from_name {
+        command.push_str(&format!(" --style-from-name '{p}'"));
+    }
     let mut config = tables::TablesConfig::full(args.data.clone(), out, figures);
+    config.style = args
+        .style_from_name
+        .clone()
+        .map(motion_lod::style::StyleSpec::Name);
     if !args.crowd_threads.is_empty() {
         config.crowd_threads = args.crowd_threads.iter().map(|&t| usize::from(t)).collect();
     }

@@ -1004,6 +1004,44 @@ pub enum Preset {
 }
 
 impl Preset {
+    /// The preset the takes' conventions call for, with the reason: [`Preset::Cmu`] when the first
+    /// take (in file order) has the joints of the CMU database's cgspeed BVH conversions (`lButtock`
+    /// and `rButtock` in the Daz/Poser-friendly release, `LHipJoint` and `RHipJoint` in the
+    /// MotionBuilder-friendly one), else [`Preset::Default`] (`None` reason). Reads only the first
+    /// take's HIERARCHY; a file that cannot be read gives the default (loading reports it).
+    pub fn detect(files: &[PathBuf]) -> (Preset, Option<String>) {
+        let Some(first) = files.first() else {
+            return (Preset::Default, None);
+        };
+        let Ok(text) = std::fs::read_to_string(first) else {
+            return (Preset::Default, None);
+        };
+        let hierarchy = text.split("MOTION").next().unwrap_or("");
+        let joints: Vec<&str> = hierarchy
+            .lines()
+            .filter_map(|l| {
+                let mut w = l.split_whitespace();
+                matches!(w.next(), Some("JOINT" | "ROOT"))
+                    .then(|| w.next())
+                    .flatten()
+            })
+            .collect();
+        for pair in [["lButtock", "rButtock"], ["LHipJoint", "RHipJoint"]] {
+            if pair.iter().all(|j| joints.contains(j)) {
+                return (
+                    Preset::Cmu,
+                    Some(format!(
+                        "{} has the joints {} and {} of the CMU database's cgspeed BVH conversions",
+                        first.display(),
+                        pair[0],
+                        pair[1]
+                    )),
+                );
+            }
+        }
+        (Preset::Default, None)
+    }
+
     /// The cycle settings of the preset.
     pub fn cycle_config(self) -> CycleConfig {
         match self {

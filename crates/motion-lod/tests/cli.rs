@@ -532,3 +532,42 @@ fn styles_tracks_and_ignored_controls_on_the_command_line() {
     assert!(ok && !stderr.contains("warning"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 33: the CMU (cgspeed) conventions are detected from the files: `--preset` defaults to
+/// `auto`, which picks `cmu` for the CMU takes (and says why) and `default` for Bandai.
+#[test]
+fn the_cmu_preset_is_detected_from_the_files() {
+    let Some(cmu) =
+        motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), "cmu-daz-walk-s07-s08")
+    else {
+        return;
+    };
+    let dir = cmu.to_str().unwrap();
+    let (ok, stdout, stderr) = run(&["cycles", dir, "--json"]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.contains("note: using --preset cmu") && stderr.contains("lButtock"),
+        "{stderr}"
+    );
+    let auto: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    let (ok, stdout, _) = run(&["cycles", dir, "--preset", "cmu", "--json"]);
+    assert!(ok);
+    let given: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(
+        auto["cycles"], given["cycles"],
+        "auto is the cmu preset here"
+    );
+    let (ok, stdout, stderr) = run(&["cycles", dir, "--preset", "default", "--json"]);
+    assert!(ok && !stderr.contains("note: using"), "{stderr}");
+    let default: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_ne!(
+        default["cycles"], given["cycles"],
+        "the presets differ on these files"
+    );
+    if let Some(bandai) =
+        motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), "bandai-namco-2-walk")
+    {
+        let (ok, _, stderr) = run(&["cycles", bandai.to_str().unwrap(), "--json"]);
+        assert!(ok && !stderr.contains("note: using"), "{stderr}");
+    }
+}

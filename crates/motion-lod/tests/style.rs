@@ -483,6 +483,50 @@ fn bandai_styles_and_their_blends_walk_like_the_data() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+
+    // Speed apart from style: a normal walk as slow as the elderly takes' median step does not
+    // take the elderly or exhausted posture (knees never straight, head down), which the elderly
+    // style at that speed does.
+    let slow = Controls {
+        dz: step_of(1),
+        ..straight
+    };
+    let postures = &report.posture;
+    assert_eq!(
+        postures.len(),
+        styles.len(),
+        "every style's posture measured"
+    );
+    let looks = |j: usize| {
+        let req = WalkRequest {
+            controls: slow.with_style(StyleMix::one(j)),
+            detail: model.lod().full_detail(),
+            cycles: 4,
+            fps: 30.0,
+            blend: true,
+            plant_feet: true,
+        };
+        let walk = model.synthesize_walk(&req).unwrap();
+        let p = walk_quality::walk_posture(model, &walk).expect("posture");
+        let nearest = motion_lod::posture::nearest_style(&p, postures).expect("a style");
+        println!(
+            "{} at {:.2} m per cycle: knee extension {:.1} deg, head pitch {:.1} deg, looks {}",
+            styles[j], slow.dz, p.knee_extension_deg, p.head_pitch_deg, postures[nearest].style
+        );
+        (p, postures[nearest].style.clone())
+    };
+    let (normal, normal_looks) = looks(5);
+    let (elderly, elderly_looks) = looks(1);
+    assert!(
+        normal_looks != "elderly" && normal_looks != "exhausted",
+        "a slow normal walk looks {normal_looks}"
+    );
+    assert_eq!(elderly_looks, "elderly");
+    assert!(
+        normal.head_pitch_deg < postures[1].head_pitch_deg.p10
+            && normal.knee_extension_deg < elderly.knee_extension_deg,
+        "slow normal {normal:?} against slow elderly {elderly:?}"
+    );
     // A blend lies between its styles (joint positions of the level-0 clip).
     for a in 0..styles.len() {
         for b in a + 1..styles.len() {

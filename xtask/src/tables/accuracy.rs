@@ -50,6 +50,29 @@ pub fn refit(
         .with_context(|| format!("{folds}-fold cross-validation by refitting"))
 }
 
+/// The per-style rows of a report with styles: each style's held-out cycles and their error at
+/// level 0 and by naive kriging (empty without styles).
+pub fn style_table(report: &motion_lod::eval::EvalReport) -> String {
+    if report.styles.is_empty() {
+        return String::new();
+    }
+    let mut t = Table::new(&[
+        "style",
+        ">held-out cycles",
+        ">multilinear level 0 (cm)",
+        ">naive kriging (cm)",
+    ]);
+    for st in &report.styles {
+        t.row(&[
+            st.style.clone(),
+            st.evaluated.to_string(),
+            format!("{:.3}", st.level0_cm),
+            format!("{:.3}", st.naive_cm),
+        ]);
+    }
+    format!("\nPer style:\n\n{}", t.render())
+}
+
 /// The refit table in markdown: every method's error over all held-out cycles, and the first
 /// fold's ranks and bytes.
 pub fn refit_table(report: &FoldReport) -> String {

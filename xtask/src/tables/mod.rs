@@ -71,6 +71,8 @@ pub struct TablesConfig {
     pub loo_samples: Option<usize>,
     /// Folds of the cross-validation by refitting (by take when the data has that many takes).
     pub refit_folds: usize,
+    /// Also cross-validate a model conditioned on the takes' styles labelled by this rule.
+    pub style: Option<motion_lod::style::StyleSpec>,
     /// Show the progress display on standard error.
     pub show_progress: bool,
     /// The command line that reproduces this run, for the document.
@@ -94,6 +96,7 @@ impl TablesConfig {
             crowd_threads: vec![1, crowd::MAIN_THREADS],
             loo_samples: None,
             refit_folds: 5,
+            style: None,
             show_progress: true,
             command: "cargo xtask tables".into(),
         }
@@ -135,6 +138,7 @@ impl TablesConfig {
             crowd_threads: vec![1, crowd::MAIN_THREADS],
             loo_samples: Some(4),
             refit_folds: 2,
+            style: None,
             show_progress: false,
             command: "(smoke test)".into(),
         }
@@ -285,6 +289,27 @@ pub fn run(config: &TablesConfig) -> Result<()> {
         },
         progress,
     )?;
+    let styled_refit = match &config.style {
+        Some(spec) => {
+            let styled = loaded
+                .training
+                .clone()
+                .with_styles(Some(spec))
+                .with_context(|| format!("labelling the takes' styles by {}", spec.describe()))?;
+            let refit = accuracy::refit(
+                &styled,
+                &config.build,
+                config.refit_folds,
+                &EvalConfig {
+                    max_samples: None,
+                    ..eval_config
+                },
+                progress,
+            )?;
+            Some((spec.describe(), refit))
+        }
+        None => None,
+    };
     let loo = accuracy::evaluate(&analysis, &model, &eval_config, progress)?;
     let plain = accuracy::plain_vs_weighted(
         &loaded.training,
@@ -386,6 +411,19 @@ pub fn run(config: &TablesConfig) -> Result<()> {
         refit.fold_sizes,
     );
     doc.push_str(&accuracy::refit_table(&refit));
+    if let Some((rule, styled)) = &styled_refit {
+        let _ = writeln!(
+            doc,
+            "\n### With style as a control (`motion-lod eval DIR --folds {} --by take --style-from-name ...`)\n\n\
+             The same cross-validation with each take's style ({rule}) as a control: a one-hot code per \
+             style beside dx, dz, turn and height, its weight chosen on each fold's training takes by their \
+             own 5-fold cross-validation. Every method gets the style (the baselines interpolate over the \
+             same controls).\n",
+            styled.folds
+        );
+        doc.push_str(&accuracy::refit_table(styled));
+        doc.push_str(&accuracy::style_table(&styled.pooled));
+    }
     let _ = writeln!(
         doc,
         "\n### Leave-one-out, factors fitted on all samples\n\nA fast check, not a held-out figure: the \

@@ -22,6 +22,10 @@ pub enum AlignArg {
 /// Contact detection and cycle selection settings.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum PresetArg {
+    /// `cmu` when the first take has the joints of the CMU database's cgspeed conversions
+    /// (`lButtock`/`rButtock` or `LHipJoint`/`RHipJoint`), else `default` (said on standard error
+    /// when it picks `cmu`).
+    Auto,
     /// Defaults tuned on the Bandai data set.
     Default,
     /// CMU (cgspeed) conversions: ignore the first 0.1 s, looser floor height.
@@ -76,7 +80,7 @@ pub struct DataArgs {
     #[arg(long, default_value_t = DtwConfig::default().max_slope, value_parser = super::ranges::count(super::ranges::MAX_SLOPE))]
     pub max_slope: usize,
     /// Contact detection preset.
-    #[arg(long, value_enum, default_value_t = PresetArg::Default)]
+    #[arg(long, value_enum, default_value_t = PresetArg::Auto)]
     pub preset: PresetArg,
     /// Use a random subset of N cycles (the paper used 186; 1..=10000000, and at most the cycles the
     /// data gives: more is an error).
@@ -146,6 +150,17 @@ impl DataArgs {
             preset: match self.preset {
                 PresetArg::Default => Preset::Default,
                 PresetArg::Cmu => Preset::Cmu,
+                PresetArg::Auto => {
+                    let files = motion_lod::dataset::list_bvh_files(&self.dirs).unwrap_or_default();
+                    let (preset, why) = Preset::detect(&files);
+                    if let Some(why) = why {
+                        eprintln!(
+                            "note: using --preset cmu: {why} (floors that drift, a reference pose \
+                             blended in over the first 0.1 s); --preset default overrides"
+                        );
+                    }
+                    preset
+                }
             },
             samples: self.samples,
             seed: self.seed,
