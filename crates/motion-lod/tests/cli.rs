@@ -476,7 +476,7 @@ fn styles_tracks_and_ignored_controls_on_the_command_line() {
     assert!(ok, "{stderr}");
     assert!(stdout.contains("\"walkers\":60"), "{stdout}");
 
-    // A model without styles: no style, and the dropped turn is said with its figures.
+    // A model without styles: no style is accepted.
     let plain = path("plain.mlod");
     let (ok, _, stderr) = run(&["build", "-o", &plain]);
     assert!(ok, "{stderr}");
@@ -498,6 +498,33 @@ fn styles_tracks_and_ignored_controls_on_the_command_line() {
         !ok && stderr.contains("the model has no styles"),
         "{stderr}"
     );
+    // A control the model ignores, given a value, is said with why: five cycles cannot hold a
+    // trend over every control, so the build leaves the least varying out.
+    let few = path("few.mlod");
+    let (ok, _, stderr) = run(&["build", "--samples", "5", "-o", &few]);
+    assert!(ok, "{stderr}");
+    let (ok, _, stderr) = run(&[
+        "synth",
+        &few,
+        "--dx",
+        "0.1",
+        "--dz",
+        "1.3",
+        "--turn",
+        "20",
+        "--height",
+        "1.7",
+        "-o",
+        &path("t.bvh"),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.contains("has no effect: the model ignores")
+            && stderr.contains("too few samples (5)")
+            && stderr.contains("the other controls imply"),
+        "{stderr}"
+    );
+    // The embedded model drops turn as no signal: a turn given is said with the figures.
     let (ok, _, stderr) = run(&[
         "synth",
         &plain,
@@ -508,7 +535,7 @@ fn styles_tracks_and_ignored_controls_on_the_command_line() {
         "--turn",
         "20",
         "-o",
-        &path("t.bvh"),
+        &path("t20.bvh"),
     ]);
     assert!(ok, "{stderr}");
     assert!(
