@@ -276,6 +276,19 @@ pub struct CycleSource {
     pub frame_time: f64,
 }
 
+impl CycleSource {
+    /// The sample's source as training sets record it: `<file> [<first>..=<last>]` ([`take_of`]
+    /// gives the file back).
+    pub fn label(&self) -> String {
+        format!(
+            "{} [{}..={}]",
+            self.file.display(),
+            self.first_frame,
+            self.last_frame
+        )
+    }
+}
+
 /// The cycles of a data set, on one skeleton and one exp-map branch.
 #[derive(Debug, Clone)]
 pub struct CycleSet {
@@ -1327,18 +1340,7 @@ impl AlignedSet {
             styles: None,
             style_spec: None,
             take_quality: Vec::new(),
-            sources: self
-                .sources
-                .iter()
-                .map(|s| {
-                    format!(
-                        "{} [{}..={}]",
-                        s.file.display(),
-                        s.first_frame,
-                        s.last_frame
-                    )
-                })
-                .collect(),
+            sources: self.sources.iter().map(CycleSource::label).collect(),
         }
     }
 }

@@ -150,19 +150,8 @@ impl MotionModel {
             poses.extend(pose.iter().map(|&v| f64::from(v)));
             poses[f * p + TIME_ROW] /= lod.parts().time_scale;
         }
-        motion_io::unwrap_exp_maps(&mut poses, p)?;
-        let body_scale = f64::from(self.body_scale(&req.controls));
-        if req.plant_feet {
-            if let Some(reference) = &self.report.quality {
-                crate::footlock::plant_feet(
-                    &self.layout.scaled(body_scale)?,
-                    &reference.feet,
-                    reference.floor_m,
-                    &mut poses,
-                    frame_time,
-                );
-            }
-        }
+        let body_scale =
+            self.finish_poses(&mut poses, &req.controls, req.plant_feet, frame_time)?;
         Ok(Walk {
             poses,
             frame_time,
@@ -321,19 +310,7 @@ impl MotionModel {
             poses[f * p + TIME_ROW] /= lod.parts().time_scale;
             f += 1;
         }
-        motion_io::unwrap_exp_maps(&mut poses, p)?;
-        let body_scale = f64::from(self.body_scale(&first));
-        if req.plant_feet {
-            if let Some(reference) = &self.report.quality {
-                crate::footlock::plant_feet(
-                    &self.layout.scaled(body_scale)?,
-                    &reference.feet,
-                    reference.floor_m,
-                    &mut poses,
-                    frame_time,
-                );
-            }
-        }
+        let body_scale = self.finish_poses(&mut poses, &first, req.plant_feet, frame_time)?;
         Ok(Walk {
             poses,
             frame_time,
@@ -345,6 +322,30 @@ impl MotionModel {
             clamped,
             body_scale,
         })
+    }
+
+    /// What every walk does to its world-frame poses once they are placed: exp-maps kept on one
+    /// branch over time, then with `plant_feet` the foot lock on the layout scaled to the body
+    /// scale of `controls` (which it returns).
+    fn finish_poses(
+        &self,
+        poses: &mut [f64],
+        controls: &Controls,
+        plant_feet: bool,
+        frame_time: f64,
+    ) -> Result<f64, SynthError> {
+        motion_io::unwrap_exp_maps(poses, self.lod().p())?;
+        let body_scale = f64::from(self.body_scale(controls));
+        if plant_feet && let Some(reference) = &self.report.quality {
+            crate::footlock::plant_feet(
+                &self.layout.scaled(body_scale)?,
+                &reference.feet,
+                reference.floor_m,
+                poses,
+                frame_time,
+            );
+        }
+        Ok(body_scale)
     }
 
     /// The pose layout a walk is drawn with: the model's, its bones scaled by the walk's body scale

@@ -223,18 +223,7 @@ pub fn evaluate(
     // Held-out takes get their styles by the same rule, and must be styles of the model.
     let styles = match (style, &analysis.styles) {
         (Some(rule), Some(labels)) => {
-            let sources: Vec<String> = aligned
-                .sources
-                .iter()
-                .map(|s| {
-                    format!(
-                        "{} [{}..={}]",
-                        s.file.display(),
-                        s.first_frame,
-                        s.last_frame
-                    )
-                })
-                .collect();
+            let sources: Vec<String> = aligned.sources.iter().map(|s| s.label()).collect();
             let held = rule
                 .label_with(&sources, &labels.names)
                 .context("labelling the held-out takes' styles")?;
