@@ -596,3 +596,88 @@ fn the_runtime_refuses_styles_that_do_not_fit_its_controls() {
     assert!(RuntimeModel::new(rig.clone(), lod.clone()).is_err());
     assert!(RuntimeModel::with_styles(rig, lod, names(&["a", "b", "c"])).is_ok());
 }
+
+/// The style section is checked like every other: a styled model without it, with it cut short
+/// or of another version, and a style-less model given one, are clear errors of the offline reader,
+/// never a panic; the runtime, which skips it, still plays the model.
+#[test]
+fn a_broken_style_section_is_a_clear_error() {
+    use lod_policy::file::{Section, frame};
+    let model = styled();
+    let path = std::path::Path::new("styled.mlod");
+    let bytes = encode(model, path).unwrap();
+    let parts = sections(&bytes, path).unwrap();
+    let owned: Vec<(Vec<u8>, [u8; 4], u32)> = parts
+        .iter()
+        .map(|s| (s.bytes.to_vec(), s.tag, s.version))
+        .collect();
+    let rebuild = |edit: &dyn Fn(&[u8; 4], &[u8]) -> Option<(u32, Vec<u8>)>| {
+        let kept: Vec<(u32, Vec<u8>, [u8; 4])> = owned
+            .iter()
+            .filter_map(|(b, tag, v)| {
+                edit(tag, b).map(|(v2, b2)| (if v2 == 0 { *v } else { v2 }, b2, *tag))
+            })
+            .collect();
+        let sections: Vec<Section> = kept
+            .iter()
+            .map(|(v, b, tag)| Section {
+                tag: *tag,
+                version: *v,
+                bytes: b,
+                offset: 0,
+            })
+            .collect();
+        frame(&sections)
+    };
+    let is_style = |tag: &[u8; 4]| *tag == STYLE_SECTION;
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "no style section",
+            rebuild(&|tag, b| (!is_style(tag)).then(|| (0, b.to_vec()))),
+            "no style report",
+        ),
+        (
+            "cut short",
+            rebuild(&|tag, b| {
+                Some((
+                    0,
+                    if is_style(tag) {
+                        b[..b.len() / 2].to_vec()
+                    } else {
+                        b.to_vec()
+                    },
+                ))
+            }),
+            "section STYL",
+        ),
+        (
+            "another version",
+            rebuild(&|tag, b| Some((if is_style(tag) { 99 } else { 0 }, b.to_vec()))),
+            "rebuild",
+        ),
+    ];
+    for (what, file, says) in cases {
+        let e = MotionModel::from_bytes(&file, path)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(says), "{what}: {e}");
+        let runtime = RuntimeModel::from_bytes(&file).expect("the runtime skips the style section");
+        assert_eq!(runtime.styles(), model.styles(), "{what}");
+    }
+    // A style report beside a model without styles.
+    let plain = MotionModel::build(&fixture_training(), &small(), &NoProgress).unwrap();
+    let plain_bytes = encode(&plain, path).unwrap();
+    let plain_parts = sections(&plain_bytes, path).unwrap();
+    let style_bytes = &owned.iter().find(|(_, tag, _)| is_style(tag)).unwrap().0;
+    let mut with_style: Vec<Section> = plain_parts.clone();
+    with_style.push(Section {
+        tag: STYLE_SECTION,
+        version: motion_lod::model_file::STYLE_VERSION,
+        bytes: style_bytes,
+        offset: 0,
+    });
+    let e = MotionModel::from_bytes(&frame(&with_style), path)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("style report names"), "{e}");
+}
