@@ -611,7 +611,10 @@ fn a_broken_style_section_is_a_clear_error() {
         .iter()
         .map(|s| (s.bytes.to_vec(), s.tag, s.version))
         .collect();
-    let rebuild = |edit: &dyn Fn(&[u8; 4], &[u8]) -> Option<(u32, Vec<u8>)>| {
+    // A section's new (version, bytes) from its tag and bytes, or `None` to leave it out; version
+    // 0 keeps the section's own.
+    type Edit<'a> = &'a dyn Fn(&[u8; 4], &[u8]) -> Option<(u32, Vec<u8>)>;
+    let rebuild = |edit: Edit| {
         let kept: Vec<(u32, Vec<u8>, [u8; 4])> = owned
             .iter()
             .filter_map(|(b, tag, v)| {
