@@ -598,3 +598,14 @@ fn the_cmu_preset_is_detected_from_the_files() {
         assert!(ok && !stderr.contains("note: using"), "{stderr}");
     }
 }
+
+/// Issue 36: the conventions `cycles --json` prints (`root_positions`: `Same`, `Absolute`,
+/// `Relative`) are explained.
+#[test]
+fn the_root_position_readings_are_explained() {
+    for word in ["Same", "Absolute", "Relative", "root_positions"] {
+        let (ok, stdout, stderr) = run(&["explain", word]);
+        assert!(ok, "{word}: {stderr}");
+        assert!(stdout.contains("OFFSET"), "{word}: {stdout}");
+    }
+}

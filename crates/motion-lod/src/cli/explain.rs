@@ -60,6 +60,17 @@ pub const GLOSSARY: &[Entry] = &[
         text: "Two figures of how a walk holds itself, measured by forward kinematics on every frame (`motion_lod::posture`): knee extension, the smallest knee flexion over the walk in degrees (0 = a straight leg; the mean of both legs), and head pitch, the mean angle of the neck-to-head line from vertical in degrees, positive leaning forward. For a model with styles `quality` prints each style's spread over its training cycles (median, 10th-90th percentile), each walk's figures, and `looks like`: the style whose medians are nearest (each figure over its pooled spread).",
     },
     Entry {
+        term: "root positions",
+        aliases: &[
+            "root_positions",
+            "Absolute",
+            "Relative",
+            "Same",
+            "conventions",
+        ],
+        text: "How the takes' root position channels were read (`cycles` prints it; JSON `root_positions`): `Absolute`, the channels hold the root's position and replace its OFFSET (the usual reading); `Relative`, they are a displacement from the OFFSET (hip height in the OFFSET), made absolute on reading; `Same`, both readings agree (the OFFSET is zero or the root has no position channel). Chosen per take as the reading that puts the lowest joint nearer the floor; `cycles` also prints the units, up axis and forward axis it decided.",
+    },
+    Entry {
         term: "body scale",
         aliases: &["stature", "skeleton", "scale"],
         text: "A model keeps one skeleton (the first take's); its stature is that skeleton's standing height, measured as the height control measures each performer (leg length plus the pelvis-to-head chain). A character is drawn at its body scale, its height over the stature: every bone below the root is that many times as long (crowd, foot lock, `synth` BVH and glTF, the C ABI). 1 when the data hold one height; `info` prints the stature and the range of body scales.",
