@@ -85,6 +85,28 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+//! Style as a control: label each take's style (here from the file names; a folder per style or a
+//! CSV table work too, [`style::StyleSpec`]), build, and ask for one style or a blend; the kernel
+//! normalises the weights, and all zero is the data's own mix ([`lod_policy::StyleMix`]):
+//!
+//! ```no_run
+//! use motion_lod::dataset::DataSpec;
+//! use motion_lod::lod_policy::Controls;
+//! use motion_lod::progress::NoProgress;
+//! use motion_lod::style::{StyleSpec, parse_style_mix};
+//! use motion_lod::{BuildConfig, MotionModel};
+//!
+//! let spec = DataSpec { dirs: vec!["takes".into()], ..DataSpec::default() };
+//! let labels = StyleSpec::Name(r"_([a-z]+)_\d+\.bvh$".into()); // walk_elderly_001.bvh: elderly
+//! let set = spec.load(&|_, _| {})?.training.with_styles(Some(&labels))?;
+//! let model = MotionModel::build(&set, &BuildConfig::default(), &NoProgress)?;
+//! println!("styles {:?}, shares {:?}", model.styles(), model.runtime().data_style_mix());
+//! let style = parse_style_mix(model.styles(), "elderly=0.5,youthful=0.5")?;
+//! let controls = Controls::from_array([0.0, 0.9, 0.0, 1.7]).with_style(style); // dx, dz, turn, height
+//! # let _ = controls;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
 pub mod build;
 pub mod config;
 pub mod crowd;
