@@ -29,6 +29,21 @@
 //! drift is estimated jointly with the weights), not the regression kriging of [`crate::Kriging`]
 //! (an ordinary least-squares trend, then ordinary kriging of its residuals).
 //!
+//! # Simple kriging
+//!
+//! With a known constant mean `m` ([`Krige::simple`]) there is no drift to estimate (p = 0, no
+//! Lagrange row): the weights solve the covariance system alone, and
+//!
+//! ```text
+//! C lambda = c(x)                                   (C(h) = K - gamma(h), K = nugget + sill)
+//! z*(x)      = m + lambda^t (z - m) = m + c(x)^t C^-1 (z - m)
+//! sigma^2(x) = C(0) - lambda^t c(x) = K - c(x)^t C^-1 c(x)
+//! ```
+//!
+//! Here `K` must be the total sill: the covariance is only defined for a bounded (sill-reaching)
+//! variogram, so the linear and power models are refused ([`KrigingError::InvalidVariogram`]).
+//! Beyond the range `c(x) = 0`: the prediction is the mean and the variance the total sill.
+//!
 //! Numerics: `C = L L^t` (Cholesky), `F_w = L^-1 F`, `F^t C^-1 F = F_w^t F_w = R R^t`; a query costs
 //! one triangular solve `v = L^-1 c(x)` (n^2 multiply-adds) for the variance and `O(n p)` for the
 //! prediction. Coordinates are centred on their mean and the drift terms are built from coordinates
@@ -219,6 +234,10 @@ pub struct Krige {
     pub fit_weights: FitWeights,
     /// Whether the fit estimates a nugget (otherwise 0).
     pub fit_nugget: bool,
+    /// `Some(m)`: simple kriging with the known mean `m` (see [`Krige::simple`]); `None` (the
+    /// default): the mean or drift is estimated (ordinary, universal or external-drift kriging).
+    #[serde(default)]
+    pub known_mean: Option<f64>,
 }
 
 impl Default for Krige {
@@ -235,6 +254,7 @@ impl Default for Krige {
             binning: Binning::default(),
             fit_weights: FitWeights::Cressie,
             fit_nugget: true,
+            known_mean: None,
         }
     }
 }
@@ -298,6 +318,9 @@ struct ModelData {
     anisotropy: Anisotropy,
     neighbourhood: Neighbourhood,
     fit: Option<VariogramFitReport>,
+    /// Simple kriging's known mean (absent in models saved before simple kriging existed).
+    #[serde(default)]
+    known_mean: Option<f64>,
 }
 
 /// A kriging system over a set of samples (all of them, or one query's neighbours).
@@ -403,6 +426,40 @@ impl Krige {
         self
     }
 
+    /// Simple kriging with the known constant mean `mean`: weights from the covariance system alone
+    /// (no Lagrange row), `z*(x) = m + c(x)^t C^-1 (z - m)` and
+    /// `sigma^2(x) = C(0) - c(x)^t C^-1 c(x)` (see the [module docs](crate::geo#simple-kriging)).
+    ///
+    /// Needs a bounded variogram (nugget plus sill-reaching structures: not linear or power), a
+    /// finite mean, the constant drift and no external drift; [`Krige::fit`] refuses anything else.
+    /// Works with every [`Neighbourhood`] (a local system per query, with the same global mean:
+    /// at least one neighbour per query), [`Anisotropy`] and [`KrigeModel::leave_one_out`].
+    ///
+    /// ```
+    /// use kriging::faer::Mat;
+    /// use kriging::{Krige, KrigingError, NestedVariogram, VariogramModel};
+    ///
+    /// let coords = Mat::from_fn(4, 1, |i, _| [0.0, 1.0, 3.0, 4.5][i]);
+    /// let z = [1.2, 0.8, 1.5, 1.1];
+    /// // Exponential variogram, nugget 0, partial sill 0.5, practical range 2: K = C(0) = 0.5.
+    /// let v = NestedVariogram::single(VariogramModel::Exponential, 0.0, 0.5, 2.0)?;
+    /// let sk = Krige::new().simple(1.0).variogram(v).fit(coords.as_ref(), &z)?;
+    /// assert_eq!(sk.known_mean(), Some(1.0));
+    /// let at = sk.predict(&[3.0])?; // exact at a sample, variance 0
+    /// assert!((at.value - 1.5).abs() < 1e-12 && at.variance.abs() < 1e-12);
+    /// let far = sk.predict(&[500.0])?; // beyond the range: the mean and the total sill
+    /// assert!((far.value - 1.0).abs() < 1e-12 && (far.variance - 0.5).abs() < 1e-12);
+    /// // An unbounded variogram has no covariance: refused, naming the model.
+    /// let power = NestedVariogram::single(VariogramModel::Power, 0.0, 0.5, 1.0)?;
+    /// let err = Krige::new().simple(1.0).variogram(power).fit(coords.as_ref(), &z).unwrap_err();
+    /// assert!(matches!(err, KrigingError::InvalidVariogram { model: VariogramModel::Power, .. }));
+    /// # Ok::<(), kriging::KrigingError>(())
+    /// ```
+    pub fn simple(mut self, mean: f64) -> Self {
+        self.known_mean = Some(mean);
+        self
+    }
+
     /// Uses this variogram as given (a [`crate::Variogram`] or a [`NestedVariogram`]).
     pub fn variogram(mut self, v: impl Into<NestedVariogram>) -> Self {
         self.variogram = VariogramChoice::Given(v.into());
@@ -446,7 +503,9 @@ impl Krige {
     /// one, coinciding samples without a nugget ([`KrigingError::DuplicateParams`] with both
     /// indices), a variogram that cannot be fitted, a covariance matrix that is not positive
     /// definite, an ill-conditioned drift system, a global system above 4 GiB (use a
-    /// [`Neighbourhood`]).
+    /// [`Neighbourhood`]); for simple kriging also a non-finite mean or a non-constant drift
+    /// ([`KrigingError::InvalidConfig`]) and an unbounded variogram
+    /// ([`KrigingError::InvalidVariogram`] naming the model).
     pub fn fit(&self, coords: MatRef<'_, f64>, values: &[f64]) -> Result<KrigeModel, KrigingError> {
         self.fit_inner(coords, values, None)
     }
@@ -505,6 +564,9 @@ impl Krige {
                 got: 0,
             });
         }
+        if let Some(m) = self.known_mean {
+            check_simple(m, self.drift, external.map_or(0, |e| e.ncols()), None)?;
+        }
         crate::check_finite("coordinates", coords)?;
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
             return Err(KrigingError::NonFinite {
@@ -541,6 +603,7 @@ impl Krige {
             anisotropy: self.anisotropy,
             neighbourhood: self.neighbourhood,
             fit: None,
+            known_mean: self.known_mean,
         };
         match &self.variogram {
             VariogramChoice::Given(v) => {
@@ -574,7 +637,9 @@ impl Krige {
         let (gp, _) = sym_pinv(matmul(f.transpose(), f.as_ref()).as_ref());
         let beta = matmul(gp.as_ref(), matmul(f.transpose(), z.as_ref()).as_ref());
         let fitted = matmul(f.as_ref(), beta.as_ref());
-        let resid = Mat::from_fn(n, 1, |i, _| data.values[i] - fitted[(i, 0)]);
+        // Simple kriging (p = 0): the residuals from the known mean.
+        let m0 = data.known_mean.unwrap_or(0.0);
+        let resid = Mat::from_fn(n, 1, |i, _| data.values[i] - m0 - fitted[(i, 0)]);
         let pts = Mat::from_fn(n, data.dim, |i, k| geom.pts[i * data.dim + k]);
         let emp = EmpiricalVariogram::compute_binned(pts.as_ref(), resid.as_ref(), &self.binning)?;
         let opts = FitOptions {
@@ -647,10 +712,19 @@ impl Geometry {
     fn new(data: &ModelData) -> Result<Self, KrigingError> {
         let d = data.dim;
         let n = data.values.len();
-        let p = data.drift.n_terms(d) + data.n_ext;
+        // Simple kriging has no drift terms.
+        let p = if data.known_mean.is_some() {
+            0
+        } else {
+            data.drift.n_terms(d) + data.n_ext
+        };
         if n < p + 1 || n < 2 {
             return Err(KrigingError::TooFewSamples {
-                what: "kriging with this drift (drift terms plus one)",
+                what: if p == 0 {
+                    "simple kriging (at least two samples)"
+                } else {
+                    "kriging with this drift (drift terms plus one)"
+                },
                 needed: (p + 1).max(2),
                 got: n,
             });
@@ -743,6 +817,9 @@ fn drift_terms(
     ext_sd: &[f64],
     out: &mut [f64],
 ) {
+    if out.is_empty() {
+        return; // simple kriging: no drift terms
+    }
     let d = u.len();
     out[0] = 1.0;
     let mut j = 1;
@@ -817,6 +894,9 @@ impl KrigeModel {
                 expected: n * d,
                 got: data.coords.len(),
             });
+        }
+        if let Some(m) = data.known_mean {
+            check_simple(m, data.drift, data.n_ext, Some(&data.variogram))?;
         }
         let geom = Geometry::new(&data)?;
         let fmat = geom.drift_rows(&data);
@@ -952,6 +1032,24 @@ impl KrigeModel {
         if ratio.is_nan() || ratio < PIVOT_RATIO_MIN {
             return Err(not_pd(ratio));
         }
+        // Simple kriging: alpha = C^-1 (z - m), no drift system.
+        let m0 = self.data.known_mean.unwrap_or(0.0);
+        if p == 0 {
+            let mut alpha = Mat::from_fn(n, 1, |i, _| self.data.values[idx[i]] - m0);
+            solve_lower(c.as_ref(), alpha.as_mut());
+            solve_lower_t(c.as_ref(), alpha.as_mut());
+            return Ok((
+                System {
+                    idx,
+                    l: c,
+                    fw: Mat::zeros(n, 0),
+                    r: Mat::zeros(0, 0),
+                    beta: Vec::new(),
+                    alpha: (0..n).map(|i| alpha[(i, 0)]).collect(),
+                },
+                None,
+            ));
+        }
         let mut fw = Mat::from_fn(n, p, |i, k| st.fmat[idx[i] * p + k]);
         solve_lower(c.as_ref(), fw.as_mut());
         let m = matmul(fw.transpose(), fw.as_ref());
@@ -1016,8 +1114,10 @@ impl KrigeModel {
             let a = sys.idx[i];
             st.shift - v.eval(dist(&st.pts[a * d..(a + 1) * d], &q[j * d..(j + 1) * d]))
         });
+        // The known mean of simple kriging (p = 0); 0 otherwise, where the drift carries the mean.
+        let m0 = self.data.known_mean.unwrap_or(0.0);
         for j in 0..b {
-            let mut s = 0.0;
+            let mut s = m0;
             for k in 0..p {
                 s += sys.beta[k] * fq[j * p + k];
             }
@@ -1033,7 +1133,9 @@ impl KrigeModel {
         solve_lower(sys.l.as_ref(), cq.as_mut());
         let ftv = matmul(sys.fw.transpose(), cq.as_ref()); // p x B
         let mut w = Mat::from_fn(p, b, |k, j| fq[j * p + k] - ftv[(k, j)]);
-        solve_lower(sys.r.as_ref(), w.as_mut());
+        if p > 0 {
+            solve_lower(sys.r.as_ref(), w.as_mut());
+        }
         for (j, vj) in var.iter_mut().enumerate() {
             let vv: f64 = cq.col_as_slice(j).iter().map(|x| x * x).sum();
             let ww: f64 = w.col_as_slice(j).iter().map(|x| x * x).sum();
@@ -1316,13 +1418,16 @@ impl KrigeModel {
         Ok(Predictions { values, variances })
     }
 
-    /// Leave-one-out cross validation with the variogram fixed and the drift re-estimated.
+    /// Leave-one-out cross validation with the variogram fixed and the drift re-estimated (simple
+    /// kriging: the mean stays the known one).
     ///
     /// Global neighbourhood, closed form (Dubrule 1983) from the inverse of the kriging matrix
     /// `A = [C F; F^t 0]`: with `B = A^-1`, `e_k = (B [z; 0])_k / B_kk` and
     /// `sigma^2_{-k}(x_k) = 1 / B_kk`, where `B_kk = (C^-1)_kk - g_k^t (F^t C^-1 F)^-1 g_k`,
-    /// `g_k = (F^t C^-1)_{:, k}` (cost: one `L^-1`, `n^3 / 3`). Moving neighbourhood: each sample is
-    /// predicted from its own neighbours without it.
+    /// `g_k = (F^t C^-1)_{:, k}` (cost: one `L^-1`, `n^3 / 3`). Simple kriging is the same closed
+    /// form without drift (`B = C^-1`): `e_k = (C^-1 (z - m))_k / (C^-1)_kk`,
+    /// `sigma^2_{-k}(x_k) = 1 / (C^-1)_kk`. Moving neighbourhood: each sample is predicted from its
+    /// own neighbours without it.
     ///
     /// ```
     /// use kriging::faer::Mat;
@@ -1359,8 +1464,10 @@ impl KrigeModel {
             solve_lower(sys.l.as_ref(), linv.as_mut());
             let mut g = sys.fw.clone();
             solve_lower_t(sys.l.as_ref(), g.as_mut());
-            let mut gt = g.transpose().to_owned(); // p x n
-            solve_lower(sys.r.as_ref(), gt.as_mut());
+            let mut gt = g.transpose().to_owned(); // p x n (0 x n for simple kriging)
+            if p > 0 {
+                solve_lower(sys.r.as_ref(), gt.as_mut());
+            }
             for k in 0..n {
                 let cinv_kk: f64 = (k..n).map(|i| linv[(i, k)] * linv[(i, k)]).sum();
                 let corr: f64 = gt.col_as_slice(k).iter().map(|x| x * x).sum();
@@ -1434,6 +1541,11 @@ impl KrigeModel {
         self.data.drift
     }
 
+    /// The known mean of a simple-kriging model ([`Krige::simple`]); `None` otherwise.
+    pub fn known_mean(&self) -> Option<f64> {
+        self.data.known_mean
+    }
+
     /// The neighbourhood.
     pub fn neighbourhood(&self) -> Neighbourhood {
         self.data.neighbourhood
@@ -1461,7 +1573,8 @@ impl KrigeModel {
 
     /// Generalised least-squares drift coefficients of a global model, on the internal basis
     /// (`1`, centred coordinates over their largest extent, their products, standardised external
-    /// variables); `None` for a moving neighbourhood (each query has its own).
+    /// variables); `None` for a moving neighbourhood (each query has its own); empty for simple
+    /// kriging (no drift is estimated).
     pub fn drift_coefficients(&self) -> Option<&[f64]> {
         self.st.global.as_ref().map(|s| s.beta.as_slice())
     }
@@ -1470,6 +1583,41 @@ impl KrigeModel {
     pub fn warnings(&self) -> &[String] {
         &self.st.warnings
     }
+}
+
+/// The conditions of simple kriging: a finite mean, the constant drift without external variables,
+/// and (once known) a bounded variogram.
+fn check_simple(
+    mean: f64,
+    drift: Drift,
+    n_ext: usize,
+    variogram: Option<&NestedVariogram>,
+) -> Result<(), KrigingError> {
+    if !mean.is_finite() {
+        return Err(KrigingError::InvalidConfig(format!(
+            "the mean of simple kriging must be finite, got {mean}"
+        )));
+    }
+    if drift != Drift::Constant || n_ext > 0 {
+        return Err(KrigingError::InvalidConfig(format!(
+            "simple kriging (known mean) takes no drift to estimate: got {drift:?} drift and {n_ext} \
+             external drift variables (use Drift::Constant without external variables, or drop \
+             Krige::simple for universal kriging)"
+        )));
+    }
+    let unbounded = variogram.and_then(|v| v.structures.iter().find(|s| !s.model.has_range()));
+    if let Some(s) = unbounded {
+        return Err(KrigingError::InvalidVariogram {
+            model: s.model,
+            reason: format!(
+                "simple kriging needs a bounded variogram (one that reaches a sill, so that the \
+                 covariance C(h) = sill - gamma(h) exists); the {} model is unbounded: use a \
+                 bounded model or ordinary kriging",
+                s.model.name()
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Adds the query index to an error about a query point.

@@ -797,7 +797,7 @@ impl MotionModel {
         // 6. Measured errors of every accuracy level and joint count.
         progress.stage("level errors", 1);
         let (level_errors, joint_errors) =
-            model.measure_lod_errors(&set.controls, config.error_samples)?;
+            model.measure_lod_errors(&set.controls, set.styles.as_ref(), config.error_samples)?;
         let (runtime, layout, report) = model.into_parts();
         let style = analysis.style_report(set);
         let model = MotionModel {
@@ -813,10 +813,12 @@ impl MotionModel {
 
     /// Error of every accuracy level (all joints) and of every joint count (level 0) relative to the
     /// full-detail synthesis at the same controls: pose errors over up to `max_samples` training
-    /// controls, foot slide ([`foot_slide_cm`]) over those and the walks of the quality grid.
+    /// controls (each with its sample's style when the set has `styles`), foot slide
+    /// ([`foot_slide_cm`]) over those and the walks of the quality grid.
     fn measure_lod_errors(
         &self,
         controls: &[[f64; 4]],
+        styles: Option<&StyleLabels>,
         max_samples: usize,
     ) -> Result<(Vec<LevelError>, Vec<LevelError>), BuildError> {
         let lod = self.lod();
@@ -824,8 +826,14 @@ impl MotionModel {
         let stride = controls.len().div_ceil(max_samples.max(1)).max(1);
         let picked: Vec<Controls> = controls
             .iter()
+            .enumerate()
             .step_by(stride)
-            .map(|&c| Controls::from_f64(c))
+            .map(|(i, &c)| {
+                let style = styles.map_or(lod_policy::StyleMix::DATA_MIX, |l| {
+                    lod_policy::StyleMix::one(l.of_sample[i])
+                });
+                Controls::from_f64(c).with_style(style)
+            })
             .collect();
         let full = self.lod().full_detail();
         let reference: Vec<Vec<f64>> = picked
