@@ -1,6 +1,6 @@
-//! Geostatistics front end: ordinary, universal and external-drift kriging of a scalar field over
-//! 1-, 2- or 3-D coordinates, with kriging variances, leave-one-out diagnostics, geometric anisotropy
-//! and an optional moving neighbourhood.
+//! Geostatistics front end: simple, ordinary, universal and external-drift kriging of a scalar
+//! field over 1-, 2- or 3-D coordinates, with kriging variances, leave-one-out diagnostics,
+//! geometric anisotropy and an optional moving neighbourhood.
 //!
 //! # The estimator
 //!
@@ -632,14 +632,17 @@ impl Krige {
         let p = geom.p;
         let fmat = geom.drift_rows(data);
         // OLS residuals: beta = (F^t F)^+ F^t z.
-        let f = Mat::from_fn(n, p, |i, k| fmat[i * p + k]);
-        let z = Mat::from_fn(n, 1, |i, _| data.values[i]);
-        let (gp, _) = sym_pinv(matmul(f.transpose(), f.as_ref()).as_ref());
-        let beta = matmul(gp.as_ref(), matmul(f.transpose(), z.as_ref()).as_ref());
-        let fitted = matmul(f.as_ref(), beta.as_ref());
         // Simple kriging (p = 0): the residuals from the known mean.
-        let m0 = data.known_mean.unwrap_or(0.0);
-        let resid = Mat::from_fn(n, 1, |i, _| data.values[i] - m0 - fitted[(i, 0)]);
+        let resid = if let (0, Some(m0)) = (p, data.known_mean) {
+            Mat::from_fn(n, 1, |i, _| data.values[i] - m0)
+        } else {
+            let f = Mat::from_fn(n, p, |i, k| fmat[i * p + k]);
+            let z = Mat::from_fn(n, 1, |i, _| data.values[i]);
+            let (gp, _) = sym_pinv(matmul(f.transpose(), f.as_ref()).as_ref());
+            let beta = matmul(gp.as_ref(), matmul(f.transpose(), z.as_ref()).as_ref());
+            let fitted = matmul(f.as_ref(), beta.as_ref());
+            Mat::from_fn(n, 1, |i, _| data.values[i] - fitted[(i, 0)])
+        };
         let pts = Mat::from_fn(n, data.dim, |i, k| geom.pts[i * data.dim + k]);
         let emp = EmpiricalVariogram::compute_binned(pts.as_ref(), resid.as_ref(), &self.binning)?;
         let opts = FitOptions {
@@ -1536,7 +1539,7 @@ impl KrigeModel {
         self.data.fit.as_ref()
     }
 
-    /// The drift.
+    /// The drift ([`Drift::Constant`] for simple kriging; its mean: [`KrigeModel::known_mean`]).
     pub fn drift(&self) -> Drift {
         self.data.drift
     }

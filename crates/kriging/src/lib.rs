@@ -3,9 +3,9 @@
 //!
 //! This crate is for: fitting variograms (binned empirical variogram with a maximum lag, weighted
 //! least squares, seven shapes and nested sums); ordinary, universal (linear or quadratic drift inside
-//! the kriging system) and external-drift kriging of a scalar field over 1-3-D coordinates with
-//! kriging variances, leave-one-out diagnostics, geometric anisotropy and a moving neighbourhood
-//! ([`Krige`], module [`geo`]; checked against PyKrige and GSTools on the Meuse data); and the
+//! the kriging system), external-drift and simple (known mean) kriging of a scalar field over 1-3-D
+//! coordinates with kriging variances, leave-one-out diagnostics, geometric anisotropy and a moving
+//! neighbourhood ([`Krige`], module [`geo`]; checked against PyKrige and GSTools on the Meuse data); and the
 //! vector-valued regression kriging of Mukai and Kuriyama's motion model ([`Kriging`], eq. 8 and
 //! appendix A) with its precomputed hot-path projection and an RBF baseline. It is not for: space-time
 //! or multivariate (co-)kriging, indicator or disjunctive kriging, simulation, block kriging,
@@ -29,7 +29,8 @@
 //! - [`Variogram`] / [`VariogramModel`]: linear, power, spherical, exponential, gaussian, Matérn and
 //!   cardinal-sine (wave; formerly called hole-effect) models with nugget, partial sill and range, fitted by weighted least squares
 //!   ([`fit_variogram`], pair-count or Cressie weights); [`NestedVariogram`]: sums of them;
-//! - [`Krige`] / [`KrigeModel`]: ordinary, universal and external-drift kriging with variances,
+//! - [`Krige`] / [`KrigeModel`]: simple ([`Krige::simple`]), ordinary, universal and external-drift
+//!   kriging with variances,
 //!   [`Anisotropy`], [`Neighbourhood`], [`LooStats`] (see [`geo`] for the formulas);
 //! - [`Kriging`]: ordinary kriging and the paper's regression kriging (trend `F = K C^+` over
 //!   `[c; 1]`, kriging of the residuals), with automatic model choice by fit or leave-one-out error,
