@@ -44,6 +44,40 @@
 //! variogram, so the linear and power models are refused ([`KrigingError::InvalidVariogram`]).
 //! Beyond the range `c(x) = 0`: the prediction is the mean and the variance the total sill.
 //!
+//! # Measurement error
+//!
+//! By default the nugget is microscale variation and kriging is exact: `c_i(x_i) = C(0) = K`, so a
+//! prediction at a sample is its value with variance 0. With [`Krige::measurement_error`] the
+//! nugget `c0` is the variance of independent measurement errors, `z_i = S(x_i) + e_i`, and the
+//! target is the error-free signal `S` (GSTools' `exact=False` with `cond_err="nugget"`). The
+//! kriging matrix is unchanged (`C_ii = K = c0 + sill`, `C_ij = K - c0 - gamma_s(h_ij)` for
+//! `i != j`, duplicates included), but the right-hand side is the signal covariance at every
+//! distance, the origin included:
+//!
+//! ```text
+//! c_i(x) = K - c0 - gamma_s(|x - x_i|)        (gamma_s = gamma - c0, continuous, 0 at 0)
+//! [ C   F ] [lambda]   [c(x)]
+//! [ F^t 0 ] [  mu  ] = [f(x)]                  z*(x) = lambda^t z   (simple: m + lambda^t (z - m))
+//! sigma^2(x) = K - c^t C^-1 c + (f - F^t C^-1 c)^t (F^t C^-1 F)^-1 (f - F^t C^-1 c)
+//!            = sum_i lambda_i gamma_me(x - x_i) + sum_k mu_k f_k(x)   (semivariogram form, drift)
+//! ```
+//!
+//! where `gamma_me(h) = c0 + gamma_s(h)` is the variogram without its drop to 0 at the origin (the
+//! semivariogram form needs `sum_i lambda_i = 1`, i.e. a drift; it has the sign of `mu` of the
+//! semivariogram system, as in the exact case above).
+//!
+//! The reported variance follows GSTools (`krige_var = sill - k^t A^-1 k` with `sill` the *total*
+//! sill `nugget + var`): it is `E[(Z_new(x) - z*(x))^2]`, the mean squared error of predicting a new
+//! measurement at `x` with its own independent error. The variance of the error-free signal,
+//! `E[(S(x) - z*(x))^2]`, is that minus the nugget `c0`; subtract it where that is wanted. With
+//! measurement error the predictions are smoothed at the samples and the variance there is at
+//! least the nugget. Coinciding samples are allowed with a positive nugget (the matrix stays
+//! regular: `C_ii - C_ij = c0`), and a pure-nugget variogram (no structure, `c0 > 0`) is allowed:
+//! `c(x) = 0`, so the prediction is the (generalised least-squares) drift everywhere. Without a
+//! nugget the two forms coincide. Leave-one-out is the same closed form in both modes, since the
+//! right-hand side at a held-out sample is its column of `C` (which already carries the signal
+//! covariance off the diagonal).
+//!
 //! Numerics: `C = L L^t` (Cholesky), `F_w = L^-1 F`, `F^t C^-1 F = F_w^t F_w = R R^t`; a query costs
 //! one triangular solve `v = L^-1 c(x)` (n^2 multiply-adds) for the variance and `O(n p)` for the
 //! prediction. Coordinates are centred on their mean and the drift terms are built from coordinates
@@ -238,6 +272,11 @@ pub struct Krige {
     /// default): the mean or drift is estimated (ordinary, universal or external-drift kriging).
     #[serde(default)]
     pub known_mean: Option<f64>,
+    /// `true`: the nugget is measurement error (non-exact kriging, see
+    /// [`Krige::measurement_error`]); `false` (the default): it is microscale variation and
+    /// kriging interpolates the data.
+    #[serde(default)]
+    pub measurement_error: bool,
 }
 
 impl Default for Krige {
@@ -255,6 +294,7 @@ impl Default for Krige {
             fit_weights: FitWeights::Cressie,
             fit_nugget: true,
             known_mean: None,
+            measurement_error: false,
         }
     }
 }
@@ -264,7 +304,8 @@ impl Default for Krige {
 pub struct Prediction {
     /// `z*(x)`.
     pub value: f64,
-    /// `sigma^2(x) >= 0` (0 at a sample).
+    /// `sigma^2(x) >= 0` (0 at a sample; at least the nugget with
+    /// [`Krige::measurement_error`]).
     pub variance: f64,
 }
 
@@ -321,6 +362,9 @@ struct ModelData {
     /// Simple kriging's known mean (absent in models saved before simple kriging existed).
     #[serde(default)]
     known_mean: Option<f64>,
+    /// The nugget is measurement error (absent in models saved before the option existed).
+    #[serde(default)]
+    measurement_error: bool,
 }
 
 /// A kriging system over a set of samples (all of them, or one query's neighbours).
@@ -460,6 +504,47 @@ impl Krige {
         self
     }
 
+    /// `true`: the nugget is measurement error, not microscale variation (non-exact kriging, as
+    /// GSTools' `exact=False`): the kriging matrix keeps the nugget on its diagonal, but the
+    /// right-hand side is the covariance of the error-free signal, `c_i(x) = C(0) - nugget -
+    /// gamma_s(|x - x_i|)` (`gamma_s` the structured part, without the jump at the origin) even
+    /// where `x` is a sample, so predictions at the samples are smoothed towards the drift instead
+    /// of reproducing the data. See the [module docs](crate::geo#measurement-error) for the
+    /// formulas and the variance reported (GSTools' convention: the total sill `K` minus the
+    /// kriging reduction, i.e. the error variance of predicting a *new measurement* at `x`; the
+    /// variance of the error-free signal there is that minus the nugget).
+    ///
+    /// With the option, samples at the same place are accepted when the nugget is positive (their
+    /// errors are independent), and a pure-nugget variogram (`NestedVariogram { nugget, structures:
+    /// vec![] }`, nugget > 0) is allowed: it predicts the (drift) mean everywhere. Leave-one-out
+    /// keeps its closed form (the held-out sample is not in the system, so the right-hand side at
+    /// it is a column of the kriging matrix either way). Works with every drift, simple kriging,
+    /// neighbourhood and anisotropy. Without a nugget the option changes nothing.
+    ///
+    /// ```
+    /// use kriging::faer::Mat;
+    /// use kriging::{Krige, NestedVariogram, VariogramModel};
+    ///
+    /// // The same site measured twice (2 and 5), and a third sample.
+    /// let coords = Mat::from_fn(3, 1, |i, _| [0.0, 0.0, 4.0][i]);
+    /// let z = [2.0, 5.0, 3.0];
+    /// let v = NestedVariogram::single(VariogramModel::Exponential, 0.5, 1.0, 6.0)?;
+    /// let me = Krige::new().measurement_error(true).variogram(v).fit(coords.as_ref(), &z)?;
+    /// let p = me.predict(&[0.0])?; // smoothed: between the two measurements
+    /// assert!(p.value > 2.0 && p.value < 5.0 && p.variance > 0.5);
+    /// // Pure nugget: the data are noise around the mean; ordinary kriging predicts their mean.
+    /// let noise = NestedVariogram { nugget: 0.5, structures: vec![] };
+    /// let pn = Krige::new().measurement_error(true).variogram(noise).fit(coords.as_ref(), &z)?;
+    /// assert!((pn.predict(&[4.0])?.value - 10.0 / 3.0).abs() < 1e-12);
+    /// // Variance: the nugget (a new measurement's error) plus the mean's, 0.5 / 3.
+    /// assert!((pn.predict(&[4.0])?.variance - 0.5 * (1.0 + 1.0 / 3.0)).abs() < 1e-12);
+    /// # Ok::<(), kriging::KrigingError>(())
+    /// ```
+    pub fn measurement_error(mut self, on: bool) -> Self {
+        self.measurement_error = on;
+        self
+    }
+
     /// Uses this variogram as given (a [`crate::Variogram`] or a [`NestedVariogram`]).
     pub fn variogram(mut self, v: impl Into<NestedVariogram>) -> Self {
         self.variogram = VariogramChoice::Given(v.into());
@@ -501,7 +586,8 @@ impl Krige {
     ///
     /// Errors: shapes, NaN or infinity (naming row and column), fewer samples than drift terms plus
     /// one, coinciding samples without a nugget ([`KrigingError::DuplicateParams`] with both
-    /// indices), a variogram that cannot be fitted, a covariance matrix that is not positive
+    /// indices; with a nugget they are accepted, best read with [`Krige::measurement_error`]), a
+    /// pure-nugget variogram (no structure) unless [`Krige::measurement_error`] is set, a variogram that cannot be fitted, a covariance matrix that is not positive
     /// definite, an ill-conditioned drift system, a global system above 4 GiB (use a
     /// [`Neighbourhood`]); for simple kriging also a non-finite mean or a non-constant drift
     /// ([`KrigingError::InvalidConfig`]) and an unbounded variogram
@@ -604,10 +690,11 @@ impl Krige {
             neighbourhood: self.neighbourhood,
             fit: None,
             known_mean: self.known_mean,
+            measurement_error: self.measurement_error,
         };
         match &self.variogram {
             VariogramChoice::Given(v) => {
-                v.validate()?;
+                validate_variogram(v, self.measurement_error)?;
                 data.variogram = v.clone();
             }
             VariogramChoice::Fit(m) => self.fit_variogram(&mut data, &[*m])?,
@@ -888,7 +975,7 @@ fn solve_lower_t(l: MatRef<'_, f64>, rhs: faer::MatMut<'_, f64>) {
 
 impl KrigeModel {
     fn build(data: ModelData) -> Result<Self, KrigingError> {
-        data.variogram.validate()?;
+        validate_variogram(&data.variogram, data.measurement_error)?;
         let d = data.dim;
         let n = data.values.len();
         if data.coords.len() != n * d || data.external.len() != n * data.n_ext {
@@ -1113,9 +1200,16 @@ impl KrigeModel {
         let b = val.len();
         let n = sys.idx.len();
         let v = &self.data.variogram;
+        let me = self.data.measurement_error;
         let mut cq = Mat::from_fn(n, b, |i, j| {
             let a = sys.idx[i];
-            st.shift - v.eval(dist(&st.pts[a * d..(a + 1) * d], &q[j * d..(j + 1) * d]))
+            let h = dist(&st.pts[a * d..(a + 1) * d], &q[j * d..(j + 1) * d]);
+            if me {
+                // Measurement error: the covariance of the error-free signal, also at h = 0.
+                st.shift - (v.nugget + v.structured(h))
+            } else {
+                st.shift - v.eval(h)
+            }
         });
         // The known mean of simple kriging (p = 0); 0 otherwise, where the drift carries the mean.
         let m0 = self.data.known_mean.unwrap_or(0.0);
@@ -1429,7 +1523,10 @@ impl KrigeModel {
     /// `sigma^2_{-k}(x_k) = 1 / B_kk`, where `B_kk = (C^-1)_kk - g_k^t (F^t C^-1 F)^-1 g_k`,
     /// `g_k = (F^t C^-1)_{:, k}` (cost: one `L^-1`, `n^3 / 3`). Simple kriging is the same closed
     /// form without drift (`B = C^-1`): `e_k = (C^-1 (z - m))_k / (C^-1)_kk`,
-    /// `sigma^2_{-k}(x_k) = 1 / (C^-1)_kk`. Moving neighbourhood: each sample is predicted from its
+    /// `sigma^2_{-k}(x_k) = 1 / (C^-1)_kk`. With [`Krige::measurement_error`] the same closed form
+    /// holds (the held-out sample is not in the system, and the right-hand side at it is its
+    /// column of `C`, which off the diagonal is the error-free covariance already; the variance is
+    /// that of predicting the held-out measurement, GSTools' convention). Moving neighbourhood: each sample is predicted from its
     /// own neighbours without it.
     ///
     /// ```
@@ -1549,6 +1646,11 @@ impl KrigeModel {
         self.data.known_mean
     }
 
+    /// Whether the nugget is measurement error ([`Krige::measurement_error`]).
+    pub fn measurement_error(&self) -> bool {
+        self.data.measurement_error
+    }
+
     /// The neighbourhood.
     pub fn neighbourhood(&self) -> Neighbourhood {
         self.data.neighbourhood
@@ -1621,6 +1723,21 @@ fn check_simple(
         });
     }
     Ok(())
+}
+
+/// [`NestedVariogram::validate`], and under measurement error also a pure nugget (no structure,
+/// nugget finite and > 0).
+fn validate_variogram(v: &NestedVariogram, measurement_error: bool) -> Result<(), KrigingError> {
+    if measurement_error && v.structures.is_empty() {
+        if v.nugget.is_finite() && v.nugget > 0.0 {
+            return Ok(());
+        }
+        return Err(KrigingError::InvalidConfig(format!(
+            "a pure-nugget variogram needs a finite nugget > 0, got {}",
+            v.nugget
+        )));
+    }
+    v.validate()
 }
 
 /// Adds the query index to an error about a query point.
