@@ -24,20 +24,8 @@ kriging smooths. Variograms are given (no fitting), in the kriging crate's conve
 import gstools as gs
 import numpy as np
 
+from gstools_points import N, lit, model, xs, ys, z
 
-def radical(i, b):
-    f, r = 1.0, 0.0
-    while i > 0:
-        f /= b
-        r += f * (i % b)
-        i //= b
-    return r
-
-
-N = 12
-xs = np.array([100.0 * radical(i, 2) for i in range(1, N + 1)])
-ys = np.array([80.0 * radical(i, 3) for i in range(1, N + 1)])
-z = np.sin(xs / 30.0) + 0.5 * np.cos(ys / 20.0) + 0.01 * xs
 QX = np.array([10.0, 33.3, 50.0, 71.2, xs[0], xs[5], xs[11], 400.0])
 QY = np.array([10.0, 60.0, 40.0, 25.5, ys[0], ys[5], ys[11], -300.0])
 
@@ -46,16 +34,6 @@ CASES = [
     ("exponential", 0.2, 1.0, 60.0, 0.5),
     ("spherical", 0.05, 0.8, 50.0, 1.5),
 ]
-
-
-def model(name, nugget, sill, rng):
-    if name == "exponential":
-        return gs.Exponential(dim=2, var=sill, len_scale=rng / 3.0, nugget=nugget)
-    return gs.Spherical(dim=2, var=sill, len_scale=rng, nugget=nugget)
-
-
-def lit(a):
-    return "[" + ", ".join(repr(float(v)) for v in a) + "]"
 
 
 def run(k, qx, qy):

@@ -22,20 +22,8 @@ Variograms are given (no fitting), written in the kriging crate's convention and
 import gstools as gs
 import numpy as np
 
+from gstools_points import N, lit, model, xs, ys, z
 
-def radical(i, b):
-    f, r = 1.0, 0.0
-    while i > 0:
-        f /= b
-        r += f * (i % b)
-        i //= b
-    return r
-
-
-N = 12
-xs = np.array([100.0 * radical(i, 2) for i in range(1, N + 1)])
-ys = np.array([80.0 * radical(i, 3) for i in range(1, N + 1)])
-z = np.sin(xs / 30.0) + 0.5 * np.cos(ys / 20.0) + 0.01 * xs
 QX = np.array([10.0, 33.3, 50.0, 71.2, 90.0, xs[5], 45.0, 400.0])
 QY = np.array([10.0, 60.0, 40.0, 25.5, 75.0, ys[5], 5.0, -300.0])
 
@@ -43,17 +31,6 @@ CASES = [
     ("exponential", 0.1, 1.0, 60.0, 2.0),
     ("spherical", 0.0, 0.8, 50.0, 1.5),
 ]
-
-
-def model(name, nugget, sill, rng):
-    if name == "exponential":
-        return gs.Exponential(dim=2, var=sill, len_scale=rng / 3.0, nugget=nugget)
-    return gs.Spherical(dim=2, var=sill, len_scale=rng, nugget=nugget)
-
-
-def lit(a):
-    return "[" + ", ".join(repr(float(v)) for v in a) + "]"
-
 
 print(f"// gstools {gs.__version__}")
 print(f"const XS: [f64; {N}] = {lit(xs)};")

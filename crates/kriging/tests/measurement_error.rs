@@ -2,6 +2,9 @@
 //! numbers (ordinary and simple kriging, a duplicated site, a pure nugget), smoothing at the
 //! samples, leave-one-out against explicit refits, neighbourhoods, serde, and the option off.
 
+mod common;
+
+use common::gstools_points::{XS, YS, Z};
 use kriging::faer::Mat;
 use kriging::{
     Drift, Krige, KrigeModel, KrigingError, Neighbourhood, NestedVariogram, VariogramModel,
@@ -21,37 +24,6 @@ fn col(x: &[f64]) -> Mat<f64> {
 
 // Reference numbers: crates/kriging/scripts/measurement_error_reference.py (GSTools 1.7.0,
 // krige.Ordinary / krige.Simple with exact=False, cond_err="nugget", pseudo_inv=False).
-const XS: [f64; 12] = [
-    50.0, 25.0, 75.0, 12.5, 62.5, 37.5, 87.5, 6.25, 56.25, 31.25, 81.25, 18.75,
-];
-const YS: [f64; 12] = [
-    26.666666666666664,
-    53.33333333333333,
-    8.88888888888889,
-    35.55555555555556,
-    62.222222222222214,
-    17.77777777777778,
-    44.44444444444444,
-    71.11111111111111,
-    2.962962962962963,
-    29.629629629629626,
-    56.2962962962963,
-    11.851851851851851,
-];
-const Z: [f64; 12] = [
-    1.6130267444032595,
-    0.5455135690895164,
-    1.7998969787834058,
-    0.42696120337704574,
-    0.9967354545649547,
-    1.6391221448170588,
-    0.7948737528226304,
-    -0.18843742833488264,
-    2.011108841428221,
-    1.2203448027343886,
-    0.7587904186474028,
-    1.1873450082663637,
-];
 const QX: [f64; 8] = [10.0, 33.3, 50.0, 71.2, 50.0, 37.5, 18.75, 400.0];
 const QY: [f64; 8] = [
     10.0,

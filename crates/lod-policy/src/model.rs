@@ -192,13 +192,18 @@ impl ControlSpace {
     /// is not the walk's as the four controls alone.
     fn values_lossy(&self, c: &Controls) -> ([f32; CONTROL_VALUES], usize) {
         let mut out = [0.0f32; CONTROL_VALUES];
-        let mix = self.data_style_mix();
+        // The data's mix (a pass over the samples) only when the controls ask for it.
+        let mix = if c.style.is_data_mix() {
+            self.data_style_mix()
+        } else {
+            [0.0; MAX_STYLES]
+        };
         match self.values_into(c, &mix, &mut out) {
             Ok(d) => (out, d),
             Err(_) => {
                 let d = match self.values_into(
                     &c.with_style(crate::StyleMix::DATA_MIX),
-                    &mix,
+                    &self.data_style_mix(),
                     &mut out,
                 ) {
                     Ok(d) => d,
@@ -268,7 +273,11 @@ impl ControlSpace {
     /// and positive.
     pub fn body_scale(&self, stature_m: Option<f32>, c: &Controls) -> f32 {
         let (values, d) = self.values_lossy(c);
-        let c = &values[..d];
+        self.body_scale_of(stature_m, &values[..d])
+    }
+
+    /// [`ControlSpace::body_scale`] for a raw control vector of length `d`.
+    pub(crate) fn body_scale_of(&self, stature_m: Option<f32>, c: &[f32]) -> f32 {
         let k = HEIGHT_CONTROL;
         let Some(stature) = stature_m else {
             return 1.0;

@@ -242,7 +242,16 @@ impl RuntimeModel {
     /// [`Rig::joint_transforms_scaled`] and [`crate::FootLock::apply`] take, and what an engine
     /// scales the skeleton's bone translations by. 1 when the data hold one height.
     pub fn body_scale(&self, controls: &Controls) -> f32 {
-        self.lod.controls().body_scale(self.stature_m, controls)
+        // The kernel's conversion, with the data's mix the model cached when it loaded (a clip
+        // build calls this per character); a style the kernel refuses reads as the data's mix.
+        let mut values = [0.0f32; crate::CONTROL_VALUES];
+        match self.lod.control_vector(controls, &mut values) {
+            Ok(d) => self
+                .lod
+                .controls()
+                .body_scale_of(self.stature_m, &values[..d]),
+            Err(_) => self.lod.controls().body_scale(self.stature_m, controls),
+        }
     }
 
     /// The names of the styles the model conditions on, in the order of [`crate::StyleMix`]'s

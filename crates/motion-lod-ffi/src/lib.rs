@@ -576,6 +576,26 @@ pub unsafe extern "C" fn mlod_model_sizes(
     })
 }
 
+/// A name's length (without the NUL) into `*name_len` and the name, NUL-terminated and truncated to
+/// `capacity` bytes with the NUL, into `name`: the one convention of the ABI's name getters.
+///
+/// # Safety
+/// `name` is null or holds `capacity` bytes; `name_len` is null or writable.
+unsafe fn write_name(text: &[u8], name: *mut c_char, capacity: usize, name_len: *mut usize) {
+    // SAFETY: null or writable per the contract.
+    if let Some(len) = unsafe { name_len.as_mut() } {
+        *len = text.len();
+    }
+    if !name.is_null() && capacity > 0 {
+        let n = text.len().min(capacity - 1);
+        // SAFETY: `name` holds `capacity` bytes and `n + 1 <= capacity`.
+        unsafe {
+            std::ptr::copy_nonoverlapping(text.as_ptr(), name.cast::<u8>(), n);
+            *name.add(n) = 0;
+        }
+    }
+}
+
 /// Joint `joint`'s name (NUL-terminated, truncated to `capacity` bytes with the NUL) into `name`,
 /// and its parent's index into `*parent` (-1 for the skeleton's top joint). Joints are in the
 /// model's order (parents first), the order of the transforms and local rotations. `name` may be
@@ -604,11 +624,6 @@ pub unsafe extern "C" fn mlod_model_joint(
                 rig.joint_count()
             )));
         }
-        let text = rig.joints()[joint].name.as_bytes();
-        // SAFETY: null or writable per the contract.
-        if let Some(len) = unsafe { name_len.as_mut() } {
-            *len = text.len();
-        }
         // SAFETY: null or writable per the contract.
         if let Some(p) = unsafe { parent.as_mut() } {
             *p = rig.joints()[joint]
@@ -616,14 +631,15 @@ pub unsafe extern "C" fn mlod_model_joint(
                 .and_then(|j| i32::try_from(j).ok())
                 .unwrap_or(-1);
         }
-        if !name.is_null() && capacity > 0 {
-            let n = text.len().min(capacity - 1);
-            // SAFETY: `name` holds `capacity` bytes and `n + 1 <= capacity`.
-            unsafe {
-                std::ptr::copy_nonoverlapping(text.as_ptr(), name.cast::<u8>(), n);
-                *name.add(n) = 0;
-            }
-        }
+        // SAFETY: per this function's contract.
+        unsafe {
+            write_name(
+                rig.joints()[joint].name.as_bytes(),
+                name,
+                capacity,
+                name_len,
+            )
+        };
         Ok(())
     })
 }
@@ -756,18 +772,8 @@ pub unsafe extern "C" fn mlod_model_style_name(
         // SAFETY: per this function's contract.
         let m = unsafe { reference(model, "model") }?;
         let text = style(m, index)?.as_bytes();
-        // SAFETY: null or writable per the contract.
-        if let Some(len) = unsafe { name_len.as_mut() } {
-            *len = text.len();
-        }
-        if !name.is_null() && capacity > 0 {
-            let n = text.len().min(capacity - 1);
-            // SAFETY: `name` holds `capacity` bytes and `n + 1 <= capacity`.
-            unsafe {
-                std::ptr::copy_nonoverlapping(text.as_ptr(), name.cast::<u8>(), n);
-                *name.add(n) = 0;
-            }
-        }
+        // SAFETY: per this function's contract.
+        unsafe { write_name(text, name, capacity, name_len) };
         Ok(())
     })
 }

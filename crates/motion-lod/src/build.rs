@@ -236,13 +236,7 @@ fn style_kriging(
         let kriging = Kriging::fit(params.as_ref(), values, &fit_config(w))?;
         return Ok((kriging, w, Vec::new()));
     }
-    let mut takes: Vec<&str> = set
-        .sources
-        .iter()
-        .map(|s| crate::dataset::take_of(s))
-        .collect();
-    takes.sort_unstable();
-    takes.dedup();
+    let takes = crate::folds::distinct_takes(&set.sources);
     let folds = STYLE_FOLDS.min(takes.len());
     if folds < 2 {
         return Err(BuildError::Data(format!(

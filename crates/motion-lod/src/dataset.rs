@@ -1344,3 +1344,25 @@ impl AlignedSet {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_parameters_are_the_controls_then_the_style_code() {
+        let labels = StyleLabels {
+            names: vec!["elderly".into(), "normal".into()],
+            of_sample: vec![1, 0, 1],
+        };
+        let params = control_matrix(&[[0.5, 1.0, 0.1, 1.7]; 3], Some(&labels));
+        let row = |i: usize| {
+            (0..params.ncols())
+                .map(|k| params[(i, k)])
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(row(1), [0.5, 1.0, 0.1, 1.7, 1.0, 0.0]);
+        assert_eq!(row(2), [0.5, 1.0, 0.1, 1.7, 0.0, 1.0]);
+        assert_eq!(control_matrix(&[[0.5, 1.0, 0.1, 1.7]], None).ncols(), 4);
+    }
+}

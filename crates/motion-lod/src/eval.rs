@@ -482,26 +482,31 @@ pub fn held_out(
             analysis.tensor.dims()
         )));
     }
-    let n_styles = analysis.styles.as_ref().map_or(0, |l| l.len());
-    let controls: Vec<Vec<f64>> = match (n_styles, styles) {
-        (0, _) => controls.iter().map(|c| c.to_vec()).collect(),
-        (n, Some(st)) if st.len() == controls.len() && st.iter().all(|&j| j < n) => controls
-            .iter()
-            .zip(st)
-            .map(|(c, &j)| {
-                let mut v = c.to_vec();
-                v.extend((0..n).map(|k| f64::from(u8::from(k == j))));
-                v
+    // Each held-out cycle's parameters as the analysis's samples have them
+    // ([`crate::dataset::control_matrix`]: the controls, then the style's one-hot code).
+    let held_labels = match (&analysis.styles, styles) {
+        (None, _) => None,
+        (Some(labels), Some(st))
+            if st.len() == controls.len() && st.iter().all(|&j| j < labels.len()) =>
+        {
+            Some(crate::style::StyleLabels {
+                names: labels.names.clone(),
+                of_sample: st.to_vec(),
             })
-            .collect(),
-        (n, st) => {
+        }
+        (Some(labels), st) => {
             return Err(BuildError::Data(format!(
-                "the model has {n} styles: every held-out cycle needs one of them ({} given for {} cycles)",
+                "the model has {} styles: every held-out cycle needs one of them ({} given for {} cycles)",
+                labels.len(),
                 st.map_or(0, <[usize]>::len),
                 controls.len()
             )));
         }
     };
+    let params = crate::dataset::control_matrix(controls, held_labels.as_ref());
+    let controls: Vec<Vec<f64>> = (0..params.nrows())
+        .map(|i| (0..params.ncols()).map(|k| params[(i, k)]).collect())
+        .collect();
     let controls = controls.as_slice();
     let weights = Weights {
         kriging: prediction_weights(analysis, controls, None)?,

@@ -42,9 +42,7 @@ pub fn fold_of_samples(sources: &[String], folds: usize, by: FoldBy) -> Result<V
             Ok((0..sources.len()).map(|i| i % folds).collect())
         }
         FoldBy::Take => {
-            let mut takes: Vec<&str> = sources.iter().map(|s| take_of(s)).collect();
-            takes.sort_unstable();
-            takes.dedup();
+            let takes = distinct_takes(sources);
             if takes.len() < folds {
                 return Err(format!(
                     "{} takes cannot fill {folds} folds (use fewer folds or split by sample)",
@@ -60,6 +58,14 @@ pub fn fold_of_samples(sources: &[String], folds: usize, by: FoldBy) -> Result<V
                 .collect())
         }
     }
+}
+
+/// The distinct takes ([`take_of`]) among `sources`, sorted by name.
+pub fn distinct_takes(sources: &[String]) -> Vec<&str> {
+    let mut takes: Vec<&str> = sources.iter().map(|s| take_of(s)).collect();
+    takes.sort_unstable();
+    takes.dedup();
+    takes
 }
 
 /// The take (source file) of a training sample's source as [`crate::dataset::AlignedSet::training_set`] writes it

@@ -94,14 +94,7 @@ impl StyleSpec {
     /// [`MAX_STYLES`] styles, and each name must be a valid style name
     /// ([`lod_policy::style_name_problem`]).
     pub fn label(&self, sources: &[String]) -> Result<StyleLabels, StyleError> {
-        let rule = Rule::new(self)?;
-        let mut of_take: BTreeMap<&str, String> = BTreeMap::new();
-        for source in sources {
-            let take = take_of(source);
-            if !of_take.contains_key(take) {
-                of_take.insert(take, rule.style_of(Path::new(take))?);
-            }
-        }
+        let of_take = self.styles_of_takes(sources)?;
         let mut names: Vec<String> = of_take.values().cloned().collect();
         names.sort();
         names.dedup();
@@ -144,15 +137,15 @@ impl StyleSpec {
         sources: &[String],
         names: &[String],
     ) -> Result<Vec<usize>, StyleError> {
-        let rule = Rule::new(self)?;
+        let of_take = self.styles_of_takes(sources)?;
         sources
             .iter()
             .map(|s| {
                 let take = take_of(s);
-                let style = rule.style_of(Path::new(take))?;
+                let style = &of_take[take];
                 names
                     .iter()
-                    .position(|n| *n == style)
+                    .position(|n| n == style)
                     .ok_or_else(|| StyleError::Unlabelled {
                         take: take.to_string(),
                         why: format!(
@@ -162,6 +155,24 @@ impl StyleSpec {
                     })
             })
             .collect()
+    }
+}
+
+impl StyleSpec {
+    /// The style of each distinct take among `sources` (the rule applied once per take).
+    fn styles_of_takes<'a>(
+        &self,
+        sources: &'a [String],
+    ) -> Result<BTreeMap<&'a str, String>, StyleError> {
+        let rule = Rule::new(self)?;
+        let mut of_take = BTreeMap::new();
+        for source in sources {
+            let take = take_of(source);
+            if !of_take.contains_key(take) {
+                of_take.insert(take, rule.style_of(Path::new(take))?);
+            }
+        }
+        Ok(of_take)
     }
 }
 
@@ -320,13 +331,6 @@ impl StyleLabels {
             names: self.names.clone(),
             of_sample: indices.iter().map(|&i| self.of_sample[i]).collect(),
         }
-    }
-
-    /// The one-hot code of sample `i`: 1 in its style's place, 0 elsewhere (length [`Self::len`]).
-    pub fn one_hot(&self, i: usize) -> Vec<f64> {
-        let mut v = vec![0.0; self.names.len()];
-        v[self.of_sample[i]] = 1.0;
-        v
     }
 }
 
@@ -501,7 +505,6 @@ mod tests {
         assert_eq!(labels.names, ["elderly", "normal"]);
         assert_eq!(labels.of_sample, [1, 0, 1]);
         assert_eq!(labels.counts(), [1, 2]);
-        assert_eq!(labels.one_hot(1), [1.0, 0.0]);
         assert_eq!(StyleReport::takes_per_style(&labels, &s), [1, 1]);
     }
 

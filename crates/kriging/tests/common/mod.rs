@@ -2,6 +2,8 @@
 //! plain Vec<Vec<f64>>, Gaussian elimination, formulas typed again from the paper.
 #![allow(dead_code, clippy::needless_range_loop)]
 
+pub mod gstools_points;
+
 use faer::Mat;
 use kriging::{Variogram, VariogramModel};
 
