@@ -126,6 +126,7 @@ pub mod posture;
 pub mod progress;
 pub mod projection;
 pub mod quality;
+pub mod recording;
 mod sample_weights;
 pub mod source;
 pub mod storage;

@@ -34,14 +34,17 @@ pub use lod_policy::file::{FORMAT_VERSION, HEADER_LEN, MAGIC, SECTION_HEADER_LEN
 /// The tag of the offline report's section.
 pub const REPORT_SECTION: [u8; 4] = *b"RPRT";
 /// The format version of the report section; another version is refused with a request to
-/// rebuild. History: 1 (format 8: the pose layout, then the build report).
-pub const REPORT_VERSION: u32 = 1;
+/// rebuild. History: 1 (format 8: the pose layout, then the build report); 2 (the motion-quality
+/// meter finds contacts from the feet's own motion and reports floating,
+/// [`crate::quality::MotionQuality::floating_cm`]).
+pub const REPORT_VERSION: u32 = 2;
 
 /// The tag of the style report's section, written only for a model with styles (a model without
 /// them is byte for byte what it was before styles existed).
 pub const STYLE_SECTION: [u8; 4] = *b"STYL";
-/// The format version of the style section. History: 1 (the first).
-pub const STYLE_VERSION: u32 = 1;
+/// The format version of the style section. History: 1 (the first); 2 (each style's
+/// motion-quality reference by the meter of [`REPORT_VERSION`] 2).
+pub const STYLE_VERSION: u32 = 2;
 
 /// The runtime's payload decoder ([`lod_policy::file::decode_payload`]): the entry point for fuzzing
 /// the decoder itself.

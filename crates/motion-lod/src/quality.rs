@@ -4,20 +4,43 @@
 //! a cadence that does not fit the speed.
 //!
 //! It works on any motion given as world-frame pose vectors of a [`PoseLayout`] (`frames x dof`, metres,
-//! y up), synthesized or captured, after forward kinematics. With `h` = the frame step nearest 1/30 s
-//! (`k = max(1, round(1 / (30 dt)))` frames, so 30 fps data use neighbouring frames and 120 Hz data every
-//! fourth):
+//! y up), synthesized or captured, after forward kinematics; `x_j(f)` is joint `j`'s world position at
+//! frame `f` of `n`, `y` its height and `|v|_xz` the length of a vector's ground (x, z) part. With
+//! `k` = the frame step nearest 1/30 s (`k = max(1, round(1 / (30 dt)))` frames, so 30 fps data use
+//! neighbouring frames and 120 Hz data every fourth):
 //!
 //! - **pop** (cm per frame² at 30 fps): the largest joint acceleration,
 //!   `max_{f, j} |x_j(f + k) - 2 x_j(f) + x_j(f - k)| (1 / (30 k dt))^2`, over the measured joints
 //!   ([`measured_joints`]); **seam pop**: the same maximum over frames within `k` of a seam.
-//! - **foot skate** (cm/s): per foot, the lowest of its points (ankle, and toe when the skeleton has
-//!   one); while that point is within [`CONTACT_HEIGHT_M`] of the floor, its horizontal speed
-//!   `|x(f + k) - x(f - k)|_xz / (2 k dt)`; the mean over those (foot, frame) pairs.
-//! - **floor offset** (cm): the lowest point of both feet is at the floor at least once in every step.
-//!   Over windows of [`STEP_WINDOW_S`], the window's lowest height minus the floor: the median is the
-//!   offset (positive floats, negative sinks), the largest is the **float** (both feet off the floor
-//!   for a whole step).
+//! - **Feet.** Each foot `F` has one or two points (ankle, and toe when the skeleton has one); its
+//!   **lowest point** `l_F(f)` is the one lowest at frame `f`, at height `h_F(f)`, moving at the
+//!   horizontal speed `v_F(f) = |x_l(f + k) - x_l(f - k)|_xz / (2 k dt)` (m/s, `l = l_F(f)`, for
+//!   `k <= f < n - k`).
+//! - **Stance floor** `s_F(f)` (m): the [`STANCE_QUANTILE`] quantile (10th percentile) of `h_F` over
+//!   the one-cycle window of frames around `f` (`2 round(cycle_s / (2 dt)) + 1` frames, shifted to lie
+//!   inside the motion; the whole motion when that is shorter; quantile `q` of `m` sorted values is the
+//!   value at position `round(q (m - 1))`). Every window one gait cycle long holds one stance of each
+//!   foot, so `s_F` is the height that foot stands at, wherever the motion holds it: a walk lifted by
+//!   3 cm has its stance floor 3 cm higher, and a walk whose stance height changes along the way (a
+//!   crowd walker changing level) is followed cycle by cycle.
+//! - **Contact**: foot `F` is in contact at frame `f` (`k <= f < n - k`) when its lowest point is within
+//!   [`CONTACT_HEIGHT_M`] (2 cm) of its stance floor, `h_F(f) - s_F(f) < 0.02`, and slower than
+//!   [`CONTACT_SPEED_M_S`] (1 m/s), `v_F(f) < 1`. No absolute floor enters: raising or lowering a
+//!   motion changes none of its contacts. **Contact share**: contacts over the `2 (n - 2 k)`
+//!   (foot, frame) pairs.
+//! - **Foot skate** (cm/s): `100 mean v_F(f)` over the (foot, frame) pairs in contact, 0 without
+//!   contacts: how fast a planted foot slides. (The speed limit sits in the gap the data leave between
+//!   stance and swing: of the Bandai frames where a foot is within 2 cm of its stance floor, 92% move
+//!   slower than 1 m/s, 6.5% faster than 2 m/s (swing feet passing low) and 1.2% in between. A foot
+//!   that slides faster than 1 m/s at stance height is taken for a swing foot: it shows as a contact
+//!   share below the data's.)
+//! - **Floating** (cm): `100 (mean_{F, f} s_F(f) - g)` over both feet and every frame, `g` the ground
+//!   (below): how far the feet stand above the floor (negative: below it).
+//! - **Floor offset**, **float** and **sink** (cm), the window rule: the lowest point of both feet is
+//!   at the floor at least once in every step. Over windows of [`STEP_WINDOW_S`], the window's lowest
+//!   height minus `g`: the median is the floor offset (positive floats, negative sinks), the largest is
+//!   the float (both feet off the floor for a whole step); the sink is the deepest any foot point goes
+//!   below `g` (0 when none does).
 //! - **facing against travel** (degrees): the pelvis heading (perpendicular to the line from the right
 //!   hip to the left hip on the ground) minus the travel heading (the root's ground displacement over one
 //!   cycle centred on the frame), averaged over frames; the smallest and largest one-cycle means are
@@ -25,9 +48,17 @@
 //! - **cycle duration** (s) against the data's cycles of similar step length (see
 //!   [`QualityReference::duration_for_step`]).
 //!
-//! The floor is the data's: [`QualityReference::floor_m`], measured on the training takes by the same
-//! window rule. Every figure is also reported as a ratio to the data's median ([`QualityReference`]),
-//! measured on the data's own takes (the steady walking stretch of every take that gave cycles).
+//! Only the floating and the window-rule figures depend on the ground `g`. A synthesized walk or a crowd
+//! track is measured against the data's floor, [`QualityReference::floor_m`]; a data take against its
+//! own floor (the window rule's median, [`floor_of`]), and the data's floor is the median of those over
+//! the takes. Every figure is also reported as a ratio to the data's median ([`QualityReference`]),
+//! measured on the data's own takes (the steady stretch of every take that gave cycles) by the same
+//! function, [`measure`], as every walk: the data's skate and a walk's are one definition.
+//!
+//! (Until issue 34 a foot counted as planted while within 2 cm of the data's floor: a walk whose
+//! feet floated lost its contacts and read as not skating, and swing feet passing low counted as
+//! sliding, so that Bandai's own takes read 22.3 cm/s of skate, 3.2x what the rule above reads,
+//! 7.0 cm/s.)
 
 use glam::DVec3;
 use motion_io::{Feet, PoseLayout};
@@ -35,8 +66,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::metrics::measured_joints;
 
-/// A foot point counts as on the floor within this height above it (2 cm).
+/// A foot is in contact only while its lowest point is within this height of its own stance floor
+/// (2 cm; module documentation).
 pub const CONTACT_HEIGHT_M: f64 = 0.02;
+/// A foot is in contact only while its lowest point moves slower than this horizontally (1 m/s).
+pub const CONTACT_SPEED_M_S: f64 = 1.0;
+/// The quantile of a foot's heights over one cycle that is its stance floor (the 10th percentile).
+pub const STANCE_QUANTILE: f64 = 0.1;
 /// Window of the floor rule: at walking pace one foot is flat on the floor at least once in 0.5 s.
 pub const STEP_WINDOW_S: f64 = 0.5;
 /// The rate accelerations and speeds are taken at (frames per second).
@@ -91,9 +127,10 @@ pub struct MotionQuality {
     pub pop_cm: f64,
     /// Largest joint acceleration within one 30 fps frame of a seam (0 without seams).
     pub seam_pop_cm: f64,
-    /// Mean horizontal speed of the lowest foot point while it is on the floor, cm/s.
+    /// Mean horizontal speed of a foot's lowest point while the foot is in contact (within 2 cm of
+    /// its own stance floor and slower than 1 m/s), cm/s.
     pub skate_cm_s: f64,
-    /// Share of (foot, frame) pairs on the floor.
+    /// Share of (foot, frame) pairs in contact.
     pub contact_share: f64,
     /// Median over step windows of the lowest foot point above the floor, cm (negative: sinks).
     pub floor_offset_cm: f64,
@@ -101,6 +138,9 @@ pub struct MotionQuality {
     pub float_cm: f64,
     /// Deepest foot point below the floor, cm (0 when none sinks).
     pub sink_cm: f64,
+    /// Mean over both feet and every frame of the foot's stance floor above the floor, cm (how far
+    /// the feet stand above it; negative: below it).
+    pub floating_cm: f64,
     /// Mean pelvis heading minus travel heading, degrees (+ = facing left of the path).
     pub facing_deg: f64,
     /// Smallest mean facing against travel over one-cycle windows, degrees.
@@ -121,9 +161,13 @@ pub struct QualityReference {
     pub stature_m: Option<f64>,
     /// Takes measured.
     pub takes: usize,
-    /// The floor height (m) in the data's frame: median over takes of each take's floor.
+    /// The floor height (m) in the data's frame: median over takes of each take's floor (the
+    /// window rule, [`floor_of`]). The ground of every walk's floating and window-rule figures, and
+    /// the floor of the foot lock.
     pub floor_m: f64,
-    /// Median over takes of the per-take figures (the floor figures relative to each take's own floor).
+    /// Median over takes of the per-take figures, each take measured by [`measure`] as a walk is
+    /// (the floating and window-rule figures against the take's own floor; the pop, skate and
+    /// contacts do not depend on it).
     pub median: MotionQuality,
     /// The data's range of facing against travel, degrees: the 2nd percentile of the takes' smallest
     /// one-cycle means and the 98th percentile of their largest.
@@ -239,12 +283,37 @@ fn heading(v: DVec3) -> f64 {
     v.x.atan2(v.z)
 }
 
+/// The stance floor of one foot at every frame (module documentation): the [`STANCE_QUANTILE`]
+/// quantile of `heights` (the foot's lowest point, frame by frame) over the window of `2 half + 1`
+/// frames around the frame, shifted to lie inside the motion (all frames when there are fewer).
+fn stance_floors(heights: &[f64], half: usize) -> Vec<f64> {
+    let n = heights.len();
+    let len = (2 * half + 1).min(n);
+    let rank = (STANCE_QUANTILE * (len.saturating_sub(1)) as f64).round() as usize;
+    let mut window = vec![0.0; len];
+    let mut out = Vec::with_capacity(n);
+    let mut placed = None;
+    for f in 0..n {
+        let start = f.saturating_sub(half).min(n - len);
+        // Frames near the ends share one window: it is ranked again only where it moved.
+        if placed != Some(start) {
+            window.copy_from_slice(&heights[start..start + len]);
+            window.select_nth_unstable_by(rank, f64::total_cmp);
+            placed = Some(start);
+        }
+        out.push(window[rank]);
+    }
+    out
+}
+
 /// Measures one motion (module documentation).
 ///
 /// `poses`: `frames x dof` world-frame pose vectors of `layout`; `dt`: seconds between frames;
-/// `floor_m`: the floor height (the data's, [`QualityReference::floor_m`]; `None` measures against
-/// the motion's own floor, as the reference does); `cycle_s`: the gait cycle duration, the window of
-/// the travel heading; `seams`: frames where one cycle hands over to the next.
+/// `floor_m`: the ground `g` of the floating and window-rule figures (the data's floor,
+/// [`QualityReference::floor_m`], for a walk; `None` measures against the motion's own floor by the
+/// window rule, as the data's takes are measured); `cycle_s`: the gait cycle duration, the window of
+/// the stance floor and of the travel heading; `seams`: frames where one cycle hands over to the
+/// next. The pop, skate and contacts do not depend on `floor_m`.
 pub fn measure(
     layout: &PoseLayout,
     feet: &FootJoints,
@@ -345,18 +414,26 @@ pub fn measure(
     let floor = floor_m.unwrap_or(offset_m);
     let sink_m = both_low.iter().map(|&y| floor - y).fold(0.0, f64::max);
 
-    // Skate.
+    // Skate and floating: contacts from each foot's own motion, against its own stance floor.
+    let cycle_half = ((0.5 * cycle_s / dt).round() as usize).max(1);
     let (mut skate_sum, mut contacts) = (0.0, 0usize);
+    let mut stance_sum = 0.0;
     for pts in [&feet.left, &feet.right] {
+        let low: Vec<usize> = (0..n).map(|f| lowest(f, pts)).collect();
+        let heights: Vec<f64> = (0..n).map(|f| at(f, low[f]).y).collect();
+        let stance = stance_floors(&heights, cycle_half);
+        stance_sum += stance.iter().sum::<f64>();
         for f in k..n - k {
-            let j = lowest(f, pts);
-            if at(f, j).y - floor < CONTACT_HEIGHT_M {
-                let d = at(f + k, j) - at(f - k, j);
-                skate_sum += DVec3::new(d.x, 0.0, d.z).length() / (2.0 * k as f64 * dt);
+            let j = low[f];
+            let d = at(f + k, j) - at(f - k, j);
+            let speed = DVec3::new(d.x, 0.0, d.z).length() / (2.0 * k as f64 * dt);
+            if heights[f] - stance[f] < CONTACT_HEIGHT_M && speed < CONTACT_SPEED_M_S {
+                skate_sum += speed;
                 contacts += 1;
             }
         }
     }
+    let floating_m = stance_sum / (2 * n) as f64 - floor;
 
     // Facing against travel.
     let root = layout.root();
@@ -405,6 +482,7 @@ pub fn measure(
         floor_offset_cm: 100.0 * (offset_m - floor),
         float_cm: 100.0 * (float_m - floor),
         sink_cm: 100.0 * sink_m,
+        floating_cm: 100.0 * floating_m,
         facing_deg: mean_facing.to_degrees(),
         facing_min_deg: facing_min.to_degrees(),
         facing_max_deg: facing_max.to_degrees(),
@@ -451,6 +529,7 @@ pub fn reference_from_takes(
             floor_offset_cm: pick(&|q| q.floor_offset_cm),
             float_cm: pick(&|q| q.float_cm),
             sink_cm: pick(&|q| q.sink_cm),
+            floating_cm: pick(&|q| q.floating_cm),
             facing_deg: pick(&|q| q.facing_deg),
             facing_min_deg: pick(&|q| q.facing_min_deg),
             facing_max_deg: pick(&|q| q.facing_max_deg),
@@ -524,10 +603,70 @@ mod tests {
         assert!((q.skate_cm_s - 60.0).abs() < 1e-6, "{q:?}");
         assert!(q.floor_offset_cm.abs() < 1e-9 && q.sink_cm < 1e-9, "{q:?}");
         assert!(q.facing_deg.abs() < 1e-6, "{q:?}");
-        // Against a floor 3 cm lower the feet float 3 cm: not on the floor, no skate.
-        let q = measure(&layout, &feet, &poses, dt, Some(0.02), 1.0, &[]).unwrap();
-        assert_eq!(q.skate_cm_s, 0.0);
-        assert!((q.floor_offset_cm - 3.0).abs() < 1e-9 && (q.float_cm - 3.0).abs() < 1e-9);
+        assert!(
+            (q.contact_share - 1.0).abs() < 1e-12 && q.floating_cm.abs() < 1e-9,
+            "{q:?}"
+        );
+        // Against a floor 3 cm lower the feet float 3 cm, and skate as before: contacts are found
+        // from the feet's own motion, not from the floor.
+        let low = measure(&layout, &feet, &poses, dt, Some(0.02), 1.0, &[]).unwrap();
+        assert_eq!(low.skate_cm_s, q.skate_cm_s);
+        assert_eq!(low.contact_share, q.contact_share);
+        assert!((low.floating_cm - 3.0).abs() < 1e-9, "{low:?}");
+        assert!((low.floor_offset_cm - 3.0).abs() < 1e-9 && (low.float_cm - 3.0).abs() < 1e-9);
+        // The same body lifted by 3 cm, against the first floor: the same.
+        let lifted = track(&layout, 60, |f| [0.0, 0.93, 0.6 * f as f64 * dt]);
+        let up = measure(&layout, &feet, &lifted, dt, Some(0.05), 1.0, &[]).unwrap();
+        assert_eq!(up.skate_cm_s, q.skate_cm_s);
+        assert!((up.floating_cm - 3.0).abs() < 1e-9, "{up:?}");
+    }
+
+    #[test]
+    fn a_foot_faster_than_the_contact_speed_is_not_in_contact() {
+        let (layout, feet) = legs();
+        let dt = 1.0 / 30.0;
+        for (speed, contact) in [(0.95, true), (1.05, false)] {
+            let poses = track(&layout, 60, |f| [speed * f as f64 * dt, 0.9, 0.0]);
+            let q = measure(&layout, &feet, &poses, dt, Some(0.05), 1.0, &[]).unwrap();
+            if contact {
+                assert!((q.skate_cm_s - 100.0 * speed).abs() < 1e-6, "{q:?}");
+                assert!((q.contact_share - 1.0).abs() < 1e-12, "{q:?}");
+            } else {
+                assert_eq!((q.skate_cm_s, q.contact_share), (0.0, 0.0), "{q:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_stance_floor_follows_a_motion_that_changes_height() {
+        let (layout, feet) = legs();
+        let dt = 1.0 / 30.0;
+        // Gliding at 0.3 m/s, 3 cm higher from frame 60 of 120: with one floor for the whole motion
+        // the raised half would lose its contacts; the one-cycle stance floor follows it.
+        let poses = track(&layout, 120, |f| {
+            let lift = if f >= 60 { 0.03 } else { 0.0 };
+            [0.0, 0.9 + lift, 0.3 * f as f64 * dt]
+        });
+        let q = measure(&layout, &feet, &poses, dt, Some(0.05), 1.0, &[]).unwrap();
+        assert!((q.skate_cm_s - 30.0).abs() < 1e-6, "{q:?}");
+        // Only the frames whose window still holds more than its 10% of low frames lose contact.
+        assert!(q.contact_share > 0.85, "{q:?}");
+        assert!(q.floating_cm > 1.0 && q.floating_cm < 2.0, "{q:?}");
+    }
+
+    #[test]
+    fn stance_floors_are_the_windowed_quantile() {
+        // 21 heights 0..=20 cm: a window of 11 frames, rank round(0.1 * 10) = 1: its second lowest.
+        let h: Vec<f64> = (0..21).map(|i| f64::from(i) * 0.01).collect();
+        let s = stance_floors(&h, 5);
+        assert_eq!(s.len(), 21);
+        for (f, &v) in s.iter().enumerate() {
+            let start = f.saturating_sub(5).min(21 - 11);
+            assert!((v - (start + 1) as f64 * 0.01).abs() < 1e-12, "{f}: {v}");
+        }
+        // Fewer frames than the window: one window, the whole motion.
+        assert_eq!(stance_floors(&[0.3, 0.1, 0.2], 5), vec![0.1; 3]);
+        assert_eq!(stance_floors(&[], 5), Vec::<f64>::new());
     }
 
     #[test]

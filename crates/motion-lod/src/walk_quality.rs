@@ -112,8 +112,10 @@ pub(crate) fn drawn_layout(model: &MotionModel, scale: f64) -> Result<PoseLayout
     })
 }
 
-/// Measures a synthesized walk against the model's reference floor (the walk's own without a
-/// reference), with its cycle seams.
+/// Measures a synthesized walk ([`measure`]) with its cycle seams, at the body scale it is drawn
+/// at: its floating and window-rule figures against the data's floor
+/// ([`QualityReference::floor_m`]); its contacts and skate from its own feet. Without the model's
+/// reference, [`QualityError::NoReference`].
 pub fn measure_walk(model: &MotionModel, walk: &Walk) -> Result<MotionQuality, QualityError> {
     let reference = reference_of(model)?;
     let cycles = ((walk.poses.len() / model.layout.dof()) as f64 * walk.frame_time

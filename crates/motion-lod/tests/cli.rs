@@ -92,6 +92,8 @@ fn every_column_header_of_info_eval_and_quality_is_explained() {
         "pop",
         "seam",
         "skate",
+        "contact",
+        "floating",
         "floor",
         "float",
         "facing",

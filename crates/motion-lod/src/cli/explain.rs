@@ -144,8 +144,13 @@ pub const GLOSSARY: &[Entry] = &[
     },
     Entry {
         term: "skate",
-        aliases: &["skate (cm/s)"],
-        text: "The mean horizontal speed of the lowest foot point while it is on the floor (within 2 cm of it), cm/s; `x data` divides by the data's.",
+        aliases: &["skate (cm/s)", "contact", "contact share"],
+        text: "The mean horizontal speed of a foot's lowest point (ankle or toe) while the foot is in contact, cm/s; `x data` divides by the data's. Contacts come from the foot's own motion, not from a floor: a foot is in contact when its lowest point is within 2 cm of its stance floor (the 10th percentile of its height over the gait cycle around the frame) and moves slower than 1 m/s, so feet that float still count. `contact` is the share of (foot, frame) pairs in contact.",
+    },
+    Entry {
+        term: "floating",
+        aliases: &["stance floor"],
+        text: "How far the feet stand above the data's floor, in cm: each foot's stance floor (the 10th percentile of its lowest point's height over the gait cycle around each frame), averaged over both feet and every frame, minus the floor (negative: below it). The data's own takes read about 0.",
     },
     Entry {
         term: "floor",

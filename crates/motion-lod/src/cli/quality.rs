@@ -63,6 +63,10 @@ pub struct QualityArgs {
     /// resembles most.
     #[arg(long, value_name = "STYLE")]
     pub style: Option<String>,
+    /// Measure a walk recorded from the live page (`motion-lod view MODEL.mlod`, the "record"
+    /// button: `walk-recording.json`) instead of the walk grid, against the data's takes.
+    #[arg(long, value_name = "FILE.json", conflicts_with = "crowd")]
+    pub recorded: Option<PathBuf>,
 }
 
 /// One measured walk.
@@ -113,6 +117,9 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         .filter(|p| !p.is_empty());
     if args.crowd {
         return run_crowd(&args, &model, &reference);
+    }
+    if let Some(path) = &args.recorded {
+        return run_recorded(&args, path, &model, &reference);
     }
     let levels = model.lod().levels().len();
     let chosen: Vec<usize> = match args.level {
@@ -193,11 +200,13 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         }
     }
     println!(
-        "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s, float {:.2} cm, facing {:.1} deg \
-         (range {:.1}..{:.1}), floor at {:.3} m",
+        "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s, contact {:.2}, floating {:.2} cm, \
+         float {:.2} cm, facing {:.1} deg (range {:.1}..{:.1}), floor at {:.3} m",
         reference.takes,
         m.pop_cm,
         m.skate_cm_s,
+        m.contact_share,
+        m.floating_cm,
         m.float_cm,
         m.facing_deg,
         reference.facing_range_deg.0,
@@ -210,7 +219,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         String::new()
     };
     println!(
-        "{:<16} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>12}{posture_head}",
+        "{:<16} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>12}{posture_head}",
         "walk",
         "level",
         "pop",
@@ -218,6 +227,8 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         "seam",
         "skate",
         "x data",
+        "contact",
+        "floating",
         "floor",
         "float",
         "facing",
@@ -235,7 +246,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             _ => String::new(),
         };
         println!(
-            "{:<16} {:>5} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.1} {:>12}{posture}",
+            "{:<16} {:>5} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.1} {:>12}{posture}",
             r.walk.name,
             r.level,
             q.pop_cm,
@@ -243,6 +254,8 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             q.seam_pop_cm,
             q.skate_cm_s,
             q.skate_cm_s / m.skate_cm_s,
+            q.contact_share,
+            q.floating_cm,
             q.floor_offset_cm,
             q.float_cm,
             q.facing_deg,
@@ -251,6 +264,76 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
                 .unwrap_or_default()
         );
     }
+    Ok(())
+}
+
+/// `--recorded`: the meter over a walk recorded from the live page.
+fn run_recorded(
+    args: &QualityArgs,
+    path: &std::path::Path,
+    model: &MotionModel,
+    reference: &quality::QualityReference,
+) -> anyhow::Result<()> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let recording = motion_lod::recording::Recording::parse(&text)
+        .with_context(|| format!("reading {}", path.display()))?;
+    let track = recording
+        .track(model)
+        .with_context(|| format!("{} against {}", path.display(), args.model.display()))?;
+    let q = motion_lod::crowd::measure_track(model, &track, recording.frame_time)
+        .with_context(|| format!("measuring {}", path.display()))?;
+    let m = &reference.median;
+    let (lo, hi) = (
+        track.levels.iter().min().copied().unwrap_or(0),
+        track.levels.iter().max().copied().unwrap_or(0),
+    );
+    if args.json {
+        #[derive(Serialize)]
+        struct Doc<'a> {
+            data: &'a MotionQuality,
+            recorded: &'a MotionQuality,
+            frames: usize,
+            seams: usize,
+            frame_time: f64,
+            levels: (usize, usize),
+        }
+        println!(
+            "{}",
+            serde_json::to_string(&Doc {
+                data: m,
+                recorded: &q,
+                frames: recording.frames.len(),
+                seams: track.seams.len(),
+                frame_time: recording.frame_time,
+                levels: (lo, hi),
+            })?
+        );
+        return Ok(());
+    }
+    println!(
+        "{}: {} frames of {:.4} s, {} seams, levels {lo}..{hi} (measured from the first seam)",
+        path.display(),
+        recording.frames.len(),
+        recording.frame_time,
+        track.seams.len()
+    );
+    println!(
+        "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s, contact {:.2}, floating {:.2} cm",
+        reference.takes, m.pop_cm, m.skate_cm_s, m.contact_share, m.floating_cm
+    );
+    println!(
+        "recorded: pop {:.2} cm/frame^2 ({:.2}x the data), seam pop {:.2}, skate {:.2} cm/s ({:.2}x), \
+         contact {:.2}, floating {:.2} cm, floor offset {:.2} cm",
+        q.pop_cm,
+        q.pop_cm / m.pop_cm,
+        q.seam_pop_cm,
+        q.skate_cm_s,
+        q.skate_cm_s / m.skate_cm_s,
+        q.contact_share,
+        q.floating_cm,
+        q.floor_offset_cm
+    );
     Ok(())
 }
 
@@ -307,11 +390,11 @@ fn run_crowd(
         args.seconds
     );
     println!(
-        "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s",
-        reference.takes, m.pop_cm, m.skate_cm_s
+        "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s, contact {:.2}",
+        reference.takes, m.pop_cm, m.skate_cm_s, m.contact_share
     );
     println!(
-        "{:>6} {:>7} {:>7} {:>7} {:>6} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "{:>6} {:>7} {:>7} {:>7} {:>6} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "walker",
         "frames",
         "levels",
@@ -322,12 +405,14 @@ fn run_crowd(
         "seam",
         "skate",
         "x data",
+        "contact",
+        "floating",
         "floor"
     );
     for w in &walkers {
         let q = &w.quality;
         println!(
-            "{:>6} {:>7} {:>7} {:>7} {:>6} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+            "{:>6} {:>7} {:>7} {:>7} {:>6} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
             w.walker,
             w.frames,
             format!("{}-{}", w.levels.0, w.levels.1),
@@ -338,6 +423,8 @@ fn run_crowd(
             q.seam_pop_cm,
             q.skate_cm_s,
             q.skate_cm_s / m.skate_cm_s,
+            q.contact_share,
+            q.floating_cm,
             q.floor_offset_cm
         );
     }
