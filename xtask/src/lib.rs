@@ -45,3 +45,4 @@ pub mod rng;
 pub mod tables;
 pub mod variants;
 pub mod walker;
+pub mod web;

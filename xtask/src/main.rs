@@ -1,13 +1,14 @@
 //! Project tasks: `cargo xtask fixtures` regenerates `fixtures/` (the synthetic gait set of the
 //! procedural walker, see the library part of this crate); `cargo xtask tables` measures the paper's
 //! tables and figures into `docs/tables.md` and `docs/figures/`; `cargo xtask imports` fails on an
-//! import circle among a crate's source files.
+//! import circle among a crate's source files; `cargo xtask web` builds the viewer's WebAssembly
+//! runtime and copies its three.js modules (`--check`: fails when the checked-in ones are stale).
 
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand};
-use xtask::{fixtures, imports, tables};
+use xtask::{fixtures, imports, tables, web};
 
 /// Project tasks of the motion-lod workspace.
 #[derive(Debug, Parser)]
@@ -28,6 +29,17 @@ enum Command {
     /// List the `use crate::` edges among a crate's top-level modules and fail on an import circle
     /// (default: the facade, `crates/motion-lod/src`).
     Imports(ImportsArgs),
+    /// Build the viewer's assets: the runtime as WebAssembly (`viewer/wasm/motion_lod.wasm`) and
+    /// the three.js modules the pages import (`viewer/vendor/three/`, from `npm ci` in `viewer/`).
+    Web(WebArgs),
+}
+
+/// Options of `xtask web`.
+#[derive(Debug, Args)]
+struct WebArgs {
+    /// Do not write: fail if the checked-in assets differ from a build of the current source.
+    #[arg(long)]
+    check: bool,
 }
 
 /// Options of `xtask imports`.
@@ -86,6 +98,14 @@ fn main() -> Result<()> {
         Command::Fixtures(args) => run_fixtures(&args),
         Command::Tables(args) => run_tables(&args),
         Command::Imports(args) => run_imports(&args),
+        Command::Web(args) => {
+            let root = tables::workspace_root();
+            let root = root.canonicalize().unwrap_or(root);
+            for line in web::run(&root, args.check)? {
+                println!("{line}");
+            }
+            Ok(())
+        }
     }
 }
 

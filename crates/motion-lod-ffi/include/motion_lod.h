@@ -11,8 +11,12 @@
  4. Start its walk: mlod_model_detail_from_camera at its start position, then mlod_walker_start.
  5. Every frame: mlod_walker_detail_from_camera, then mlod_walker_advance with the frame's step and
     the controls and detail of the next cycle; then mlod_walker_local_rotations (skinning) or
-    mlod_walker_joint_transforms. mlod_walker_set_foot_lock turns the foot lock off or on.
+    mlod_walker_joint_transforms. mlod_walker_set_foot_lock turns the foot lock off or on,
+    mlod_walker_set_seam_blend the inertialized seams between cycles; mlod_walker_shown_pose
+    records the pose shown.
  6. Release: mlod_walker_free, then mlod_model_free.
+ A host with no allocator in the library's memory (WebAssembly) gets buffers from mlod_buffer_new
+ and returns them with mlod_buffer_free.
  Lower level (the engine chains cycles): mlod_walker_prepare, mlod_walker_pose, mlod_model_detail_at.
 
  Units: metres, seconds, radians; +y up, a heading of 0 faces +z. A zero-initialised
@@ -33,7 +37,7 @@
  `motion_lod.h`. It changes whenever any of them changes; a program compiled against a header
  whose `MLOD_ABI_VERSION` differs from what `mlod_abi_version` returns must not use the library.
  */
-#define MLOD_ABI_VERSION 3
+#define MLOD_ABI_VERSION 4
 
 /*
  The most styles a model holds: the length of [`MlodControls`]'s `style` weights.
@@ -41,9 +45,20 @@
 #define MLOD_MAX_STYLES 8
 
 /*
+ The half-life of the seam transitions between a walker's cycles, seconds
+ ([`mlod_walker_set_seam_blend`]).
+ */
+#define MLOD_SEAM_HALFLIFE_S 0.15
+
+/*
  The longest step [`mlod_walker_advance`] takes, seconds.
  */
 #define MLOD_MAX_STEP_S 10.0
+
+/*
+ The alignment of every buffer of [`mlod_buffer_new`], bytes: enough for each struct of this ABI.
+ */
+#define MLOD_BUFFER_ALIGN 16
 
 /*
  Outcome of every call.
@@ -560,7 +575,8 @@ enum MlodStatus mlod_walker_start(struct MlodWalker *walker,
  When the current cycle ends on the way, the walker's cycle frame moves by that cycle's root
  motion and heading change, and the next cycle is built with `next_controls` at `next_detail`
  (the time past the end carries into it; a long step may chain several). Until a cycle ends they
- are only kept: the current cycle goes on as it was built, as the runtime chains cycles. Either
+ are only kept: the current cycle goes on as it was built, as the runtime chains cycles; the
+ change is inertialized (`mlod_walker_set_seam_blend`). Either
  may be null to keep those given before (at the start or by an earlier call). `*state`, when not
  null, receives where the walker is.
 
@@ -590,6 +606,18 @@ enum MlodStatus mlod_walker_advance(struct MlodWalker *walker,
 enum MlodStatus mlod_walker_set_foot_lock(struct MlodWalker *walker, bool enabled);
 
 /*
+ Turns the inertialized seams between the walker's cycles on or off (on from `mlod_walker_new`).
+ On, when a cycle ends and both it and the next one animate joints, the next clip starts from the
+ pose and velocity the walker showed (a seam transition: offsets that decay with a half-life of
+ `MLOD_SEAM_HALFLIFE_S`), so a change of controls or detail does not pop; off, the next clip
+ starts as it is. Takes effect at the next cycle.
+
+ # Safety
+ `walker` is a live walker.
+ */
+enum MlodStatus mlod_walker_set_seam_blend(struct MlodWalker *walker, bool enabled);
+
+/*
  The level of detail `camera` gives the walker, and whether it is in view, from where its root
  was at the last frame `mlod_walker_start` or `mlod_walker_advance` evaluated, with a sphere of
  `radius_m` metres around the root holding its body (two thirds of its height holds a walking
@@ -606,6 +634,21 @@ enum MlodStatus mlod_walker_detail_from_camera(struct MlodWalker *walker,
                                                float radius_m,
                                                struct MlodDetail *out,
                                                bool *visible);
+
+/*
+ The pose vector of the walker's last frame as shown (the frame `mlod_walker_start` or
+ `mlod_walker_advance` evaluated, with its planted feet; or the pose of `mlod_walker_pose`) into
+ `out` (`len >=` the `pose_len` of `mlod_model_sizes` floats), in the cycle frame: what
+ `mlod_walker_joint_transforms` and `mlod_walker_local_rotations` turn into joints, for recording
+ a walk (the quality meter of `motion-lod quality --recorded` reads such poses).
+
+ # Safety
+ `walker` and `model` are live and belong together; `out` holds `len` floats.
+ */
+enum MlodStatus mlod_walker_shown_pose(struct MlodWalker *walker,
+                                       const struct MlodModel *model,
+                                       float *out,
+                                       size_t len);
 
 /*
  The transforms (cycle frame) of every joint for the walker's last pose (the frame
@@ -639,6 +682,22 @@ enum MlodStatus mlod_walker_local_rotations(struct MlodWalker *walker,
                                             const struct MlodModel *model,
                                             struct MlodQuat *out,
                                             size_t len);
+
+/*
+ A zero-filled buffer of `len` bytes (`len > 0`), aligned to `MLOD_BUFFER_ALIGN`, for a host
+ that has no allocator of its own in the library's memory (a WebAssembly host passes the
+ library's structs and arrays through it); release it with `mlod_buffer_free` and the same
+ `len`. Returns null when `len` is 0 or too large, or memory runs out.
+ */
+uint8_t *mlod_buffer_new(size_t len);
+
+/*
+ Releases a buffer of `mlod_buffer_new` (null is ignored).
+
+ # Safety
+ `buffer` is null or was returned by `mlod_buffer_new(len)` with this `len` and not yet freed.
+ */
+void mlod_buffer_free(uint8_t *buffer, size_t len);
 
 /*
  The message of the last failed call on this thread (empty after a success). The pointer stays

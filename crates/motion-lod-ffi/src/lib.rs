@@ -37,6 +37,11 @@
 //!    on.
 //! 6. **Release**: [`mlod_walker_free`] for each walker, then [`mlod_model_free`].
 //!
+//! A host without an allocator of its own in the library's memory (a WebAssembly page, which
+//! sees the module's linear memory as an array) gets the buffers it passes from
+//! [`mlod_buffer_new`] and returns them with [`mlod_buffer_free`]; `viewer/mlod.js` drives this
+//! ABI from JavaScript that way.
+//!
 //! Engines that chain cycles themselves use the lower-level pair instead of steps 4-5:
 //! [`mlod_walker_prepare`] (one cycle's clip, with its duration and root motion) and
 //! [`mlod_walker_pose`] (the pose at a time in it), with [`mlod_model_detail_at`] for a detail
@@ -75,17 +80,25 @@ use std::path::Path;
 
 use lod_policy::glam::{Quat, Vec3};
 use lod_policy::{
-    ClipKernel, Controls, CycleFrame, Detail, DistancePolicy, FileError, FootLock, JointTransform,
-    KernelScratch, LevelPolicy, RuntimeModel, StyleMix, ViewParams, wrap_angle,
+    ClipKernel, Controls, CycleFrame, DEFAULT_HALFLIFE_S, Detail, DistancePolicy, FileError,
+    FootLock, JointTransform, KernelScratch, LevelPolicy, RootMotion, RuntimeModel, SeamScratch,
+    SeamTransition, StyleMix, ViewParams, wrap_angle,
 };
 
 /// The version of this C ABI: the functions, their arguments and the layouts of the structs in
 /// `motion_lod.h`. It changes whenever any of them changes; a program compiled against a header
 /// whose `MLOD_ABI_VERSION` differs from what `mlod_abi_version` returns must not use the library.
-pub const MLOD_ABI_VERSION: u32 = 3;
+pub const MLOD_ABI_VERSION: u32 = 4;
 
 /// The most styles a model holds: the length of [`MlodControls`]'s `style` weights.
 pub const MLOD_MAX_STYLES: usize = 8;
+
+/// The half-life of the seam transitions between a walker's cycles, seconds
+/// ([`mlod_walker_set_seam_blend`]).
+pub const MLOD_SEAM_HALFLIFE_S: f32 = 0.15;
+
+// The runtime's own seams (synth, the crowd) use the same half-life.
+const _: () = assert!(MLOD_SEAM_HALFLIFE_S == DEFAULT_HALFLIFE_S);
 
 /// The longest step [`mlod_walker_advance`] takes, seconds.
 pub const MLOD_MAX_STEP_S: f64 = 10.0;
@@ -316,6 +329,14 @@ pub struct MlodWalker {
     walk: Walk,
     /// The foot lock is on.
     foot_lock: bool,
+    /// Seams between cycles are inertialized (`mlod_walker_set_seam_blend`).
+    seam_blend: bool,
+    /// The running seam transition into the current clip (inactive when none runs).
+    seam: SeamTransition,
+    /// The current clip's time at its seam, seconds.
+    seam_start: f32,
+    /// What starting a seam needs (allocated once).
+    seam_scratch: SeamScratch,
 }
 
 // SAFETY: the raw pointer is only compared, never dereferenced; everything else is owned data.
@@ -1002,6 +1023,10 @@ pub unsafe extern "C" fn mlod_walker_new(
                 locked: false,
             },
             foot_lock: true,
+            seam_blend: true,
+            seam: SeamTransition::new(lod.p(), MLOD_SEAM_HALFLIFE_S),
+            seam_start: 0.0,
+            seam_scratch: SeamScratch::new(lod.p()),
         };
         *out = Box::into_raw(Box::new(walker));
         Ok(())
@@ -1049,6 +1074,7 @@ fn build_clip(
     w.prepared = false;
     w.posed = false;
     w.walking = false;
+    w.seam.clear();
     m.model
         .lod()
         .build_kernel(controls, detail, &mut w.scratch, &mut w.kernel)
@@ -1176,6 +1202,12 @@ fn show_frame(w: &mut MlodWalker, m: &MlodModel, dt: f32) -> Result<(), Failure>
     w.posed = false;
     lod.pose(&w.kernel, w.kernel.phase_at(walk.t), &mut w.pose)
         .map_err(|e| Failure::invalid(e.to_string()))?;
+    if w.seam.is_active() {
+        let since = walk.t as f32 - w.seam_start;
+        let rows = w.kernel.rows().min(w.pose.len());
+        w.seam.apply(since, &mut w.pose[..rows]);
+        w.seam.finish_after(since);
+    }
     let active = walk.detail.active_joints;
     walk.locked = false;
     if let (true, Some(feet)) = (w.foot_lock, m.model.feet()) {
@@ -1198,6 +1230,60 @@ fn show_frame(w: &mut MlodWalker, m: &MlodModel, dt: f32) -> Result<(), Failure>
     walk.root = walk.frame.to_world(root);
     // The root's local rotation, as `Rig::local_rotations` gives it.
     walk.root_rotation = walk.frame.rotation() * lod_policy::offline::exp_to_quat(orientation);
+    Ok(())
+}
+
+/// The pose a walker shows `t` seconds into its current clip (the running seam applied) into
+/// `out`; returns the rows written.
+fn displayed(
+    w_kernel: &ClipKernel,
+    seam: &SeamTransition,
+    seam_start: f32,
+    m: &MlodModel,
+    t: f32,
+    out: &mut [f32],
+) -> Result<usize, Failure> {
+    m.model
+        .lod()
+        .pose(w_kernel, w_kernel.phase_at(f64::from(t)), out)
+        .map_err(|e| Failure::invalid(e.to_string()))?;
+    let rows = w_kernel.rows().min(out.len());
+    seam.apply(t - seam_start, &mut out[..rows]);
+    Ok(rows)
+}
+
+/// Captures the pose the walker shows at the end of its current clip (`t_out` seconds into it),
+/// moved into the next cycle frame by the clip's `motion`: the outgoing side of a seam.
+fn capture_seam(
+    w: &mut MlodWalker,
+    m: &MlodModel,
+    t_out: f32,
+    motion: &RootMotion,
+) -> Result<(), Failure> {
+    let duration = w.kernel.duration() as f32;
+    let (kernel, seam, start) = (&w.kernel, &w.seam, w.seam_start);
+    w.seam_scratch
+        .capture(t_out, duration, Some(motion), |t, out| {
+            displayed(kernel, seam, start, m, t, out)
+        })
+}
+
+/// Starts the seam into the walker's new clip at its time `t_in` (seconds).
+fn start_seam(w: &mut MlodWalker, m: &MlodModel, t_in: f32) -> Result<(), Failure> {
+    let duration = w.kernel.duration() as f32;
+    let kernel = &w.kernel;
+    let lod = m.model.lod();
+    w.seam_scratch.start(
+        t_in,
+        duration,
+        |t, out| {
+            lod.pose(kernel, kernel.phase_at(f64::from(t)), out)
+                .map_err(|e| Failure::invalid(e.to_string()))?;
+            Ok(kernel.rows().min(out.len()))
+        },
+        &mut w.seam,
+    )?;
+    w.seam_start = t_in;
     Ok(())
 }
 
@@ -1286,7 +1372,8 @@ pub unsafe extern "C" fn mlod_walker_start(
 /// When the current cycle ends on the way, the walker's cycle frame moves by that cycle's root
 /// motion and heading change, and the next cycle is built with `next_controls` at `next_detail`
 /// (the time past the end carries into it; a long step may chain several). Until a cycle ends they
-/// are only kept: the current cycle goes on as it was built, as the runtime chains cycles. Either
+/// are only kept: the current cycle goes on as it was built, as the runtime chains cycles; the
+/// change is inertialized (`mlod_walker_set_seam_blend`). Either
 /// may be null to keep those given before (at the start or by an earlier call). `*state`, when not
 /// null, receives where the walker is.
 ///
@@ -1338,10 +1425,22 @@ pub unsafe extern "C" fn mlod_walker_advance(
         w.walk.t += dt_s;
         let mut begun = 0u32;
         while w.walk.t >= w.kernel.duration() {
-            w.walk.t -= w.kernel.duration();
-            w.walk.frame = w.walk.frame.next(&w.kernel.root_motion());
+            let ending = w.kernel.duration();
+            w.walk.t -= ending;
+            let motion = w.kernel.root_motion();
             let (values, detail) = (w.walk.next_controls, w.walk.next_detail);
+            // Inertialized when both cycles animate joints (as the crowd's near walkers are).
+            let blend = w.seam_blend
+                && w.kernel.detail().active_joints > 0
+                && m.model.lod().evaluated(detail).active_joints > 0;
+            if blend {
+                capture_seam(w, m, ending as f32, &motion)?;
+            }
+            w.walk.frame = w.walk.frame.next(&motion);
             build_clip(w, m, &values, detail)?;
+            if blend && w.kernel.detail().active_joints > 0 {
+                start_seam(w, m, w.walk.t as f32)?;
+            }
             w.walk.detail = detail;
             w.walk.cycle += 1;
             begun += 1;
@@ -1370,6 +1469,27 @@ pub unsafe extern "C" fn mlod_walker_set_foot_lock(
             w.walk.lock.release();
         }
         w.foot_lock = enabled;
+        Ok(())
+    })
+}
+
+/// Turns the inertialized seams between the walker's cycles on or off (on from `mlod_walker_new`).
+/// On, when a cycle ends and both it and the next one animate joints, the next clip starts from the
+/// pose and velocity the walker showed (a seam transition: offsets that decay with a half-life of
+/// `MLOD_SEAM_HALFLIFE_S`), so a change of controls or detail does not pop; off, the next clip
+/// starts as it is. Takes effect at the next cycle.
+///
+/// # Safety
+/// `walker` is a live walker.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_walker_set_seam_blend(
+    walker: *mut MlodWalker,
+    enabled: bool,
+) -> MlodStatus {
+    guard("mlod_walker_set_seam_blend", || {
+        // SAFETY: per this function's contract.
+        let w = unsafe { mutable(walker, "walker") }?;
+        w.seam_blend = enabled;
         Ok(())
     })
 }
@@ -1411,6 +1531,38 @@ pub unsafe extern "C" fn mlod_walker_detail_from_camera(
         if let Some(v) = unsafe { visible.as_mut() } {
             *v = seen_now;
         }
+        Ok(())
+    })
+}
+
+/// The pose vector of the walker's last frame as shown (the frame `mlod_walker_start` or
+/// `mlod_walker_advance` evaluated, with its planted feet; or the pose of `mlod_walker_pose`) into
+/// `out` (`len >=` the `pose_len` of `mlod_model_sizes` floats), in the cycle frame: what
+/// `mlod_walker_joint_transforms` and `mlod_walker_local_rotations` turn into joints, for recording
+/// a walk (the quality meter of `motion-lod quality --recorded` reads such poses).
+///
+/// # Safety
+/// `walker` and `model` are live and belong together; `out` holds `len` floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_walker_shown_pose(
+    walker: *mut MlodWalker,
+    model: *const MlodModel,
+    out: *mut f32,
+    len: usize,
+) -> MlodStatus {
+    guard("mlod_walker_shown_pose", || {
+        // SAFETY: per this function's contract.
+        let (w, m) = unsafe { walker_and_model(walker, model) }?;
+        if !w.posed {
+            return Err(Failure(
+                MlodStatus::NotPrepared,
+                "no pose: call mlod_walker_start or mlod_walker_pose first".into(),
+            ));
+        }
+        let p = m.model.lod().p();
+        // SAFETY: per this function's contract.
+        let out = unsafe { out_slice(out, len, p, "out") }?;
+        out[..p].copy_from_slice(&w.pose[..p]);
         Ok(())
     })
 }
@@ -1493,6 +1645,37 @@ pub unsafe extern "C" fn mlod_walker_local_rotations(
         }
         Ok(())
     })
+}
+
+/// The alignment of every buffer of [`mlod_buffer_new`], bytes: enough for each struct of this ABI.
+pub const MLOD_BUFFER_ALIGN: usize = 16;
+
+/// A zero-filled buffer of `len` bytes (`len > 0`), aligned to `MLOD_BUFFER_ALIGN`, for a host
+/// that has no allocator of its own in the library's memory (a WebAssembly host passes the
+/// library's structs and arrays through it); release it with `mlod_buffer_free` and the same
+/// `len`. Returns null when `len` is 0 or too large, or memory runs out.
+#[unsafe(no_mangle)]
+pub extern "C" fn mlod_buffer_new(len: usize) -> *mut u8 {
+    match std::alloc::Layout::from_size_align(len, MLOD_BUFFER_ALIGN) {
+        // SAFETY: the layout has a non-zero size.
+        Ok(layout) if len > 0 => unsafe { std::alloc::alloc_zeroed(layout) },
+        _ => std::ptr::null_mut(),
+    }
+}
+
+/// Releases a buffer of `mlod_buffer_new` (null is ignored).
+///
+/// # Safety
+/// `buffer` is null or was returned by `mlod_buffer_new(len)` with this `len` and not yet freed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_buffer_free(buffer: *mut u8, len: usize) {
+    if buffer.is_null() {
+        return;
+    }
+    if let Ok(layout) = std::alloc::Layout::from_size_align(len, MLOD_BUFFER_ALIGN) {
+        // SAFETY: allocated by `mlod_buffer_new` with this layout, per the contract.
+        unsafe { std::alloc::dealloc(buffer, layout) };
+    }
 }
 
 /// The message of the last failed call on this thread (empty after a success). The pointer stays

@@ -11,8 +11,9 @@ use std::process::Command;
 
 use lod_policy::glam::{Quat, Vec3};
 use lod_policy::{
-    ClipKernel, Controls, CycleFrame, Detail, DistancePolicy, FootLock, JointTransform,
-    KernelScratch, LevelPolicy, RuntimeModel, ViewParams, wrap_angle,
+    ClipKernel, Controls, CycleFrame, DEFAULT_HALFLIFE_S, Detail, DistancePolicy, FootLock,
+    JointTransform, KernelError, KernelScratch, LevelPolicy, RuntimeModel, SeamScratch,
+    SeamTransition, ViewParams, wrap_angle,
 };
 use motion_lod::dataset::DataSpec;
 use motion_lod::progress::NoProgress;
@@ -189,6 +190,10 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
             heading: wrap_angle(heading),
         };
         let mut lock = FootLock::new();
+        // The inertialized seams between cycles that both animate joints.
+        let mut seam = SeamTransition::new(lod.p(), DEFAULT_HALFLIFE_S);
+        let mut seam_scratch = SeamScratch::new(lod.p());
+        let mut seam_start = 0.0f32;
         let mut t = 0.0f64;
         let mut cycle = 0u64;
         let mut root = Vec3::ZERO;
@@ -202,10 +207,42 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
                 controls = controls_for(lo, hi, i, cycle + 1);
                 t += dt;
                 while t >= kernel.duration() {
-                    t -= kernel.duration();
-                    frame = frame.next(&kernel.root_motion());
+                    let ending = kernel.duration();
+                    t -= ending;
+                    let motion = kernel.root_motion();
+                    let blend = kernel.detail().active_joints > 0
+                        && lod.evaluated(detail).active_joints > 0;
+                    if blend {
+                        // The outgoing side: the pose shown at the clip's end (its seam applied).
+                        let (k, s, st) = (&kernel, &seam, seam_start);
+                        seam_scratch
+                            .capture(ending as f32, ending as f32, Some(&motion), |tt, out| {
+                                lod.pose(k, k.phase_at(f64::from(tt)), out)?;
+                                let rows = k.rows().min(out.len());
+                                s.apply(tt - st, &mut out[..rows]);
+                                Ok::<usize, KernelError>(rows)
+                            })
+                            .expect("capture");
+                    }
+                    frame = frame.next(&motion);
+                    seam.clear();
                     lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
                         .expect("kernel");
+                    if blend && kernel.detail().active_joints > 0 {
+                        let k = &kernel;
+                        seam_scratch
+                            .start(
+                                t as f32,
+                                k.duration() as f32,
+                                |tt, out| {
+                                    lod.pose(k, k.phase_at(f64::from(tt)), out)?;
+                                    Ok::<usize, KernelError>(k.rows().min(out.len()))
+                                },
+                                &mut seam,
+                            )
+                            .expect("seam");
+                        seam_start = t as f32;
+                    }
                     body_scale = model.body_scale(&controls);
                     cycle_detail = detail;
                     cycle += 1;
@@ -215,6 +252,12 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
             let active = cycle_detail.active_joints;
             lod.pose(&kernel, kernel.phase_at(t), &mut pose)
                 .expect("pose");
+            if seam.is_active() {
+                let since = t as f32 - seam_start;
+                let rows = kernel.rows().min(pose.len());
+                seam.apply(since, &mut pose[..rows]);
+                seam.finish_after(since);
+            }
             lock.apply(rig, feet, &frame, active, body_scale, dt as f32, &mut pose)
                 .expect("foot lock");
             locked_frames += 1;

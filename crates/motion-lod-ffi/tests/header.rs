@@ -111,10 +111,14 @@ fn known() -> Known {
         mlod_walker_start,
         mlod_walker_advance,
         mlod_walker_set_foot_lock,
+        mlod_walker_set_seam_blend,
         mlod_walker_detail_from_camera,
         mlod_walker_joint_transforms,
         mlod_walker_local_rotations,
+        mlod_walker_shown_pose,
         mlod_last_error,
+        mlod_buffer_new,
+        mlod_buffer_free,
     ];
     let types = types![
         MlodStatus,
@@ -138,12 +142,20 @@ fn known() -> Known {
         NotPrepared,
         Panic,
     ];
-    let _ = (MLOD_ABI_VERSION, MLOD_MAX_STEP_S, MLOD_MAX_STYLES);
+    let _ = (
+        MLOD_ABI_VERSION,
+        MLOD_MAX_STEP_S,
+        MLOD_MAX_STYLES,
+        MLOD_BUFFER_ALIGN,
+        MLOD_SEAM_HALFLIFE_S,
+    );
     let mut others: BTreeSet<String> = types.iter().map(|t| t.to_string()).collect();
     others.extend([
         "MLOD_ABI_VERSION".to_string(),
         "MLOD_MAX_STEP_S".to_string(),
         "MLOD_MAX_STYLES".to_string(),
+        "MLOD_BUFFER_ALIGN".to_string(),
+        "MLOD_SEAM_HALFLIFE_S".to_string(),
     ]);
     others.extend(
         statuses

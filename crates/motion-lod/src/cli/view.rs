@@ -1,18 +1,22 @@
-//! `motion-lod view FILE.glb`: serves the web viewer (`viewer/` of the checkout) and FILE on
-//! localhost and prints the address to open.
+//! `motion-lod view FILE`: serves the web viewer on localhost with FILE and prints the address to
+//! open. A model file (`.mlod`, from `motion-lod build`) opens the live page (`live.html`): the
+//! runtime compiled to WebAssembly synthesizes one walker steered from the page, or a crowd whose
+//! level of detail follows the page's camera. A glTF binary (`.glb`, from `synth -o walk.glb` or
+//! `crowd --export`) opens the glTF viewer (`index.html`), which plays it.
+//!
+//! The pages, their scripts, the WebAssembly runtime (`viewer/wasm/`) and the three.js modules
+//! (`viewer/vendor/three/`) are embedded in the binary (`cargo xtask web` rebuilds the last two;
+//! CI checks they are current), so an installed binary needs no checkout. `--viewer-dir DIR` (or
+//! `$MOTION_LOD_VIEWER`) serves the same files from a folder instead, to try edits to the page.
 //!
 //! A small HTTP/1.1 server on `std::net` (GET and HEAD, one thread per connection, `Connection:
-//! close`): `/` is the viewer's `index.html`, `/model.glb` the file (read at every request, so a
-//! re-export shows on reload), other paths the viewer's own files and the three.js modules that
-//! `npm ci` installs under `viewer/node_modules/three`. Nothing else is served.
-//!
-//! The viewer folder is `--viewer-dir`, else `$MOTION_LOD_VIEWER`, else the `viewer/` folder of the
-//! source tree the binary was built from (an installed binary keeps working while that checkout
-//! exists; otherwise pass `--viewer-dir`).
+//! close`): `/` is the page for FILE's kind, `/model.mlod` or `/model.glb` the file (read at every
+//! request, so a rebuilt model shows on reload), other paths the viewer's own files. Nothing else is
+//! served.
 
 use std::io::{BufRead as _, BufReader, Write as _};
 use std::net::{TcpListener, TcpStream};
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, bail};
 use clap::Args;
@@ -20,128 +24,195 @@ use clap::Args;
 /// Arguments of `motion-lod view`.
 #[derive(Debug, Args)]
 pub struct ViewArgs {
-    /// The glTF binary to show (from `synth -o walk.glb` or `crowd --export crowd.glb`).
-    #[arg(value_name = "FILE.glb")]
+    /// The file to show: a model (`.mlod`, from `build`) opens the live page, a glTF binary
+    /// (`.glb`, from `synth -o walk.glb` or `crowd --export crowd.glb`) the glTF viewer.
+    #[arg(value_name = "FILE")]
     pub file: PathBuf,
     /// Port on 127.0.0.1 (0 picks a free one).
     #[arg(long, default_value_t = 8787)]
     pub port: u16,
-    /// The viewer folder (default: $MOTION_LOD_VIEWER, else viewer/ of this source tree).
+    /// Serve the viewer's files from this folder instead of the binary's copies (default:
+    /// $MOTION_LOD_VIEWER when set).
     #[arg(long, value_name = "DIR")]
     pub viewer_dir: Option<PathBuf>,
 }
 
-/// The viewer folder: the option, the environment, or the source tree's.
-fn viewer_dir(arg: Option<&Path>) -> PathBuf {
-    arg.map(Path::to_path_buf)
-        .or_else(|| std::env::var_os("MOTION_LOD_VIEWER").map(PathBuf::from))
-        .unwrap_or_else(|| {
-            // The source tree's `viewer/`, two folders above this crate, named without `..`.
-            let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-            manifest
-                .ancestors()
-                .nth(2)
-                .unwrap_or(manifest)
-                .join("viewer")
-        })
+/// Embeds a viewer file by its path under `viewer/`.
+macro_rules! assets {
+    ($($path:literal),* $(,)?) => {
+        [$(($path, include_bytes!(concat!("../../../../viewer/", $path)) as &[u8])),*]
+    };
 }
 
-/// Checks that `file` is a readable glTF binary (its magic number), before serving anything.
-fn check_glb(file: &Path) -> anyhow::Result<()> {
-    let mut head = [0u8; 4];
-    let mut f = std::fs::File::open(file).with_context(|| format!("opening {}", file.display()))?;
-    use std::io::Read as _;
-    let n = f
-        .read(&mut head)
-        .with_context(|| format!("reading {}", file.display()))?;
-    if n < 4 || &head != b"glTF" {
-        bail!(
-            "{} is not a glTF binary (.glb): it does not start with `glTF`",
-            file.display()
-        );
+/// The viewer's files, by their path under `viewer/`: the two pages and their scripts, the
+/// runtime as WebAssembly, and the three.js modules they import.
+const ASSETS: [(&str, &[u8]); 16] = assets![
+    "index.html",
+    "main.js",
+    "live.html",
+    "live.js",
+    "mlod.js",
+    "crowd.js",
+    "style.css",
+    "wasm/motion_lod.wasm",
+    "vendor/three/LICENSE",
+    "vendor/three/build/three.module.js",
+    "vendor/three/build/three.core.js",
+    "vendor/three/examples/jsm/controls/OrbitControls.js",
+    "vendor/three/examples/jsm/loaders/GLTFLoader.js",
+    "vendor/three/examples/jsm/utils/BufferGeometryUtils.js",
+    "vendor/three/examples/jsm/utils/SkeletonUtils.js",
+    "wasm/BUILD.txt",
+];
+
+/// What FILE is, from its first bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// A model file: the live page.
+    Model,
+    /// A glTF binary: the glTF viewer.
+    Gltf,
+}
+
+impl Kind {
+    /// The page `/` serves and the name the file is served under.
+    fn page_and_name(self) -> (&'static str, &'static str) {
+        match self {
+            Kind::Model => ("live.html", "model.mlod"),
+            Kind::Gltf => ("index.html", "model.glb"),
+        }
     }
-    Ok(())
+}
+
+/// Checks that `file` is a model the runtime loads or a glTF binary, before serving anything.
+fn kind_of(file: &Path) -> anyhow::Result<Kind> {
+    let bytes = std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
+    if bytes.starts_with(b"glTF") {
+        return Ok(Kind::Gltf);
+    }
+    if bytes.starts_with(&lod_policy::file::MAGIC) {
+        lod_policy::RuntimeModel::from_bytes(&bytes)
+            .with_context(|| format!("{} is not a model the runtime can load", file.display()))?;
+        return Ok(Kind::Model);
+    }
+    bail!(
+        "{} is neither a model file (.mlod, from `motion-lod build`) nor a glTF binary (.glb): \
+         it starts with neither `MLOD` nor `glTF`",
+        file.display()
+    )
+}
+
+/// Where the viewer's files come from.
+#[derive(Debug)]
+enum Source {
+    /// The copies in the binary.
+    Embedded,
+    /// A folder laid out as `viewer/`.
+    Dir(PathBuf),
+}
+
+impl Source {
+    /// The bytes of the viewer file `name` (a path under `viewer/` of [`ASSETS`]).
+    fn read(&self, name: &str) -> Option<Vec<u8>> {
+        let embedded = ASSETS.iter().find(|(n, _)| *n == name)?.1;
+        match self {
+            Source::Embedded => Some(embedded.to_vec()),
+            Source::Dir(dir) => std::fs::read(dir.join(name)).ok(),
+        }
+    }
 }
 
 /// Runs the subcommand (until interrupted).
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
-    check_glb(&args.file)?;
-    let dir = viewer_dir(args.viewer_dir.as_deref());
-    if !dir.join("index.html").is_file() {
-        bail!(
-            "no viewer in {} (index.html missing); pass --viewer-dir DIR or set MOTION_LOD_VIEWER",
-            dir.display()
-        );
-    }
-    if !dir
-        .join("node_modules/three/build/three.module.js")
-        .is_file()
+    let kind = kind_of(&args.file)?;
+    let source = match args
+        .viewer_dir
+        .or_else(|| std::env::var_os("MOTION_LOD_VIEWER").map(PathBuf::from))
     {
-        bail!(
-            "three.js is not installed in {}: run `npm ci` there first",
-            dir.display()
-        );
-    }
+        Some(dir) => {
+            if !dir.join("live.html").is_file() || !dir.join("wasm/motion_lod.wasm").is_file() {
+                bail!(
+                    "{} is not a viewer folder (live.html or wasm/motion_lod.wasm missing; \
+                     `cargo xtask web` builds the wasm)",
+                    dir.display()
+                );
+            }
+            Source::Dir(dir)
+        }
+        None => Source::Embedded,
+    };
     let listener = TcpListener::bind(("127.0.0.1", args.port))
         .with_context(|| format!("listening on 127.0.0.1:{}", args.port))?;
     let addr = listener.local_addr()?;
+    let page = match kind {
+        Kind::Model => "the live page: the runtime in WebAssembly walks it",
+        Kind::Gltf => "the glTF viewer",
+    };
+    let from = match &source {
+        Source::Embedded => "the binary's copy".to_string(),
+        Source::Dir(dir) => dir.display().to_string(),
+    };
     println!(
-        "serving {} at http://{addr}/ (viewer: {}); open it in a browser, Ctrl-C to stop",
+        "serving {} at http://{addr}/ in {page} (viewer: {from}); open it in a browser, Ctrl-C to stop",
         args.file.display(),
-        dir.display()
     );
     std::io::stdout().flush()?;
-    let file = std::sync::Arc::new(args.file);
-    let dir = std::sync::Arc::new(dir);
+    let shared = std::sync::Arc::new((args.file, kind, source));
     for stream in listener.incoming() {
         let Ok(stream) = stream else { continue };
-        let (file, dir) = (file.clone(), dir.clone());
+        let shared = shared.clone();
         std::thread::spawn(move || {
-            let _ = serve(stream, &file, &dir);
+            let (file, kind, source) = &*shared;
+            let _ = serve(stream, file, *kind, source);
         });
     }
     Ok(())
 }
 
 /// Content type by extension.
-fn content_type(path: &Path) -> &'static str {
-    match path.extension().and_then(|e| e.to_str()) {
+fn content_type(name: &str) -> &'static str {
+    match name.rsplit_once('.').map(|(_, e)| e) {
         Some("html") => "text/html; charset=utf-8",
         Some("js" | "mjs") => "text/javascript; charset=utf-8",
         Some("css") => "text/css; charset=utf-8",
-        Some("json") => "application/json",
-        Some("png") => "image/png",
-        Some("svg") => "image/svg+xml",
+        Some("wasm") => "application/wasm",
         Some("glb") => "model/gltf-binary",
-        _ => "application/octet-stream",
+        _ => "text/plain; charset=utf-8",
     }
 }
 
-/// The file a request path maps to, or `None` (404): `/`, `/model.glb`, files at the top of the
-/// viewer folder, and three.js's modules.
-fn resolve(url_path: &str, file: &Path, dir: &Path) -> Option<PathBuf> {
+/// What a request path asks for.
+#[derive(Debug, PartialEq, Eq)]
+enum Target {
+    /// FILE itself.
+    File,
+    /// A viewer file, by its path under `viewer/`.
+    Asset(&'static str),
+}
+
+/// The target of a request path, or `None` (404): `/` (the page for FILE's kind), FILE under its
+/// served name, and the viewer's files.
+fn resolve(url_path: &str, kind: Kind) -> Option<Target> {
     let path = url_path.split(['?', '#']).next().unwrap_or("");
-    match path {
-        "/" | "/index.html" => return Some(dir.join("index.html")),
-        "/model.glb" => return Some(file.to_path_buf()),
-        _ => {}
+    let (page, name) = kind.page_and_name();
+    if path == "/" {
+        return ASSETS
+            .iter()
+            .find(|(n, _)| *n == page)
+            .map(|(n, _)| Target::Asset(n));
     }
-    let rel = Path::new(path.strip_prefix('/')?);
-    if !rel.components().all(|c| matches!(c, Component::Normal(_))) {
-        return None;
+    let rel = path.strip_prefix('/')?;
+    if rel == name {
+        return Some(Target::File);
     }
-    let top = rel.components().count() == 1;
-    let three = rel.starts_with("node_modules/three/build")
-        || rel.starts_with("node_modules/three/examples/jsm");
-    let ext_ok = matches!(
-        rel.extension().and_then(|e| e.to_str()),
-        Some("html" | "js" | "css" | "png" | "svg")
-    );
-    (ext_ok && (top || three)).then(|| dir.join(rel))
+    ASSETS
+        .iter()
+        .find(|(n, _)| *n == rel)
+        .map(|(n, _)| Target::Asset(n))
 }
 
 /// Answers one request.
-fn serve(stream: TcpStream, file: &Path, dir: &Path) -> std::io::Result<()> {
+fn serve(stream: TcpStream, file: &Path, kind: Kind, source: &Source) -> std::io::Result<()> {
     stream.set_read_timeout(Some(std::time::Duration::from_secs(10)))?;
     let mut reader = BufReader::new(stream.try_clone()?);
     let mut line = String::new();
@@ -166,22 +237,43 @@ fn serve(stream: TcpStream, file: &Path, dir: &Path) -> std::io::Result<()> {
             true,
         );
     }
-    let found = resolve(target, file, dir).and_then(|p| std::fs::read(&p).ok().map(|b| (p, b)));
-    match found {
-        Some((p, body)) if p == file => {
-            // The viewer shows the file's own name.
-            let name: String = file
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default()
-                .chars()
-                .filter(|c| !c.is_control() && *c != '"')
-                .collect();
-            let kind =
-                format!("model/gltf-binary\r\nContent-Disposition: inline; filename=\"{name}\"");
-            respond(&mut out, "200 OK", &kind, &body, method == "GET")
-        }
-        Some((p, body)) => respond(&mut out, "200 OK", content_type(&p), &body, method == "GET"),
+    let with_body = method == "GET";
+    match resolve(target, kind) {
+        Some(Target::File) => match std::fs::read(file) {
+            Ok(body) => {
+                // The page shows the file's own name.
+                let name: String = file
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+                    .chars()
+                    .filter(|c| !c.is_control() && *c != '"')
+                    .collect();
+                let mime = match kind {
+                    Kind::Model => "application/octet-stream",
+                    Kind::Gltf => "model/gltf-binary",
+                };
+                let kind = format!("{mime}\r\nContent-Disposition: inline; filename=\"{name}\"");
+                respond(&mut out, "200 OK", &kind, &body, with_body)
+            }
+            Err(e) => respond(
+                &mut out,
+                "500 Internal Server Error",
+                "text/plain",
+                format!("reading {}: {e}\n", file.display()).as_bytes(),
+                true,
+            ),
+        },
+        Some(Target::Asset(name)) => match source.read(name) {
+            Some(body) => respond(&mut out, "200 OK", content_type(name), &body, with_body),
+            None => respond(
+                &mut out,
+                "404 Not Found",
+                "text/plain",
+                b"not found\n",
+                true,
+            ),
+        },
         None => respond(
             &mut out,
             "404 Not Found",
@@ -215,24 +307,65 @@ mod tests {
     use super::*;
 
     #[test]
-    fn only_the_viewer_three_and_the_model_are_served() {
-        let (f, d) = (Path::new("/x/walk.glb"), Path::new("/v"));
-        assert_eq!(resolve("/", f, d), Some(d.join("index.html")));
-        assert_eq!(resolve("/model.glb?x=1", f, d), Some(f.to_path_buf()));
-        assert_eq!(resolve("/main.js", f, d), Some(d.join("main.js")));
+    fn only_the_viewer_and_the_file_are_served() {
+        assert_eq!(resolve("/", Kind::Gltf), Some(Target::Asset("index.html")));
+        assert_eq!(resolve("/", Kind::Model), Some(Target::Asset("live.html")));
+        assert_eq!(resolve("/model.glb?x=1", Kind::Gltf), Some(Target::File));
+        assert_eq!(resolve("/model.mlod", Kind::Model), Some(Target::File));
+        assert_eq!(resolve("/model.mlod", Kind::Gltf), None);
         assert_eq!(
-            resolve("/node_modules/three/build/three.module.js", f, d),
-            Some(d.join("node_modules/three/build/three.module.js"))
+            resolve("/main.js", Kind::Gltf),
+            Some(Target::Asset("main.js"))
+        );
+        assert_eq!(
+            resolve("/wasm/motion_lod.wasm", Kind::Model),
+            Some(Target::Asset("wasm/motion_lod.wasm"))
+        );
+        assert_eq!(
+            resolve("/vendor/three/build/three.module.js", Kind::Gltf),
+            Some(Target::Asset("vendor/three/build/three.module.js"))
         );
         for bad in [
             "/../secret.js",
-            "/node_modules/../../etc/passwd",
+            "/vendor/../../etc/passwd",
             "/package.json",
-            "/node_modules/pngjs/lib/png.js",
+            "/node_modules/three/build/three.module.js",
             "//etc/x.js",
             "/checks/browser.mjs",
         ] {
-            assert_eq!(resolve(bad, f, d), None, "{bad}");
+            assert_eq!(resolve(bad, Kind::Gltf), None, "{bad}");
         }
+    }
+
+    #[test]
+    fn every_embedded_file_is_the_checkouts() {
+        let viewer = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../viewer");
+        for (name, bytes) in ASSETS {
+            let on_disk = std::fs::read(viewer.join(name)).expect(name);
+            assert!(on_disk == bytes, "{name} differs from viewer/{name}");
+            assert!(!bytes.is_empty(), "{name} is empty");
+        }
+        assert_eq!(content_type("wasm/motion_lod.wasm"), "application/wasm");
+    }
+
+    #[test]
+    fn files_of_neither_kind_are_refused_with_their_name() {
+        let dir = std::env::temp_dir().join(format!("mlod-view-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let junk = dir.join("notes.txt");
+        std::fs::write(&junk, b"hello").unwrap();
+        let err = kind_of(&junk).unwrap_err().to_string();
+        assert!(
+            err.contains("notes.txt") && err.contains("neither"),
+            "{err}"
+        );
+        let glb = dir.join("w.glb");
+        std::fs::write(&glb, b"glTF\x02\0\0\0").unwrap();
+        assert_eq!(kind_of(&glb).unwrap(), Kind::Gltf);
+        let truncated = dir.join("m.mlod");
+        std::fs::write(&truncated, &lod_policy::file::MAGIC).unwrap();
+        let err = format!("{:#}", kind_of(&truncated).unwrap_err());
+        assert!(err.contains("m.mlod") && err.contains("runtime"), "{err}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -1,0 +1,70 @@
+// The live page's figures for README, measured in one run (not a test: it asserts nothing):
+//   1. the pose kernel, native (crates/motion-lod-ffi/examples/pose_bench.rs, release) against the
+//      runtime compiled to WebAssembly in headless Chromium (`benchPose` of viewer/crowd.js): the
+//      median nanoseconds a call at every level, and their ratio;
+//   2. the live crowd in headless Chromium (software GL: SwiftShader) at growing walker counts:
+//      milliseconds a frame (the interval between animation frames), split into the runtime
+//      (clips and poses; FK) and drawing, and the largest count kept at 60 fps.
+//
+//   node checks/bench.mjs --bin target/release/motion-lod --native target/release/examples/pose_bench
+//                         --model MODEL.mlod [--counts 1000,3000,10000,30000,100000]
+import { spawn, execFileSync } from 'node:child_process';
+import { existsSync, statSync } from 'node:fs';
+import { chromium } from 'playwright-core';
+
+const args = Object.fromEntries(
+  process.argv.slice(2).reduce((acc, a, i, all) => (a.startsWith('--') ? [...acc, [a.slice(2), all[i + 1]]] : acc), []),
+);
+const browserPath = process.env.CHROMIUM ?? ['/usr/bin/chromium', '/usr/bin/chromium-browser'].find(existsSync);
+const counts = (args.counts ?? '1000,3000,10000,30000,100000').split(',').map(Number);
+if (!args.model || !args.native || !args.bin) throw new Error('--bin, --native and --model are required');
+
+const server = await new Promise((resolve, reject) => {
+  const child = spawn(args.bin, ['view', args.model, '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
+  let out = '';
+  child.stdout.on('data', (d) => {
+    out += d;
+    const m = out.match(/http:\/\/[^\s]+\//);
+    if (m) resolve({ url: m[0], child });
+  });
+  child.on('exit', (code) => reject(new Error(`motion-lod view exited with ${code}: ${out}`)));
+});
+const browser = await chromium.launch({
+  executablePath: browserPath,
+  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
+});
+try {
+  const page = await browser.newPage({ viewport: { width: 960, height: 540 } });
+  await page.goto(`${server.url}?fast`);
+  await page.waitForFunction(() => window.live?.ready, null, { timeout: 60000 });
+  const model = await page.evaluate(() => window.live.model());
+  console.log(`model ${args.model}: ${model.joints} joints, ${model.levels} levels`);
+  console.log(`wasm: ${statSync('viewer/wasm/motion_lod.wasm').size} bytes`);
+  console.log('\n| level | native pose (ns) | wasm pose (ns) | ratio | native pose + FK (ns) | wasm pose + FK (ns) | ratio |');
+  console.log('|---|---|---|---|---|---|---|');
+  for (let level = 0; level < model.levels; level++) {
+    const native = JSON.parse(execFileSync(args.native, [args.model, String(level)], { encoding: 'utf8' }));
+    const wasm = await page.evaluate((l) => window.live.benchPose(l), level);
+    console.log(`| ${level} | ${native.poseNs.toFixed(0)} | ${wasm.poseNs.toFixed(0)} | ${(wasm.poseNs / native.poseNs).toFixed(2)} | ` +
+      `${native.poseFkNs.toFixed(0)} | ${wasm.poseFkNs.toFixed(0)} | ${(wasm.poseFkNs / native.poseFkNs).toFixed(2)} |`);
+  }
+  console.log('\n| walkers | ms a frame | frames/s | runtime: clips and poses (ms) | FK (ms) | drawing (ms) | in view with joints | root only |');
+  console.log('|---|---|---|---|---|---|---|---|');
+  let kept = 0;
+  for (const n of counts) {
+    await page.evaluate((c) => window.live.setMode('crowd', c), n);
+    await page.waitForTimeout(2000);
+    await page.evaluate(() => window.live.resetTiming());
+    await page.waitForTimeout(4000);
+    const t = await page.evaluate(() => window.live.timing());
+    const animated = t.levels.slice(0, -1).reduce((a, b) => a + b, 0);
+    console.log(`| ${n} | ${t.frameMs.toFixed(1)} | ${(1000 / t.frameMs).toFixed(1)} | ${t.runtimeMs.toFixed(2)} | ${t.fkMs.toFixed(2)} | ` +
+      `${t.drawMs.toFixed(2)} | ${animated} | ${t.levels.at(-1)} |`);
+    if (t.frameMs <= 1000 / 60 * 1.05) kept = n;
+  }
+  console.log(`\nlargest crowd at 60 fps: ${kept || 'none of those measured'}`);
+  console.log(`machine: ${execFileSync('nproc', { encoding: 'utf8' }).trim()} cores; ${await browser.version()}`);
+} finally {
+  await browser.close();
+  server.child.kill();
+}
