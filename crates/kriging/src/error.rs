@@ -125,4 +125,33 @@ pub enum KrigingError {
         /// Samples found.
         got: usize,
     },
+    /// Two conditioning data of a simulation sit at the same place: a realisation takes one value
+    /// per site, so the data contradict each other (average or drop the duplicates).
+    #[error(
+        "data {first} and {second} sit at the same place: a realisation has one value per site \
+         (average or drop the duplicates before simulating)"
+    )]
+    CoincidentData {
+        /// The smaller data index.
+        first: usize,
+        /// The larger data index.
+        second: usize,
+    },
+    /// A node of a sequential simulation ([`crate::Sgs`]) could not be simulated: its local
+    /// kriging system failed (`source`: for example [`KrigingError::Singular`], or
+    /// [`KrigingError::QueryNeighbourhood`] for ordinary kriging without neighbours).
+    #[error(
+        "sequential simulation at target {target}{}: {source}",
+        realisation.map(|r| format!(" (realisation {r})")).unwrap_or_default()
+    )]
+    SimulationNode {
+        /// The target (row of the target matrix) being simulated.
+        target: usize,
+        /// The realisation, when the failure depends on it (a path per realisation); `None` when
+        /// the system is shared by every realisation ([`crate::SgsPath::Shared`]).
+        realisation: Option<usize>,
+        /// What went wrong with the node's kriging system.
+        #[source]
+        source: Box<KrigingError>,
+    },
 }

@@ -5,12 +5,13 @@
 //! least squares, seven shapes and nested sums); ordinary, universal (linear or quadratic drift inside
 //! the kriging system), external-drift and simple (known mean) kriging of a scalar field over 1-3-D
 //! coordinates with kriging variances, leave-one-out diagnostics, geometric anisotropy and a moving
-//! neighbourhood ([`Krige`], module [`geo`]; checked against PyKrige and GSTools on the Meuse data); and the
+//! neighbourhood ([`Krige`], module [`geo`]; checked against PyKrige and GSTools on the Meuse data);
+//! conditional simulation by sequential Gaussian simulation ([`Sgs`], module [`simulate`]); and the
 //! vector-valued regression kriging of Mukai and Kuriyama's motion model ([`Kriging`], eq. 8 and
 //! appendix A) with its precomputed hot-path projection and an RBF baseline. It is not for: space-time
-//! or multivariate (co-)kriging, indicator or disjunctive kriging, simulation, block kriging,
-//! geographic (lat/lon) distances, or sparse/approximate methods for millions of points; nor for
-//! tensors or motion data themselves.
+//! or multivariate (co-)kriging, indicator or disjunctive kriging, other simulation methods
+//! (turning bands, spectral, indicator), block kriging, geographic (lat/lon) distances, or
+//! sparse/approximate methods for millions of points; nor for tensors or motion data themselves.
 //!
 //! Two front ends:
 //! - [`Krige`] (builder) -> [`KrigeModel`]: maps and other geostatistics. Defaults suit maps:
@@ -32,6 +33,9 @@
 //! - [`Krige`] / [`KrigeModel`]: simple ([`Krige::simple`]), ordinary, universal and external-drift
 //!   kriging with variances,
 //!   [`Anisotropy`], [`Neighbourhood`], [`LooStats`] (see [`geo`] for the formulas);
+//! - [`Sgs`] / [`Realisations`]: sequential Gaussian simulation honouring the data (a random path,
+//!   simple or ordinary kriging from the nearest data and earlier nodes, a normal draw per node;
+//!   deterministic for a seed on any number of threads; see [`simulate`] for the formulas);
 //! - [`Kriging`]: ordinary kriging and the paper's regression kriging (trend `F = K C^+` over
 //!   `[c; 1]`, kriging of the residuals), with automatic model choice by fit or leave-one-out error,
 //!   by default over the fitted models and a grid of ranges and nuggets ([`search`]: the nugget smooths
@@ -105,6 +109,7 @@ mod rbf;
 mod scaling;
 pub mod search;
 mod select;
+pub mod simulate;
 mod special;
 mod variogram;
 
@@ -128,6 +133,7 @@ pub use projected::ProjectedQuery;
 pub use rbf::{RBF_SMOOTHING_GRID, Rbf, RbfConfig, RbfKernel, RbfSmoothing, SmoothingCandidate};
 pub use scaling::{ParamScaling, ScalingChoice};
 pub use select::{DimDecision, DimSelection, SelectRule, TRIAL_SEARCH_MAX_SAMPLES, select_dims};
+pub use simulate::{Realisations, Sgs, SgsMean, SgsPath};
 pub use variogram::{Variogram, VariogramModel, shape};
 
 /// Fails with [`KrigingError::NonFinite`] at the first NaN or infinity of `m` (column by column).
