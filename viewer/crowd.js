@@ -1,23 +1,37 @@
 // Walkers driven through the runtime (mlod.js): the live crowd of the page, and the scripted runs
 // the browser test compares with the native runtime (crates/motion-lod-ffi/tests/web_reference.rs
 // walks the same scripts through the same C ABI in Rust).
-import { Walker, TRANSFORM_FLOATS } from './mlod.js';
+import { Walker, TRANSFORM_FLOATS, CONTROLS_BYTES, STATE_BYTES } from './mlod.js';
 
 /// A crowd: walker i starts at `starts[i]` = [x, z, heading] and walks its cycle k with
 /// `presets[(7 i + 3 k) mod presets.length]`, its path; every frame the model's distance policy
 /// gives each walker its detail from the camera (out of view: root only), used from its next cycle.
 export class Crowd {
   constructor(model, { starts, presets, radius = 1.2, footLock = true }) {
+    const rt = (this.rt = model.rt);
     this.model = model;
     this.presets = presets;
     this.radius = radius;
-    this.walkers = starts.map(() => new Walker(model));
-    for (const w of this.walkers) w.setFootLock(footLock);
     this.starts = starts;
-    this.count = starts.length;
-    this.visible = new Uint8Array(this.count);
-    // The cycle whose controls each walker was last given (as its next cycle's).
-    this.given = new Int32Array(this.count);
+    const n = (this.count = starts.length);
+    // The arrays `mlod_walkers_step` takes: walker pointers, next controls, states, visibility.
+    this.lens = [4 * n, CONTROLS_BYTES * n, STATE_BYTES * n, n];
+    [this.ptrs, this.controls, this.states, this.visiblePtr] = this.lens.map((len) => rt.alloc(Math.max(len, 16)));
+    this.walkers = starts.map((_, i) => {
+      const w = new Walker(model);
+      w.useSlots(this.controls + CONTROLS_BYTES * i, this.states + STATE_BYTES * i);
+      w.setFootLock(footLock);
+      return w;
+    });
+    const u32 = rt.u32;
+    this.walkers.forEach((w, i) => { u32[(this.ptrs >> 2) + i] = w.ptr; });
+    // The cycle whose controls each walker's slot holds (as its next cycle's).
+    this.given = new Int32Array(n);
+  }
+
+  /// Whether walker i was in view at the last frame (0 or 1).
+  get visible() {
+    return this.rt.bytes.subarray(this.visiblePtr, this.visiblePtr + this.count);
   }
 
   /// Walker i's controls for its cycle k.
@@ -25,30 +39,36 @@ export class Crowd {
     return this.presets[(7 * i + 3 * k) % this.presets.length];
   }
 
-  /// The first frame: each walker's detail from the camera at its start, then its walk starts.
+  /// The first frame: each walker's detail from the camera at its start, then its walk starts;
+  /// its slot then holds its second cycle's controls.
   start(cameraPtr) {
     for (let i = 0; i < this.count; i++) {
       const [x, z, heading] = this.starts[i];
       const d = this.model.detailFromCamera(cameraPtr, x, 1.0, z, this.radius);
-      this.visible[i] = d.visible ? 1 : 0;
-      this.walkers[i].start(this.controlsFor(i, 0), d, x, z, heading);
-      this.given[i] = 0;
+      const w = this.walkers[i];
+      w.start(this.controlsFor(i, 0), d, x, z, heading);
+      this.rt.bytes[this.visiblePtr + i] = d.visible ? 1 : 0;
+      this.rt.writeControls(w.controls, this.controlsFor(i, 1));
+      this.given[i] = 1;
     }
   }
 
-  /// One frame `dt` seconds on: each walker's detail from the camera where it is, then its step
-  /// with its next cycle's controls (written only when that cycle changes: the runtime keeps them).
+  /// One frame `dt` seconds on, in one call of the runtime (`mlod_walkers_step`): each walker's
+  /// detail from the camera where it is, then its step with its next cycle's controls; a walker
+  /// that began a cycle gets the controls of the one after in its slot.
   step(dt, cameraPtr) {
-    const { walkers, visible, given, radius } = this;
+    const rt = this.rt;
+    const status = rt.x.mlod_walkers_step(this.ptrs, this.count, this.model.ptr, cameraPtr, this.radius, dt,
+      this.controls, this.states, this.visiblePtr);
+    if (status !== 0) rt.check('mlod_walkers_step', status);
+    const u32 = rt.u32;
+    const { given } = this;
     for (let i = 0; i < this.count; i++) {
-      const w = walkers[i];
-      visible[i] = w.detailFromCamera(cameraPtr, radius) ? 1 : 0;
-      const next = w.cycle() + 1;
+      const s = (this.states + STATE_BYTES * i) >> 2;
+      const next = u32[s + 4] + 1;
       if (given[i] !== next) {
         given[i] = next;
-        w.advance(dt, this.controlsFor(i, next));
-      } else {
-        w.advance(dt, null);
+        rt.writeControls(this.controls + CONTROLS_BYTES * i, this.controlsFor(i, next));
       }
     }
   }
@@ -56,6 +76,7 @@ export class Crowd {
   free() {
     for (const w of this.walkers) w.free();
     this.walkers = [];
+    [this.ptrs, this.controls, this.states, this.visiblePtr].forEach((p, k) => this.rt.free(p, Math.max(this.lens[k], 16)));
   }
 }
 
@@ -118,11 +139,12 @@ export function runCrowd(runtime, model, script) {
     for (let f = 0; f < frames; f++) {
       if (f === 0) crowd.start(cameraPtr);
       else crowd.step(dt, cameraPtr);
+      const visible = crowd.visible;
       for (let i = 0; i < n; i++) {
         const w = crowd.walkers[i];
         const at = (f * n + i) * 3;
         roots[at] = w.rootX(); roots[at + 1] = w.rootY(); roots[at + 2] = w.rootZ();
-        details[at] = w.level(); details[at + 1] = w.joints(); details[at + 2] = crowd.visible[i];
+        details[at] = w.level(); details[at + 1] = w.joints(); details[at + 2] = visible[i];
       }
       if (f % sampleFrames === 0 || f === frames - 1) {
         for (let i = 0; i < n; i += sampleWalkers) {
@@ -164,5 +186,37 @@ export function benchPose(model, detail, { batch = 20000, samples = 15 } = {}) {
     return { poseNs: time(false), poseFkNs: time(true) };
   } finally {
     w.free();
+  }
+}
+
+/// Times `mlod_walkers_step` per walker as the native benchmark does (pose_bench.rs, `crowd_step`):
+/// 2,000 walkers on a grid 2 m apart started at level 0, the camera at the grid's near edge
+/// looking along `directionZ` (+1 over the crowd, -1 away: every walker root only). Returns the
+/// median nanoseconds a walker.
+export function benchStep(model, directionZ, { samples = 15 } = {}) {
+  const rt = model.rt;
+  const n = 2000;
+  const mid = (k) => 0.5 * (model.min[k] + model.max[k]);
+  const controls = { dx: mid('dx'), dz: mid('dz'), turn: mid('turn'), height: mid('height') };
+  const starts = Array.from({ length: n }, (_, i) => [((i % 50) - 24.5) * 2, Math.floor(i / 50) * 2, 0]);
+  const crowd = new Crowd(model, { starts, presets: [controls] });
+  const camera = rt.alloc(64);
+  rt.writeCamera(camera, { position: [0, 1.7, -8], direction: [0, 0, directionZ], fovY: 1.0471976,
+    aspect: 16 / 9, heightPx: 1080, near: 0.1, far: 0 });
+  const detail = { level: 0, joints: model.animatedJoints };
+  try {
+    crowd.walkers.forEach((w, i) => w.start(controls, detail, starts[i][0], starts[i][1], 0));
+    crowd.walkers.forEach((w) => rt.writeControls(w.controls, controls));
+    const per = [];
+    // 90 steps of 1/60 s (more than a cycle) warm up: every walker then walks at its detail.
+    for (let s = 0; s < samples + 90; s++) {
+      const t0 = performance.now();
+      crowd.step(1 / 60, camera);
+      if (s >= 90) per.push(((performance.now() - t0) * 1e6) / n);
+    }
+    return per.sort((a, b) => a - b)[per.length >> 1];
+  } finally {
+    crowd.free();
+    rt.free(camera, 64);
   }
 }

@@ -199,6 +199,13 @@ export class Walker {
     this.transforms = this.state + STATE_BYTES;
   }
 
+  /// Keeps the walker's controls and state in slots of a crowd's arrays instead of its own block
+  /// (`mlod_walkers_step` reads and writes whole arrays).
+  useSlots(controlsPtr, statePtr) {
+    this.controls = controlsPtr;
+    this.state = statePtr;
+  }
+
   setFootLock(on) {
     this.rt.check('mlod_walker_set_foot_lock', this.rt.x.mlod_walker_set_foot_lock(this.ptr, on));
   }

@@ -40,6 +40,8 @@ try {
   const model = await page.evaluate(() => window.live.model());
   console.log(`model ${args.model}: ${model.joints} joints, ${model.levels} levels`);
   console.log(`wasm: ${statSync('viewer/wasm/motion_lod.wasm').size} bytes`);
+  // The page's frame loop stops while the kernels are timed, on both sides.
+  await page.evaluate(() => window.live.pause(true));
   console.log('\n| level | native pose (ns) | wasm pose (ns) | ratio | native pose + FK (ns) | wasm pose + FK (ns) | ratio |');
   console.log('|---|---|---|---|---|---|---|');
   for (let level = 0; level < model.levels; level++) {
@@ -48,6 +50,14 @@ try {
     console.log(`| ${level} | ${native.poseNs.toFixed(0)} | ${wasm.poseNs.toFixed(0)} | ${(wasm.poseNs / native.poseNs).toFixed(2)} | ` +
       `${native.poseFkNs.toFixed(0)} | ${wasm.poseFkNs.toFixed(0)} | ${(wasm.poseFkNs / native.poseFkNs).toFixed(2)} |`);
   }
+  const native = JSON.parse(execFileSync(args.native, [args.model, '0'], { encoding: 'utf8' }));
+  const away = await page.evaluate(() => window.live.benchStep(-1));
+  const facing = await page.evaluate(() => window.live.benchStep(1));
+  console.log('\n| crowd step (mlod_walkers_step, 2,000 walkers) | native (ns a walker) | wasm (ns a walker) | ratio |');
+  console.log('|---|---|---|---|');
+  console.log(`| camera facing the crowd | ${native.stepFacingNs.toFixed(0)} | ${facing.toFixed(0)} | ${(facing / native.stepFacingNs).toFixed(2)} |`);
+  console.log(`| camera facing away (all root only) | ${native.stepAwayNs.toFixed(0)} | ${away.toFixed(0)} | ${(away / native.stepAwayNs).toFixed(2)} |`);
+  await page.evaluate(() => window.live.pause(false));
   console.log('\n| walkers | ms a frame | frames/s | runtime: clips and poses (ms) | FK (ms) | drawing (ms) | in view with joints | root only |');
   console.log('|---|---|---|---|---|---|---|---|');
   let kept = 0;

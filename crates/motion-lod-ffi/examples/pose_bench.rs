@@ -4,7 +4,8 @@
 //!
 //! Usage: `cargo run --release -p motion-lod-ffi --example pose_bench -- MODEL.mlod LEVEL`
 //! (prints one JSON line: the median nanoseconds of `mlod_walker_pose`, alone and followed by
-//! `mlod_walker_joint_transforms`).
+//! `mlod_walker_joint_transforms`; and of `mlod_walkers_step` per walker for a crowd of 2,000 on a
+//! grid 2 m apart, with the camera facing away, every walker root only, and facing the crowd).
 
 use std::time::Instant;
 
@@ -102,8 +103,86 @@ fn main() {
         };
         let pose_ns = time(false);
         let pose_fk_ns = time(true);
-        println!("{{\"poseNs\": {pose_ns:.1}, \"poseFkNs\": {pose_fk_ns:.1}}}");
+        let away_ns = crowd_step(model, &controls, animated, -1.0);
+        let facing_ns = crowd_step(model, &controls, animated, 1.0);
+        println!(
+            "{{\"poseNs\": {pose_ns:.1}, \"poseFkNs\": {pose_fk_ns:.1}, \"stepAwayNs\": {away_ns:.1}, \"stepFacingNs\": {facing_ns:.1}}}"
+        );
         mlod_walker_free(walker);
         mlod_model_free(model);
+    }
+}
+
+/// Walkers of the crowd step measurement, on a grid of `CROWD_COLUMNS`, 2 m apart.
+const CROWD: usize = 2000;
+const CROWD_COLUMNS: usize = 50;
+
+/// The median nanoseconds a walker of `mlod_walkers_step` for a crowd of `CROWD` walking with
+/// `controls`, the camera at the grid's near edge looking along `direction_z` (+1: over the crowd,
+/// -1: away from it, every walker root only once its first cycle has ended).
+///
+/// # Safety
+/// `model` is live.
+unsafe fn crowd_step(
+    model: *mut MlodModel,
+    controls: &MlodControls,
+    animated: usize,
+    direction_z: f32,
+) -> f64 {
+    let camera = MlodCamera {
+        position: [0.0, 1.7, -8.0],
+        direction: [0.0, 0.0, direction_z],
+        fov_y: 1.047_197_6,
+        aspect: 16.0 / 9.0,
+        image_height_px: 1080.0,
+        near_m: 0.1,
+        far_m: 0.0,
+    };
+    let detail = MlodDetail {
+        level: 0,
+        joints: animated as u32,
+    };
+    let mut walkers = vec![std::ptr::null_mut::<MlodWalker>(); CROWD];
+    // SAFETY: live model; every walker created here.
+    unsafe {
+        for (i, w) in walkers.iter_mut().enumerate() {
+            ok(mlod_walker_new(model, w), "walker");
+            let x = ((i % CROWD_COLUMNS) as f32 - 24.5) * 2.0;
+            let z = (i / CROWD_COLUMNS) as f32 * 2.0;
+            ok(
+                mlod_walker_start(*w, model, controls, detail, x, z, 0.0, std::ptr::null_mut()),
+                "start",
+            );
+        }
+        let next = vec![*controls; CROWD];
+        let mut states = vec![MlodWalkerState::default(); CROWD];
+        let mut per = Vec::new();
+        // 90 steps of 1/60 s (more than a cycle) warm up: every walker then walks at the
+        // detail the camera gives it.
+        for s in 0..SAMPLES + 90 {
+            let t0 = Instant::now();
+            ok(
+                mlod_walkers_step(
+                    walkers.as_ptr(),
+                    CROWD,
+                    model,
+                    &camera,
+                    1.2,
+                    1.0 / 60.0,
+                    next.as_ptr(),
+                    states.as_mut_ptr(),
+                    std::ptr::null_mut(),
+                ),
+                "step",
+            );
+            if s >= 90 {
+                per.push(t0.elapsed().as_nanos() as f64 / CROWD as f64);
+            }
+        }
+        for w in walkers {
+            mlod_walker_free(w);
+        }
+        per.sort_by(f64::total_cmp);
+        per[per.len() / 2]
     }
 }

@@ -13,7 +13,7 @@
     the controls and detail of the next cycle; then mlod_walker_local_rotations (skinning) or
     mlod_walker_joint_transforms. mlod_walker_set_foot_lock turns the foot lock off or on,
     mlod_walker_set_seam_blend the inertialized seams between cycles; mlod_walker_shown_pose
-    records the pose shown.
+    records the pose shown. mlod_walkers_step does step 5 for many walkers in one call.
  6. Release: mlod_walker_free, then mlod_model_free.
  A host with no allocator in the library's memory (WebAssembly) gets buffers from mlod_buffer_new
  and returns them with mlod_buffer_free.
@@ -593,6 +593,32 @@ enum MlodStatus mlod_walker_advance(struct MlodWalker *walker,
                                     const struct MlodControls *next_controls,
                                     const struct MlodDetail *next_detail,
                                     struct MlodWalkerState *state);
+
+/*
+ Moves `count` walkers one frame, the crowd's loop in one call: for each walker `i`, the level
+ of detail `camera` gives it where its root is (as `mlod_walker_detail_from_camera`, with a
+ sphere of `radius_m` metres) and whether it is in view (into `visible[i]`, when `visible` is
+ not null), then the step of `mlod_walker_advance` by `dt_s` seconds with `next_controls[i]` and
+ that detail for its next cycle, into `states[i]`. `next_controls[i]` is read at every call, so
+ a host keeps each walker's next controls there and changes them when its cycle changes.
+
+ Every argument is checked before any walker moves: each walker live, of `model` and walking,
+ each controls valid; the message names the first index that is not. Walkers must be distinct.
+
+ # Safety
+ `walkers` holds `count` walker pointers, `next_controls` `count` readable controls and `states`
+ `count` writable states; `visible` is null or holds `count` writable flags; `model` and
+ `camera` are live and readable.
+ */
+enum MlodStatus mlod_walkers_step(struct MlodWalker *const *walkers,
+                                  size_t count,
+                                  const struct MlodModel *model,
+                                  const struct MlodCamera *camera,
+                                  float radius_m,
+                                  double dt_s,
+                                  const struct MlodControls *next_controls,
+                                  struct MlodWalkerState *states,
+                                  bool *visible);
 
 /*
  Turns the walker's foot lock on or off (it is on from `mlod_walker_new`). Turning it off

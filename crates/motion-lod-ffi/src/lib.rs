@@ -34,7 +34,10 @@
 //!    root's world position and rotation ([`MlodWalkerState`]). For skinning,
 //!    [`mlod_walker_local_rotations`]; for joints in the cycle frame,
 //!    [`mlod_walker_joint_transforms`]. [`mlod_walker_set_foot_lock`] turns the foot lock off or
-//!    on.
+//!    on, [`mlod_walker_set_seam_blend`] the inertialized seams between cycles (on: a change of
+//!    controls or detail does not pop); [`mlod_walker_shown_pose`] gives the pose shown, to record
+//!    a walk. [`mlod_walkers_step`] does this step (detail from the camera, then advance) for a
+//!    whole crowd in one call.
 //! 6. **Release**: [`mlod_walker_free`] for each walker, then [`mlod_model_free`].
 //!
 //! A host without an allocator of its own in the library's memory (a WebAssembly page, which
@@ -1367,6 +1370,53 @@ pub unsafe extern "C" fn mlod_walker_start(
     })
 }
 
+/// The checked step of `mlod_walker_advance` and `mlod_walkers_step`: keeps the next cycle's
+/// controls and detail (when given), moves the walk `dt_s` seconds on (chaining cycles, each seam
+/// inertialized when both cycles animate joints) and shows the frame there.
+///
+/// # Safety
+/// `state` is null or writable.
+unsafe fn step_walker(
+    w: &mut MlodWalker,
+    m: &MlodModel,
+    dt_s: f64,
+    controls: Option<Controls>,
+    detail: Option<Detail>,
+    state: *mut MlodWalkerState,
+) -> Result<(), Failure> {
+    if let Some(c) = controls {
+        w.walk.next_controls = c;
+    }
+    if let Some(d) = detail {
+        w.walk.next_detail = d;
+    }
+    w.walk.t += dt_s;
+    let mut begun = 0u32;
+    while w.walk.t >= w.kernel.duration() {
+        let ending = w.kernel.duration();
+        w.walk.t -= ending;
+        let motion = w.kernel.root_motion();
+        let (values, detail) = (w.walk.next_controls, w.walk.next_detail);
+        // Inertialized when both cycles animate joints (as the crowd's near walkers are).
+        let blend = w.seam_blend
+            && w.kernel.detail().active_joints > 0
+            && m.model.lod().evaluated(detail).active_joints > 0;
+        if blend {
+            capture_seam(w, m, ending as f32, &motion)?;
+        }
+        w.walk.frame = w.walk.frame.next(&motion);
+        build_clip(w, m, &values, detail)?;
+        if blend && w.kernel.detail().active_joints > 0 {
+            start_seam(w, m, w.walk.t as f32)?;
+        }
+        w.walk.detail = detail;
+        w.walk.cycle += 1;
+        begun += 1;
+    }
+    // SAFETY: `state` is null or writable per the caller's contract.
+    unsafe { finish_step(w, m, dt_s as f32, begun, state) }
+}
+
 /// Moves the walk `dt_s` seconds forward (`0 < dt_s <=` `MLOD_MAX_STEP_S`) and evaluates the frame
 /// there: the pose, the foot lock (when on and the model knows its feet), the root in the world.
 /// When the current cycle ends on the way, the walker's cycle frame moves by that cycle's root
@@ -1416,37 +1466,104 @@ pub unsafe extern "C" fn mlod_walker_advance(
             Some(d) => Some(checked_detail(m, *d, "next_detail")?),
             None => None,
         };
-        if let Some(c) = controls {
-            w.walk.next_controls = c;
-        }
-        if let Some(d) = detail {
-            w.walk.next_detail = d;
-        }
-        w.walk.t += dt_s;
-        let mut begun = 0u32;
-        while w.walk.t >= w.kernel.duration() {
-            let ending = w.kernel.duration();
-            w.walk.t -= ending;
-            let motion = w.kernel.root_motion();
-            let (values, detail) = (w.walk.next_controls, w.walk.next_detail);
-            // Inertialized when both cycles animate joints (as the crowd's near walkers are).
-            let blend = w.seam_blend
-                && w.kernel.detail().active_joints > 0
-                && m.model.lod().evaluated(detail).active_joints > 0;
-            if blend {
-                capture_seam(w, m, ending as f32, &motion)?;
-            }
-            w.walk.frame = w.walk.frame.next(&motion);
-            build_clip(w, m, &values, detail)?;
-            if blend && w.kernel.detail().active_joints > 0 {
-                start_seam(w, m, w.walk.t as f32)?;
-            }
-            w.walk.detail = detail;
-            w.walk.cycle += 1;
-            begun += 1;
-        }
         // SAFETY: `state` is null or writable per the contract.
-        unsafe { finish_step(w, m, dt_s as f32, begun, state) }
+        unsafe { step_walker(w, m, dt_s, controls, detail, state) }
+    })
+}
+
+/// Moves `count` walkers one frame, the crowd's loop in one call: for each walker `i`, the level
+/// of detail `camera` gives it where its root is (as `mlod_walker_detail_from_camera`, with a
+/// sphere of `radius_m` metres) and whether it is in view (into `visible[i]`, when `visible` is
+/// not null), then the step of `mlod_walker_advance` by `dt_s` seconds with `next_controls[i]` and
+/// that detail for its next cycle, into `states[i]`. `next_controls[i]` is read at every call, so
+/// a host keeps each walker's next controls there and changes them when its cycle changes.
+///
+/// Every argument is checked before any walker moves: each walker live, of `model` and walking,
+/// each controls valid; the message names the first index that is not. Walkers must be distinct.
+///
+/// # Safety
+/// `walkers` holds `count` walker pointers, `next_controls` `count` readable controls and `states`
+/// `count` writable states; `visible` is null or holds `count` writable flags; `model` and
+/// `camera` are live and readable.
+#[unsafe(no_mangle)]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn mlod_walkers_step(
+    walkers: *const *mut MlodWalker,
+    count: usize,
+    model: *const MlodModel,
+    camera: *const MlodCamera,
+    radius_m: f32,
+    dt_s: f64,
+    next_controls: *const MlodControls,
+    states: *mut MlodWalkerState,
+    visible: *mut bool,
+) -> MlodStatus {
+    guard("mlod_walkers_step", || {
+        // SAFETY: per this function's contract.
+        let m = unsafe { reference(model, "model") }?;
+        // SAFETY: per this function's contract.
+        let camera = unsafe { reference(camera, "camera") }?;
+        check_camera(camera)?;
+        if !(radius_m.is_finite() && radius_m >= 0.0) {
+            return Err(Failure::invalid(format!(
+                "radius {radius_m} m must be finite and >= 0"
+            )));
+        }
+        if !(dt_s.is_finite() && dt_s > 0.0 && dt_s <= MLOD_MAX_STEP_S) {
+            return Err(Failure::invalid(format!(
+                "step {dt_s} s must be finite, > 0 and <= {MLOD_MAX_STEP_S} s"
+            )));
+        }
+        if count == 0 {
+            return Ok(());
+        }
+        if walkers.is_null() || next_controls.is_null() || states.is_null() {
+            return Err(Failure(
+                MlodStatus::NullPointer,
+                "walkers, next_controls and states must not be null".into(),
+            ));
+        }
+        // SAFETY: non-null and holding `count` elements per the contract.
+        let (list, controls, states) = unsafe {
+            (
+                std::slice::from_raw_parts(walkers, count),
+                std::slice::from_raw_parts(next_controls, count),
+                std::slice::from_raw_parts_mut(states, count),
+            )
+        };
+        // SAFETY: null or holding `count` flags per the contract.
+        let mut visible =
+            (!visible.is_null()).then(|| unsafe { std::slice::from_raw_parts_mut(visible, count) });
+        for (i, (&w, c)) in list.iter().zip(controls).enumerate() {
+            // SAFETY: each pointer is null or a live walker per the contract.
+            let w = unsafe { w.as_ref() }
+                .ok_or_else(|| Failure(MlodStatus::NullPointer, format!("walker {i} is null")))?;
+            if !std::ptr::eq(w.model, model) {
+                return Err(Failure::invalid(format!(
+                    "walker {i} was created for another model"
+                )));
+            }
+            if !w.walking {
+                return Err(Failure(
+                    MlodStatus::NotPrepared,
+                    format!("walker {i}: no walk: call mlod_walker_start first"),
+                ));
+            }
+            control_values(c, &format!("next_controls[{i}]"))?;
+        }
+        for (i, (&w, c)) in list.iter().zip(controls).enumerate() {
+            // SAFETY: checked above: live, distinct walkers of this model.
+            let w = unsafe { &mut *w };
+            let (seen_detail, in_view) = seen(m, camera, w.walk.root, radius_m)?;
+            let detail = checked_detail(m, seen_detail, "detail")?;
+            let values = control_values(c, "next_controls")?;
+            // SAFETY: `states[i]` is writable.
+            unsafe { step_walker(w, m, dt_s, Some(values), Some(detail), &mut states[i]) }?;
+            if let Some(v) = visible.as_deref_mut() {
+                v[i] = in_view;
+            }
+        }
+        Ok(())
     })
 }
 

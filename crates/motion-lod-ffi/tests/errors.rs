@@ -679,3 +679,124 @@ fn walking_misuse_is_a_status_with_a_message() {
         mlod_model_free(model);
     }
 }
+
+/// `mlod_walkers_step` moves walkers as one `mlod_walker_detail_from_camera` and one
+/// `mlod_walker_advance` each do, bit for bit, and refuses a bad list before moving any walker.
+#[test]
+fn a_crowd_step_is_the_walkers_steps_and_checks_first() {
+    let model = load();
+    let (_, _, animated) = sizes(model);
+    let controls = middle(model);
+    let cam = camera();
+    let detail = MlodDetail {
+        level: 0,
+        joints: animated as u32,
+    };
+    // SAFETY: live objects; readable inputs; writable outputs throughout.
+    unsafe {
+        let mut batch = [null_mut::<MlodWalker>(); 3];
+        let mut single = [null_mut::<MlodWalker>(); 3];
+        for (k, w) in batch.iter_mut().chain(single.iter_mut()).enumerate() {
+            assert_eq!(mlod_walker_new(model, w), MlodStatus::Ok);
+            let x = (k % 3) as f32 * 4.0 - 4.0;
+            assert_eq!(
+                mlod_walker_start(*w, model, &controls, detail, x, 10.0, 0.2, null_mut()),
+                MlodStatus::Ok
+            );
+        }
+        let next = [controls; 3];
+        let mut states = [MlodWalkerState::default(); 3];
+        let mut visible = [false; 3];
+        for _ in 0..40 {
+            assert_eq!(
+                mlod_walkers_step(
+                    batch.as_ptr(),
+                    3,
+                    model,
+                    &cam,
+                    1.2,
+                    1.0 / 30.0,
+                    next.as_ptr(),
+                    states.as_mut_ptr(),
+                    visible.as_mut_ptr(),
+                ),
+                MlodStatus::Ok,
+                "{}",
+                message()
+            );
+            for (k, &w) in single.iter().enumerate() {
+                let mut d = MlodDetail::default();
+                let mut v = false;
+                let mut s = MlodWalkerState::default();
+                assert_eq!(
+                    mlod_walker_detail_from_camera(w, model, &cam, 1.2, &mut d, &mut v),
+                    MlodStatus::Ok
+                );
+                assert_eq!(
+                    mlod_walker_advance(w, model, 1.0 / 30.0, &controls, &d, &mut s),
+                    MlodStatus::Ok
+                );
+                assert_eq!(s, states[k], "walker {k}");
+                assert_eq!(v, visible[k], "walker {k}");
+            }
+        }
+        assert!(states.iter().all(|s| s.cycle >= 1), "cycles were chained");
+
+        // A bad entry is refused, by index, and nothing moves.
+        let before = states;
+        let mut bad = next;
+        bad[2].dz = f32::NAN;
+        assert_eq!(
+            mlod_walkers_step(
+                batch.as_ptr(),
+                3,
+                model,
+                &cam,
+                1.2,
+                1.0 / 30.0,
+                bad.as_ptr(),
+                states.as_mut_ptr(),
+                null_mut(),
+            ),
+            MlodStatus::InvalidArgument
+        );
+        assert!(message().contains("next_controls[2]"), "{}", message());
+        assert_eq!(states, before, "no walker moved");
+        let mut fresh = null_mut();
+        assert_eq!(mlod_walker_new(model, &mut fresh), MlodStatus::Ok);
+        let list = [batch[0], fresh];
+        assert_eq!(
+            mlod_walkers_step(
+                list.as_ptr(),
+                2,
+                model,
+                &cam,
+                1.2,
+                1.0 / 30.0,
+                next.as_ptr(),
+                states.as_mut_ptr(),
+                null_mut(),
+            ),
+            MlodStatus::NotPrepared
+        );
+        assert!(message().contains("walker 1"), "{}", message());
+        assert_eq!(
+            mlod_walkers_step(
+                null(),
+                2,
+                model,
+                &cam,
+                1.2,
+                1.0 / 30.0,
+                next.as_ptr(),
+                states.as_mut_ptr(),
+                null_mut(),
+            ),
+            MlodStatus::NullPointer
+        );
+        for w in batch.into_iter().chain(single).chain([fresh]) {
+            mlod_walker_free(w);
+        }
+        mlod_model_free(model);
+    }
+}

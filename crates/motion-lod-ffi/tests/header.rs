@@ -112,6 +112,7 @@ fn known() -> Known {
         mlod_walker_advance,
         mlod_walker_set_foot_lock,
         mlod_walker_set_seam_blend,
+        mlod_walkers_step,
         mlod_walker_detail_from_camera,
         mlod_walker_joint_transforms,
         mlod_walker_local_rotations,
