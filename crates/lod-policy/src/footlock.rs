@@ -410,6 +410,20 @@ impl FootLock {
             return Err(FootLockError::FrameStep(dt));
         }
         let legs = feet.legs(rig).map_err(FootLockError::Feet)?;
+        let active = active_joints.min(rig.rotating_joints().len());
+        let leg_evaluated = |leg: &Leg| {
+            [leg.thigh, leg.knee, leg.ankle]
+                .iter()
+                .all(|&j| evaluated(rig, j, active))
+        };
+        if !legs.iter().any(leg_evaluated) {
+            // No leg is evaluated (a root-only or arms-only detail): every foot lets go, and no
+            // forward kinematics is needed (the loop below would do the same, after it).
+            for (state, _) in self.feet.iter_mut().zip(&legs) {
+                state.let_go(dt);
+            }
+            return Ok(());
+        }
         let nj = rig.joint_count();
         let mut stack = [JointTransform::default(); STACK_JOINTS];
         let mut heap = Vec::new();
@@ -438,13 +452,9 @@ impl FootLock {
             }
         }
         rig.joint_transforms_of(pose, active_joints, scale, needed, world)?;
-        let active = active_joints.min(rig.rotating_joints().len());
         let to_frame = frame.rotation().inverse();
         for (state, leg) in self.feet.iter_mut().zip(legs) {
-            if ![leg.thigh, leg.knee, leg.ankle]
-                .iter()
-                .all(|&j| evaluated(rig, j, active))
-            {
+            if !leg_evaluated(&leg) {
                 state.let_go(dt);
                 continue;
             }

@@ -904,7 +904,12 @@ fn check_camera(c: &MlodCamera) -> Result<(), Failure> {
 
 /// Whether a sphere of `radius` around the point `offset` from the eye (`distance` its length) is in
 /// the camera's view cone, between its near and far distances (see [`MlodCamera`]).
-fn in_view(c: &MlodCamera, offset: Vec3, distance: f32, radius: f32) -> bool {
+/// The half-angle of the cone that reaches the image's corners (see `MlodCamera`), radians.
+fn view_half_angle(c: &MlodCamera) -> f32 {
+    ((0.5 * c.fov_y).tan() * (1.0 + c.aspect * c.aspect).sqrt()).atan()
+}
+
+fn in_view(c: &MlodCamera, half: f32, offset: Vec3, distance: f32, radius: f32) -> bool {
     let along = offset.dot(Vec3::from_array(c.direction));
     if c.near_m > 0.0 && along + radius < c.near_m {
         return false;
@@ -915,7 +920,6 @@ fn in_view(c: &MlodCamera, offset: Vec3, distance: f32, radius: f32) -> bool {
     if distance <= radius {
         return true;
     }
-    let half = ((0.5 * c.fov_y).tan() * (1.0 + c.aspect * c.aspect).sqrt()).atan();
     let reach = half + (radius / distance).asin();
     reach >= std::f32::consts::PI || (along / distance).clamp(-1.0, 1.0).acos() <= reach
 }
@@ -928,6 +932,17 @@ fn seen(
     radius_m: f32,
 ) -> Result<(MlodDetail, bool), Failure> {
     check_camera(camera)?;
+    seen_checked(m, camera, view_half_angle(camera), p, radius_m)
+}
+
+/// [`seen`] for a checked camera whose [`view_half_angle`] is `half`.
+fn seen_checked(
+    m: &MlodModel,
+    camera: &MlodCamera,
+    half: f32,
+    p: Vec3,
+    radius_m: f32,
+) -> Result<(MlodDetail, bool), Failure> {
     if !p.is_finite() {
         return Err(Failure::invalid(format!("position {p} is not finite")));
     }
@@ -938,7 +953,7 @@ fn seen(
     }
     let offset = p - Vec3::from_array(camera.position);
     let distance = offset.length();
-    let visible = in_view(camera, offset, distance, radius_m);
+    let visible = in_view(camera, half, offset, distance, radius_m);
     let view = ViewParams {
         fov_y_radians: camera.fov_y,
         image_height_px: camera.image_height_px,
@@ -1551,10 +1566,11 @@ pub unsafe extern "C" fn mlod_walkers_step(
             }
             control_values(c, &format!("next_controls[{i}]"))?;
         }
+        let half = view_half_angle(camera);
         for (i, (&w, c)) in list.iter().zip(controls).enumerate() {
             // SAFETY: checked above: live, distinct walkers of this model.
             let w = unsafe { &mut *w };
-            let (seen_detail, in_view) = seen(m, camera, w.walk.root, radius_m)?;
+            let (seen_detail, in_view) = seen_checked(m, camera, half, w.walk.root, radius_m)?;
             let detail = checked_detail(m, seen_detail, "detail")?;
             let values = control_values(c, "next_controls")?;
             // SAFETY: `states[i]` is writable.
