@@ -235,8 +235,9 @@ function startWalk() {
   walker = new Walker(model);
   walker.setFootLock(ui.footLock.checked);
   walker.start(panelControls(), panelDetail() ?? { level: 0, joints: model.animatedJoints }, 0, 0, 0);
+  // From the walker's front right, the walker right of the screen's centre (clear of the panel).
   camera.position.set(3.2, 1.8, 4.2);
-  orbit.target.set(0, 0.9, 0);
+  orbit.target.set(-0.8, 0.9, 0.6);
   followLast = new THREE.Vector3(0, 0, 0);
   setGrid(200, 200);
 }
