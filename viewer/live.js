@@ -190,10 +190,17 @@ function panelControls() {
 
 function showControls() {
   const c = panelControls();
+  // A control the model ignores is shown as such, its slider off.
+  for (const name of ['dz', 'turn', 'dx', 'height']) {
+    const off = model.ignored.has(name);
+    ui[name].disabled = off;
+    ui[name].title = off ? `this model ignores ${name}: the build found no signal in it (motion-lod info says why); the walk follows what the data imply` : '';
+  }
   document.getElementById('dz-out').textContent = `${c.dz.toFixed(2)} m`;
   document.getElementById('dx-out').textContent = `${c.dx.toFixed(2)} m`;
   document.getElementById('turn-out').textContent = `${THREE.MathUtils.radToDeg(c.turn).toFixed(0)} deg`;
   document.getElementById('height-out').textContent = `${c.height.toFixed(2)} m`;
+  for (const name of model.ignored) document.getElementById(`${name}-out`).textContent = 'ignored';
 }
 
 function fillPanel() {
@@ -472,6 +479,11 @@ window.addEventListener('keydown', (e) => {
   const k = KEYS[e.code];
   if (!k || mode !== 'walk') return;
   const [name, sign] = k;
+  if (model.ignored.has(name)) {
+    ui.walkReadout.textContent = `this model ignores ${name} (no signal in its data)`;
+    e.preventDefault();
+    return;
+  }
   ui[name].value = String(Math.min(1, Math.max(0, slider(name) + 0.05 * sign)));
   showControls();
   e.preventDefault();
@@ -503,7 +515,8 @@ const base64 = (array) => {
 window.live = {
   get ready() { return ready; },
   get version() { return runtime?.version; },
-  model: () => model && { joints: model.joints, levels: model.levels, styles: model.styles, min: model.min, max: model.max },
+  model: () => model && { joints: model.joints, levels: model.levels, styles: model.styles, min: model.min, max: model.max,
+    ignored: [...model.ignored] },
   runScripts(script) {
     const walk = runWalk(runtime, model, { ...script.walk, dt: script.dt });
     const c = runCrowd(runtime, model, { ...script.crowd, dt: script.dt });

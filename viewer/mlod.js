@@ -153,6 +153,10 @@ export class Model {
       rt.x.mlod_model_control_range(this.ptr, out, out + CONTROLS_BYTES));
     this.min = rt.readControls(out);
     this.max = rt.readControls(out + CONTROLS_BYTES);
+    // The controls the build left out (bit k: dx, dz, turn, height): a clip follows the data there.
+    rt.check('mlod_model_ignored_controls', rt.x.mlod_model_ignored_controls(this.ptr, out));
+    const bits = rt.u32[out >> 2];
+    this.ignored = new Set(['dx', 'dz', 'turn', 'height'].filter((_, k) => bits & (1 << k)));
     rt.check('mlod_model_style_count', rt.x.mlod_model_style_count(this.ptr, out));
     const styles = rt.u32[out >> 2];
     this.styles = [];

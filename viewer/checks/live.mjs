@@ -163,6 +163,18 @@ try {
     `${fresh.map((l) => l.toFixed(2)).join(', ')} m from the next cycle on`);
   check(trace.filter((s) => s.footLocked).length > trace.length / 2,
     `the foot lock runs (${trace.filter((s) => s.footLocked).length} of ${trace.length} samples)`);
+  // A control the model ignores is shown as such, and its keys say so instead of moving it.
+  const shown = await page.evaluate(() => ['dz', 'turn', 'dx', 'height'].map((n) =>
+    [n, document.getElementById(n).disabled, document.getElementById(`${n}-out`).textContent]));
+  const ignored = new Set(info.model.ignored);
+  check(shown.every(([n, disabled, text]) => disabled === ignored.has(n) && (text === 'ignored') === ignored.has(n)),
+    `controls the model ignores (${info.model.ignored.join(', ') || 'none'}) are shown ignored: ${shown.map(([n, d, t]) => `${n} ${t}`).join(', ')}`);
+  if (ignored.has('turn')) {
+    await page.keyboard.press('KeyA');
+    const said = await page.evaluate(() => document.getElementById('walk-readout').textContent);
+    check(said.includes('ignores turn'), `A on a model that ignores turn says so: "${said}"`);
+  }
+
   // 3. A steered walk recorded from the page passes the motion-quality meter
   //    (`motion-lod quality --recorded`) at the thresholds of native walks: pop at most 1.25x and
   //    skate at most 1.5x the data's.

@@ -4,8 +4,8 @@
  Call order (a call that can fail returns an MlodStatus; mlod_last_error() says why it failed):
  1. Check the library: mlod_abi_version() == MLOD_ABI_VERSION; mlod_version() names the release.
  2. Load a model once: mlod_model_load or mlod_model_from_bytes; then mlod_model_sizes,
-    mlod_model_joint, mlod_model_joint_rest and mlod_model_root_joint (the skeleton) and
-    mlod_model_control_range; for a model with styles, mlod_model_style_count,
+    mlod_model_joint, mlod_model_joint_rest and mlod_model_root_joint (the skeleton),
+    mlod_model_control_range and mlod_model_ignored_controls; for a model with styles, mlod_model_style_count,
     mlod_model_style_name and mlod_model_style_share (what MlodControls.style weighs).
  3. Per character: mlod_walker_new (allocates its buffers, once).
  4. Start its walk: mlod_model_detail_from_camera at its start position, then mlod_walker_start.
@@ -417,6 +417,18 @@ enum MlodStatus mlod_model_joint_rest(const struct MlodModel *model,
  `model` is a live model; `out` is writable.
  */
 enum MlodStatus mlod_model_root_joint(const struct MlodModel *model, size_t *out);
+
+/*
+ Which of the four walk controls the model ignores, into `*out` as bits: `1 << k` for `dx`,
+ `dz`, `turn`, `height` (k = 0..3) when the build left that control out of the kriging (it
+ carried no signal in the data, or was constant; `motion-lod info MODEL` says which and why).
+ A clip then follows what the data imply for it from the other controls, so a host should not
+ offer it as a control (a value given is not refused, only unused).
+
+ # Safety
+ `model` is a live model; `out` is writable.
+ */
+enum MlodStatus mlod_model_ignored_controls(const struct MlodModel *model, uint32_t *out);
 
 /*
  The range of every control over the model's training data (`*min`, `*max`). Controls outside

@@ -21,7 +21,8 @@
 //! 2. **Load a model** once: [`mlod_model_load`] (a file) or [`mlod_model_from_bytes`]; then
 //!    [`mlod_model_sizes`] (levels, joints, animated joints, pose length), [`mlod_model_joint`]
 //!    and [`mlod_model_joint_rest`] (each joint's name, parent, offset and rest rotation, to bind
-//!    a skeleton), [`mlod_model_root_joint`] and [`mlod_model_control_range`]; for a model built
+//!    a skeleton), [`mlod_model_root_joint`], [`mlod_model_control_range`] and
+//!    [`mlod_model_ignored_controls`] (controls the build left out); for a model built
 //!    with style labels, [`mlod_model_style_count`], [`mlod_model_style_name`] and
 //!    [`mlod_model_style_share`] (the styles a walk's `style` weights, in order).
 //! 3. **Create a walker** per character: [`mlod_walker_new`] allocates its buffers, once.
@@ -720,6 +721,32 @@ pub unsafe extern "C" fn mlod_model_root_joint(
         // SAFETY: per this function's contract.
         let out = unsafe { mutable(out, "out") }?;
         *out = m.model.rig().root();
+        Ok(())
+    })
+}
+
+/// Which of the four walk controls the model ignores, into `*out` as bits: `1 << k` for `dx`,
+/// `dz`, `turn`, `height` (k = 0..3) when the build left that control out of the kriging (it
+/// carried no signal in the data, or was constant; `motion-lod info MODEL` says which and why).
+/// A clip then follows what the data imply for it from the other controls, so a host should not
+/// offer it as a control (a value given is not refused, only unused).
+///
+/// # Safety
+/// `model` is a live model; `out` is writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlod_model_ignored_controls(
+    model: *const MlodModel,
+    out: *mut u32,
+) -> MlodStatus {
+    guard("mlod_model_ignored_controls", || {
+        // SAFETY: per this function's contract.
+        let m = unsafe { reference(model, "model") }?;
+        // SAFETY: per this function's contract.
+        let out = unsafe { mutable(out, "out") }?;
+        let scale = &m.model.lod().controls().scale;
+        *out = (0..Controls::COUNT)
+            .filter(|&k| scale.get(k).is_none_or(|&v| v == 0.0))
+            .fold(0, |bits, k| bits | (1 << k));
         Ok(())
     })
 }

@@ -800,3 +800,40 @@ fn a_crowd_step_is_the_walkers_steps_and_checks_first() {
         mlod_model_free(model);
     }
 }
+
+/// The controls the C ABI says a model ignores are those the build left out.
+#[test]
+fn ignored_controls_are_the_builds() {
+    for bytes in [model_bytes(), common::styled_model_bytes()] {
+        let offline = motion_lod::MotionModel::from_bytes(&bytes, std::path::Path::new("m"))
+            .expect("the model reads back");
+        let expected = offline
+            .ignored_controls()
+            .iter()
+            .enumerate()
+            .filter(|(_, ignored)| **ignored)
+            .fold(0u32, |bits, (k, _)| bits | (1 << k));
+        let mut model: *mut MlodModel = null_mut();
+        let mut bits = u32::MAX;
+        // SAFETY: readable bytes, writable outputs; the model is freed once.
+        unsafe {
+            assert_eq!(
+                mlod_model_from_bytes(bytes.as_ptr(), bytes.len(), &mut model),
+                MlodStatus::Ok
+            );
+            assert_eq!(
+                mlod_model_ignored_controls(model, &mut bits),
+                MlodStatus::Ok
+            );
+            assert_eq!(
+                mlod_model_ignored_controls(model, null_mut()),
+                MlodStatus::NullPointer
+            );
+            mlod_model_free(model);
+        }
+        assert_eq!(
+            bits, expected,
+            "ignored controls of the C ABI and of the build"
+        );
+    }
+}

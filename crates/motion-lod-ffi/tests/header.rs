@@ -99,6 +99,7 @@ fn known() -> Known {
         mlod_model_joint_rest,
         mlod_model_root_joint,
         mlod_model_control_range,
+        mlod_model_ignored_controls,
         mlod_model_style_count,
         mlod_model_style_name,
         mlod_model_style_share,
