@@ -167,4 +167,8 @@ pub struct CandidateReport {
     pub loo_rmse: Option<f64>,
     /// Why the candidate was rejected, if it was.
     pub error: Option<String>,
+    /// Which fitted parameters ended at a bound ([`crate::FitBounds`]); `None` when the
+    /// candidate was not fitted (or in reports saved before this field existed).
+    #[serde(default)]
+    pub bounds: Option<crate::FitBounds>,
 }

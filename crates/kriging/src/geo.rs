@@ -745,11 +745,13 @@ impl Krige {
                 wsse: None,
                 loo_rmse: None,
                 error: None,
+                bounds: None,
             };
             match fit_variogram(&emp, m, &opts) {
                 Ok(fv) => {
                     rep.variogram = Some(fv.variogram);
                     rep.wsse = Some(fv.wsse);
+                    rep.bounds = Some(fv.bounds);
                     if best.is_none_or(|b| fv.wsse < b.0) {
                         best = Some((fv.wsse, fv.variogram));
                     }

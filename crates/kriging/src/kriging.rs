@@ -315,6 +315,7 @@ impl Kriging {
                     wsse: Some(fitted.wsse),
                     loo_rmse: None,
                     error: None,
+                    bounds: Some(fitted.bounds),
                 });
                 model.empirical = Some(emp);
                 model.install(&dist, fitted.variogram)?;

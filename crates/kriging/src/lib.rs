@@ -1,8 +1,10 @@
 //! Geostatistical interpolation: variograms and kriging of scattered samples, for maps and for any
 //! parameter space.
 //!
-//! This crate is for: fitting variograms (binned empirical variogram with a maximum lag, weighted
-//! least squares, seven shapes and nested sums); ordinary, universal (linear or quadratic drift inside
+//! This crate is for: variogram analysis (binned empirical variograms with a maximum lag,
+//! directional and robust ones: Matheron, Cressie-Hawkins, Dowd; anisotropy estimation; weighted
+//! least-squares fits of seven shapes, Matérn's smoothness included, and of nested sums, with
+//! parameters that end at a bound reported); ordinary, universal (linear or quadratic drift inside
 //! the kriging system), external-drift and simple (known mean) kriging of a scalar field over 1-3-D
 //! coordinates with kriging variances, leave-one-out diagnostics, geometric anisotropy and a moving
 //! neighbourhood ([`Krige`], module [`geo`]; checked against PyKrige and GSTools on the Meuse data);
@@ -10,8 +12,9 @@
 //! vector-valued regression kriging of Mukai and Kuriyama's motion model ([`Kriging`], eq. 8 and
 //! appendix A) with its precomputed hot-path projection and an RBF baseline. It is not for: space-time
 //! or multivariate (co-)kriging, indicator or disjunctive kriging, other simulation methods
-//! (turning bands, spectral, indicator), block kriging, geographic (lat/lon) distances, or
-//! sparse/approximate methods for millions of points; nor for tensors or motion data themselves.
+//! (turning bands, spectral, indicator), block kriging, or sparse/approximate methods for millions
+//! of points; nor for tensors or motion data themselves. Latitude/longitude data are kriged on the
+//! sphere through [`latlon_to_xyz`] (chordal distances, as GSTools' `latlon=True`; module [`sphere`]).
 //!
 //! Two front ends:
 //! - [`Krige`] (builder) -> [`KrigeModel`]: maps and other geostatistics. Defaults suit maps:
@@ -29,7 +32,11 @@
 //!   bins up to the largest distance) or with a chosen maximum lag ([`Binning`], [`MaxLag`]);
 //! - [`Variogram`] / [`VariogramModel`]: linear, power, spherical, exponential, gaussian, Matérn and
 //!   cardinal-sine (wave; formerly called hole-effect) models with nugget, partial sill and range, fitted by weighted least squares
-//!   ([`fit_variogram`], pair-count or Cressie weights); [`NestedVariogram`]: sums of them;
+//!   ([`fit_variogram`], pair-count or Cressie weights; Matérn's `nu` fitted too; parameters at a
+//!   bound in [`FitBounds`]); [`NestedVariogram`]: sums of them, fitted by [`fit_nested`];
+//! - [`EmpiricalVariogram::estimate`]: directional ([`Direction`]) and robust ([`Estimator`])
+//!   empirical variograms, also with great-circle distances; [`estimate_anisotropy`]: angle and
+//!   ratio of a 2-D geometric anisotropy from directional variograms;
 //! - [`Krige`] / [`KrigeModel`]: simple ([`Krige::simple`]), ordinary, universal and external-drift
 //!   kriging with variances,
 //!   [`Anisotropy`], [`Neighbourhood`], [`LooStats`] (see [`geo`] for the formulas);
@@ -98,6 +105,7 @@ mod anisotropy;
 mod config;
 mod empirical;
 mod error;
+mod estimator;
 mod fit;
 pub mod geo;
 mod kdtree;
@@ -111,6 +119,7 @@ pub mod search;
 mod select;
 pub mod simulate;
 mod special;
+pub mod sphere;
 mod variogram;
 
 /// The linear-algebra crate whose matrix types ([`faer::MatRef`], [`faer::Mat`]) this crate takes
@@ -121,7 +130,14 @@ pub use anisotropy::Anisotropy;
 pub use config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoice, Selection};
 pub use empirical::{Binning, EmpiricalVariogram, MaxLag};
 pub use error::KrigingError;
-pub use fit::{FitOptions, FitWeights, FittedVariogram, MATERN_NUS, fit_variogram};
+pub use estimator::{
+    AnisotropyEstimate, AnisotropyOptions, Direction, DirectionalRange, EstimateOptions, Estimator,
+    estimate_anisotropy,
+};
+pub use fit::{
+    FitBounds, FitOptions, FitWeights, FittedVariogram, MATERN_NU_BOUNDS, MATERN_NUS, NestedFit,
+    fit_nested, fit_variogram,
+};
 pub use geo::{
     Drift, Krige, KrigeModel, LooStats, Neighbourhood, Prediction, Predictions, VariogramChoice,
     VariogramFitReport,
@@ -134,6 +150,7 @@ pub use rbf::{RBF_SMOOTHING_GRID, Rbf, RbfConfig, RbfKernel, RbfSmoothing, Smoot
 pub use scaling::{ParamScaling, ScalingChoice};
 pub use select::{DimDecision, DimSelection, SelectRule, TRIAL_SEARCH_MAX_SAMPLES, select_dims};
 pub use simulate::{Realisations, Sgs, SgsMean, SgsPath};
+pub use sphere::{chord_distance, great_circle_distance, latlon_to_xyz};
 pub use variogram::{Variogram, VariogramModel, shape};
 
 /// Fails with [`KrigingError::NonFinite`] at the first NaN or infinity of `m` (column by column).

@@ -87,11 +87,13 @@ pub(crate) fn fitted_candidates(
             wsse: None,
             loo_rmse: None,
             error: None,
+            bounds: None,
         };
         match fit_variogram(emp, m, opts) {
             Ok(f) => {
                 rep.variogram = Some(f.variogram);
                 rep.wsse = Some(f.wsse);
+                rep.bounds = Some(f.bounds);
             }
             Err(e) => rep.error = Some(e.to_string()),
         }
@@ -136,6 +138,7 @@ pub(crate) fn candidates(
                     wsse: None,
                     loo_rmse: None,
                     error: None,
+                    bounds: None,
                 });
             }
         }

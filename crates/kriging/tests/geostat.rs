@@ -520,7 +520,12 @@ fn fitted_variograms_recover_the_model_in_the_input_units() {
             );
             assert!((v.range - t.range).abs() < 1e-3 * t.range, "{t:?}: {v:?}");
             assert!((v.nugget - t.nugget).abs() < 1e-3, "{t:?}: {v:?}");
-            assert_eq!(v.exponent, t.exponent);
+            // Matérn's nu is a continuous parameter of the fit (issue 37): recovered, not exact.
+            assert!(
+                (v.exponent - t.exponent).abs() < 1e-6 * t.exponent,
+                "{t:?}: {v:?}"
+            );
+            assert!(!f.bounds.any(), "{t:?}: {f:?}");
         }
     }
 }
