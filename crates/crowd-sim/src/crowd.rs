@@ -112,7 +112,11 @@ pub struct CrowdConfig {
     /// Spread the clip builds of the first frames over the first cycle: a new walker that the
     /// policy wants finer than its starting root-only clip waits a seeded fraction of that clip
     /// (uniform in `[0, duration)`) before it rebuilds mid-cycle, instead of every such walker
-    /// building in the first frame. Later refinements are immediate. Default on.
+    /// building in the first frame. Later refinements are immediate (there is no per-frame build
+    /// budget). Default on. It trades a first-frame spike of clip builds for walkers that start
+    /// root-only and snap into walking over their first cycle, which suits a timed run; a crowd
+    /// that is watched or recorded from frame 0 calls [`Crowd::prime`] instead, which builds every
+    /// walker's clip at its detail before the first frame and cancels the spread.
     pub spread_first_builds: bool,
     /// The walkers' styles ([`CrowdStyle`]; default [`CrowdStyle::DataMix`]: each walker walks one
     /// style, drawn with the data's shares). Ignored by a source without styles.
@@ -264,7 +268,8 @@ pub struct Crowd<C> {
 }
 
 impl<C: Send> Crowd<C> {
-    /// Places `config.walkers` walkers on seeded paths with root-only clips at random phases.
+    /// Places `config.walkers` walkers on seeded paths with root-only clips at random phases
+    /// ([`Crowd::prime`] gives them their clips at the policy's detail before a first frame).
     ///
     /// A field too small for the paths the source's turn range can follow (a model of straight
     /// walks turns little per cycle, so its paths need large radii) is enlarged to fit them:
@@ -431,12 +436,19 @@ impl<C: Send> Crowd<C> {
     }
 
     /// Starts every walker mid-stride at the detail `policy` gives it seen from `camera`, before
-    /// the first frame: a walker the policy wants finer than its starting root-only clip gets that
-    /// clip at once, at its own phase, instead of snapping into walking over its first cycle
-    /// ([`CrowdConfig::spread_first_builds`] spreads those builds over the first frames). For
-    /// recordings and renders that start at frame 0; a game calls it while loading (it builds the
-    /// clips of every walker in view in one go). Returns the kernels built; a clip the source
-    /// cannot build leaves the walker with its root-only clip (counted in the returned faults).
+    /// the first frame (call it once, between [`Crowd::new`] and the first step, with the first
+    /// step's camera). Each walker's root is first placed where its clip puts it at its starting
+    /// phase (`new` leaves it at its cycle frame's origin, up to a stride away), its culling box
+    /// follows, and the policy is asked from there (distance and visibility, as the first step
+    /// asks); a walker the policy wants finer than its starting root-only clip then gets that clip
+    /// at once, at the same phase of its first cycle and without a seam (nothing was shown yet),
+    /// instead of snapping into walking over its first cycle. The spread of first builds
+    /// ([`CrowdConfig::spread_first_builds`]) is cancelled for every walker, primed or not: it
+    /// exists only to spread the builds `prime` has just done; later refinements are immediate
+    /// either way. For recordings, exports and renders that start at frame 0; a game calls it while
+    /// loading (it builds the clips of every walker in view in one go). The same bytes for any
+    /// thread count. Returns the kernels built; a clip the source cannot build leaves the walker
+    /// with its root-only clip (counted in the returned faults).
     pub fn prime<S, P>(
         &mut self,
         source: &S,
@@ -450,15 +462,22 @@ impl<C: Send> Crowd<C> {
         let frustum = Frustum::from_camera(camera)?;
         lod_policy::offline::clear_avx_upper_state();
         let params = self.params;
+        let margin = self.config.cull_margin_m;
+        let pl = params.levels.pose_len;
         let (eye, view) = (camera.position, camera.view());
         let (built, faults, fault) = self
             .walkers
             .par_chunks_mut(CHUNK)
-            .zip(self.placed_bounds.par_chunks(CHUNK))
+            .zip(self.placed_bounds.par_chunks_mut(CHUNK))
+            .zip(self.poses.par_chunks_mut(CHUNK * pl))
             .enumerate()
-            .map(|(c, (walkers, boxes))| {
+            .map(|(c, ((walkers, boxes), poses))| {
                 let mut out = (0usize, ClipFaults::default(), None);
-                for (k, (w, b)) in walkers.iter_mut().zip(boxes).enumerate() {
+                // The first step writes every walker's pose slot before reading it: a scratch here.
+                let scratch = &mut poses[..pl];
+                for (k, (w, b)) in walkers.iter_mut().zip(boxes.iter_mut()).enumerate() {
+                    w.place_root(source, scratch);
+                    *b = walker_bounds(w, margin);
                     let d = policy.detail(w.root.distance(eye), frustum.intersects(b), &view);
                     match w.prime(source, &params, d) {
                         Ok(a) => {
@@ -471,6 +490,8 @@ impl<C: Send> Crowd<C> {
                             out.2.get_or_insert((c * CHUNK + k, e));
                         }
                     }
+                    // Where the primed clip puts the root (its box is the first step's).
+                    w.place_root(source, scratch);
                 }
                 out
             })

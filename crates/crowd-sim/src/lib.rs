@@ -13,7 +13,10 @@
 //! Each walker follows a seeded closed path inside the field; every gait cycle asks the source
 //! for a clip at controls taken from the path ahead (clamped to the source's
 //! [`ControlRange`](lod_policy::ControlRange)) and at the detail a policy picks from the walker's
-//! distance to the camera and its visibility (checked against the source's [`LevelTable`]). A
+//! distance to the camera and its visibility (checked against the source's [`LevelTable`]). A new
+//! crowd's walkers hold root-only clips at random phases and take their detail over their first
+//! cycle ([`CrowdConfig::spread_first_builds`]), unless the crowd is primed before its first frame
+//! ([`Crowd::prime`]: every walker starts mid-stride at its detail, as recordings and exports do). A
 //! clip the source cannot build is counted in the frame's statistics
 //! ([`FrameStats::clip_faults`]) and the walker keeps its previous clip. Cycles chain through their root motion with the runtime's one
 //! chaining routine ([`lod_policy::SeamTransition`]): changes of clip are inertialized at the first levels

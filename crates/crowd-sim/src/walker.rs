@@ -240,6 +240,23 @@ impl<C> Walker<C> {
         Ok(done)
     }
 
+    /// Places the root where the current clip puts it at the walker's clip time `t` (its pose's
+    /// root rows, `out` a pose buffer of `levels().pose_len`), as the FK stage would, without
+    /// showing a pose: [`crate::Crowd::prime`] asks the policy from there before the first frame.
+    pub fn place_root<S: ClipSource<Clip = C>>(&mut self, src: &S, out: &mut [f32]) {
+        let rows = src.pose(&self.cur, self.t, out).min(out.len());
+        if rows < 3 {
+            return;
+        }
+        let (sh, ch) = self.heading_sc;
+        let (x, y, z) = (out[0], out[1], out[2]);
+        self.root = Vec3::new(
+            self.base.x + x * ch + z * sh,
+            y,
+            self.base.y - x * sh + z * ch,
+        );
+    }
+
     /// Kernel stage: advance time by `dt`; at each cycle end move the cycle frame by the clip's
     /// root motion, pick controls from the path ahead and build the next clip at `d`, with an
     /// inertialized seam at the first `seam_levels` levels; mid-cycle, rebuild at once when `d` is

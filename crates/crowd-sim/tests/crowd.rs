@@ -385,7 +385,10 @@ fn bad_input_gives_clear_errors() {
         .unwrap();
 }
 
-fn run_in_pool(threads: usize, culling: Culling) -> (Vec<Vec3>, Vec<bool>, Vec<u32>) {
+/// 90 frames of 700 walkers seen from inside the crowd, on `threads` threads, primed with the first
+/// frame's camera (`Crowd::prime`) when asked: every joint position, the last visibility flags and
+/// every frame's level histogram.
+fn run_in_pool(threads: usize, culling: Culling, prime: bool) -> (Vec<Vec3>, Vec<bool>, Vec<u32>) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -403,6 +406,12 @@ fn run_in_pool(threads: usize, culling: Culling) -> (Vec<Vec3>, Vec<bool>, Vec<u
         let path = CameraPath::inside_crowd(cfg.field_size_m);
         let mut hist = Vec::new();
         let mut all = Vec::new();
+        if prime {
+            let (built, faults) = crowd
+                .prime(&source, &policy, &path.camera_at(0.0, &lens))
+                .unwrap();
+            assert!(built > 0 && faults.count == 0);
+        }
         for f in 0..90 {
             let cam = path.camera_at(f as f32 * DT * 4.0, &lens);
             let s = crowd.step(&source, &policy, &cam, DT).unwrap();
@@ -417,7 +426,7 @@ fn run_in_pool(threads: usize, culling: Culling) -> (Vec<Vec3>, Vec<bool>, Vec<u
 
 #[test]
 fn results_are_identical_for_one_and_four_threads_and_both_cullings() {
-    let (a, va, ha) = run_in_pool(1, Culling::Scan);
+    let (a, va, ha) = run_in_pool(1, Culling::Scan, false);
     let bits = |v: &[Vec3]| {
         v.iter()
             .flat_map(|p| p.to_array().map(f32::to_bits))
@@ -425,7 +434,7 @@ fn results_are_identical_for_one_and_four_threads_and_both_cullings() {
     };
     assert!(va.iter().any(|&v| v) && !va.iter().all(|&v| v));
     for (threads, culling) in [(4, Culling::Scan), (1, Culling::Tree), (4, Culling::Tree)] {
-        let (b, vb, hb) = run_in_pool(threads, culling);
+        let (b, vb, hb) = run_in_pool(threads, culling, false);
         assert_eq!(a.len(), b.len());
         assert!(
             bits(&a) == bits(&b),
@@ -434,6 +443,97 @@ fn results_are_identical_for_one_and_four_threads_and_both_cullings() {
         assert_eq!(va, vb);
         assert_eq!(ha, hb);
     }
+}
+
+/// A primed crowd (`Crowd::prime`) is the same for any thread count, and not the unprimed crowd.
+#[test]
+fn a_primed_crowd_is_the_same_for_one_and_four_threads() {
+    let (a, va, ha) = run_in_pool(1, Culling::Scan, true);
+    let (b, vb, hb) = run_in_pool(4, Culling::Scan, true);
+    let bits = |v: &[Vec3]| {
+        v.iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<u32>>()
+    };
+    assert!(bits(&a) == bits(&b), "joint positions differ");
+    assert_eq!((va, ha), (vb, hb));
+    let (unprimed, _, _) = run_in_pool(1, Culling::Scan, false);
+    assert!(bits(&a) != bits(&unprimed));
+}
+
+/// Issue 34: a primed crowd starts mid-stride. Its first frame shows every walker at the detail
+/// the policy gives it from the first camera, at its own phase: the frame a crowd that builds every
+/// first clip in its first step shows (`spread_first_builds` off), with no clip left to build in
+/// that step; a crowd whose first builds are spread shows most of the walkers in view root-only.
+#[test]
+fn a_primed_crowd_starts_mid_stride_at_its_details() {
+    let source = ProceduralSource::new();
+    let policy = paper_distance_policy(source.levels());
+    let lens = Camera::default();
+    let n = 700;
+    let start = |prime: bool, spread: bool| {
+        let cfg = CrowdConfig {
+            spread_first_builds: spread,
+            ..config(n, 70.0)
+        };
+        let mut crowd = Crowd::new(&source, cfg).unwrap();
+        let cam = CameraPath::inside_crowd(cfg.field_size_m).camera_at(0.0, &lens);
+        let built = if prime {
+            crowd.prime(&source, &policy, &cam).unwrap().0
+        } else {
+            0
+        };
+        let stats = crowd.step(&source, &policy, &cam, DT).unwrap();
+        (crowd, built, stats)
+    };
+    let (primed, built, first) = start(true, true);
+    let (at_once, _, at_once_first) = start(false, false);
+    let (spread, _, _) = start(false, true);
+    let with_joints = |c: &Crowd<ProceduralClip>| {
+        (0..n)
+            .filter(|&i| c.is_visible(i) && c.detail(i).active_joints > 0)
+            .count()
+    };
+    let (p, a, s) = (
+        with_joints(&primed),
+        with_joints(&at_once),
+        with_joints(&spread),
+    );
+    println!(
+        "walkers in view with joints at frame 0: primed {p}, built at once {a}, spread {s}; \
+         clips built by prime {built}, then in the first step {} (at once: {})",
+        first.kernels_built, at_once_first.kernels_built
+    );
+    assert!(p > 50, "{p} walkers in view with joints");
+    assert!(s * 4 < p, "spread {s} against primed {p}");
+    assert!(built >= p);
+    // The first step builds what any step does: the next clips of the walkers whose cycle ends
+    // (about one in 30 at 30 fps), not a clip for every walker in view.
+    assert!(first.kernels_built * 10 <= n, "{}", first.kernels_built);
+    assert!(first.kernels_built * 10 <= at_once_first.kernels_built);
+    // The same poses, up to the phase kept: prime keeps the phase of the root-only clip when it
+    // was asked, the other crowd one frame later (clips of other durations map it a little apart).
+    let (mut same, mut farthest) = (0, 0.0f32);
+    for i in 0..n {
+        if primed.detail(i) != at_once.detail(i) {
+            continue;
+        }
+        same += 1;
+        let (x, y) = (primed.joint_positions(i), at_once.joint_positions(i));
+        assert_eq!(x.len(), y.len(), "walker {i}");
+        let far = x
+            .iter()
+            .zip(y)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0, f32::max);
+        farthest = farthest.max(far);
+    }
+    println!("frame 0 against the crowd built at once: joints at most {farthest} m apart");
+    assert!(farthest < 0.02, "joints {farthest} m apart");
+    assert!(
+        same * 100 >= 99 * n,
+        "{same} of {n} walkers at the same detail"
+    );
 }
 
 #[test]

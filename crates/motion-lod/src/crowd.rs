@@ -152,7 +152,10 @@ pub struct WalkerTrack {
 /// Runs a crowd of the model for `frames` frames of `1 / config.fps` s under `policy`, the camera
 /// on `scene`'s path, and records what `walkers` showed, as the crowd plays it: seams between
 /// cycles of changing controls, levels that change with distance, planted feet near the camera.
-/// Walker indices beyond the crowd are ignored.
+/// The crowd is primed ([`Crowd::prime`]) with the first frame's camera, as an exported crowd is:
+/// every walker starts at its own phase of its first cycle with a clip at the detail the policy
+/// gives it there, so frame 0 looks like frame 100 (no walker starts root-only and snaps into
+/// walking). The same tracks for any thread count. Walker indices beyond the crowd are ignored.
 pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
     model: &MotionModel,
     config: CrowdConfig,
@@ -166,6 +169,9 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
     let field = crowd.config().field_size_m;
     let (path, lens) = (scene.path(field), scene.lens(Camera::default(), field));
     let dt = 1.0 / config.fps;
+    // Every walker starts mid-stride at the detail the policy gives it from the first frame's
+    // camera, as an exported crowd does (`Crowd::prime`): frame 0 looks like frame 100.
+    crowd.prime(&source, policy, &path.camera_at(0.0, &lens))?;
     let p = model.lod().p();
     let rest = model.layout.rest_pose();
     let mut placed = vec![0.0f32; p];
@@ -345,9 +351,10 @@ pub fn crowd_quality<P: LevelPolicy + Sync + ?Sized>(
 /// Measures what a crowd walker showed ([`record_walkers`]) against the model's
 /// reference floor, with its seams; `frame_time`: the crowd's `1 / fps`. The cycle duration (the
 /// facing window) is the mean time between the track's seams, the track's length with fewer than
-/// two. The frames before the first seam are the crowd's start and are not measured: a new crowd's
-/// walkers begin root-only (drawn by nobody) and take their joints in the first cycle
-/// ([`crowd_sim::CrowdConfig::spread_first_builds`]), a switch from the rest pose.
+/// two. The frames before the first seam are not measured: they are a part of a cycle (or, for a
+/// walk recorded from the live page, a start from rest), too short for the stance floor's one-cycle
+/// window. A recorded crowd starts mid-stride ([`record_walkers`]); its start is measured with
+/// [`measure_track_range`] (the tests compare its first 30 frames with frames 100-130).
 pub fn measure_track(
     model: &MotionModel,
     track: &WalkerTrack,

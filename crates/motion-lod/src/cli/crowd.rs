@@ -128,7 +128,10 @@ pub struct CrowdArgs {
     #[arg(long, value_name = "STYLE")]
     pub style: Option<String>,
     /// Also write a short clip of this crowd as glTF 2.0 binary (`.glb`): one skinned character per
-    /// exported walker, coloured by its level of detail (view it with `motion-lod view FILE`).
+    /// exported walker, coloured by its level of detail (view it with `motion-lod view FILE`). The
+    /// clip is the crowd seen from `--camera` (its levels and the walkers chosen follow that
+    /// camera), under `--policy` (or full detail with `--no-lod`), animated by the model; every
+    /// walker starts mid-stride at its detail.
     #[arg(long, value_name = "FILE.glb")]
     pub export: Option<PathBuf>,
     /// Walkers written by `--export`, spread evenly over their distance from the camera (1..=1000).
@@ -456,8 +459,11 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Records `--export-seconds` of the crowd of `run` (the model's source, the chosen policy) and
-/// writes `--export-walkers` of its walkers to `path`; returns the line to print.
+/// Records `--export-seconds` of the crowd of `run` (the model's source, the chosen policy, or full
+/// detail under `--no-lod`) seen from the camera of `--camera` (its path decides every walker's
+/// detail and visibility, and which walkers are written), every walker starting mid-stride at its
+/// detail ([`export_crowd`]), and writes `--export-walkers` of its walkers to `path`; returns the
+/// line to print.
 fn export_clip(
     model: &MotionModel,
     args: &CrowdArgs,
@@ -473,6 +479,7 @@ fn export_clip(
     };
     let lod = model.lod();
     let (scene, summary) = match args.policy {
+        _ if args.no_lod => export_crowd(model, &FullDetail::for_model(lod), &clip),
         PolicyArg::Distance => export_crowd(model, &DistancePolicy::for_model(lod), &clip),
         PolicyArg::Screen => export_crowd(
             model,

@@ -363,7 +363,7 @@ mod tests {
         std::fs::write(&glb, b"glTF\x02\0\0\0").unwrap();
         assert_eq!(kind_of(&glb).unwrap(), Kind::Gltf);
         let truncated = dir.join("m.mlod");
-        std::fs::write(&truncated, &lod_policy::file::MAGIC).unwrap();
+        std::fs::write(&truncated, lod_policy::file::MAGIC).unwrap();
         let err = format!("{:#}", kind_of(&truncated).unwrap_err());
         assert!(err.contains("m.mlod") && err.contains("runtime"), "{err}");
         let _ = std::fs::remove_dir_all(&dir);

@@ -1,6 +1,7 @@
-//! A crowd clip as a `.glb`: the crowd runs as `motion-lod crowd` runs it, and a subset of its
-//! walkers, spread over their distance from the camera, is recorded frame by frame as skinned
-//! characters coloured by their level of detail.
+//! A crowd clip as a `.glb`: the crowd runs as `motion-lod crowd` runs it, seen from the camera
+//! asked for (`--camera ground|overview`), its walkers starting mid-stride at their detail
+//! ([`crowd_sim::Crowd::prime`]), and a subset of its walkers, spread over their distance from the
+//! camera, is recorded frame by frame as skinned characters coloured by their level of detail.
 
 use std::sync::Arc;
 
@@ -104,10 +105,16 @@ fn world_pose(
     out
 }
 
-/// Runs the crowd of `clip` with the model's clip source under `policy` and returns the scene of the
-/// exported walkers: one character per walker (`walker NNN`), its body coloured by the level it
-/// showed most often (the crowd renderer's colours), its node's extras holding the level bin of
-/// every frame (`motion_lod.levels`), and the scene's extras the legend.
+/// Runs the crowd of `clip` with the model's clip source under `policy`, seen from the camera of
+/// `clip.scene` (its path, on the crowd's own field, decides every walker's detail and
+/// visibility, which walkers are picked, and the camera written to the scene's extras), and returns
+/// the scene of the exported walkers. The crowd is primed with the first frame's camera
+/// ([`Crowd::prime`]): every walker starts at its own phase of its first cycle with a clip at its
+/// detail, so the first frames pop no more than later ones. The result: one character per walker
+/// (`walker NNN`), its body coloured by the level it showed most often (the crowd renderer's
+/// colours), its node's extras holding the level bin of every frame (`motion_lod.levels`), and the
+/// scene's extras the legend, the first camera and the field used (enlarged when the model's turn
+/// range needs larger paths).
 pub fn export_crowd<P: LevelPolicy + Sync>(
     model: &MotionModel,
     policy: &P,
@@ -231,7 +238,7 @@ pub fn export_crowd<P: LevelPolicy + Sync>(
             "legend": legend,
             "frame_time": dt,
             "walkers": clip.config.walkers,
-            "field_size_m": clip.config.field_size_m,
+            "field_size_m": field,
             "camera": {
                 "position": start_camera.position.to_array(),
                 "target": start_camera.target.to_array(),
