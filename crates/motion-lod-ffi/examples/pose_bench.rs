@@ -132,7 +132,7 @@ unsafe fn crowd_step(
     let camera = MlodCamera {
         position: [0.0, 1.7, -8.0],
         direction: [0.0, 0.0, direction_z],
-        fov_y: 1.047_197_6,
+        fov_y: std::f32::consts::FRAC_PI_3,
         aspect: 16.0 / 9.0,
         image_height_px: 1080.0,
         near_m: 0.1,

@@ -238,7 +238,7 @@ fn the_pages_scripts_walked_natively() {
     let camera = MlodCamera {
         position: [0.0, 1.7, -8.0],
         direction: [0.0, 0.0, 1.0],
-        fov_y: 1.047_197_6,
+        fov_y: std::f32::consts::FRAC_PI_3,
         aspect: 16.0 / 9.0,
         image_height_px: 1080.0,
         near_m: 0.1,
@@ -264,7 +264,7 @@ fn the_pages_scripts_walked_natively() {
         .map(|i| {
             let x = ((i % COLUMNS) as f32 - 19.5) * 2.5;
             let z = ((i / COLUMNS) as f32 - 5.0) * 2.5;
-            let heading = (i % 16) as f32 * 0.392_699_1 - 3.0;
+            let heading = (i % 16) as f32 * std::f32::consts::FRAC_PI_8 - 3.0;
             [x, z, heading]
         })
         .collect();
