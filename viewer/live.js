@@ -157,6 +157,8 @@ let crowd = null;
 let cameraPtr = 0;
 let ready = false;
 let followLast = null;
+// A message the readout shows for a while (a key for a control the model ignores).
+let notice = { text: '', until: 0 };
 // A walk being recorded (frames as `motion-lod quality --recorded` reads them), or null.
 let recording = null;
 /// The fixed step of a recorded walk, seconds: the page steps the walker by it every frame while
@@ -346,7 +348,7 @@ function frame(now) {
     orbit.target.add(root.clone().sub(followLast));
     followLast.copy(root);
     const s = walker.readState();
-    ui.walkReadout.textContent = `cycle ${s.cycle}, ${(slider('dz') >= 0 ? panelControls().dz / s.cycleDuration : 0).toFixed(2)} m/s, ` +
+    ui.walkReadout.textContent = (performance.now() < notice.until ? `${notice.text}; ` : '') + `cycle ${s.cycle}, ${(slider('dz') >= 0 ? panelControls().dz / s.cycleDuration : 0).toFixed(2)} m/s, ` +
       `level ${s.level} with ${s.joints} joints${s.footLocked ? ', feet locked' : ''}`;
   } else if (crowd) {
     crowd.step(dt, cameraPtr);
@@ -480,7 +482,8 @@ window.addEventListener('keydown', (e) => {
   if (!k || mode !== 'walk') return;
   const [name, sign] = k;
   if (model.ignored.has(name)) {
-    ui.walkReadout.textContent = `this model ignores ${name} (no signal in its data)`;
+    notice = { text: `this model ignores ${name} (no signal in its data)`, until: performance.now() + 2500 };
+    ui.walkReadout.textContent = notice.text;
     e.preventDefault();
     return;
   }

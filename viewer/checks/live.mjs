@@ -37,7 +37,7 @@ function check(ok, what) {
 
 function serve(file) {
   return new Promise((resolve, reject) => {
-    const child = spawn(bin, ['view', file, '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
+    const child = spawn(bin, ['view', ...(file ? [file] : []), '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
     let out = '';
     const timer = setTimeout(() => reject(new Error(`motion-lod view printed no address: ${out}`)), 20000);
     child.stdout.on('data', (d) => {
@@ -171,6 +171,7 @@ try {
     `controls the model ignores (${info.model.ignored.join(', ') || 'none'}) are shown ignored: ${shown.map(([n, d, t]) => `${n} ${t}`).join(', ')}`);
   if (ignored.has('turn')) {
     await page.keyboard.press('KeyA');
+    await page.waitForTimeout(300); // the readout keeps the notice over the next frames
     const said = await page.evaluate(() => document.getElementById('walk-readout').textContent);
     check(said.includes('ignores turn'), `A on a model that ignores turn says so: "${said}"`);
   }
@@ -217,6 +218,25 @@ try {
     console.log(`screenshot written to ${args['crowd-screenshot']}`);
   }
   check(errors.length === 0, `no page errors${errors.length ? `: ${errors.join(' | ')}` : ''}`);
+
+  // 4. `motion-lod view` without a file serves the page alone; a model picked in it opens.
+  const bare = await serve(null);
+  try {
+    const other = await browser.newPage({ viewport: { width: 960, height: 600 } });
+    const pageErrors = [];
+    other.on('pageerror', (e) => pageErrors.push(String(e)));
+    await other.goto(bare.url);
+    await other.waitForFunction(() => window.live && !window.live.ready && !document.getElementById('message').hidden,
+      null, { timeout: 60000 });
+    await other.setInputFiles('#open', join(ref, 'model.mlod'));
+    await other.waitForFunction(() => window.live?.ready, null, { timeout: 60000 });
+    const picked = await other.evaluate(() => ({ joints: window.live.model().joints,
+      name: document.getElementById('file-name').textContent }));
+    check(picked.joints === script.joints && pageErrors.length === 0,
+      `a model picked in the page served without a file opens: "${picked.name}"`);
+  } finally {
+    bare.child.kill();
+  }
 } finally {
   await browser.close();
   server.child.kill();

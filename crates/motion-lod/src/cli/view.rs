@@ -25,9 +25,10 @@ use clap::Args;
 #[derive(Debug, Args)]
 pub struct ViewArgs {
     /// The file to show: a model (`.mlod`, from `build`) opens the live page, a glTF binary
-    /// (`.glb`, from `synth -o walk.glb` or `crowd --export crowd.glb`) the glTF viewer.
+    /// (`.glb`, from `synth -o walk.glb` or `crowd --export crowd.glb`) the glTF viewer; none
+    /// serves the live page alone, to open or drop a model file in it.
     #[arg(value_name = "FILE")]
-    pub file: PathBuf,
+    pub file: Option<PathBuf>,
     /// Port on 127.0.0.1 (0 picks a free one).
     #[arg(long, default_value_t = 8787)]
     pub port: u16,
@@ -124,7 +125,10 @@ impl Source {
 
 /// Runs the subcommand (until interrupted).
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
-    let kind = kind_of(&args.file)?;
+    let kind = match &args.file {
+        Some(file) => kind_of(file)?,
+        None => Kind::Model,
+    };
     let source = match args
         .viewer_dir
         .or_else(|| std::env::var_os("MOTION_LOD_VIEWER").map(PathBuf::from))
@@ -152,9 +156,12 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         Source::Embedded => "the binary's copy".to_string(),
         Source::Dir(dir) => dir.display().to_string(),
     };
+    let what = match &args.file {
+        Some(file) => file.display().to_string(),
+        None => "no file (open or drop a model file in the page)".to_string(),
+    };
     println!(
-        "serving {} at http://{addr}/ in {page} (viewer: {from}); open it in a browser, Ctrl-C to stop",
-        args.file.display(),
+        "serving {what} at http://{addr}/ in {page} (viewer: {from}); open it in a browser, Ctrl-C to stop"
     );
     std::io::stdout().flush()?;
     let shared = std::sync::Arc::new((args.file, kind, source));
@@ -163,7 +170,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         let shared = shared.clone();
         std::thread::spawn(move || {
             let (file, kind, source) = &*shared;
-            let _ = serve(stream, file, *kind, source);
+            let _ = serve(stream, file.as_deref(), *kind, source);
         });
     }
     Ok(())
@@ -212,7 +219,12 @@ fn resolve(url_path: &str, kind: Kind) -> Option<Target> {
 }
 
 /// Answers one request.
-fn serve(stream: TcpStream, file: &Path, kind: Kind, source: &Source) -> std::io::Result<()> {
+fn serve(
+    stream: TcpStream,
+    file: Option<&Path>,
+    kind: Kind,
+    source: &Source,
+) -> std::io::Result<()> {
     stream.set_read_timeout(Some(std::time::Duration::from_secs(10)))?;
     let mut reader = BufReader::new(stream.try_clone()?);
     let mut line = String::new();
@@ -238,8 +250,15 @@ fn serve(stream: TcpStream, file: &Path, kind: Kind, source: &Source) -> std::io
         );
     }
     let with_body = method == "GET";
-    match resolve(target, kind) {
-        Some(Target::File) => match std::fs::read(file) {
+    match resolve(target, kind).zip(Some(file)) {
+        Some((Target::File, None)) => respond(
+            &mut out,
+            "404 Not Found",
+            "text/plain",
+            b"no file served: open one in the page\n",
+            true,
+        ),
+        Some((Target::File, Some(file))) => match std::fs::read(file) {
             Ok(body) => {
                 // The page shows the file's own name.
                 let name: String = file
@@ -264,7 +283,7 @@ fn serve(stream: TcpStream, file: &Path, kind: Kind, source: &Source) -> std::io
                 true,
             ),
         },
-        Some(Target::Asset(name)) => match source.read(name) {
+        Some((Target::Asset(name), _)) => match source.read(name) {
             Some(body) => respond(&mut out, "200 OK", content_type(name), &body, with_body),
             None => respond(
                 &mut out,
