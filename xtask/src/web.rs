@@ -4,7 +4,8 @@
 //! `motion-lod view` can embed them (an installed binary needs no checkout and no npm):
 //! - `viewer/wasm/motion_lod.wasm`: the runtime's C ABI (`crates/motion-lod-ffi`) compiled for
 //!   `wasm32-unknown-unknown` with SIMD128, in the `wasm` profile (LTO, one codegen unit), with
-//!   the paths of the Cargo registry remapped so the bytes do not depend on where it was built;
+//!   the registry's, Cargo's and the checkout's paths remapped so the bytes do not depend on where
+//!   it was built (nor on what the registry's index folder is called);
 //!   `viewer/wasm/BUILD.txt` records the compiler that made it.
 //! - `viewer/vendor/three/`: the three.js modules the pages import, copied from the npm package
 //!   that `viewer/package-lock.json` pins (`npm ci` in `viewer/` installs it).
@@ -52,13 +53,24 @@ pub fn build_wasm(root: &Path, target_dir: &Path) -> Result<Vec<u8>> {
         .map(PathBuf::from)
         .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cargo")))
         .unwrap_or_default();
-    // Flags for the wasm crates only (with --target, build scripts and proc macros get none).
-    let flags = [
+    // Flags for the wasm crates only (with --target, build scripts and proc macros get none). The
+    // paths compiled into the module (panic locations) lose every machine-specific prefix: the
+    // checkout, Cargo's home, and each registry's source folder whatever its index is called (rustc
+    // applies the last matching remap, so the most specific come last).
+    let mut flags = vec![
         "-Ctarget-feature=+simd128".to_string(),
-        format!("--remap-path-prefix={}=/cargo", home.display()),
         format!("--remap-path-prefix={}=/motion-lod", root.display()),
-    ]
-    .join("\u{1f}");
+        format!("--remap-path-prefix={}=/cargo", home.display()),
+    ];
+    let sources = home.join("registry/src");
+    let mut registries: Vec<PathBuf> = std::fs::read_dir(&sources)
+        .map(|entries| entries.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_default();
+    registries.sort();
+    for dir in registries {
+        flags.push(format!("--remap-path-prefix={}=/registry", dir.display()));
+    }
+    let flags = flags.join("\u{1f}");
     let status = Command::new(cargo)
         .current_dir(root)
         .args([
