@@ -8,31 +8,17 @@
 //
 //   node checks/bench.mjs --bin target/release/motion-lod --native target/release/examples/pose_bench
 //                         --model MODEL.mlod [--counts 1000,3000,10000,30000,100000]
-import { spawn, execFileSync } from 'node:child_process';
-import { existsSync, statSync } from 'node:fs';
+import { execFileSync } from 'node:child_process';
+import { statSync } from 'node:fs';
 import { chromium } from 'playwright-core';
+import { CHROMIUM_ARGS, chromiumPath, options, serve } from './common.mjs';
 
-const args = Object.fromEntries(
-  process.argv.slice(2).reduce((acc, a, i, all) => (a.startsWith('--') ? [...acc, [a.slice(2), all[i + 1]]] : acc), []),
-);
-const browserPath = process.env.CHROMIUM ?? ['/usr/bin/chromium', '/usr/bin/chromium-browser'].find(existsSync);
+const args = options();
 const counts = (args.counts ?? '1000,3000,10000,30000,100000').split(',').map(Number);
 if (!args.model || !args.native || !args.bin) throw new Error('--bin, --native and --model are required');
 
-const server = await new Promise((resolve, reject) => {
-  const child = spawn(args.bin, ['view', args.model, '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
-  let out = '';
-  child.stdout.on('data', (d) => {
-    out += d;
-    const m = out.match(/http:\/\/[^\s]+\//);
-    if (m) resolve({ url: m[0], child });
-  });
-  child.on('exit', (code) => reject(new Error(`motion-lod view exited with ${code}: ${out}`)));
-});
-const browser = await chromium.launch({
-  executablePath: browserPath,
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
+const server = await serve(args.bin, args.model);
+const browser = await chromium.launch({ executablePath: chromiumPath(), args: CHROMIUM_ARGS });
 try {
   const page = await browser.newPage({ viewport: { width: 960, height: 540 } });
   await page.goto(`${server.url}?fast`);

@@ -8,46 +8,25 @@
 // screenshots 0.6 s apart and checks that the character is drawn (pixels of its level colour
 // where its bones project) and that it moves between the two. For the crowd clip: that it loads
 // and shows a legend of at least two levels. No page error is allowed.
-import { spawn } from 'node:child_process';
-import { existsSync, mkdirSync, writeFileSync } from 'node:fs';
+import { mkdirSync, writeFileSync } from 'node:fs';
 import { dirname } from 'node:path';
 import { chromium } from 'playwright-core';
 import { PNG } from 'pngjs';
+import { CHROMIUM_ARGS, chromiumPath, options, serve as serveFile, tally } from './common.mjs';
 
-const args = Object.fromEntries(
-  process.argv.slice(2).reduce((acc, a, i, all) => (a.startsWith('--') ? [...acc, [a.slice(2), all[i + 1]]] : acc), []),
-);
+const args = options();
 const bin = args.bin ?? 'target/debug/motion-lod';
-const browserPath = process.env.CHROMIUM ?? ['/usr/bin/chromium', '/usr/bin/chromium-browser'].find(existsSync);
 if (!args.walk) throw new Error('--walk FILE.glb is required');
-if (!browserPath) throw new Error('no Chromium found (install Debian package `chromium` or set $CHROMIUM)');
+const browserPath = chromiumPath();
 
 const servers = [];
-function serve(file) {
-  return new Promise((resolve, reject) => {
-    const child = spawn(bin, ['view', file, '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
-    servers.push(child);
-    let out = '';
-    const timer = setTimeout(() => reject(new Error(`motion-lod view printed no address: ${out}`)), 20000);
-    child.stdout.on('data', (d) => {
-      out += d;
-      const m = out.match(/http:\/\/[^\s]+\//);
-      if (m) {
-        clearTimeout(timer);
-        resolve(m[0]);
-      }
-    });
-    child.on('exit', (code) => reject(new Error(`motion-lod view exited with ${code}: ${out}`)));
-  });
+async function serve(file) {
+  const server = await serveFile(bin, file);
+  servers.push(server.child);
+  return server.url;
 }
 
-let passed = 0;
-let failed = 0;
-function check(ok, what) {
-  console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
-  if (ok) passed++;
-  else failed++;
-}
+const { check, done } = tally();
 
 // Pixels of the walk's colour (level 0: sRGB 220, 30, 30, shaded): clearly red.
 const isCharacter = (r, g, b) => r > 50 && r > 1.5 * g + 10 && r > 1.5 * b + 10;
@@ -67,11 +46,7 @@ function redMask(png, box) {
   return mask;
 }
 
-const browser = await chromium.launch({
-  executablePath: browserPath,
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-  timeout: 60000,
-});
+const browser = await chromium.launch({ executablePath: browserPath, args: CHROMIUM_ARGS, timeout: 60000 });
 try {
   const page = await browser.newPage({ viewport: { width: 960, height: 600 } });
   const errors = [];
@@ -125,5 +100,4 @@ try {
   await browser.close();
   for (const s of servers) s.kill();
 }
-console.log(`${passed} passed, ${failed} failed`);
-process.exit(failed > 0 ? 1 : 0);
+done();

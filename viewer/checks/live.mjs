@@ -10,47 +10,23 @@
 // for 300 frames, their details from a camera) and what the native runtime gives for them. The
 // page runs the same scripts (viewer/crowd.js) and every value must agree within 1e-5 (metres,
 // seconds, quaternion components; details and visibility exactly).
-import { execFileSync, spawn } from 'node:child_process';
+import { execFileSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, writeFileSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import { chromium } from 'playwright-core';
+import { CHROMIUM_ARGS, chromiumPath, options, serve as serveFile, tally } from './common.mjs';
 
-const args = Object.fromEntries(
-  process.argv.slice(2).reduce((acc, a, i, all) => (a.startsWith('--') ? [...acc, [a.slice(2), all[i + 1]]] : acc), []),
-);
+const args = options();
 const bin = args.bin ?? 'target/debug/motion-lod';
 const ref = args.ref ?? 'target/web-ref';
 const TOLERANCE = 1e-5;
-const browserPath = process.env.CHROMIUM ?? ['/usr/bin/chromium', '/usr/bin/chromium-browser'].find(existsSync);
-if (!browserPath) throw new Error('no Chromium found (install Debian package `chromium` or set $CHROMIUM)');
+const browserPath = chromiumPath();
 if (!existsSync(join(ref, 'script.json'))) {
   throw new Error(`${ref}/script.json is missing: run \`cargo test -p motion-lod-ffi --test web_reference\` first`);
 }
 
-let passed = 0;
-let failed = 0;
-function check(ok, what) {
-  console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
-  if (ok) passed++;
-  else failed++;
-}
-
-function serve(file) {
-  return new Promise((resolve, reject) => {
-    const child = spawn(bin, ['view', ...(file ? [file] : []), '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
-    let out = '';
-    const timer = setTimeout(() => reject(new Error(`motion-lod view printed no address: ${out}`)), 20000);
-    child.stdout.on('data', (d) => {
-      out += d;
-      const m = out.match(/http:\/\/[^\s]+\//);
-      if (m) {
-        clearTimeout(timer);
-        resolve({ url: m[0], child, line: out.trim() });
-      }
-    });
-    child.on('exit', (code) => reject(new Error(`motion-lod view exited with ${code}: ${out}`)));
-  });
-}
+const { check, done } = tally();
+const serve = (file) => serveFile(bin, file);
 
 const typed = (bytes, Type) => new Type(bytes.buffer, bytes.byteOffset, bytes.byteLength / Type.BYTES_PER_ELEMENT);
 const fromBase64 = (s, Type) => typed(Buffer.from(s, 'base64'), Type);
@@ -90,11 +66,7 @@ const expected = {
 
 const server = await serve(join(ref, 'model.mlod'));
 console.log(server.line);
-const browser = await chromium.launch({
-  executablePath: browserPath,
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-  timeout: 60000,
-});
+const browser = await chromium.launch({ executablePath: browserPath, args: CHROMIUM_ARGS, timeout: 60000 });
 try {
   const page = await browser.newPage({ viewport: { width: 960, height: 600 } });
   const errors = [];
@@ -241,5 +213,4 @@ try {
   await browser.close();
   server.child.kill();
 }
-console.log(`${passed} passed, ${failed} failed`);
-process.exit(failed > 0 ? 1 : 0);
+done();
