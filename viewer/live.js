@@ -157,6 +157,7 @@ let crowd = null;
 let cameraPtr = 0;
 let ready = false;
 let followLast = null;
+const followStep = new THREE.Vector3();
 // A message the readout shows for a while (a key for a control the model ignores).
 let notice = { text: '', until: 0 };
 // A walk being recorded (frames as `motion-lod quality --recorded` reads them), or null.
@@ -168,8 +169,9 @@ const timing = { frames: 0, runtime: 0, fk: 0, draw: 0, frame: 0, last: 0 };
 const levelCounts = [];
 
 /// The page's camera as the runtime's policy sees it.
+const cameraDirection = new THREE.Vector3();
 function writeCamera() {
-  const dir = camera.getWorldDirection(new THREE.Vector3());
+  const dir = camera.getWorldDirection(cameraDirection);
   runtime.writeCamera(cameraPtr, {
     position: camera.position.toArray(), direction: dir.toArray(),
     fovY: THREE.MathUtils.degToRad(camera.fov), aspect: camera.aspect,
@@ -343,10 +345,10 @@ function frame(now) {
     drawWalker(walker, colourOf(walker.level()));
     levelCounts[walker.joints() ? walker.level() : model.levels] = 1;
     // Follow the walker: the camera and its target move with the root.
-    const root = new THREE.Vector3(walker.rootX(), 0, walker.rootZ());
-    camera.position.add(root.clone().sub(followLast));
-    orbit.target.add(root.clone().sub(followLast));
-    followLast.copy(root);
+    followStep.set(walker.rootX() - followLast.x, 0, walker.rootZ() - followLast.z);
+    camera.position.add(followStep);
+    orbit.target.add(followStep);
+    followLast.add(followStep);
     const s = walker.readState();
     ui.walkReadout.textContent = (performance.now() < notice.until ? `${notice.text}; ` : '') + `cycle ${s.cycle}, ${(slider('dz') >= 0 ? panelControls().dz / s.cycleDuration : 0).toFixed(2)} m/s, ` +
       `level ${s.level} with ${s.joints} joints${s.footLocked ? ', feet locked' : ''}`;

@@ -280,13 +280,10 @@ export class Walker {
   shownPose() {
     const rt = this.rt;
     const n = this.model.poseLen;
-    const out = rt.alloc(4 * n);
-    try {
-      rt.check('mlod_walker_shown_pose', rt.x.mlod_walker_shown_pose(this.ptr, this.model.ptr, out, n));
-      return rt.f32.slice(out >> 2, (out >> 2) + n);
-    } finally {
-      rt.free(out, 4 * n);
-    }
+    // A buffer of the walker's own, allocated at the first call (a recording asks every frame).
+    this.poseBuffer ||= rt.alloc(4 * n);
+    rt.check('mlod_walker_shown_pose', rt.x.mlod_walker_shown_pose(this.ptr, this.model.ptr, this.poseBuffer, n));
+    return rt.f32.slice(this.poseBuffer >> 2, (this.poseBuffer >> 2) + n);
   }
 
   /// The state as an object.
@@ -323,6 +320,7 @@ export class Walker {
   free() {
     this.rt.x.mlod_walker_free(this.ptr);
     this.rt.free(this.block, this.blockLen);
+    if (this.poseBuffer) this.rt.free(this.poseBuffer, 4 * this.model.poseLen);
     this.ptr = 0;
   }
 }

@@ -284,49 +284,8 @@ impl EmpiricalVariogram {
             .flat_map(|i| (0..dv).map(move |k| (i, k)))
             .map(|(i, k)| values[(i, k)])
             .collect();
-        let pair = |i: usize, j: usize| -> f64 {
-            let (a, b) = (&pts[i * d..(i + 1) * d], &pts[j * d..(j + 1) * d]);
-            a.iter()
-                .zip(b)
-                .map(|(x, y)| (x - y) * (x - y))
-                .sum::<f64>()
-                .sqrt()
-        };
-        let max_lag = match binning.max_lag {
-            MaxLag::Largest => {
-                let per_row: Vec<f64> = (0..s)
-                    .into_par_iter()
-                    .map(|i| (i + 1..s).map(|j| pair(i, j)).fold(0.0f64, f64::max))
-                    .collect();
-                per_row.into_iter().fold(0.0f64, f64::max)
-            }
-            MaxLag::DiagonalFraction(f) => {
-                let mut diag = 0.0;
-                for k in 0..d {
-                    let (lo, hi) = (0..s).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), i| {
-                        (l.min(pts[i * d + k]), h.max(pts[i * d + k]))
-                    });
-                    diag += (hi - lo) * (hi - lo);
-                }
-                if !(f.is_finite() && f > 0.0) {
-                    return Err(KrigingError::InvalidConfig(format!(
-                        "maximum lag fraction {f} must be finite and > 0"
-                    )));
-                }
-                f * f64::sqrt(diag)
-            }
-            MaxLag::Distance(h) => {
-                if !(h.is_finite() && h > 0.0) {
-                    return Err(KrigingError::InvalidConfig(format!(
-                        "maximum lag {h} must be finite and > 0"
-                    )));
-                }
-                h
-            }
-        };
-        if max_lag.is_nan() || max_lag <= 0.0 {
-            return Err(KrigingError::NoSpread { samples: s });
-        }
+        // One rule for the largest lag, with the directional estimator's (checks and spread).
+        let max_lag = crate::estimator::max_lag(binning, &pts, s, d)?;
         let dh = max_lag / bins as f64;
         let max2 = max_lag * max_lag;
         let row_bins = |i: usize| {
