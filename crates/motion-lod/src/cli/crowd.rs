@@ -140,6 +140,11 @@ pub struct CrowdArgs {
     /// Seconds recorded by `--export` (0 < s <= 60).
     #[arg(long, default_value_t = 3.0, value_parser = export_seconds)]
     pub export_seconds: f32,
+    /// Run the crowd on the GPU (crate `gpu-crowd`, wgpu compute shaders; Vulkan by default) and
+    /// time its frames; needs a build with `--features gpu`. Seams and the foot lock are off on
+    /// the GPU.
+    #[arg(long, conflicts_with_all = ["naive", "pca", "compare_naive", "compare_pca", "render", "export"])]
+    pub gpu: bool,
 }
 
 /// `--export-seconds`: in `(0, 60]`.
@@ -224,7 +229,7 @@ fn frame_ms(report: &CrowdReport, fps: f32) -> Option<FrameMs> {
 }
 
 /// The model to animate and, when the naive or PCA source is needed, the analysis it was built from.
-fn model_and_analysis(
+pub(super) fn model_and_analysis(
     path: Option<&PathBuf>,
     need_analysis: bool,
     quiet: bool,
@@ -279,6 +284,9 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
                 path.display()
             );
         }
+    }
+    if args.gpu {
+        return super::gpu::run(&args);
     }
     let need_analysis = args.naive || args.compare_naive || args.pca || args.compare_pca;
     let (model, analysis) = model_and_analysis(args.model.as_ref(), need_analysis, args.json)?;

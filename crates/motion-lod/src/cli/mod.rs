@@ -9,6 +9,7 @@ pub mod default_takes;
 pub mod demo;
 pub mod eval;
 pub mod explain;
+pub mod gpu;
 pub mod info;
 pub mod progress;
 pub mod quality;

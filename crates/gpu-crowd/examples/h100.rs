@@ -1,0 +1,139 @@
+//! The device check of issue 32, for a machine with a GPU (an H100): milliseconds a frame for
+//! 1,000,000 walkers at full detail and 10,000,000 under the distance policy (ground camera,
+//! density 0.01), and GPU memory a walker, with the CPU crowd's figure for the first beside them.
+//!
+//! `cargo run --release -p gpu-crowd --example h100 -- [MODEL.mlod] [--full N] [--lod N] [--frames N]`
+//! (without a model, the fixture model is built from `fixtures/`).
+
+use std::time::Instant;
+
+use crowd_sim::{Camera, Crowd, CrowdConfig, Scene};
+use gpu_crowd::{Gpu, GpuCrowd, GpuOptions};
+use lod_policy::{DistancePolicy, FullDetail, LevelPolicy};
+use motion_lod::{LodSource, MotionModel};
+
+fn arg(args: &[String], name: &str, default: usize) -> usize {
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+fn time_gpu(
+    gpu: &Gpu,
+    model: &MotionModel,
+    walkers: usize,
+    policy: &dyn LevelPolicy,
+    options: GpuOptions,
+    frames: usize,
+) -> Result<(f64, f64, u64), Box<dyn std::error::Error>> {
+    let config = CrowdConfig {
+        seam_levels: 0,
+        foot_lock_levels: 0,
+        ..CrowdConfig::with_density(walkers, 0.01)
+    };
+    let mut crowd = GpuCrowd::new(gpu, model.runtime(), config, options)?;
+    let field = crowd.config().field_size_m;
+    let (path, lens) = (
+        Scene::Ground.path(field),
+        Scene::Ground.lens(Camera::default(), field),
+    );
+    let dt = 1.0 / config.fps;
+    let mut ms = Vec::new();
+    for f in 0..30 + frames {
+        let stats = crowd.step(policy, &path.camera_at(f as f32 * dt, &lens), dt)?;
+        if f >= 30 {
+            ms.push(stats.wall.as_secs_f64() * 1e3);
+        }
+    }
+    let mean = ms.iter().sum::<f64>() / ms.len() as f64;
+    ms.sort_by(f64::total_cmp);
+    Ok((mean, ms[ms.len() / 2], crowd.gpu_bytes()))
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (full_n, lod_n, frames) = (
+        arg(&args, "--full", 1_000_000),
+        arg(&args, "--lod", 10_000_000),
+        arg(&args, "--frames", 60),
+    );
+    let model = match args.first().filter(|a| !a.starts_with("--")) {
+        Some(path) => MotionModel::load(std::path::Path::new(path))?,
+        None => {
+            let loaded = motion_lod::dataset::DataSpec::default()
+                .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})?;
+            MotionModel::build(
+                &loaded.training,
+                &Default::default(),
+                &motion_lod::progress::NoProgress,
+            )?
+        }
+    };
+    let gpu = Gpu::new()?;
+    println!("adapter: {}", gpu.adapter_name());
+    let lod = model.lod();
+    let (mean, median, bytes) = time_gpu(
+        &gpu,
+        &model,
+        full_n,
+        &FullDetail::for_model(lod),
+        GpuOptions::default(),
+        frames,
+    )?;
+    println!(
+        "GPU, {full_n} walkers, full detail: {mean:.2} ms a frame (median {median:.2}), {:.0} bytes a walker",
+        bytes as f64 / full_n as f64
+    );
+    // Under the policy few walkers hold joints: 2% of them get a joint slot.
+    let options = GpuOptions {
+        joint_slots: Some((lod_n / 50).max(1)),
+        ..GpuOptions::default()
+    };
+    let (mean, median, bytes) = time_gpu(
+        &gpu,
+        &model,
+        lod_n,
+        &DistancePolicy::for_model(lod),
+        options,
+        frames,
+    )?;
+    println!(
+        "GPU, {lod_n} walkers, distance policy: {mean:.2} ms a frame (median {median:.2}), {:.0} bytes a walker",
+        bytes as f64 / lod_n as f64
+    );
+    // The CPU crowd on the same machine, same scene, full detail (all threads).
+    let source = LodSource::new(&model);
+    let config = CrowdConfig {
+        seam_levels: 0,
+        foot_lock_levels: 0,
+        ..CrowdConfig::with_density(full_n, 0.01)
+    };
+    let mut cpu = Crowd::new(&source, config)?;
+    let field = cpu.config().field_size_m;
+    let (path, lens) = (
+        Scene::Ground.path(field),
+        Scene::Ground.lens(Camera::default(), field),
+    );
+    let policy = FullDetail::for_model(lod);
+    let dt = 1.0 / config.fps;
+    let mut ms = Vec::new();
+    for f in 0..10 + frames.min(20) {
+        let t = Instant::now();
+        cpu.step(&source, &policy, &path.camera_at(f as f32 * dt, &lens), dt)?;
+        if f >= 10 {
+            ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    println!(
+        "CPU ({} threads), {full_n} walkers, full detail: {:.1} ms a frame",
+        rayon_threads(),
+        ms.iter().sum::<f64>() / ms.len() as f64
+    );
+    Ok(())
+}
+
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}

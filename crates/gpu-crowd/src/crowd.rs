@@ -1,0 +1,865 @@
+//! [`GpuCrowd`]: the crowd's walkers on the GPU, stepped by the compute shaders.
+
+use std::time::{Duration, Instant};
+
+use bytemuck::{Pod, Zeroable};
+use crowd_sim::path::{EllipsePath, heading_of, path_controls};
+use crowd_sim::{Camera, CrowdConfig, CrowdStyle, Frustum, check_control_range};
+use glam::Vec3;
+use lod_policy::{Detail, LevelPolicy, RuntimeModel, SplitMix64, StyleMix, ViewParams};
+use wgpu::util::DeviceExt;
+
+use crate::device::Gpu;
+use crate::error::GpuError;
+use crate::policy::PolicyTable;
+use crate::tables::{POLICY_MAX, Tables, style_row};
+
+const NONE: u32 = u32::MAX;
+const MODE_INIT: u32 = 2;
+/// Threads per workgroup of the per-walker passes (the shaders' `WG`).
+const WG: u32 = 64;
+/// Largest workgroup count in one dimension of a dispatch.
+const MAX_X: u32 = 65535;
+/// The counters' layout (the shaders' `C_*`).
+const C_BUILDS: usize = 3;
+const C_FREE_TOP: usize = 6;
+const C_HIST: usize = 8;
+/// Largest time step (s), as the CPU crowd.
+const MAX_DT: f32 = 10.0;
+
+/// One walker as the shaders hold it (`struct Walker` of `crowd.wgsl`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct GpuWalker {
+    t: f32,
+    cur_dur: f32,
+    hold_s: f32,
+    pend_u: f32,
+    root: [f32; 3],
+    height: f32,
+    base: [f32; 2],
+    heading: f32,
+    sin_h: f32,
+    cos_h: f32,
+    s: f32,
+    stride: f32,
+    body_scale: f32,
+    path_c: [f32; 2],
+    path_ab: [f32; 2],
+    path_rot: f32,
+    path_dir: f32,
+    controls: [f32; 4],
+    motion: [f32; 3],
+    init_phase: f32,
+    init_hold: f32,
+    pad0: f32,
+    cur_acc: u32,
+    cur_joints: u32,
+    pend_acc: u32,
+    pend_joints: u32,
+    style: u32,
+    slot: u32,
+    mode: u32,
+    flags: u32,
+}
+
+/// The per-frame uniform (`struct Frame` of `crowd.wgsl`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct FrameUniform {
+    planes: [[f32; 4]; 6],
+    eye: [f32; 4],
+    dt: f32,
+    margin: f32,
+    n: u32,
+    n_slots: u32,
+    vis_entries: u32,
+    hid_entries: u32,
+    pad: [u32; 2],
+    policy: [[u32; 4]; POLICY_MAX],
+}
+
+/// Settings of the GPU crowd beyond the CPU crowd's [`CrowdConfig`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GpuOptions {
+    /// Walkers that can hold a clip with joints at the same time (each such clip takes
+    /// `4 (P max r_T + T)` bytes, plus `12 J` for its joint positions); `None` gives every walker
+    /// one. A walker the policy wants with joints when every slot is taken is shown root only and
+    /// counted in [`GpuFrameStats::slot_faults`] until a slot frees.
+    pub joint_slots: Option<usize>,
+    /// Walkers per page (the crowd is split into pages whose buffers each fit the adapter's
+    /// largest storage binding); `None` picks the largest that fits.
+    pub page_walkers: Option<usize>,
+}
+
+/// What one GPU frame did.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct GpuFrameStats {
+    /// Walkers whose box intersected the view frustum.
+    pub visible: u64,
+    /// Clips built this frame.
+    pub kernels_built: u64,
+    /// Walkers shown root only because no joint slot was free ([`GpuOptions::joint_slots`]).
+    pub slot_faults: u64,
+    /// Walkers per accuracy level, then root-only walkers last (as `crowd_sim::FrameStats`).
+    pub level_histogram: Vec<u32>,
+    /// Wall time from the frame's submission to its completion on the device, including the
+    /// read-back of these statistics.
+    pub gpu: Duration,
+    /// Wall time of the whole step on the host (upload, encode, submit, wait, read back).
+    pub wall: Duration,
+}
+
+/// One walker's joints after a frame, read back from the GPU ([`GpuCrowd::read_walkers`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WalkerJoints {
+    /// The detail of the walker's clip (the policy's, as the CPU crowd's `Crowd::detail`).
+    pub detail: Detail,
+    /// World joint positions (m): the root, then the clip's active joints in row order (as the
+    /// CPU crowd's `Crowd::joint_positions`).
+    pub positions: Vec<Vec3>,
+}
+
+/// One page of walkers: its buffers and bind group.
+#[derive(Debug)]
+struct Page {
+    n: usize,
+    slots: usize,
+    frame: wgpu::Buffer,
+    walkers: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    joints: wgpu::Buffer,
+    bind: wgpu::BindGroup,
+    bytes: u64,
+}
+
+/// The crowd of [`crowd_sim`] on the GPU: the same walkers, paths, culling and level-of-detail
+/// policy, with clips built, posed and skinned by compute shaders.
+///
+/// What it does as the CPU crowd does (`crowd_sim::Crowd` with the same [`CrowdConfig`] and a
+/// `LodSource` over the same model): the walkers' seeded paths, strides, heights, styles and
+/// starting phases; per frame the frustum test of each walker's box from its last root, the
+/// policy's detail from its distance ([`PolicyTable`]), the clock, cycle ends (the cycle frame
+/// moved by the clip's root motion, the next controls from the path ahead), mid-cycle refinement
+/// when the policy wants a finer detail (after the spread of first builds), the clip build at the
+/// detail the model evaluates (kriging weights, core, `G(c)`, time table, root motion, body
+/// scale), the pose at the clip's phase and forward kinematics of the active joints.
+///
+/// What it does not do (yet): inertialized seams and the foot lock. [`GpuCrowd::new`] refuses a
+/// config with `seam_levels` or `foot_lock_levels` above 0, so that a comparison with the CPU
+/// crowd is always against one configured the same way. A cycle end whose new clip is shorter
+/// than the time already past it waits for the next frame (the CPU crowd loops at once; with
+/// frames far shorter than cycles it does not happen).
+///
+/// Walker state lives on the GPU; per frame the host uploads the frame's uniform (camera planes,
+/// time step, the policy table) and resets a few counters, and reads back the counters.
+#[derive(Debug)]
+pub struct GpuCrowd {
+    gpu_name: String,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    pipelines: Pipelines,
+    pages: Vec<Page>,
+    staging: wgpu::Buffer,
+    counters_len: usize,
+    levels: usize,
+    joints: usize,
+    walkers: usize,
+    config: CrowdConfig,
+    field_enlarged_from: Option<f32>,
+    policy_cache: Option<(ViewParams, Vec<[u32; 4]>, u32, u32)>,
+    frame: u64,
+    bytes_per_slot: u64,
+}
+
+#[derive(Debug)]
+struct Pipelines {
+    advance: wgpu::ComputePipeline,
+    build_args: wgpu::ComputePipeline,
+    build: wgpu::ComputePipeline,
+    fix_free: wgpu::ComputePipeline,
+    pose_fk: wgpu::ComputePipeline,
+}
+
+/// Workgroups for `n` walkers: `(x, y)` with `x y WG >= n`.
+fn groups(n: usize) -> (u32, u32) {
+    let g = n.div_ceil(WG as usize).max(1) as u32;
+    let x = g.min(MAX_X);
+    (x, g.div_ceil(x))
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Runs `f` inside a validation and an out-of-memory error scope; their errors become
+/// [`GpuError::Runtime`].
+fn scoped<R>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> R) -> Result<R, GpuError> {
+    device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let r = f();
+    let validation = pollster::block_on(device.pop_error_scope());
+    let memory = pollster::block_on(device.pop_error_scope());
+    match validation.or(memory) {
+        Some(e) => Err(GpuError::Runtime(format!("{what}: {e}"))),
+        None => Ok(r),
+    }
+}
+
+impl GpuCrowd {
+    /// Places `config.walkers` walkers as `crowd_sim::Crowd::new` does for a source over `model`
+    /// (the same paths, phases, strides, heights and styles; the field enlarged likewise), uploads
+    /// them and builds every walker's first, root-only clip on the GPU.
+    ///
+    /// Errors: a config the CPU crowd would refuse, or one asking for what the GPU crowd does not
+    /// do (`seam_levels` or `foot_lock_levels` above 0: configure the CPU crowd you compare with the
+    /// same way); a model the shaders cannot take; buffers or workgroup memory beyond the adapter's
+    /// limits.
+    pub fn new(
+        gpu: &Gpu,
+        model: &RuntimeModel,
+        config: CrowdConfig,
+        options: GpuOptions,
+    ) -> Result<GpuCrowd, GpuError> {
+        let mut config = config;
+        check_config(&config)?;
+        let lod = model.lod();
+        let range = lod
+            .controls()
+            .range()
+            .ok_or_else(|| GpuError::Model("the control space is not a walk's".into()))?;
+        check_control_range(&range)?;
+        let n_styles = model.styles().len();
+        // Style rows: one per style alone, then the config's blend (or the data's mix).
+        let mut styles = Vec::new();
+        for j in 0..n_styles {
+            styles.push(style_row(model, StyleMix::one(j))?);
+        }
+        styles.push(style_row(
+            model,
+            match config.style {
+                CrowdStyle::Each(s) => s,
+                CrowdStyle::DataMix => StyleMix::DATA_MIX,
+            },
+        )?);
+        let tables = Tables::new(model, &styles)?;
+        let limits = &gpu.limits;
+        if tables.workgroup_bytes > u64::from(limits.max_compute_workgroup_storage_size) {
+            return Err(GpuError::Limit {
+                what: "workgroup memory of the clip build (bytes)",
+                needed: tables.workgroup_bytes,
+                limit: u64::from(limits.max_compute_workgroup_storage_size),
+                adapter: gpu.adapter_name(),
+            });
+        }
+
+        // The walkers, as crowd_sim::Crowd::new draws them.
+        let bounds = range;
+        let dz_lo = bounds.min.dz.max(0.2 * bounds.max.dz);
+        let (stride_lo, stride_hi) = (
+            dz_lo + 0.3 * (bounds.max.dz - dz_lo),
+            dz_lo + 0.8 * (bounds.max.dz - dz_lo),
+        );
+        let turn_max = bounds.max.turn.min(-bounds.min.turn);
+        let min_radius = 2.0 * stride_hi / turn_max;
+        let needed = 2.0 * ((1.5 * min_radius).max(3.0) + config.border_m) * 1.001;
+        let field_enlarged_from = (config.field_size_m < needed && needed.is_finite()).then(|| {
+            let from = config.field_size_m;
+            config.field_size_m = needed;
+            from
+        });
+        let mix = model.data_style_mix();
+        let last = tables.levels - 1;
+        let mut walkers = Vec::with_capacity(config.walkers);
+        for i in 0..config.walkers {
+            let mut g = SplitMix64::for_walker(config.seed, i);
+            let path =
+                EllipsePath::random(&mut g, config.field_size_m, config.border_m, min_radius)
+                    .ok_or(crowd_sim::CrowdError::FieldTooSmall {
+                        field_m: config.field_size_m,
+                        needed_m: 2.0 * ((1.5 * min_radius).max(3.0) + config.border_m),
+                    })?;
+            let s = g.range(0.0, std::f32::consts::TAU);
+            let stride = g.range(stride_lo, stride_hi);
+            let height = g.range(bounds.min.height, bounds.max.height);
+            let phase = g.next_f32();
+            let base = path.point(s);
+            let heading = heading_of(path.velocity(s));
+            let (style, style_id) = if mix.is_empty() {
+                (StyleMix::DATA_MIX, n_styles as u32)
+            } else {
+                let st = config.style.for_walker(mix, g.next_f32());
+                let id = match config.style {
+                    CrowdStyle::Each(_) => n_styles,
+                    CrowdStyle::DataMix => (0..n_styles)
+                        .find(|&j| st == StyleMix::one(j))
+                        .unwrap_or(n_styles),
+                };
+                (st, id as u32)
+            };
+            let c =
+                path_controls(&path, s, base, heading, stride, height, &bounds).with_style(style);
+            let hold = if config.spread_first_builds {
+                g.next_f32()
+            } else {
+                0.0
+            };
+            let (sh, ch) = heading.sin_cos();
+            walkers.push(GpuWalker {
+                t: 0.0,
+                cur_dur: 1.0,
+                hold_s: 0.0,
+                pend_u: 0.0,
+                root: [base.x, 0.0, base.y],
+                height,
+                base: [base.x, base.y],
+                heading,
+                sin_h: sh,
+                cos_h: ch,
+                s,
+                stride,
+                body_scale: 1.0,
+                path_c: [path.centre.x, path.centre.y],
+                path_ab: [path.axes.x, path.axes.y],
+                path_rot: path.rot,
+                path_dir: path.dir,
+                controls: c.to_array(),
+                motion: [0.0; 3],
+                init_phase: phase,
+                init_hold: hold,
+                pad0: 0.0,
+                cur_acc: last as u32,
+                cur_joints: 0,
+                pend_acc: last as u32,
+                pend_joints: 0,
+                style: style_id,
+                slot: NONE,
+                mode: MODE_INIT,
+                flags: 0,
+            });
+        }
+
+        let device = gpu.device.clone();
+        let queue = gpu.queue.clone();
+        let module = scoped(&device, "compiling the crowd shaders", || {
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("gpu-crowd"),
+                source: wgpu::ShaderSource::Wgsl(tables.source.as_str().into()),
+            })
+        })?;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gpu-crowd"),
+            entries: &[
+                uniform_entry(0),
+                uniform_entry(1),
+                storage_entry(2, false),
+                storage_entry(3, false),
+                storage_entry(4, false),
+                storage_entry(5, false),
+                storage_entry(6, true),
+                storage_entry(7, false),
+                storage_entry(8, false),
+                storage_entry(9, false),
+            ],
+        });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gpu-crowd"),
+            bind_group_layouts: &[&layout],
+            push_constant_ranges: &[],
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pl),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let pipelines = scoped(&device, "creating the crowd pipelines", || Pipelines {
+            advance: pipeline("advance"),
+            build_args: pipeline("build_args"),
+            build: pipeline("build"),
+            fix_free: pipeline("fix_free"),
+            pose_fk: pipeline("pose_fk"),
+        })?;
+
+        // Pages: each buffer of a page within the adapter's largest storage binding.
+        let n = config.walkers;
+        let slots_total = options.joint_slots.unwrap_or(n).min(n);
+        let (p, t, rt_max, rt_last, j) = (
+            tables.p,
+            tables.t,
+            tables.rt_max,
+            tables.rt_last,
+            tables.joints,
+        );
+        let small_per_walker = 4 * (7 * rt_last + 2 * t) as u64;
+        let big_per_slot = 4 * (p * rt_max + 2 * t) as u64;
+        let joints_per_slot = 12 * j.max(1) as u64;
+        let walker_bytes = std::mem::size_of::<GpuWalker>() as u64;
+        let max_binding =
+            u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let largest = walker_bytes
+            .max(small_per_walker)
+            .max(big_per_slot)
+            .max(joints_per_slot);
+        let fit =
+            (max_binding / largest).min(u64::from(u32::MAX) / ((p * rt_max + 2 * t) as u64).max(1));
+        let page_walkers = options
+            .page_walkers
+            .unwrap_or(usize::MAX)
+            .min(fit as usize)
+            .max(1);
+        if fit == 0 {
+            return Err(GpuError::Limit {
+                what: "bytes of one walker's clip in one storage binding",
+                needed: largest,
+                limit: max_binding,
+                adapter: gpu.adapter_name(),
+            });
+        }
+        let md = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("model"),
+            contents: bytemuck::cast_slice(&tables.md),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let mtab = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("model table"),
+            contents: bytemuck::cast_slice(&tables.mtab),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let counters_len = C_HIST + tables.levels + 1;
+        let mut pages = Vec::new();
+        let mut start = 0;
+        let page_count = n.div_ceil(page_walkers);
+        let mut slots_left = slots_total;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let result = scoped(&device, "allocating the crowd's buffers", || {
+            for k in 0..page_count {
+                let pn = page_walkers.min(n - start);
+                // Slots shared in proportion (the last page takes what is left).
+                let slots = if k + 1 == page_count {
+                    slots_left
+                } else {
+                    ((slots_total as u128 * pn as u128) / n as u128) as usize
+                };
+                slots_left -= slots;
+                let slots_alloc = slots.max(1);
+                let ws = &walkers[start..start + pn];
+                let storage = wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST;
+                let walkers_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("walkers"),
+                    contents: bytemuck::cast_slice(ws),
+                    usage: storage,
+                });
+                let mut counters = vec![0u32; counters_len];
+                let (gx, gy) = (pn.min(MAX_X as usize) as u32, (pn as u32).div_ceil(MAX_X));
+                counters[0] = gx;
+                counters[1] = gy;
+                counters[2] = 1;
+                counters[C_BUILDS] = pn as u32;
+                counters[C_FREE_TOP] = slots as u32;
+                let counters_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("counters"),
+                    contents: bytemuck::cast_slice(&counters),
+                    usage: storage | wgpu::BufferUsages::INDIRECT,
+                });
+                let list: Vec<u32> = (0..pn as u32).collect();
+                let build_list = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("build list"),
+                    contents: bytemuck::cast_slice(&list),
+                    usage: storage,
+                });
+                let stack: Vec<u32> = (0..slots_alloc as u32).rev().collect();
+                let free_stack = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("free joint slots"),
+                    contents: bytemuck::cast_slice(&stack),
+                    usage: storage,
+                });
+                let make = |label: &str, size: u64| {
+                    device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(label),
+                        size: size.max(4),
+                        usage: storage,
+                        mapped_at_creation: false,
+                    })
+                };
+                let small = make("root-only clips", small_per_walker * pn as u64);
+                let big = make("clips with joints", big_per_slot * slots_alloc as u64);
+                let joints = make("joint positions", joints_per_slot * slots_alloc as u64);
+                let frame = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("frame"),
+                    size: std::mem::size_of::<FrameUniform>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let mut uniform = FrameUniform::zeroed();
+                uniform.n = pn as u32;
+                uniform.n_slots = slots_alloc as u32;
+                queue.write_buffer(&frame, 0, bytemuck::bytes_of(&uniform));
+                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("gpu-crowd page"),
+                    layout: &layout,
+                    entries: &[
+                        (0, &frame),
+                        (1, &mtab),
+                        (2, &walkers_buf),
+                        (3, &counters_buf),
+                        (4, &build_list),
+                        (5, &free_stack),
+                        (6, &md),
+                        (7, &small),
+                        (8, &big),
+                        (9, &joints),
+                    ]
+                    .map(|(binding, b)| wgpu::BindGroupEntry {
+                        binding,
+                        resource: b.as_entire_binding(),
+                    }),
+                });
+                let bytes = [
+                    &walkers_buf,
+                    &counters_buf,
+                    &build_list,
+                    &free_stack,
+                    &small,
+                    &big,
+                    &joints,
+                    &frame,
+                ]
+                .iter()
+                .map(|b| b.size())
+                .sum();
+                // The first clips: every walker root only, built on the GPU.
+                {
+                    let mut pass = encoder.begin_compute_pass(&Default::default());
+                    pass.set_bind_group(0, &bind, &[]);
+                    pass.set_pipeline(&pipelines.build);
+                    pass.dispatch_workgroups_indirect(&counters_buf, 0);
+                    pass.set_pipeline(&pipelines.fix_free);
+                    pass.dispatch_workgroups(1, 1, 1);
+                }
+                pages.push(Page {
+                    n: pn,
+                    slots: slots_alloc,
+                    frame,
+                    walkers: walkers_buf,
+                    counters: counters_buf,
+                    joints,
+                    bind,
+                    bytes,
+                });
+                start += pn;
+            }
+        });
+        result?;
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("counters read-back"),
+            size: (4 * counters_len * pages.len()) as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let crowd = GpuCrowd {
+            gpu_name: gpu.adapter_name(),
+            device,
+            queue,
+            pipelines,
+            pages,
+            staging,
+            counters_len,
+            levels: tables.levels,
+            joints: j,
+            walkers: n,
+            config,
+            field_enlarged_from,
+            policy_cache: None,
+            frame: 0,
+            bytes_per_slot: big_per_slot + joints_per_slot,
+        };
+        crowd.submit_and_wait(encoder)?;
+        let _ = small_per_walker;
+        Ok(crowd)
+    }
+
+    fn submit_and_wait(&self, encoder: wgpu::CommandEncoder) -> Result<(), GpuError> {
+        let index = self.queue.submit([encoder.finish()]);
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Runtime(e.to_string()))?;
+        Ok(())
+    }
+
+    /// Advances the crowd by `dt` seconds seen from `camera` under `policy` (the stages of
+    /// `crowd_sim::Crowd::step`, on the GPU) and waits for the frame to finish.
+    pub fn step<P: LevelPolicy + ?Sized>(
+        &mut self,
+        policy: &P,
+        camera: &Camera,
+        dt: f32,
+    ) -> Result<GpuFrameStats, GpuError> {
+        let started = Instant::now();
+        if !(dt.is_finite() && (0.0..=MAX_DT).contains(&dt)) {
+            return Err(crowd_sim::CrowdError::BadTimeStep { dt }.into());
+        }
+        let frustum = Frustum::from_camera(camera)?;
+        let view = camera.view();
+        let stale = self.policy_cache.as_ref().is_none_or(|c| c.0 != view);
+        if stale {
+            let table = PolicyTable::new(policy, &view, self.levels, self.joints)?;
+            let entries = table.entries();
+            self.policy_cache = Some((
+                view,
+                entries,
+                table.visible.len() as u32,
+                table.hidden.len() as u32,
+            ));
+        }
+        let (_, entries, vis, hid) = self.policy_cache.as_ref().expect("tabulated");
+        let mut uniform = FrameUniform::zeroed();
+        for (dst, src) in uniform.planes.iter_mut().zip(frustum.planes) {
+            *dst = src.to_array();
+        }
+        uniform.eye = camera.position.extend(0.0).to_array();
+        uniform.dt = dt;
+        uniform.margin = self.config.cull_margin_m;
+        uniform.vis_entries = *vis;
+        uniform.hid_entries = *hid;
+        uniform.policy[..entries.len()].copy_from_slice(entries);
+        let zeros = vec![0u32; self.levels + 1];
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        for page in &self.pages {
+            uniform.n = page.n as u32;
+            uniform.n_slots = page.slots as u32;
+            self.queue
+                .write_buffer(&page.frame, 0, bytemuck::bytes_of(&uniform));
+            // Reset the frame's counters (builds, visible, slot faults) and the histogram; the
+            // free-slot stack's top stays.
+            self.queue.write_buffer(
+                &page.counters,
+                4 * C_BUILDS as u64,
+                bytemuck::cast_slice(&[0u32; 3]),
+            );
+            self.queue.write_buffer(
+                &page.counters,
+                4 * C_HIST as u64,
+                bytemuck::cast_slice(&zeros),
+            );
+            let (gx, gy) = groups(page.n);
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_bind_group(0, &page.bind, &[]);
+            pass.set_pipeline(&self.pipelines.advance);
+            pass.dispatch_workgroups(gx, gy, 1);
+            pass.set_pipeline(&self.pipelines.build_args);
+            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_pipeline(&self.pipelines.build);
+            pass.dispatch_workgroups_indirect(&page.counters, 0);
+            pass.set_pipeline(&self.pipelines.fix_free);
+            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_pipeline(&self.pipelines.pose_fk);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        let row = (4 * self.counters_len) as u64;
+        for (k, page) in self.pages.iter().enumerate() {
+            encoder.copy_buffer_to_buffer(&page.counters, 0, &self.staging, k as u64 * row, row);
+        }
+        let submitted = Instant::now();
+        self.submit_and_wait(encoder)?;
+        let counters: Vec<u32> = self.read_mapped(&self.staging)?;
+        let gpu = submitted.elapsed();
+        let mut stats = GpuFrameStats {
+            level_histogram: vec![0; self.levels + 1],
+            gpu,
+            ..GpuFrameStats::default()
+        };
+        for c in counters.chunks_exact(self.counters_len) {
+            stats.kernels_built += u64::from(c[C_BUILDS]);
+            stats.visible += u64::from(c[4]);
+            stats.slot_faults += u64::from(c[5]);
+            for (h, v) in stats.level_histogram.iter_mut().zip(&c[C_HIST..]) {
+                *h += v;
+            }
+        }
+        self.frame += 1;
+        stats.wall = started.elapsed();
+        Ok(stats)
+    }
+
+    /// Maps `buffer` (MAP_READ), copies it out as `T`s and unmaps it.
+    fn read_mapped<T: Pod>(&self, buffer: &wgpu::Buffer) -> Result<Vec<T>, GpuError> {
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Runtime(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| GpuError::Runtime(e.to_string()))?
+            .map_err(|e| GpuError::Runtime(format!("reading back: {e}")))?;
+        let out = bytemuck::cast_slice(&slice.get_mapped_range()).to_vec();
+        buffer.unmap();
+        Ok(out)
+    }
+
+    /// Copies `buffer` into a new read-back buffer and returns its contents.
+    fn read_buffer<T: Pod>(&self, buffer: &wgpu::Buffer) -> Result<Vec<T>, GpuError> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read-back"),
+            size: buffer.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+        self.submit_and_wait(encoder)?;
+        self.read_mapped(&staging)
+    }
+
+    /// Every walker's detail and world joint positions after the last step, read back from the
+    /// GPU (slow: for tests, exports and inspection, not per frame).
+    pub fn read_walkers(&self) -> Result<Vec<WalkerJoints>, GpuError> {
+        let mut out = Vec::with_capacity(self.walkers);
+        for page in &self.pages {
+            let walkers: Vec<GpuWalker> = self.read_buffer(&page.walkers)?;
+            let joints: Vec<f32> = self.read_buffer(&page.joints)?;
+            let ns = page.slots;
+            for w in &walkers[..page.n] {
+                let mut positions = vec![Vec3::from_array(w.root)];
+                if w.cur_joints > 0 && w.slot != NONE {
+                    let s = w.slot as usize;
+                    for k in 0..w.cur_joints as usize {
+                        let at = |c: usize| joints[(3 * k + c) * ns + s];
+                        positions.push(Vec3::new(at(0), at(1), at(2)));
+                    }
+                }
+                out.push(WalkerJoints {
+                    detail: Detail::new(w.cur_acc as usize, w.cur_joints as usize),
+                    positions,
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// Number of walkers.
+    pub fn len(&self) -> usize {
+        self.walkers
+    }
+
+    /// Always false: a crowd has at least one walker.
+    pub fn is_empty(&self) -> bool {
+        self.walkers == 0
+    }
+
+    /// The configuration in use (the field enlarged when the model's turn range needed it).
+    pub fn config(&self) -> &CrowdConfig {
+        &self.config
+    }
+
+    /// The field size asked for, when the crowd enlarged it (as `crowd_sim::Crowd`).
+    pub fn field_enlarged_from(&self) -> Option<f32> {
+        self.field_enlarged_from
+    }
+
+    /// The adapter the crowd runs on.
+    pub fn adapter_name(&self) -> &str {
+        &self.gpu_name
+    }
+
+    /// Bytes of GPU memory the crowd's buffers take (the model's own buffers excluded).
+    pub fn gpu_bytes(&self) -> u64 {
+        self.pages.iter().map(|p| p.bytes).sum()
+    }
+
+    /// Bytes of one joint slot (a clip with joints and its joint positions).
+    pub fn bytes_per_joint_slot(&self) -> u64 {
+        self.bytes_per_slot
+    }
+
+    /// Pages the walkers are split into (see [`GpuOptions::page_walkers`]).
+    pub fn pages(&self) -> usize {
+        self.pages.len()
+    }
+
+    /// Frames stepped so far.
+    pub fn frame(&self) -> u64 {
+        self.frame
+    }
+}
+
+/// The CPU crowd's checks of the settings the GPU crowd uses, and the settings it does not
+/// implement.
+fn check_config(c: &CrowdConfig) -> Result<(), GpuError> {
+    let bad = |field: &'static str, value: f32| {
+        Err(crowd_sim::CrowdError::BadConfig {
+            field,
+            value: f64::from(value),
+        }
+        .into())
+    };
+    if c.walkers == 0 {
+        return Err(crowd_sim::CrowdError::NoWalkers.into());
+    }
+    if c.walkers > u32::MAX as usize / 2 {
+        return Err(GpuError::Config(format!(
+            "{} walkers: at most 2^31",
+            c.walkers
+        )));
+    }
+    if !(c.field_size_m.is_finite() && c.field_size_m > 0.0) {
+        return bad("field_size_m", c.field_size_m);
+    }
+    if !(c.border_m.is_finite() && c.border_m >= 0.0) {
+        return bad("border_m", c.border_m);
+    }
+    if !(c.cull_margin_m.is_finite() && c.cull_margin_m >= 0.0) {
+        return bad("cull_margin_m", c.cull_margin_m);
+    }
+    if let CrowdStyle::Each(style) = &c.style
+        && let Some(j) = style
+            .weights
+            .iter()
+            .position(|w| !(w.is_finite() && *w >= 0.0))
+    {
+        return bad("style", style.weights[j]);
+    }
+    if c.seam_levels > 0 || c.foot_lock_levels > 0 {
+        return Err(GpuError::Config(format!(
+            "seam_levels = {} and foot_lock_levels = {}: the GPU crowd has no seam \
+             inertialization and no foot lock yet; set both to 0 (and the CPU crowd it is \
+             compared with likewise)",
+            c.seam_levels, c.foot_lock_levels
+        )));
+    }
+    Ok(())
+}

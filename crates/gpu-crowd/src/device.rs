@@ -1,0 +1,113 @@
+//! [`Gpu`]: the adapter, device and queue the crowd runs on.
+
+use crate::error::GpuError;
+
+/// The environment variable that points the Vulkan loader at a driver's ICD file (older loaders).
+pub const ICD_ENV: &str = "VK_ICD_FILENAMES";
+
+/// An open GPU: adapter, device and queue. One per process is enough; crowds borrow it.
+#[derive(Debug)]
+pub struct Gpu {
+    pub(crate) device: wgpu::Device,
+    pub(crate) queue: wgpu::Queue,
+    pub(crate) info: wgpu::AdapterInfo,
+    pub(crate) limits: wgpu::Limits,
+}
+
+impl Gpu {
+    /// Opens the first adapter of the compiled-in backends (Vulkan by default; Metal and DirectX 12
+    /// with this crate's features `metal` and `dx12`), high-performance first. `WGPU_BACKEND`
+    /// (`vulkan`, `metal`, `dx12`) restricts the backends and `WGPU_POWER_PREF` (`low`, `high`) the
+    /// preference, as wgpu reads them.
+    ///
+    /// Errors: [`GpuError::NoAdapter`] naming the backends tried and what to install when none is
+    /// found (no Vulkan driver: install the driver's Vulkan ICD and the loader `libvulkan1`, or
+    /// point `VK_ICD_FILENAMES` at the ICD json); [`GpuError::Device`] when the adapter refuses a
+    /// device with its own limits.
+    pub fn new() -> Result<Gpu, GpuError> {
+        let desc = wgpu::InstanceDescriptor::from_env_or_default();
+        let backends = desc.backends;
+        let instance = wgpu::Instance::new(&desc);
+        let power =
+            wgpu::PowerPreference::from_env().unwrap_or(wgpu::PowerPreference::HighPerformance);
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: power,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+        }))
+        .map_err(|e| GpuError::NoAdapter {
+            what: no_adapter_hint(backends, &e.to_string()),
+        })?;
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("gpu-crowd"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: describe(&info),
+            reason: e.to_string(),
+        })?;
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+            limits,
+        })
+    }
+
+    /// The adapter's name, device type and backend, e.g.
+    /// `llvmpipe (LLVM 15.0.6, 256 bits) (Cpu, Vulkan)`.
+    pub fn adapter_name(&self) -> String {
+        describe(&self.info)
+    }
+
+    /// Whether the adapter is a software rasterizer running on the CPU (Mesa's lavapipe,
+    /// SwiftShader): correct, but its timings say nothing about a GPU.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+}
+
+fn describe(info: &wgpu::AdapterInfo) -> String {
+    format!("{} ({:?}, {:?})", info.name, info.device_type, info.backend)
+}
+
+/// The message of [`GpuError::NoAdapter`]: the backends tried and what to install.
+fn no_adapter_hint(backends: wgpu::Backends, reason: &str) -> String {
+    let compiled: Vec<&str> = [
+        (cfg!(feature = "vulkan"), "Vulkan"),
+        (cfg!(feature = "metal"), "Metal"),
+        (cfg!(feature = "dx12"), "DirectX 12"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, n)| *n)
+    .collect();
+    let icd = std::env::var(ICD_ENV)
+        .ok()
+        .or_else(|| std::env::var("VK_DRIVER_FILES").ok());
+    let env = match std::env::var("WGPU_BACKEND") {
+        Ok(v) => format!("; WGPU_BACKEND={v} restricts the backends to {backends:?}"),
+        Err(_) => String::new(),
+    };
+    let icd_note = match icd {
+        Some(path) => format!("; the Vulkan loader was pointed at {path}"),
+        None => String::new(),
+    };
+    format!(
+        "{reason} (backends compiled in: {}{env}{icd_note}). No Vulkan driver was found: install \
+         the GPU driver's Vulkan ICD and the Vulkan loader (Debian/Ubuntu: libvulkan1; Mesa's \
+         software driver: mesa-vulkan-drivers), or point {ICD_ENV} (VK_DRIVER_FILES for newer \
+         loaders) at the driver's ICD json (NVIDIA: /usr/share/vulkan/icd.d/nvidia_icd.json)",
+        if compiled.is_empty() {
+            "none".to_string()
+        } else {
+            compiled.join(", ")
+        }
+    )
+}

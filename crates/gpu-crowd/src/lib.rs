@@ -1,0 +1,53 @@
+//! The motion-lod crowd on the GPU: the runtime's clip build, poses and forward kinematics as
+//! wgpu compute shaders (WGSL), for crowds of hundreds of thousands to millions of walkers.
+//!
+//! This crate is for: running `crowd-sim`'s crowd (the same walkers, paths, frustum culling and
+//! level-of-detail policy) with every per-walker job on the GPU: per clip the kriging weights, the
+//! blended core, `G(c)`, the time table and the root motion (`lod-policy`'s
+//! `LodModel::build_kernel`), per frame the pose at the clip's phase (`LodModel::pose_rows`) and
+//! the forward kinematics of the active joints (`Rig::joint_positions_scaled`), from the same model
+//! file. Walker state lives on the GPU; per frame the host uploads the camera, the time step and
+//! the policy (tabulated over distance, [`PolicyTable`]) and reads back a few counters. It runs on
+//! Vulkan (default feature `vulkan`), Metal (`metal`) and DirectX 12 (`dx12`) through wgpu, and on
+//! Mesa's software Vulkan (lavapipe) where there is no GPU, which is how CI checks it against the
+//! CPU crowd. It is not for: rendering (it computes joint positions; drawing them is the engine's),
+//! seam inertialization and the foot lock (not implemented yet: [`GpuCrowd::new`] refuses a
+//! configuration that asks for them), or building models (see `motion-lod`).
+//!
+//! ```no_run
+//! use crowd_sim::{Camera, CrowdConfig};
+//! use gpu_crowd::{Gpu, GpuCrowd, GpuOptions};
+//! use lod_policy::{DistancePolicy, RuntimeModel};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let model = RuntimeModel::load(std::path::Path::new("walk.mlod"))?;
+//! let gpu = Gpu::new()?; // GpuError::NoAdapter names what is missing
+//! let config = CrowdConfig {
+//!     seam_levels: 0,
+//!     foot_lock_levels: 0,
+//!     ..CrowdConfig::with_density(100_000, 0.01)
+//! };
+//! let mut crowd = GpuCrowd::new(&gpu, &model, config, GpuOptions::default())?;
+//! let policy = DistancePolicy::for_model(model.lod());
+//! let stats = crowd.step(&policy, &Camera::default(), 1.0 / 30.0)?;
+//! println!("{} visible, {} clips built, {:?}", stats.visible, stats.kernels_built, stats.gpu);
+//! # Ok(())
+//! # }
+//! ```
+
+#![warn(missing_docs)]
+
+mod crowd;
+mod device;
+mod error;
+mod policy;
+mod tables;
+
+pub use crowd::{GpuCrowd, GpuFrameStats, GpuOptions, WalkerJoints};
+pub use device::{Gpu, ICD_ENV};
+pub use error::GpuError;
+pub use policy::PolicyTable;
+
+/// The environment variable that makes a missing GPU adapter an error in the tests (CI sets it:
+/// lavapipe is installed there) instead of a skip.
+pub const REQUIRE_GPU_ENV: &str = "MOTION_LOD_REQUIRE_GPU";

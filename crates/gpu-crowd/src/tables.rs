@@ -1,0 +1,253 @@
+//! The model as the shaders read it: one f32 array (controls, kriging projections, cores,
+//! factors, rig), one table of integers (levels, keys, rig structure) and the WGSL constants that
+//! size the shaders' arrays.
+
+use lod_policy::{ControlRange, Controls, JointRole, RuntimeModel, StyleMix, VariogramModel};
+
+use crate::error::GpuError;
+
+/// The compute shaders, before the model's constants are prepended.
+const SHADER: &str = include_str!("shaders/crowd.wgsl");
+
+/// Largest number of entries of a tabulated policy (visible and hidden together).
+pub(crate) const POLICY_MAX: usize = 256;
+
+/// Largest rig the shaders take (joints held in registers per walker).
+const MAX_RIG_JOINTS: usize = 256;
+
+/// The packed model and the shader source for it.
+#[derive(Debug, Clone)]
+pub(crate) struct Tables {
+    pub md: Vec<f32>,
+    pub mtab: Vec<u32>,
+    pub source: String,
+    /// Pose rows `P`, aligned frames `T`, largest `r_T`, `r_T` of the last level.
+    pub p: usize,
+    pub t: usize,
+    pub rt_max: usize,
+    pub rt_last: usize,
+    /// Rotating joints.
+    pub joints: usize,
+    pub levels: usize,
+    /// Bytes of workgroup memory the build pass declares.
+    pub workgroup_bytes: u64,
+}
+
+fn push(md: &mut Vec<f32>, v: &[f32]) -> usize {
+    let off = md.len();
+    md.extend_from_slice(v);
+    off
+}
+
+impl Tables {
+    /// Packs `model` with the style rows `styles` (each `d - 4` values: the normalised style part of
+    /// the control vector of a walker of that style id).
+    pub fn new(model: &RuntimeModel, styles: &[Vec<f32>]) -> Result<Tables, GpuError> {
+        let lod = model.lod();
+        let rig = model.rig();
+        let parts = lod.parts();
+        let (p, t, s, d) = (lod.p(), lod.t(), lod.s(), lod.d());
+        if d < Controls::COUNT {
+            return Err(GpuError::Model(format!(
+                "{d} controls; a walk model has at least 4"
+            )));
+        }
+        if rig.joint_count() > MAX_RIG_JOINTS {
+            return Err(GpuError::Model(format!(
+                "{} rig joints; the GPU crowd takes at most {MAX_RIG_JOINTS}",
+                rig.joint_count()
+            )));
+        }
+        if t < 2 {
+            return Err(GpuError::Model(format!(
+                "T = {t} aligned frames; at least 2 are needed"
+            )));
+        }
+        let cs = lod.controls();
+        let range: ControlRange = cs
+            .range()
+            .ok_or_else(|| GpuError::Model("the control space is not a walk's".into()))?;
+        let mut md = Vec::new();
+        let (lo, hi) = (range.min.to_array(), range.max.to_array());
+        let range_off = push(&mut md, &lo);
+        push(&mut md, &hi);
+        let cs_min = push(&mut md, &cs.min);
+        let cs_max = push(&mut md, &cs.max);
+        let cs_scale = push(&mut md, &cs.scale);
+        let cs_offset = push(&mut md, &cs.offset);
+        let cs_samples = push(&mut md, &cs.samples);
+        let has_implied = cs.implied.len() == d * (d + 1);
+        let cs_implied = push(&mut md, if has_implied { &cs.implied } else { &[] });
+        let style_off = md.len();
+        for row in styles {
+            debug_assert_eq!(row.len(), d - Controls::COUNT);
+            md.extend_from_slice(row);
+        }
+        md.push(0.0);
+        let rig_f = md.len();
+        for j in rig.joints() {
+            md.extend_from_slice(&j.offset.to_array());
+            md.extend_from_slice(&j.rest.to_array());
+        }
+        let mut mtab: Vec<u32> = Vec::new();
+        let levels_off = 0usize;
+        for lv in lod.levels() {
+            mtab.extend([lv.key, lv.ranks.p, lv.ranks.t, lv.ranks.s].map(|v| v as u32));
+        }
+        let keys_off = mtab.len();
+        for key in lod.keys() {
+            let r = key.ranks;
+            let off_core = push(&mut md, &key.core);
+            let off_up = push(&mut md, &key.u_p);
+            let off_ut = md.len();
+            for j in 0..t {
+                for b in 0..r.t {
+                    md.push(key.u_t[j + t * b]);
+                }
+            }
+            // A = Q_top - V P_C (the runtime's folded projection), in f64, stored transposed.
+            let off_a = md.len();
+            let n = s + 1;
+            md.resize(off_a + 2 * n * r.s, 0.0);
+            for l in 0..r.s {
+                for jj in 0..n {
+                    let mut acc = f64::from(key.projection[l + r.s * jj]);
+                    for m in 0..=d {
+                        acc -= f64::from(key.trend[l + r.s * m])
+                            * f64::from(cs.projection[m + (d + 1) * jj]);
+                    }
+                    let hi = acc as f32;
+                    md[off_a + jj * r.s + l] = hi;
+                    md[off_a + n * r.s + jj * r.s + l] = (acc - f64::from(hi)) as f32;
+                }
+            }
+            let off_v = push(&mut md, &key.trend);
+            mtab.extend([r.p, r.t, r.s, off_core, off_up, off_ut, off_a, off_v].map(|v| v as u32));
+        }
+        if md.len() >= 1 << 31 {
+            return Err(GpuError::Model(
+                "the model holds more than 2^31 values".into(),
+            ));
+        }
+        let rig_off = mtab.len();
+        for j in rig.joints() {
+            let (role, k) = match j.role {
+                JointRole::Outside => (0, 0),
+                JointRole::Root => (1, 0),
+                JointRole::Rotating(k) => (2, k),
+                JointRole::Static => (3, 0),
+            };
+            mtab.extend([role, k as u32, j.parent.unwrap_or(0) as u32, 0]);
+        }
+        let rotating_off = mtab.len();
+        mtab.extend(rig.rotating_joints().iter().map(|&j| j as u32));
+        mtab.push(0);
+        while mtab.len() % 4 != 0 {
+            mtab.push(0);
+        }
+        let levels = lod.levels();
+        let rt_max = lod.max_ranks().t;
+        let rs_max = lod.max_ranks().s;
+        let last = levels.len() - 1;
+        let rt_last = levels[last].ranks.t;
+        let k_max = levels
+            .iter()
+            .map(|l| l.ranks.p * l.ranks.t)
+            .max()
+            .unwrap_or(1);
+        let v = cs.variogram;
+        let model_id = match v.model {
+            VariogramModel::Linear => 0,
+            VariogramModel::Power => 1,
+            VariogramModel::Spherical => 2,
+            VariogramModel::Exponential => 3,
+            VariogramModel::Gaussian => 4,
+        };
+        let lit = |x: f64| format!("{:?}", x as f32);
+        // A double-float constant: the f64 value as a high and a low f32.
+        let df = |x: f64| {
+            let hi = x as f32;
+            format!("vec2<f32>({:?}, {:?})", hi, (x - f64::from(hi)) as f32)
+        };
+        let consts = [
+            ("POLICY_MAX", format!("{POLICY_MAX}u")),
+            ("META_VEC4", format!("{}u", mtab.len() / 4)),
+            ("RANGE_OFF", format!("{range_off}u")),
+            ("D_MAX1", format!("{}u", d + 1)),
+            ("D_MAX", format!("{d}u")),
+            ("D", format!("{d}u")),
+            ("S1", format!("{}u", s + 1)),
+            ("S", format!("{s}u")),
+            ("RS_MAX", format!("{rs_max}u")),
+            ("K_MAX", format!("{k_max}u")),
+            ("GROOT_MAX", format!("{}u", 7 * rt_max)),
+            ("T", format!("{t}u")),
+            ("P", format!("{p}u")),
+            ("RT_MAX", format!("{rt_max}u")),
+            ("RT_LAST", format!("{rt_last}u")),
+            ("VG_MODEL", format!("{model_id}u")),
+            ("VG_NUGGET", df(v.nugget)),
+            ("VG_SILL", df(v.sill)),
+            ("VG_RANGE", df(if v.range > 0.0 { v.range } else { 1.0 })),
+            ("VG_EXPONENT", df(v.exponent)),
+            ("CS_MIN", format!("{cs_min}u")),
+            ("CS_MAX", format!("{cs_max}u")),
+            ("CS_SCALE", format!("{cs_scale}u")),
+            ("CS_OFFSET", format!("{cs_offset}u")),
+            ("CS_SAMPLES", format!("{cs_samples}u")),
+            ("CS_IMPLIED", format!("{cs_implied}u")),
+            ("HAS_IMPLIED", format!("{}u", u32::from(has_implied))),
+            ("STYLE_OFF", format!("{style_off}u")),
+            ("LEVELS", format!("{levels_off}u")),
+            ("KEYS", format!("{keys_off}u")),
+            ("INV_TIME_SCALE", df(1.0 / parts.time_scale)),
+            ("MIN_INCREMENT", df(lod_policy::MIN_INCREMENT)),
+            ("STATURE", lit(f64::from(model.stature_m().unwrap_or(0.0)))),
+            ("LAST_LEVEL", format!("{last}u")),
+            ("LEVEL_COUNT", format!("{}u", levels.len())),
+            ("HIST_BINS", format!("{}u", levels.len() + 1)),
+            ("NJ", format!("{}u", rig.joint_count())),
+            ("RIG_F", format!("{rig_f}u")),
+            ("RIG", format!("{rig_off}u")),
+            ("ROOT_JOINT", format!("{}u", rig.root())),
+            ("ROTATING", format!("{rotating_off}u")),
+        ];
+        let mut source = String::from("// Model constants (gpu-crowd tables.rs).\n");
+        for (name, value) in consts {
+            let ty = if value.ends_with('u') {
+                "u32"
+            } else if value.starts_with("vec2") {
+                "vec2<f32>"
+            } else {
+                "f32"
+            };
+            source.push_str(&format!("const {name}: {ty} = {value};\n"));
+        }
+        source.push_str(SHADER);
+        let workgroup_bytes = 4
+            * (12 + 1 + d + 2 * (d + 1) + 2 * (s + 1) + rs_max + k_max + 7 * rt_max + 2 * t) as u64;
+        Ok(Tables {
+            md,
+            mtab,
+            source,
+            p,
+            t,
+            rt_max,
+            rt_last,
+            joints: lod.joints(),
+            levels: levels.len(),
+            workgroup_bytes,
+        })
+    }
+}
+
+/// The style part (`d - 4` values, normalised) of the control vector of a walker of `style`.
+pub(crate) fn style_row(model: &RuntimeModel, style: StyleMix) -> Result<Vec<f32>, GpuError> {
+    let mut values = [0.0f32; lod_policy::CONTROL_VALUES];
+    let c = Controls::from_array([0.0, 1.0, 0.0, 1.7]).with_style(style);
+    let d = model
+        .lod()
+        .control_vector(&c, &mut values)
+        .map_err(|e| GpuError::Config(format!("style: {e}")))?;
+    Ok(values[Controls::COUNT..d].to_vec())
+}

@@ -1,0 +1,147 @@
+//! `motion-lod crowd --gpu`: the crowd on the GPU (crate `gpu-crowd`), timed frame by frame.
+//! Compiled in with the feature `gpu`; without it, `--gpu` says how to build with it.
+
+use super::crowd::CrowdArgs;
+
+/// Runs `crowd --gpu` (see [`CrowdArgs::gpu`]).
+#[cfg(not(feature = "gpu"))]
+pub fn run(_args: &CrowdArgs) -> anyhow::Result<()> {
+    anyhow::bail!(
+        "--gpu: this motion-lod was built without the GPU crowd; build it with the feature `gpu`: \
+         cargo run --release -p motion-lod --features gpu -- crowd MODEL --gpu"
+    )
+}
+
+/// Runs `crowd --gpu` (see [`CrowdArgs::gpu`]).
+#[cfg(feature = "gpu")]
+pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    use crowd_sim::{Camera, CrowdConfig, CrowdStyle, LevelTable, Scene};
+    use gpu_crowd::{Gpu, GpuCrowd, GpuOptions};
+    use lod_policy::{DistancePolicy, FullDetail, LevelPolicy, ScreenSpacePolicy};
+    use motion_lod::style::parse_style_mix;
+
+    use super::crowd::PolicyArg;
+
+    // The adapter first: a machine without one fails at once, before the model is built.
+    let gpu = Gpu::new().context("crowd --gpu")?;
+    let (model, _) = super::crowd::model_and_analysis(args.model.as_ref(), false, args.json)?;
+    let config = CrowdConfig {
+        seed: args.seed,
+        fps: args.fps,
+        // Not on the GPU yet: off, and said so below.
+        seam_levels: 0,
+        foot_lock_levels: 0,
+        style: match &args.style {
+            None => CrowdStyle::DataMix,
+            Some(text) => match parse_style_mix(model.styles(), text)? {
+                mix if mix.is_data_mix() => CrowdStyle::DataMix,
+                mix => CrowdStyle::Each(mix),
+            },
+        },
+        ..CrowdConfig::with_density(args.walkers, args.density)
+    };
+    let lod = model.lod();
+    let policy: Box<dyn LevelPolicy + Sync> = if args.no_lod {
+        Box::new(FullDetail::for_model(lod))
+    } else {
+        match args.policy {
+            PolicyArg::Distance => Box::new(DistancePolicy::for_model(lod)),
+            PolicyArg::Screen => {
+                Box::new(ScreenSpacePolicy::for_model(lod).context("screen-space policy")?)
+            }
+        }
+    };
+    let started = std::time::Instant::now();
+    let mut crowd = GpuCrowd::new(&gpu, model.runtime(), config, GpuOptions::default())
+        .context("starting the GPU crowd")?;
+    let setup = started.elapsed();
+    let field = crowd.config().field_size_m;
+    let scene: Scene = args.camera.into();
+    let lens = scene.lens(
+        Camera {
+            image_width: 960,
+            image_height: 540,
+            aspect: 960.0 / 540.0,
+            ..Camera::default()
+        },
+        field,
+    );
+    let path = scene.path(field);
+    let frames = ((args.seconds * args.fps).round() as usize).max(1);
+    let dt = 1.0 / args.fps;
+    let mut times = Vec::with_capacity(frames);
+    let mut last = None;
+    for f in 0..frames {
+        let camera = path.camera_at(f as f32 * dt, &lens);
+        let stats = crowd.step(policy.as_ref(), &camera, dt)?;
+        times.push(stats.wall.as_secs_f64() * 1e3);
+        last = Some(stats);
+    }
+    let last = last.expect("at least one frame");
+    let warmup = ((f64::from(args.fps)).round() as usize).min(frames.saturating_sub(1));
+    let mut after: Vec<f64> = times[warmup..].to_vec();
+    after.sort_by(f64::total_cmp);
+    let pct = |q: f64| after[((after.len() - 1) as f64 * q).round() as usize];
+    let mean = times.iter().sum::<f64>() / times.len() as f64;
+    let levels = LevelTable {
+        accuracy_levels: lod.levels().len(),
+        joints: lod.joints(),
+        pose_len: lod.p(),
+    };
+    let _ = levels;
+    if args.json {
+        println!(
+            "{{\"gpu\":{:?},\"walkers\":{},\"frames\":{},\"ms_mean\":{mean:.4},\"ms_p50\":{:.4},\"ms_p99\":{:.4},\"ms_worst\":{:.4},\"gpu_bytes\":{},\"levels\":{:?}}}",
+            crowd.adapter_name(),
+            args.walkers,
+            frames,
+            pct(0.5),
+            pct(0.99),
+            after.last().copied().unwrap_or(0.0),
+            crowd.gpu_bytes(),
+            last.level_histogram
+        );
+        return Ok(());
+    }
+    println!(
+        "{} walkers on the GPU ({}), {:.1} s at {} fps ({frames} frames), field {field:.0} m, {} policy",
+        args.walkers,
+        crowd.adapter_name(),
+        args.seconds,
+        args.fps,
+        if args.no_lod {
+            "no level of detail"
+        } else {
+            match args.policy {
+                PolicyArg::Distance => "distance",
+                PolicyArg::Screen => "screen-space",
+            }
+        }
+    );
+    if gpu.is_software() {
+        println!(
+            "note: a software adapter (it runs on the CPU): its timings say nothing about a GPU"
+        );
+    }
+    println!("not on the GPU yet: seam inertialization and the foot lock (both off in this run)");
+    println!(
+        "set-up {:.0} ms (walkers placed, first clips built); GPU memory {:.1} MB ({:.0} bytes a walker)",
+        setup.as_secs_f64() * 1e3,
+        crowd.gpu_bytes() as f64 / 1e6,
+        crowd.gpu_bytes() as f64 / args.walkers as f64
+    );
+    println!(
+        "frame times (step: upload, compute, read-back of the counters) after the first {warmup} frames: \
+         median {:.2} ms, p99 {:.2} ms, worst {:.2} ms; mean over all frames {mean:.2} ms ({:.1} fps)",
+        pct(0.5),
+        pct(0.99),
+        after.last().copied().unwrap_or(0.0),
+        1e3 / mean.max(1e-9)
+    );
+    println!(
+        "last frame: {} in view, {} clips built; levels (accuracy 0.., then root only): {:?}",
+        last.visible, last.kernels_built, last.level_histogram
+    );
+    Ok(())
+}
