@@ -40,6 +40,7 @@ pub mod footsteps;
 pub mod gait;
 pub mod imports;
 pub mod leg_ik;
+pub mod readme;
 pub mod rig;
 pub mod rng;
 pub mod tables;

@@ -2,13 +2,15 @@
 //! procedural walker, see the library part of this crate); `cargo xtask tables` measures the paper's
 //! tables and figures into `docs/tables.md` and `docs/figures/`; `cargo xtask imports` fails on an
 //! import circle among a crate's source files; `cargo xtask web` builds the viewer's WebAssembly
-//! runtime and copies its three.js modules (`--check`: fails when the checked-in ones are stale).
+//! runtime and copies its three.js modules (`--check`: fails when the checked-in ones are stale);
+//! `cargo xtask readme` rewrites the figures README.md quotes from their commands (`--check`: fails
+//! when one differs).
 
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand};
-use xtask::{fixtures, imports, tables, web};
+use xtask::{fixtures, imports, readme, tables, web};
 
 /// Project tasks of the motion-lod workspace.
 #[derive(Debug, Parser)]
@@ -32,6 +34,25 @@ enum Command {
     /// Build the viewer's assets: the runtime as WebAssembly (`viewer/wasm/motion_lod.wasm`) and
     /// the three.js modules the pages import (`viewer/vendor/three/`, from `npm ci` in `viewer/`).
     Web(WebArgs),
+    /// Produce every deterministic figure README.md quotes with the command registered for it in
+    /// `docs/readme-figures.toml` and rewrite README's values (`--check`: fail on any difference,
+    /// and on a timing that names no date).
+    Readme(ReadmeArgs),
+}
+
+/// Options of `xtask readme`.
+#[derive(Debug, Args)]
+struct ReadmeArgs {
+    /// Do not write: fail, listing each README figure that differs from what its command prints.
+    #[arg(long)]
+    check: bool,
+    /// The `motion-lod` binary to run (default: `cargo build --release -p motion-lod`, then
+    /// `target/release/motion-lod`).
+    #[arg(long, value_name = "PATH")]
+    bin: Option<PathBuf>,
+    /// Do not print each command with its time.
+    #[arg(long)]
+    quiet: bool,
 }
 
 /// Options of `xtask web`.
@@ -98,6 +119,18 @@ fn main() -> Result<()> {
         Command::Fixtures(args) => run_fixtures(&args),
         Command::Tables(args) => run_tables(&args),
         Command::Imports(args) => run_imports(&args),
+        Command::Readme(args) => {
+            let root = tables::workspace_root();
+            let root = root.canonicalize().unwrap_or(root);
+            readme::run(
+                &root,
+                &readme::Options {
+                    check: args.check,
+                    bin: args.bin,
+                    quiet: args.quiet,
+                },
+            )
+        }
         Command::Web(args) => {
             let root = tables::workspace_root();
             let root = root.canonicalize().unwrap_or(root);

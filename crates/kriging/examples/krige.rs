@@ -3,14 +3,17 @@
 //! ```text
 //! cargo run --release -p kriging --example krige -- PARAMS.csv VALUES.npy \
 //!     [--method regression|ordinary|rbf] \
-//!     [--model auto|linear|spherical|exponential|gaussian|power] [--query QUERY.csv]
+//!     [--model auto|linear|power|spherical|exponential|gaussian|matern|cardinal-sine] \
+//!     [--query QUERY.csv]
 //! ```
 //! PARAMS.csv: one row of comma-separated numbers per sample (an optional non-numeric header line
 //! and `#` comments are skipped). VALUES.npy: an NPY array whose first axis is the sample (the other
 //! axes are flattened). Prints one JSON line
 //! `{"method":..,"model":..,"loo_rmse":X,"weights":[[..],..]}` with the leave-one-out RMSE over the
 //! samples and, for each query row, the weights b(c). `auto` chooses the variogram model with the
-//! smallest leave-one-out error; for `rbf` the model is the radial function (cubic).
+//! smallest leave-one-out error; the others fix it ([`kriging::VariogramModel::from_name`]: `matern`
+//! and `cardinal-sine` are shapes `auto` does not try; `hole-effect` and `wave`, older names of
+//! `cardinal-sine`, are read as it). For `rbf` the model is the radial function (cubic).
 //!
 //! `regression` (the default) is the regression kriging of Mukai and Kuriyama's motion model
 //! ([`kriging::Method::Regression`]: an ordinary least-squares trend over the parameters, then
@@ -30,7 +33,7 @@ use kriging::{
 type Error = Box<dyn std::error::Error>;
 
 const USAGE: &str = "usage: krige PARAMS.csv VALUES.npy [--method regression|ordinary|rbf] \
-[--model auto|linear|spherical|exponential|gaussian|power] [--query QUERY.csv]";
+[--model auto|linear|power|spherical|exponential|gaussian|matern|cardinal-sine] [--query QUERY.csv]";
 
 /// Reads rows of numbers; the first line may be a header.
 fn read_csv(path: &Path) -> Result<Vec<Vec<f64>>, Error> {

@@ -115,6 +115,29 @@ impl KrigingConfig {
     /// The preset of the motion model (Mukai and Kuriyama): the paper's regression kriging over
     /// standardised controls with the variogram chosen by leave-one-out search. The same as
     /// [`KrigingConfig::default`], named for what it is for; for maps see [`crate::Krige`].
+    ///
+    /// ```
+    /// use kriging::faer::Mat;
+    /// use kriging::{Kriging, KrigingConfig, Method, ModelChoice, ScalingChoice, Selection};
+    ///
+    /// let config = KrigingConfig::motion();
+    /// assert_eq!(config, KrigingConfig::default());
+    /// assert_eq!(config.method, Method::Regression); // trend over the controls, then kriging
+    /// assert_eq!(config.model, ModelChoice::Auto(Selection::LooSearch));
+    /// assert_eq!(config.scaling, ScalingChoice::Standardise);
+    ///
+    /// // Controls (dx, dz) of 12 cycles and one pose value each: a linear trend in the controls
+    /// // plus a per-cycle wobble the controls do not explain (a performer's style).
+    /// let controls = Mat::from_fn(12, 2, |i, k| if k == 0 { (i % 4) as f64 * 0.1 } else { 1.0 + (i / 4) as f64 * 0.2 });
+    /// let values = Mat::from_fn(12, 1, |i, _| {
+    ///     2.0 * controls[(i, 0)] - controls[(i, 1)] + 0.01 * (7.0 * i as f64).sin()
+    /// });
+    /// let k = Kriging::fit(controls.as_ref(), values.as_ref(), &config)?;
+    /// let mut x = [0.0];
+    /// k.predict(&[0.15, 1.3], &mut x)?;
+    /// assert!((x[0] - (2.0 * 0.15 - 1.3)).abs() < 0.02); // the trend, within the wobble
+    /// # Ok::<(), kriging::KrigingError>(())
+    /// ```
     pub fn motion() -> Self {
         KrigingConfig::default()
     }

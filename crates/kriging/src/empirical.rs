@@ -99,6 +99,25 @@ pub struct EmpiricalVariogram {
 impl EmpiricalVariogram {
     /// Computes the empirical variogram of `values` (S x D, one sample per row) over the rows of
     /// `params` (S x d, already scaled) with `bins` intervals.
+    ///
+    /// ```
+    /// use kriging::faer::Mat;
+    /// use kriging::EmpiricalVariogram;
+    ///
+    /// // z = x on 10 points 1 apart: every pair at lag h has semi-variance h^2 / 2.
+    /// let x = Mat::from_fn(10, 1, |i, _| i as f64);
+    /// let emp = EmpiricalVariogram::compute(x.as_ref(), x.as_ref(), 3)?;
+    /// assert_eq!(emp.centers.len(), 3);
+    /// assert_eq!(emp.counts.len(), 3);
+    /// for u in 0..3 {
+    ///     // Each interval averages h^2 / 2 over the lags inside it, so it lies between the
+    ///     // values at the interval's ends.
+    ///     let (lo, hi) = (u as f64 * emp.bin_width, (u + 1) as f64 * emp.bin_width);
+    ///     assert!(emp.counts[u] > 0);
+    ///     assert!(emp.gamma[u] >= lo * lo / 2.0 && emp.gamma[u] <= hi * hi / 2.0);
+    /// }
+    /// # Ok::<(), kriging::KrigingError>(())
+    /// ```
     pub fn compute(
         params: MatRef<'_, f64>,
         values: MatRef<'_, f64>,

@@ -13,6 +13,30 @@ use crate::linalg::{checked_inverse, matmul, sym_eigen};
 use crate::scaling::{ParamScaling, ScalingChoice};
 
 /// The radial function `phi(r)`.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{Rbf, RbfConfig, RbfKernel};
+///
+/// assert_eq!(RbfKernel::Linear.eval(2.0), 2.0);
+/// assert_eq!(RbfKernel::Cubic.eval(2.0), 8.0);
+/// assert_eq!(RbfKernel::ThinPlate.eval(0.0), 0.0);
+/// assert!((RbfKernel::ThinPlate.eval(std::f64::consts::E) - std::f64::consts::E.powi(2)).abs() < 1e-12);
+/// assert!((RbfKernel::Gaussian { width: 2.0 }.eval(2.0) - (-1.0f64).exp()).abs() < 1e-15);
+/// assert_eq!(RbfKernel::default(), RbfKernel::Cubic); // Rose et al.'s choice
+/// assert_eq!(RbfKernel::ThinPlate.name(), "thin-plate");
+///
+/// // An interpolant with the thin-plate spline instead of the default cubic.
+/// let c = Mat::from_fn(6, 1, |i, _| i as f64);
+/// let x = Mat::from_fn(6, 1, |i, _| (i as f64).sqrt());
+/// let config = RbfConfig { kernel: RbfKernel::ThinPlate, ..RbfConfig::default() };
+/// let rbf = Rbf::fit(c.as_ref(), x.as_ref(), &config)?;
+/// assert_eq!(rbf.kernel(), RbfKernel::ThinPlate);
+/// let mut out = [0.0];
+/// rbf.predict(&[2.5], &mut out)?;
+/// assert!(out[0] > 2f64.sqrt() && out[0] < 3f64.sqrt());
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub enum RbfKernel {
     /// `phi(r) = r`.

@@ -20,6 +20,28 @@
 //! linearly, so candidates are ranked on the values compressed to their [`SEARCH_COLUMNS`] leading
 //! principal columns (`X V_k`, exact when `X` has at most that rank), which keeps each candidate at
 //! about one inverse whatever the number of values.
+//!
+//! ```
+//! use kriging::faer::Mat;
+//! use kriging::search::{SEARCH_MODELS, SEARCH_NUGGETS, SEARCH_RANGES};
+//! use kriging::{Kriging, KrigingConfig, ModelChoice, Selection};
+//!
+//! // 60 samples of a smooth surface plus noise that the parameters do not explain.
+//! let params = Mat::from_fn(60, 2, |i, k| ((i * (7 + 4 * k) + 3 * k) % 60) as f64 / 59.0);
+//! let noise = |i: usize| ((i * 37 % 11) as f64 - 5.0) * 0.02;
+//! let values = Mat::from_fn(60, 1, |i, _| {
+//!     (3.0 * params[(i, 0)]).sin() + params[(i, 1)] * params[(i, 1)] + noise(i)
+//! });
+//! // The search (the motion model's default) against the best fit to the empirical variogram.
+//! let searched = Kriging::fit(params.as_ref(), values.as_ref(), &KrigingConfig::motion())?;
+//! let fitted = KrigingConfig { model: ModelChoice::Auto(Selection::BestFit), ..KrigingConfig::motion() };
+//! let fitted = Kriging::fit(params.as_ref(), values.as_ref(), &fitted)?;
+//! // The search keeps whichever shape predicts the left-out samples best, fitted ones included.
+//! let (s, f) = (searched.leave_one_out()?.rmse, fitted.leave_one_out()?.rmse);
+//! assert!(s <= f + 1e-12, "search {s} against fit {f}");
+//! assert_eq!(SEARCH_MODELS.len() * SEARCH_RANGES.len() * SEARCH_NUGGETS.len(), 75); // the grid
+//! # Ok::<(), kriging::KrigingError>(())
+//! ```
 
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
