@@ -89,15 +89,18 @@ pub struct CrowdConfig {
     pub fps: f32,
     /// At accuracy levels `0..seam_levels` a change of clip (a cycle seam, or a finer detail
     /// mid-cycle) is inertialized ([`lod_policy::SeamTransition`]): every row stays continuous in position
-    /// and velocity. Coarser levels and root-only walkers switch clips as they are.
+    /// and velocity. Coarser levels and root-only walkers switch clips as they are. Default
+    /// `usize::MAX`: every walker with joints.
     pub seam_levels: usize,
     /// Half-life of a seam's offset (s).
     pub seam_halflife_s: f32,
     /// Visible walkers at accuracy levels `0..foot_lock_levels` (with joints) keep planted feet planted: the
     /// source's foot lock ([`ClipSource::plant_feet`], `lod_policy::FootLock`) runs on their pose
-    /// every frame. Farther walkers skate only as much as their level's measured slide, which the
-    /// policies keep under a pixel. Default 3, the walkers whose seams are inertialized; 0 turns
-    /// the lock off.
+    /// every frame (the lock runs where the walker's legs are evaluated). Walkers at coarser
+    /// levels skate as much as their level's measured slide, which the policies keep under a
+    /// pixel. Default `usize::MAX`: every level, so that a coarse level's remaining error is its
+    /// pose, not a slide (the model's level errors are measured with the lock on); 0 turns the
+    /// lock off.
     pub foot_lock_levels: usize,
     /// Distance kept between paths and the field border (m).
     pub border_m: f32,
@@ -164,9 +167,9 @@ impl Default for CrowdConfig {
             field_size_m: 100.0,
             seed: 1,
             fps: 30.0,
-            seam_levels: 3,
+            seam_levels: usize::MAX,
             seam_halflife_s: lod_policy::DEFAULT_HALFLIFE_S,
-            foot_lock_levels: 3,
+            foot_lock_levels: usize::MAX,
             border_m: 2.0,
             cull_margin_m: 0.25,
             culling: Culling::Scan,

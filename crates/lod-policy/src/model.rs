@@ -336,13 +336,47 @@ pub struct LevelError {
     /// Shell error: largest displacement of virtual vertices 3 cm from each joint, in centimetres.
     pub shell_cm: f32,
     /// Foot slide: how far a planted foot slides over one stance beyond what full detail slides
-    /// (largest over the measured walks, no foot lock), in centimetres; 0 when the model's feet are
-    /// unknown. The slide of a walk is `skate x contact share x cycle duration` of the motion-quality
-    /// meter (`motion_lod::quality`), the distance a foot travels while on the floor per cycle.
+    /// (largest over the measured walks, with the runtime foot lock on, as the crowd plays them),
+    /// in centimetres; 0 when the model's feet are unknown. The slide of a walk is
+    /// `skate x contact share x cycle duration` of the motion-quality meter
+    /// (`motion_lod::quality`), the distance a foot travels while on the floor per cycle.
     pub slide_cm: f32,
+    /// Motion quality of an accuracy level (every joint, seams inertialized, feet locked): the
+    /// largest pop (joint acceleration) over the walks of the quality grid, as a multiple of the
+    /// data's median pop; 0 when not measured (a joint count's entry, or a model without feet).
+    pub pop_x: f32,
+    /// Likewise the largest foot skate over the grid's walks as a multiple of the data's median
+    /// skate; 0 when not measured.
+    pub skate_x: f32,
+    /// Likewise the largest distance between a walk's feet and the data's floor (the meter's floor
+    /// offset, above or below), in centimetres; 0 when not measured.
+    pub floor_cm: f32,
 }
 
+/// Largest pop (as a multiple of the data's median) that an accuracy level may show on the quality
+/// grid and still be used by the policies ([`LevelError::passes_quality`]): the motion-quality
+/// threshold for near characters.
+pub const QUALITY_POP_LIMIT: f32 = 1.25;
+
+/// Largest foot skate (as a multiple of the data's median) that an accuracy level may show on the
+/// quality grid and still be used by the policies.
+pub const QUALITY_SKATE_LIMIT: f32 = 1.5;
+
+/// Largest floor offset (cm, above or below the data's floor) that an accuracy level may show on
+/// the quality grid and still be used by the policies.
+pub const QUALITY_FLOOR_CM: f32 = 1.0;
+
 impl LevelError {
+    /// Whether the measured motion quality is within [`QUALITY_POP_LIMIT`],
+    /// [`QUALITY_SKATE_LIMIT`] and [`QUALITY_FLOOR_CM`] (true when not measured): the policies use
+    /// an accuracy level with joints only when it passes; coarser levels that pop, skate or leave
+    /// the floor stay for root-only walkers.
+    pub fn passes_quality(&self) -> bool {
+        self.pop_x <= QUALITY_POP_LIMIT
+            && self.skate_x <= QUALITY_SKATE_LIMIT
+            && self.floor_cm <= QUALITY_FLOOR_CM
+    }
+
     /// The larger of the chosen pose error and the foot slide, in metres: what a policy projects to
     /// the screen (both must stay under its pixel budget).
     pub fn visible_m(&self, shell: bool) -> f32 {
@@ -739,7 +773,14 @@ impl LodModel {
             )));
         }
         for (i, e) in table.iter().enumerate() {
-            for v in [e.mean_joint_cm, e.shell_cm, e.slide_cm] {
+            for v in [
+                e.mean_joint_cm,
+                e.shell_cm,
+                e.slide_cm,
+                e.pop_x,
+                e.skate_x,
+                e.floor_cm,
+            ] {
                 if !v.is_finite() || v < 0.0 {
                     return Err(ModelError::ErrorTable(format!(
                         "{what}: entry {i} holds {v} (must be finite and >= 0)"

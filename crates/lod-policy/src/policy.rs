@@ -147,8 +147,14 @@ impl Default for DistanceConfig {
 /// [`ERROR_MARGIN`] and `e_l` and `e_J` are the measured
 /// [visible errors](crate::model::LevelError::visible_m) of the level and the joint count
 /// (`e_J` made non-increasing in the joint count, as in [`ScreenSpacePolicy`]). Otherwise the
-/// policy keeps the joint count and takes the coarsest finer level that fits; if even level 0 does
-/// not, it keeps level 0 and the fewest joints that fit (all joints at worst).
+/// policy takes the cheapest detail that fits and is nowhere coarser than the schedule's: among the
+/// levels `l <= level` and joint counts `j >= joints`, the one with the smallest cost (as in
+/// [`ScreenSpacePolicy`]: a cycle's kernel and poses); if none fits, level 0 with every joint. An
+/// accuracy level whose measured motion quality fails ([`LevelError::passes_quality`]: it pops or
+/// skates beyond the near-character thresholds on the quality grid) never fits; it serves only
+/// root-only walkers.
+///
+/// [`LevelError::passes_quality`]: crate::model::LevelError::passes_quality
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DistancePolicy {
     config: DistanceConfig,
@@ -156,10 +162,13 @@ pub struct DistancePolicy {
     positions: Vec<f32>,
     groups: usize,
     joints: usize,
-    /// Visible error (m) per accuracy level; empty without an error table or a screen check.
+    /// Visible error (m) per accuracy level (infinite for a level whose motion quality fails);
+    /// empty without an error table or a screen check.
     level_err_m: Vec<f32>,
     /// Non-increasing visible error (m) per active joint count `0..=J` (empty likewise).
     joint_err_m: Vec<f32>,
+    /// Cost of each detail (empty likewise).
+    costs: DetailCosts,
 }
 
 impl DistancePolicy {
@@ -224,24 +233,19 @@ impl DistancePolicy {
         let checked = config.screen_budget_px.is_some()
             && model.level_errors().len() == levels.len()
             && model.joint_errors().len() == joints + 1;
-        let (level_err_m, joint_err_m) = if checked {
-            (
-                model
-                    .level_errors()
-                    .iter()
-                    .map(|e| ERROR_MARGIN * e.visible_m(true))
-                    .collect(),
-                non_increasing(
-                    model
-                        .joint_errors()
-                        .iter()
-                        .map(|e| ERROR_MARGIN * e.visible_m(true)),
-                ),
-            )
-        } else {
-            (Vec::new(), Vec::new())
-        };
-        Self::schedule(&keys, joints, config, level_err_m, joint_err_m)
+        if !checked {
+            return Self::schedule(&keys, joints, config, Vec::new(), Vec::new());
+        }
+        let level_err_m = usable_level_errors(model, true);
+        let joint_err_m = non_increasing(
+            model
+                .joint_errors()
+                .iter()
+                .map(|e| ERROR_MARGIN * e.visible_m(true)),
+        );
+        let mut policy = Self::schedule(&keys, joints, config, level_err_m, joint_err_m);
+        policy.costs = DetailCosts::of(model);
+        policy
     }
 
     /// The policy for levels with these keys (see [`DistancePolicy::for_level_keys`]) and the
@@ -273,6 +277,7 @@ impl DistancePolicy {
             joints,
             level_err_m,
             joint_err_m,
+            costs: DetailCosts::default(),
         }
     }
 
@@ -288,17 +293,28 @@ impl DistancePolicy {
         }
         let budget_m = budget_px * mpp;
         let joints = detail.active_joints.min(self.joints);
-        let ej = self.joint_err_m[joints];
         let level = detail.accuracy.min(self.level_err_m.len() - 1);
-        if let Some(l) = (0..=level)
-            .rev()
-            .find(|&l| self.level_err_m[l] + ej <= budget_m)
-        {
-            return Detail::new(l, joints);
+        if self.level_err_m[level] + self.joint_err_m[joints] <= budget_m {
+            return Detail::new(level, joints);
         }
-        let rest = budget_m - self.level_err_m[0];
-        let fewest = self.joint_err_m.partition_point(|&e| e > rest);
-        Detail::new(0, fewest.clamp(joints, self.joints))
+        // The cheapest detail no coarser than the schedule's that fits: for each finer level, the
+        // fewest joints (at least the schedule's) whose error fits beside the level's.
+        let mut best: Option<(u64, Detail)> = None;
+        for l in 0..=level {
+            let rest = budget_m - self.level_err_m[l];
+            if rest < 0.0 {
+                continue;
+            }
+            let j = self.joint_err_m.partition_point(|&e| e > rest).max(joints);
+            if j > self.joints {
+                continue;
+            }
+            let cost = self.costs.cost(l, j);
+            if best.is_none_or(|(c, _)| cost < c) {
+                best = Some((cost, Detail::new(l, j)));
+            }
+        }
+        best.map_or(Detail::new(0, self.joints), |(_, d)| d)
     }
 
     /// The configuration in use.
@@ -347,6 +363,64 @@ fn non_increasing(v: impl Iterator<Item = f32>) -> Vec<f32> {
     v
 }
 
+/// Each accuracy level's visible error with the margin, `ERROR_MARGIN e_l` metres (shell or mean
+/// joint error against the foot slide), infinite for a level past 0 whose measured motion quality
+/// fails (`LevelError::passes_quality`): no budget admits it.
+fn usable_level_errors(model: &LodModel, shell: bool) -> Vec<f32> {
+    model
+        .level_errors()
+        .iter()
+        .enumerate()
+        .map(|(l, e)| {
+            if l > 0 && !e.passes_quality() {
+                f32::INFINITY
+            } else {
+                ERROR_MARGIN * e.visible_m(shell)
+            }
+        })
+        .collect()
+}
+
+/// The cost model of both policies: multiply-adds of one clip kernel and `T` poses of a detail,
+/// `base(l) + rows(j) row(l)` with `rows(j) = always + per_joint j` ([`LodModel::kernel_cost`] and
+/// the pose cost are affine in the evaluated rows).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+struct DetailCosts {
+    /// Per level: the cost's constant part.
+    level_base_cost: Vec<u64>,
+    /// Per level: the cost per evaluated row (a kernel row and `T` pose rows).
+    level_row_cost: Vec<u64>,
+    always_rows: usize,
+    rows_per_joint: usize,
+}
+
+impl DetailCosts {
+    fn of(model: &LodModel) -> DetailCosts {
+        let t = model.t() as u64;
+        let mut level_base_cost = Vec::new();
+        let mut level_row_cost = Vec::new();
+        for l in 0..model.levels().len() {
+            let c0 = model.kernel_cost_rows(l, 0).unwrap_or(0) as u64;
+            let c1 = model.kernel_cost_rows(l, 1).unwrap_or(0) as u64;
+            let p1 = model.pose_cost_rows(l, 1).unwrap_or(0) as u64;
+            level_base_cost.push(c0);
+            level_row_cost.push(c1 - c0 + t * p1);
+        }
+        DetailCosts {
+            level_base_cost,
+            level_row_cost,
+            always_rows: model.always_rows(),
+            rows_per_joint: model.rows_per_joint(),
+        }
+    }
+
+    /// Cost of level `level` (which must exist) with `joints` joints.
+    fn cost(&self, level: usize, joints: usize) -> u64 {
+        let rows = (self.always_rows + self.rows_per_joint * joints) as u64;
+        self.level_base_cost[level] + rows * self.level_row_cost[level]
+    }
+}
+
 /// Which measured error the [`ScreenSpacePolicy`] projects.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ErrorMetric {
@@ -386,18 +460,19 @@ impl Default for ScreenConfig {
 /// `err_px <= budget_px` it returns the one with the smallest cost
 /// `kernel_cost(l, P') + T pose_cost(l, P')` (a cycle's kernel and poses, [`LodModel::kernel_cost`] of the detail);
 /// if none qualifies, full detail. When the model has no joint error table, every joint is kept.
-/// Since the admissible set only grows with distance, the chosen cost never increases with it.
+/// An accuracy level whose measured motion quality fails ([`LevelError::passes_quality`]) is not
+/// admissible. Since the admissible set only grows with distance, the chosen cost never increases
+/// with it.
+///
+/// [`LevelError::passes_quality`]: crate::model::LevelError::passes_quality
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ScreenSpacePolicy {
     config: ScreenConfig,
-    /// Per level: error in metres, cost constant part, cost per evaluated row.
+    /// Per level: error in metres (infinite where the level's motion quality fails).
     level_err_m: Vec<f32>,
-    level_base_cost: Vec<u64>,
-    level_row_cost: Vec<u64>,
     /// Non-increasing error in metres per active joint count `0..=J`.
     joint_err_m: Vec<f32>,
-    always_rows: usize,
-    rows_per_joint: usize,
+    costs: DetailCosts,
     joints: usize,
 }
 
@@ -419,21 +494,9 @@ impl ScreenSpacePolicy {
         if model.level_errors().len() != model.levels().len() {
             return Err(PolicyError::NoErrorTable);
         }
-        let pick = |e: &crate::model::LevelError| {
-            ERROR_MARGIN * e.visible_m(config.metric == ErrorMetric::Shell)
-        };
-        let level_err_m = model.level_errors().iter().map(pick).collect();
-        let t = model.t() as u64;
-        let mut level_base_cost = Vec::new();
-        let mut level_row_cost = Vec::new();
-        for l in 0..model.levels().len() {
-            // kernel_cost is affine in the row count.
-            let c0 = model.kernel_cost_rows(l, 0).unwrap_or(0) as u64;
-            let c1 = model.kernel_cost_rows(l, 1).unwrap_or(0) as u64;
-            let p1 = model.pose_cost_rows(l, 1).unwrap_or(0) as u64;
-            level_base_cost.push(c0);
-            level_row_cost.push(c1 - c0 + t * p1);
-        }
+        let shell = config.metric == ErrorMetric::Shell;
+        let pick = |e: &crate::model::LevelError| ERROR_MARGIN * e.visible_m(shell);
+        let level_err_m = usable_level_errors(model, shell);
         let joints = model.joints();
         let joint_err_m = if model.joint_errors().is_empty() {
             // Unknown: only the full joint count is admissible.
@@ -446,11 +509,8 @@ impl ScreenSpacePolicy {
         Ok(ScreenSpacePolicy {
             config,
             level_err_m,
-            level_base_cost,
-            level_row_cost,
             joint_err_m,
-            always_rows: model.always_rows(),
-            rows_per_joint: model.rows_per_joint(),
+            costs: DetailCosts::of(model),
             joints,
         })
     }
@@ -460,8 +520,8 @@ impl ScreenSpacePolicy {
         self.config
     }
 
-    /// Estimated error in metres of `detail` (see the type's docs); `None` for a level the model
-    /// lacks.
+    /// Estimated error in metres of `detail` (see the type's docs; infinite for a level whose
+    /// motion quality fails); `None` for a level the model lacks.
     pub fn estimated_error_m(&self, detail: Detail) -> Option<f32> {
         let e = self.level_err_m.get(detail.accuracy)?;
         Some(e + self.joint_err_m[detail.active_joints.min(self.joints)])
@@ -471,9 +531,13 @@ impl ScreenSpacePolicy {
     /// the model lacks.
     pub fn cost(&self, detail: Detail) -> Option<u64> {
         let level = detail.accuracy;
-        let joints = detail.active_joints.min(self.joints);
-        let rows = (self.always_rows + self.rows_per_joint * joints) as u64;
-        Some(self.level_base_cost.get(level)? + rows * self.level_row_cost[level])
+        if level >= self.costs.level_base_cost.len() {
+            return None;
+        }
+        Some(
+            self.costs
+                .cost(level, detail.active_joints.min(self.joints)),
+        )
     }
 }
 
@@ -500,8 +564,7 @@ impl LevelPolicy for ScreenSpacePolicy {
             if j > self.joints {
                 continue;
             }
-            let cost = self.level_base_cost[l]
-                + (self.always_rows + self.rows_per_joint * j) as u64 * self.level_row_cost[l];
+            let cost = self.costs.cost(l, j);
             if best.is_none_or(|(c, _)| cost < c) {
                 best = Some((cost, Detail::new(l, j)));
             }

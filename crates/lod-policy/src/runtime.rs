@@ -142,8 +142,10 @@ impl RuntimeModel {
     /// a request to rebuild the model.
     ///
     /// History: 1 (the first sectioned file, format 8: control names, rig joints, the multilinear
-    /// model, feet, stature; a model with styles names them among the controls, [`STYLE_PREFIX`]).
-    pub const SECTION_VERSION: u32 = 1;
+    /// model, feet, stature; a model with styles names them among the controls, [`STYLE_PREFIX`]);
+    /// 2 (each accuracy level's error records its motion quality, `pop_x`, `skate_x` and `floor_cm`, and its
+    /// foot slide is measured with the foot lock on).
+    pub const SECTION_VERSION: u32 = 2;
 
     /// Decodes the runtime model from the bytes of a model file: the framing and checksums
     /// ([`file::unframe`], [`file::sections`]), then the runtime's own section

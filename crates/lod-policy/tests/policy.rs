@@ -175,21 +175,78 @@ fn distance_policy_screen_check_keeps_visible_error_under_the_budget() {
     ));
 }
 
+/// The distance policy's cost (a cycle's kernel and poses, the screen policy's cost model) never
+/// increases with distance, and its detail is never coarser than the paper's schedule in either
+/// level or joints: the screen check only refines, and takes the cheapest refinement that fits.
 #[test]
-fn distance_policy_detail_never_increases_with_distance() {
+fn distance_policy_cost_never_increases_with_distance() {
     let m = model();
     let pol = DistancePolicy::for_model(&m);
+    let schedule = DistancePolicy::new(
+        &m,
+        DistanceConfig {
+            screen_budget_px: None,
+            ..DistanceConfig::default()
+        },
+    )
+    .unwrap();
+    let costs = ScreenSpacePolicy::for_model(&m).unwrap();
     let v = ViewParams::default();
-    let mut prev = detail_rank(&m, pol.detail(0.0, true, &v));
+    let mut prev = costs.cost(pol.detail(0.0, true, &v)).unwrap();
+    let mut levels = std::collections::BTreeSet::new();
     for i in 1..4000 {
-        let cur = detail_rank(&m, pol.detail(i as f32 * 0.1, true, &v));
+        let dist = i as f32 * 0.1;
+        let d = pol.detail(dist, true, &v);
+        let cur = costs.cost(d).unwrap();
+        assert!(cur <= prev, "at {dist} m: cost {cur} after {prev} ({d:?})");
+        let (l, j) = detail_rank(&m, d);
+        let (ls, js) = detail_rank(&m, schedule.detail(dist, true, &v));
         assert!(
-            cur.0 >= prev.0 && cur.1 <= prev.1,
-            "at {} m: {cur:?} after {prev:?}",
-            i as f32 * 0.1
+            l <= ls && j >= js,
+            "at {dist} m: {d:?} is coarser than the schedule's ({ls}, {js})"
         );
+        levels.insert(l);
         prev = cur;
     }
+    assert!(levels.len() > 2, "levels used: {levels:?}");
+}
+
+/// A level whose measured motion quality fails is never given to a walker with joints, by either
+/// policy, at any distance; with the same errors and passing quality it is used.
+#[test]
+fn policies_skip_levels_whose_motion_quality_fails() {
+    let used = |m: &LodModel| {
+        let v = ViewParams::default();
+        let d = DistancePolicy::for_model(m);
+        let s = ScreenSpacePolicy::for_model(m).unwrap();
+        let mut levels = std::collections::BTreeSet::new();
+        for i in 0..4000 {
+            for det in [
+                d.detail(i as f32 * 0.25, true, &v),
+                s.detail(i as f32 * 0.25, true, &v),
+            ] {
+                if det.active_joints > 0 {
+                    levels.insert(det.accuracy);
+                }
+            }
+        }
+        levels
+    };
+    let m = model();
+    assert!(used(&m).contains(&1), "level 1 is used: {:?}", used(&m));
+    let mut parts = m.into_parts();
+    parts.level_errors[1].pop_x = lod_policy::QUALITY_POP_LIMIT * 1.01;
+    parts.level_errors[2].skate_x = lod_policy::QUALITY_SKATE_LIMIT * 1.01;
+    let failing = LodModel::new(parts).unwrap();
+    let levels = used(&failing);
+    assert!(
+        !levels.contains(&1) && !levels.contains(&2),
+        "levels used: {levels:?}"
+    );
+    assert!(
+        levels.contains(&0) && levels.len() > 1,
+        "levels used: {levels:?}"
+    );
 }
 
 #[test]
@@ -294,8 +351,8 @@ proptest! {
         budget in 0.2f32..4.0,
     ) {
         let mut parts = model().into_parts();
-        parts.level_errors = level_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e, slide_cm: 0.0 }).collect();
-        parts.joint_errors = joint_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e, slide_cm: 0.0 }).collect();
+        parts.level_errors = level_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e, slide_cm: 0.0, ..LevelError::default() }).collect();
+        parts.joint_errors = joint_cm.iter().map(|&e| LevelError { mean_joint_cm: e, shell_cm: e, slide_cm: 0.0, ..LevelError::default() }).collect();
         let m = LodModel::new(parts).unwrap();
         let pol = ScreenSpacePolicy::new(&m, ScreenConfig { budget_px: budget, metric: ErrorMetric::Shell }).unwrap();
         let v = ViewParams::default();

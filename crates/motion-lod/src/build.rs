@@ -850,7 +850,8 @@ impl MotionModel {
             ),
             None => None,
         };
-        let measure = |detail: Detail| -> Result<LevelError, BuildError> {
+        let walks = crate::walk_quality::walk_grid(self);
+        let measure = |detail: Detail, with_quality: bool| -> Result<LevelError, BuildError> {
             let mut meter = ErrorMeter::new(&self.layout);
             for (c, r) in picked.iter().zip(&reference) {
                 let poses = self.synthesize_aligned(c, detail)?;
@@ -867,30 +868,78 @@ impl MotionModel {
                 }
                 None => 0.0,
             };
+            let (pop_x, skate_x, floor_cm) = match &self.report.quality {
+                Some(reference) if with_quality => {
+                    level_quality(self, &reference.median, &walks, detail)?
+                }
+                _ => (0.0, 0.0, 0.0),
+            };
             Ok(LevelError {
                 mean_joint_cm: e.mean_joint_cm as f32,
                 shell_cm: e.shell_cm as f32,
                 slide_cm,
+                pop_x,
+                skate_x,
+                floor_cm,
             })
         };
         debug_assert!(p > 0 && t > 0);
         let levels = (0..lod.levels().len())
-            .map(|l| measure(Detail::new(l, lod.joints())))
+            .map(|l| measure(Detail::new(l, lod.joints()), true))
             .collect::<Result<Vec<_>, _>>()?;
         let joints = (0..=lod.joints())
-            .map(|j| measure(Detail::new(0, j)))
+            .map(|j| measure(Detail::new(0, j), false))
             .collect::<Result<Vec<_>, _>>()?;
         Ok((levels, joints))
     }
 }
 
+/// The motion quality of `detail` over the quality grid's `walks` (each [`QUALITY_WALK_CYCLES`]
+/// cycles at 30 fps, seams inertialized, the foot lock on: as the crowd plays a walker), as the
+/// largest pop and the largest skate over the walks, each a multiple of the data's median
+/// (`data`), and the largest floor offset (cm, either side): the figures of `motion-lod quality`
+/// that [`LevelError::passes_quality`] holds to the near-character thresholds.
+fn level_quality(
+    model: &MotionModel,
+    data: &crate::quality::MotionQuality,
+    walks: &[crate::walk_quality::GridWalk],
+    detail: Detail,
+) -> Result<(f32, f32, f32), BuildError> {
+    let ratio = |v: f64, of: f64| (v / of.max(1e-9)).min(1e6) as f32;
+    let (mut pop, mut skate, mut floor) = (0.0f32, 0.0f32, 0.0f32);
+    for w in walks {
+        let fail = |e: &dyn std::fmt::Display| {
+            BuildError::Data(format!("quality of `{}` at {detail:?}: {e}", w.name))
+        };
+        let walk = model
+            .synthesize_walk(&crate::synth::WalkRequest {
+                controls: w.controls,
+                detail,
+                cycles: QUALITY_WALK_CYCLES,
+                fps: crate::quality::REFERENCE_FPS,
+                blend: true,
+                plant_feet: true,
+            })
+            .map_err(|e| fail(&e))?;
+        let q = crate::walk_quality::measure_walk(model, &walk).map_err(|e| fail(&e))?;
+        pop = pop.max(ratio(q.pop_cm, data.pop_cm));
+        skate = skate.max(ratio(q.skate_cm_s, data.skate_cm_s));
+        floor = floor.max(q.floor_offset_cm.abs().min(1e6) as f32);
+    }
+    Ok((pop, skate, floor))
+}
+
+/// Cycles of each walk the build's per-level motion quality measures (as `motion-lod quality`).
+pub const QUALITY_WALK_CYCLES: usize = 4;
+
 /// Cycles of the walks [`foot_slide_cm`] measures.
 pub const SLIDE_WALK_CYCLES: usize = 3;
 
 /// How far a planted foot slides over one stance in a walk of [`SLIDE_WALK_CYCLES`] cycles at 30 fps
-/// for `controls` at `detail` (cycles blended, no foot lock), in centimetres: the motion-quality
-/// meter's `skate x contact share x cycle duration` (the distance the feet travel while on the
-/// floor, per foot and cycle). Needs the model's quality reference.
+/// for `controls` at `detail` (cycles blended, the runtime foot lock on, as the crowd plays a
+/// walker), in centimetres: the motion-quality meter's `skate x contact share x cycle duration`
+/// (the distance the feet travel while on the floor, per foot and cycle). Needs the model's
+/// quality reference.
 pub fn foot_slide_cm(
     model: &MotionModel,
     controls: &Controls,
@@ -903,7 +952,7 @@ pub fn foot_slide_cm(
             cycles: SLIDE_WALK_CYCLES,
             fps: crate::quality::REFERENCE_FPS,
             blend: true,
-            plant_feet: false,
+            plant_feet: true,
         })
         .map_err(|e| BuildError::Data(format!("foot slide of {controls:?} at {detail:?}: {e}")))?;
     let q = crate::walk_quality::measure_walk(model, &walk)

@@ -276,9 +276,10 @@ pub enum CrowdQualityError {
 /// measures each walker as it was drawn: its longest stretch in view with joints after its first seam
 /// (a walker culled or beyond the last level is root-only, drawn by nobody), when that stretch
 /// holds at least two cycles' worth of frames (`2 x` the model's longest mean cycle, 1.2 s at 30
-/// fps for a 0.6 s cycle); shorter ones are left out. Near walkers change clips with inertialized
-/// seams and planted feet, farther ones switch as they are (`config.seam_levels`,
-/// `config.foot_lock_levels`), so the figures are the crowd's transitions as a viewer sees them.
+/// fps for a 0.6 s cycle); shorter ones are left out. Walkers at the first `config.seam_levels`
+/// levels change clips with inertialized seams, those at the first `config.foot_lock_levels` plant
+/// their feet (by default every walker with joints), so the figures are the crowd's transitions as
+/// a viewer sees them.
 pub fn crowd_quality<P: LevelPolicy + Sync + ?Sized>(
     model: &MotionModel,
     config: CrowdConfig,

@@ -26,6 +26,17 @@ pub struct LevelSummary {
     /// most one pixel (1920 x 1080, 60 degree vertical field of view): the distance policy's screen
     /// check uses the level no nearer.
     pub one_pixel_from_m: f32,
+    /// Largest pop over the quality grid's walks (every joint, seams inertialized, feet locked), as
+    /// a multiple of the data's median (0: not measured).
+    pub pop_x: f32,
+    /// Largest foot skate over the same walks, as a multiple of the data's median (0: not
+    /// measured).
+    pub skate_x: f32,
+    /// Largest floor offset over the same walks, cm (either side; 0: not measured).
+    pub floor_cm: f32,
+    /// Whether the policies give this level to walkers with joints: level 0, or a level whose
+    /// measured motion quality passes (`lod_policy::LevelError::passes_quality`).
+    pub used: bool,
 }
 
 /// The JSON summary of a model.
@@ -132,6 +143,10 @@ pub fn summary(model: &MotionModel) -> Summary {
                 shell_cm: errors.get(l).map_or(f32::NAN, |e| e.shell_cm),
                 slide_cm: errors.get(l).map_or(f32::NAN, |e| e.slide_cm),
                 one_pixel_from_m: errors.get(l).map_or(f32::NAN, one_pixel_from_m),
+                pop_x: errors.get(l).map_or(f32::NAN, |e| e.pop_x),
+                skate_x: errors.get(l).map_or(f32::NAN, |e| e.skate_x),
+                floor_cm: errors.get(l).map_or(f32::NAN, |e| e.floor_cm),
+                used: l == 0 || errors.get(l).is_some_and(|e| e.passes_quality()),
             })
             .collect(),
         storage: Storage::of(model),
@@ -250,25 +265,35 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
     writeln!(
         out,
         "accuracy levels (error against full detail: pose at the training controls, foot slide per \
-         stance over the quality walks; 1 px from: the nearest distance where both, with the policies' \
-         margin, cover one pixel at 1080p, 60 deg):"
+         stance over the quality walks with the foot lock; 1 px from: the nearest distance where both, \
+         with the policies' margin, cover one pixel at 1080p, 60 deg; pop and skate: the worst of the \
+         quality walks, x the data's median; used: whether the policies give the level to walkers \
+         with joints, which needs pop <= {}, skate <= {} and the feet within {} cm of the floor):",
+        lod_policy::QUALITY_POP_LIMIT,
+        lod_policy::QUALITY_SKATE_LIMIT,
+        lod_policy::QUALITY_FLOOR_CM
     )?;
     writeln!(
         out,
-        "  level  key  ranks          joint error  shell error  foot slide  1 px from"
+        "  level  key  ranks          joint error  shell error  foot slide  1 px from    pop  skate     floor  used"
     )?;
     let errors = lod.level_errors();
     for (l, lv) in lod.levels().iter().enumerate() {
         let e = errors.get(l).copied().unwrap_or_default();
+        let used = l == 0 || e.passes_quality();
         writeln!(
             out,
-            "  {l:>5}  {:>3}  {:<13}  {:>8.3} cm  {:>8.3} cm  {:>7.2} cm  {:>6.1} m",
+            "  {l:>5}  {:>3}  {:<13}  {:>8.3} cm  {:>8.3} cm  {:>7.2} cm  {:>6.1} m  {:>5.2}  {:>5.2}  {:>5.2} cm  {}",
             lv.key,
             format!("[{}, {}, {}]", lv.ranks.p, lv.ranks.t, lv.ranks.s),
             e.mean_joint_cm,
             e.shell_cm,
             e.slide_cm,
-            one_pixel_from_m(&e)
+            one_pixel_from_m(&e),
+            e.pop_x,
+            e.skate_x,
+            e.floor_cm,
+            if used { "yes" } else { "no" }
         )?;
     }
     let st = Storage::of(model);

@@ -115,6 +115,7 @@ pub mod eval;
 pub mod folds;
 pub mod footlock;
 pub mod gltf;
+pub mod hull;
 pub mod importance;
 pub mod info;
 pub mod metrics;

@@ -24,7 +24,9 @@ pub struct GridWalk {
 /// data's median step, turns of 30 degrees both ways and sidesteps of 0.3 m (each pulled inside the
 /// data's range), slow and fast (the 10th and 90th percentile of dz), and the training samples that
 /// reach furthest along each of the six control directions (`+-dx`, `+-dz`, `+-turn`, in units of each
-/// control's range): the corners of the hull, inside it by construction.
+/// control's range): the corners of the hull, inside it by construction; and the hull's edges
+/// ([`crate::hull::ControlHull::edge`]) from the median straight walk along turn and sidestep, each
+/// way: the sharpest turn and the widest sidestep the data hold at the median step.
 pub fn walk_grid(model: &MotionModel) -> Vec<GridWalk> {
     let cs = model.lod().controls();
     let s = model.lod().s();
@@ -85,6 +87,22 @@ pub fn walk_grid(model: &MotionModel) -> Vec<GridWalk> {
             let c = [raw(best, 0), raw(best, 1), raw(best, 2), height];
             let sign = if sign > 0.0 { '+' } else { '-' };
             grid.push((format!("corner {sign}{name}"), c));
+        }
+    }
+    // The hull's edges from the median straight walk: the sharpest turn and the widest sidestep
+    // the data hold at the median step, each way.
+    let hull = crate::hull::ControlHull::of(model);
+    let centre = Controls::from_array([0.0, dz, 0.0, height]);
+    for (k, name) in [(2usize, "turn"), (0, "sidestep")] {
+        if k >= d || cs.max[k] <= cs.min[k] {
+            continue;
+        }
+        for (sign, mark) in [(1.0f32, '+'), (-1.0, '-')] {
+            let span = cs.max[k] - cs.min[k];
+            let edge = hull.edge(centre, k, sign, span);
+            if edge != centre {
+                grid.push((format!("{name} edge {mark}"), edge.to_array()));
+            }
         }
     }
     grid.into_iter()

@@ -41,9 +41,26 @@ fn mocap(name: &str) -> Option<PathBuf> {
 }
 
 fn walk(model: &MotionModel, controls: Controls, blend: bool, plant_feet: bool) -> MotionQuality {
+    walk_at(
+        model,
+        controls,
+        model.lod().full_detail(),
+        blend,
+        plant_feet,
+    )
+}
+
+/// [`walk`] at `detail`.
+fn walk_at(
+    model: &MotionModel,
+    controls: Controls,
+    detail: Detail,
+    blend: bool,
+    plant_feet: bool,
+) -> MotionQuality {
     let req = WalkRequest {
         controls,
-        detail: model.lod().full_detail(),
+        detail,
         cycles: 4,
         fps: 30.0,
         blend,
@@ -177,9 +194,12 @@ fn bandai_policies_keep_pose_error_and_foot_slide_under_a_pixel() {
     details_stay_under_a_pixel(model, controls);
 }
 
-/// Every walk of the quality grid, 4 cycles at full detail with the foot lock: pop at most 1.25x the
-/// data's median, skate at most 1.5x, floor within 1 cm, facing inside the data's range.
-fn walks_look_like_the_data(what: &str, model: &MotionModel, min_takes: usize) {
+/// Every walk of the quality grid (the hull's corners and its edges along turn and sidestep
+/// included), 4 cycles with the foot lock, at full detail and at every level the policies give to
+/// walkers with joints (`LevelError::passes_quality`; the build measured the same walks): pop at
+/// most 1.25x the data's median, skate at most 1.5x, floor within 1 cm, facing inside the data's
+/// range. Returns the levels checked.
+fn walks_look_like_the_data(what: &str, model: &MotionModel, min_takes: usize) -> Vec<usize> {
     let reference = model.report.quality.clone().expect("the feet are found");
     let data = reference.median;
     assert!(
@@ -187,41 +207,69 @@ fn walks_look_like_the_data(what: &str, model: &MotionModel, min_takes: usize) {
         "{what}: {} takes measured",
         reference.takes
     );
-    for g in walk_quality::walk_grid(model) {
-        let q = walk(model, g.controls, true, true);
-        let name = format!("{what} {}", g.name);
+    let grid = walk_quality::walk_grid(model);
+    let names: Vec<&str> = grid.iter().map(|g| g.name.as_str()).collect();
+    for edge in ["turn edge +", "turn edge -"] {
         assert!(
-            q.pop_cm <= 1.25 * data.pop_cm,
-            "{name}: pop {:.2} cm/frame^2 > 1.25 x the data's {:.2}",
-            q.pop_cm,
-            data.pop_cm
-        );
-        assert!(
-            q.skate_cm_s <= 1.5 * data.skate_cm_s,
-            "{name}: skate {:.2} cm/s > 1.5 x the data's {:.2}",
-            q.skate_cm_s,
-            data.skate_cm_s
-        );
-        assert!(
-            q.floor_offset_cm.abs() <= 1.0,
-            "{name}: floor offset {:.2} cm",
-            q.floor_offset_cm
-        );
-        let (lo, hi) = reference.facing_range_deg;
-        assert!(
-            (lo..=hi).contains(&q.facing_deg),
-            "{name}: facing {:.1} deg outside the data's {lo:.1}..{hi:.1}",
-            q.facing_deg
+            model.ignored_controls()[2] || names.contains(&edge),
+            "{what}: no `{edge}` walk in {names:?}"
         );
     }
+    let lod = model.lod();
+    let used: Vec<usize> = (0..lod.levels().len())
+        .filter(|&l| l == 0 || lod.level_errors()[l].passes_quality())
+        .collect();
+    for &level in &used {
+        for g in &grid {
+            let detail = Detail::new(level, lod.joints());
+            let q = walk_at(model, g.controls, detail, true, true);
+            let name = format!("{what} {} at level {level}", g.name);
+            assert!(
+                q.pop_cm <= 1.25 * data.pop_cm,
+                "{name}: pop {:.2} cm/frame^2 > 1.25 x the data's {:.2}",
+                q.pop_cm,
+                data.pop_cm
+            );
+            assert!(
+                q.skate_cm_s <= 1.5 * data.skate_cm_s,
+                "{name}: skate {:.2} cm/s > 1.5 x the data's {:.2}",
+                q.skate_cm_s,
+                data.skate_cm_s
+            );
+            assert!(
+                q.floor_offset_cm.abs() <= 1.0,
+                "{name}: floor offset {:.2} cm",
+                q.floor_offset_cm
+            );
+            let (lo, hi) = reference.facing_range_deg;
+            assert!(
+                (lo..=hi).contains(&q.facing_deg),
+                "{name}: facing {:.1} deg outside the data's {lo:.1}..{hi:.1}",
+                q.facing_deg
+            );
+        }
+    }
+    used
 }
 
+/// Bandai: the grid passes at level 0 and at levels 1 and 2, which the policies use (levels 3-14
+/// pop up to 2.7x or skate up to 8x the data even with the lock and serve only root-only walkers).
 #[test]
 fn bandai_walks_look_like_the_data() {
     let Some((model, _)) = bandai() else {
         return;
     };
-    walks_look_like_the_data("bandai", model, 100);
+    let used = walks_look_like_the_data("bandai", model, 100);
+    assert_eq!(used, [0, 1, 2], "levels the policies use");
+    // And the distance policy does use them, from its screen check's distances on.
+    let policy = DistancePolicy::for_model(model.lod());
+    let view = ViewParams::default();
+    let shown: std::collections::BTreeSet<usize> = (0..600)
+        .map(|d| policy.detail(d as f32, true, &view))
+        .filter(|d| d.active_joints > 0)
+        .map(|d| d.accuracy)
+        .collect();
+    assert_eq!(shown.into_iter().collect::<Vec<_>>(), used);
 }
 
 /// CMU (the cgspeed conversion of subjects 7 and 8, 33 cycles, `Preset::Cmu`): the same thresholds
@@ -426,8 +474,11 @@ fn embedded_crowd_walkers_plant_their_feet() {
 /// stance foot, so near walkers (levels 0-2, both legs and feet evaluated) stand on the data's
 /// floor within [`FLOOR_CM`] in both scenes (without the correction they sank up to 1.19 cm on the
 /// ground). Under the distance policy in the overview, joint counts change at seams: the joints
-/// dropped fade out and the joints added fade in, so no seam pops more than 1.25x the data's median
-/// (a switch snapped them: 2.7x).
+/// dropped fade out and the joints added fade in, so no walker with both legs evaluated pops more
+/// than 1.25x the data's median at a seam (a switch snapped them: 2.7x). Walkers with fewer joints
+/// hold their legs at the mean rotation, which pops by itself (up to 1.3x at level 0 and 1.7x at
+/// level 5 on the quality grid with 2 joints); the policies give them those few joints only where
+/// their error projects under a pixel, and they are held to 2x.
 #[test]
 fn embedded_crowd_walkers_stand_on_the_floor_and_fade_joints_at_seams() {
     use motion_lod::crowd_sim::Scene;
@@ -444,9 +495,10 @@ fn embedded_crowd_walkers_stand_on_the_floor_and_fade_joints_at_seams() {
     assert!(joint_changes >= 10, "{joint_changes} walkers change joints");
     for w in &walkers {
         let q = &w.quality;
+        let bound = if w.joints.0 >= LEG_JOINTS { 1.25 } else { 2.0 };
         assert!(
-            q.seam_pop_cm <= 1.25 * data.pop_cm,
-            "walker {} (levels {:?}, joints {:?}): seam pop {:.2} > 1.25 x the data's {:.2}",
+            q.seam_pop_cm <= bound * data.pop_cm,
+            "walker {} (levels {:?}, joints {:?}): seam pop {:.2} > {bound} x the data's {:.2}",
             w.walker,
             w.levels,
             w.joints,
@@ -458,26 +510,33 @@ fn embedded_crowd_walkers_stand_on_the_floor_and_fade_joints_at_seams() {
     assert!(near >= 20, "{near} near walkers");
 }
 
-/// How far near crowd walkers (levels 0-2, both legs evaluated: the runtime foot lock's) may stand
-/// from the data's floor, cm: the lock's soft ground margin
+/// How far crowd walkers with both legs evaluated (the runtime foot lock's, at every level) may
+/// stand from the data's floor, cm: the lock's soft ground margin
 /// ([`lod_policy::offline::GROUND_MARGIN_M`]), half issue 12's 1 cm.
 const FLOOR_CM: f64 = 0.5;
 
-/// Asserts that the crowd walkers the runtime lock held for their whole stretch (levels 0-2, at
-/// least the 8 joints that evaluate both legs) stand on the data's floor within [`FLOOR_CM`];
-/// returns how many there were.
+/// The joints that evaluate both legs (thighs, knees, ankles and toes come first in the evaluation
+/// order of the embedded, CMU and Bandai skeletons): the foot lock's.
+const LEG_JOINTS: usize = 8;
+
+/// Asserts that the crowd walkers the runtime lock held for their whole stretch (at least the
+/// [`LEG_JOINTS`] joints that evaluate both legs, at any level) stand on the data's floor: within
+/// [`FLOOR_CM`] at levels 0-2, within the near-character threshold of 1 cm at coarser levels (CMU
+/// walkers at levels 4-5 stand 0.7 cm off it: the lock's ground correction cannot undo a coarse
+/// level's hip height); returns how many there were.
 fn locked_walkers_stand_on_the_floor(
     scene: motion_lod::crowd_sim::Scene,
     walkers: &[motion_lod::crowd::WalkerQuality],
 ) -> usize {
     let locked: Vec<_> = walkers
         .iter()
-        .filter(|w| w.levels.1 <= 2 && w.joints.0 >= 8)
+        .filter(|w| w.joints.0 >= LEG_JOINTS)
         .collect();
     for w in &locked {
+        let bound = if w.levels.1 <= 2 { FLOOR_CM } else { 1.0 };
         assert!(
-            w.quality.floor_offset_cm.abs() <= FLOOR_CM,
-            "{scene:?} walker {} (levels {:?}, joints {:?}): floor offset {:.2} cm",
+            w.quality.floor_offset_cm.abs() <= bound,
+            "{scene:?} walker {} (levels {:?}, joints {:?}): floor offset {:.2} cm > {bound}",
             w.walker,
             w.levels,
             w.joints,

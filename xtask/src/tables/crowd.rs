@@ -76,15 +76,22 @@ pub enum PolicyKind {
     /// Every walker root only whatever its distance or visibility: the cost of a far or culled
     /// walker (issue 16's first deliverable), run on one thread in the ground scene.
     RootOnly,
+    /// The distance policy with walkers that have joints held to accuracy levels `0..=k` (finer
+    /// than the policy's choice where it is coarser; root-only walkers as the policy gives them):
+    /// `k = 0` is the policy with level 0 and root only, each larger `k` one more level, so the
+    /// frame rates side by side are what each level saves.
+    UpToLevel(usize),
 }
 
 impl PolicyKind {
     /// The policy's name in the tables.
-    pub fn label(self) -> &'static str {
+    pub fn label(self) -> String {
         match self {
-            PolicyKind::Lod => "LOD",
-            PolicyKind::Full => "no LOD",
-            PolicyKind::RootOnly => "root only",
+            PolicyKind::Lod => "LOD".into(),
+            PolicyKind::Full => "no LOD".into(),
+            PolicyKind::RootOnly => "root only".into(),
+            PolicyKind::UpToLevel(0) => "LOD, level 0 and root only".into(),
+            PolicyKind::UpToLevel(k) => format!("LOD, levels 0-{k} and root only"),
         }
     }
 }
@@ -129,7 +136,7 @@ impl CrowdRow {
     /// The policy's name, with the culling when it is not the default scan.
     pub fn label(&self) -> String {
         match self.culling {
-            Culling::Scan => self.policy.label().to_string(),
+            Culling::Scan => self.policy.label(),
             Culling::Tree => format!("{}, tree culling", self.policy.label()),
         }
     }
@@ -271,9 +278,19 @@ pub fn measure(
     let lod_policy = DistancePolicy::for_model(model.lod());
     let full = FullDetail::for_model(model.lod());
     let runs_per_size = 6 + threads.iter().filter(|&&t| t != MAIN_THREADS).count();
+    let used_levels = (0..model.lod().levels().len())
+        .filter(|&l| {
+            l == 0
+                || model
+                    .lod()
+                    .level_errors()
+                    .get(l)
+                    .is_some_and(|e| e.passes_quality())
+        })
+        .count();
     progress.stage(
-        "crowds (2 scenes; LOD, naive, PCA; LOD policy and full detail; threads)",
-        (Scene::ALL.len() * sizes.len() * runs_per_size + 2) as u64,
+        "crowds (2 scenes; LOD, naive, PCA; LOD policy and full detail; threads; levels)",
+        (Scene::ALL.len() * (sizes.len() * runs_per_size + used_levels) + 2) as u64,
     );
     let mut rows = Vec::new();
     for scene in Scene::ALL {
@@ -333,6 +350,40 @@ pub fn measure(
         }
     }
     if let Some(&size) = sizes.iter().max_by_key(|s| s.walkers) {
+        // What each accuracy level saves: the policy held to levels 0..=k, for every level it uses.
+        let errors = model.lod().level_errors();
+        let used: Vec<usize> = (0..model.lod().levels().len())
+            .filter(|&l| l == 0 || errors.get(l).is_some_and(|e| e.passes_quality()))
+            .collect();
+        for scene in Scene::ALL {
+            for &k in &used {
+                let spec = RunSpec {
+                    scene,
+                    source: "lod",
+                    policy: PolicyKind::UpToLevel(k),
+                    threads: MAIN_THREADS,
+                    culling: Culling::Scan,
+                };
+                let capped = |d: f32, visible: bool, view: &ViewParams| {
+                    let detail = lod_policy.detail(d, visible, view);
+                    if detail.active_joints == 0 {
+                        detail
+                    } else {
+                        lod_policy::Detail::new(detail.accuracy.min(k), detail.active_joints)
+                    }
+                };
+                let mut warm = None;
+                rows.push(timed_or_skipped(
+                    spec,
+                    &lod,
+                    &capped,
+                    size,
+                    f64::INFINITY,
+                    &mut warm,
+                )?);
+                progress.inc(1);
+            }
+        }
         let spec = RunSpec {
             scene: Scene::Ground,
             source: "lod",

@@ -18,6 +18,7 @@
 pub mod accuracy;
 pub mod crowd;
 pub mod figures;
+pub mod gpu;
 pub mod markdown;
 pub mod measure;
 pub mod online;
@@ -394,6 +395,7 @@ pub fn run(config: &TablesConfig) -> Result<()> {
     write_figure4(&mut doc, &fig4, &relative_link(out_dir, &fig4_path), t);
     write_figure5(&mut doc, &fig5, &relative_link(out_dir, &fig5_path), &model);
     write_crowd(&mut doc, &crowds);
+    doc.push_str(&gpu::section(&model));
     let _ = writeln!(
         doc,
         "\n## 5. Accuracy: held-out error per method\n\n### By refitting: {}-fold cross-validation by {} \
@@ -778,6 +780,50 @@ fn write_crowd(doc: &mut String, rows: &[crowd::CrowdRow]) {
         ]);
     }
     doc.push_str(&tab.render());
+    let capped: Vec<&crowd::CrowdRow> = rows
+        .iter()
+        .filter(|r| matches!(r.policy, crowd::PolicyKind::UpToLevel(_)) && r.report.is_some())
+        .collect();
+    if !capped.is_empty() {
+        let _ = writeln!(
+            doc,
+            "\nWhat each accuracy level saves: the model under the LOD policy with walkers that have joints \
+             held to levels 0..k (where the policy would give a coarser level, the finest allowed; root-only \
+             walkers unchanged), one row per level the policies use (levels whose motion quality fails \
+             serve only root-only walkers: section 7), in one run on {} threads. *Saved* is the mean frame \
+             time saved against level 0 and root only, in the same scene.\n",
+            crowd::MAIN_THREADS
+        );
+        let mut tab = Table::new(&[
+            "camera",
+            ">walkers",
+            "policy",
+            ">fps mean",
+            ">ms / frame",
+            ">saved against level 0 and root only",
+        ]);
+        for r in &capped {
+            let base = capped.iter().find(|b| {
+                b.scene == r.scene
+                    && b.walkers == r.walkers
+                    && b.policy == crowd::PolicyKind::UpToLevel(0)
+            });
+            let ms = |r: &crowd::CrowdRow| r.fps().map(|f| 1e3 / f);
+            let saved = match (base.and_then(|b| ms(b)), ms(r)) {
+                (Some(b), Some(m)) if b > 0.0 => format!("{:.1}%", 100.0 * (b - m) / b),
+                _ => "-".into(),
+            };
+            tab.row(&[
+                r.scene.name().to_string(),
+                r.walkers.to_string(),
+                r.label(),
+                fps(Some(r)),
+                ms(r).map_or("-".into(), |m| format!("{m:.2}")),
+                saved,
+            ]);
+        }
+        doc.push_str(&tab.render());
+    }
     let _ = writeln!(
         doc,
         "\nScaling: the model under the LOD policy on each thread count, in walkers animated per second \

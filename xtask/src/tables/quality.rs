@@ -176,10 +176,6 @@ pub fn measure_crowd(
     Ok(out)
 }
 
-/// Whether a walker belongs to a group: its `(smallest, largest)` level shown, its fewest joints
-/// shown, the near levels and the joints that evaluate both legs.
-type GroupRule = fn((usize, usize), usize, usize, usize) -> bool;
-
 /// The joint count from which both legs (thigh, knee and ankle of each foot) are evaluated, the
 /// joints the foot lock needs; the model's joint count without feet.
 pub fn leg_joints(model: &MotionModel) -> usize {
@@ -202,17 +198,14 @@ pub fn leg_joints(model: &MotionModel) -> usize {
     needed
 }
 
-/// The markdown subsection of the crowd measurement: per scene, the walkers that stayed near
-/// (seams inertialized, feet planted: the first `seam_levels` levels) with both legs evaluated or
-/// with fewer joints, far (switched clips) or crossed between near and far in their measured
-/// stretch.
+/// The markdown subsection of the crowd measurement: per scene, the walkers with both legs
+/// evaluated and those with fewer joints, each group with the levels its walkers showed.
 pub fn crowd_section(
     model: &MotionModel,
     reference: &QualityReference,
     scenes: &[(&'static str, Vec<motion_lod::crowd::WalkerQuality>)],
 ) -> String {
     let m = &reference.median;
-    let near = motion_lod::crowd_sim::CrowdConfig::default().seam_levels;
     let legs = leg_joints(model);
     let mut doc = String::new();
     let _ = writeln!(
@@ -221,50 +214,44 @@ pub fn crowd_section(
          {CROWD_WALKERS} walkers at {CROWD_DENSITY} per m² for {CROWD_SECONDS} s at 30 fps under the distance \
          policy, each measured over its longest stretch drawn (in view, with joints; after its first seam, at \
          least two cycles): controls change every cycle along the walkers' paths and levels change \
-         with distance. Walkers at levels 0-{} inertialize their seams and plant their feet (the \
-         runtime foot lock); farther ones switch clips as they are, where the policies keep their \
-         error and slide under a pixel. *Legs evaluated*: the walker showed at least the {legs} joints \
-         that evaluate both legs (the foot lock's); with fewer, the legs hold their mean rotation. \
-         *Floor worst*: the largest floor offset (cm, + = above). The same command: `motion-lod \
-         quality MODEL --crowd --camera ground|overview`.\n\n\
-         | camera | walkers | group | pop worst (x data) | pop median | seam pop worst | skate worst (x data) | skate median | floor worst |\n\
-         | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |",
-        near - 1
+         with distance. Every walker with joints inertializes its seams and plants its feet (the \
+         runtime foot lock), at whatever level; the policies give walkers with joints only the \
+         levels that pass the quality grid (section 7's last column). *Legs evaluated*: the walker \
+         showed at least the {legs} joints that evaluate both legs (the foot lock's); with fewer, the \
+         legs hold their mean rotation, where the policies keep the slide under a pixel. *Levels*: \
+         the accuracy levels the group's walkers showed. *Floor worst*: the largest floor offset (cm, \
+         + = above). The same command: `motion-lod quality MODEL --crowd --camera ground|overview`.\n\n\
+         | camera | walkers | group | levels | pop worst (x data) | pop median | seam pop worst | skate worst (x data) | skate median | floor worst |\n\
+         | --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"
     );
     for (scene, walkers) in scenes {
-        // Which walkers a group holds, by the smallest and largest level they showed.
-        let groups: [(&str, GroupRule); 4] = [
-            ("near, legs evaluated", |(_, hi), j, near, legs| {
-                hi < near && j >= legs
-            }),
-            ("near, fewer joints", |(_, hi), j, near, legs| {
-                hi < near && j < legs
-            }),
-            ("far", |(lo, _), _, near, _| lo >= near),
-            ("near and far", |(lo, hi), _, near, _| {
-                lo < near && hi >= near
-            }),
-        ];
-        for (group, keep) in &groups {
-            let at: Vec<&MotionQuality> = walkers
+        for (group, with_legs) in [("legs evaluated", true), ("fewer joints", false)] {
+            let at: Vec<&motion_lod::crowd::WalkerQuality> = walkers
                 .iter()
-                .filter(|w| keep(w.levels, w.joints.0, near, legs))
-                .map(|w| &w.quality)
+                .filter(|w| (w.joints.0 >= legs) == with_legs)
                 .collect();
             if at.is_empty() {
                 continue;
             }
-            let (pw, pm) = worst_median(at.iter().map(|q| q.pop_cm / m.pop_cm).collect());
-            let (seam, _) = worst_median(at.iter().map(|q| q.seam_pop_cm / m.pop_cm).collect());
-            let (sw, sm) = worst_median(at.iter().map(|q| q.skate_cm_s / m.skate_cm_s).collect());
-            let floor = at
+            let lo = at.iter().map(|w| w.levels.0).min().unwrap_or(0);
+            let hi = at.iter().map(|w| w.levels.1).max().unwrap_or(0);
+            let q: Vec<&MotionQuality> = at.iter().map(|w| &w.quality).collect();
+            let (pw, pm) = worst_median(q.iter().map(|q| q.pop_cm / m.pop_cm).collect());
+            let (seam, _) = worst_median(q.iter().map(|q| q.seam_pop_cm / m.pop_cm).collect());
+            let (sw, sm) = worst_median(q.iter().map(|q| q.skate_cm_s / m.skate_cm_s).collect());
+            let floor = q
                 .iter()
                 .map(|q| q.floor_offset_cm)
                 .fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
+            let levels = if lo == hi {
+                format!("{lo}")
+            } else {
+                format!("{lo}-{hi}")
+            };
             let _ = writeln!(
                 doc,
-                "| {scene} | {} | {group} | {pw:.2} | {pm:.2} | {seam:.2} | {sw:.2} | {sm:.2} | {floor:.2} |",
-                at.len()
+                "| {scene} | {} | {group} | {levels} | {pw:.2} | {pm:.2} | {seam:.2} | {sw:.2} | {sm:.2} | {floor:.2} |",
+                q.len()
             );
         }
     }

@@ -329,21 +329,25 @@ pub fn build_model(truth: &Truth) -> LodModel {
                 mean_joint_cm: 0.1,
                 shell_cm: 0.2,
                 slide_cm: 0.0,
+                ..LevelError::default()
             },
             LevelError {
                 mean_joint_cm: 0.5,
                 shell_cm: 0.9,
                 slide_cm: 0.0,
+                ..LevelError::default()
             },
             LevelError {
                 mean_joint_cm: 1.5,
                 shell_cm: 2.5,
                 slide_cm: 0.0,
+                ..LevelError::default()
             },
             LevelError {
                 mean_joint_cm: 4.0,
                 shell_cm: 7.0,
                 slide_cm: 0.0,
+                ..LevelError::default()
             },
         ],
         joint_errors: (0..=JOINTS)
@@ -353,6 +357,7 @@ pub fn build_model(truth: &Truth) -> LodModel {
                     mean_joint_cm: e,
                     shell_cm: 1.5 * e,
                     slide_cm: 0.0,
+                    ..LevelError::default()
                 }
             })
             .collect(),

@@ -36,6 +36,22 @@ pub const GLOSSARY: &[Entry] = &[
         text: "The parameters a walk is synthesized for, per cycle: dx (sideways root displacement, metres, + = the character's left), dz (forward root displacement, metres), turn (heading change, radians in files and the library, degrees on the command line), height (the performer's standing height, metres), and for a model built with style labels the style (see `style`). A control constant over the data, or carrying no signal (see `leave-one-out`), is ignored by the model and reported by `build` and `info`; `synth` warns when such a control is given a value, with the figures that dropped it.",
     },
     Entry {
+        term: "hull",
+        aliases: &[
+            "control hull",
+            "data's hull",
+            "edge",
+            "turn edge",
+            "sidestep edge",
+        ],
+        text: "The convex hull of the training cycles' controls (dx, dz, turn and height, those the model uses, each in standard deviations of the data): the combinations the takes hold. Each control can be in its range while the combination is not (a sharp turn at the longest step); there the model extrapolates and walks may pop or skate, so `synth` warns (with how many standard deviations beyond the hull the controls lie). The quality grid's `turn edge` and `sidestep edge` walks are where the hull ends along turn and sidestep from the median straight walk, each way (`motion_lod::hull`).",
+    },
+    Entry {
+        term: "used",
+        aliases: &["used by the policies", "passes quality", "quality gate"],
+        text: "`info`'s last column per accuracy level: whether the level-of-detail policies give the level to walkers with joints. Level 0 always; a coarser level only when its motion quality on the quality grid (every joint, seams inertialized, feet locked; the `pop` and `skate` columns, the worst walk as a multiple of the data's median) is within the near-character thresholds, pop at most 1.25x, skate at most 1.5x and the feet within 1 cm of the floor (`floor`). A level that fails serves only root-only walkers (`lod_policy::LevelError::passes_quality`).",
+    },
+    Entry {
         term: "style",
         aliases: &[
             "styles",
@@ -230,6 +246,104 @@ pub const GLOSSARY: &[Entry] = &[
         term: "frame times",
         aliases: &["frame_ms", "p50", "p99", "median", "worst", "fps"],
         text: "What `crowd` timed per frame: culling, clip kernels, poses and forward kinematics of every walker (not rendering). `fps worst / mean / best` count every frame from the first (the first cycle's clip builds included); `frame times after the first 1 s` (JSON `frame_ms`) are the median, the 99th percentile (nearest rank) and the slowest frame of the frames after the first simulated second, in milliseconds, and the slowest over the median: a game drops frames where the worst is far above the median.",
+    },
+    Entry {
+        term: "files",
+        aliases: &[
+            "found", "read", "skipped", "kept", "dropped", "stop", "too long", "no cycle",
+        ],
+        text: "What `cycles` (and every command reading BVH) did with the data: files found, read, and skipped (a file that cannot be parsed, each with its reason); cycles kept, and dropped with the reason counted per kind (`too short`/`too long`: outside the cycle duration limits; `start`/`stop`: the walk starts or stops within the cycle, slow or accelerating or braking; `contact pattern`: not exactly one right contact between the two left ones; `asymmetric`: the right contact far from mid-cycle; `not forward`: the root moves backwards; `sharp turn`: a U-turn or reversal). A take that gives no cycle is listed with its reason, and so are the frames skipped inside a take (a T-pose, a teleport, standing still before walking).",
+    },
+    Entry {
+        term: "units",
+        aliases: &[
+            "up",
+            "forward",
+            "standing height",
+            "--units",
+            "--up",
+            "detected",
+        ],
+        text: "The conventions `cycles` decided for the takes (also in `--json`): units (m, cm, mm, in or the CMU unit; the one that makes the skeleton's standing height, measured on its bone lengths, closest to 1.5 m), the up axis (where the feet stay; a Z-up take is turned exactly), the forward axis (what the skeleton faces at a zero root rotation, read from the direction of travel), and the root positions reading (see `root positions`). `detected` means chosen from the data; `--units` and `--up` force them.",
+    },
+    Entry {
+        term: "tensor",
+        aliases: &[
+            "motion tensor",
+            "P x T x S",
+            "T",
+            "aligned frames",
+            "alignment",
+            "reference cycle",
+            "dtw",
+            "uniform",
+            "cycle length",
+            "band",
+            "slope",
+        ],
+        text: "The motion tensor the model is built from: P joint DOF x T frames x S cycles. Every cycle is aligned in time to T frames (the median cycle length unless `--frames`), by dynamic time warping (`dtw`, within a band of that fraction of the cycle and at most `slope` consecutive steps along one cycle) against the reference cycle (the medoid), or by uniform time scaling (`uniform`); `cycle length` is the cycles' own lengths in frames before alignment. Time left over is kept as a per-frame time-increment channel, so a synthesized cycle plays at its own duration.",
+    },
+    Entry {
+        term: "model",
+        aliases: &[
+            "data",
+            "takes",
+            "x data",
+            "evaluated",
+            "training samples",
+            "multilinear",
+        ],
+        text: "`build` and `info` open with the model: P DOF (and its rotating joints), T frames, S samples (training cycles) and d controls, then `data`: the folders it was built from and the time alignment. In `quality`, `data` is the data's own takes measured by the same meter (the median over the takes), and `x data` a walk's figure over that median. In `eval`, `multilinear` is this model at each key level (the paper's method), `evaluated` the cycles predicted and `training samples` the cycles each prediction may use.",
+    },
+    Entry {
+        term: "evaluation order",
+        aliases: &[
+            "joints in evaluation order",
+            "joint order",
+            "held at the mean",
+        ],
+        text: "The order in which levels of detail drop joints: legs before arms, left and right adjacent, each kind by its visual importance, the error (cm) beside each joint being how far the body moves when that joint is held at its mean rotation. A level animating J joints animates the first J of this list (see `joints`).",
+    },
+    Entry {
+        term: "walk",
+        aliases: &[
+            "walks",
+            "grid",
+            "straight",
+            "turn +30",
+            "turn -30",
+            "sidestep",
+            "slow",
+            "fast",
+            "corner",
+            "hull corners",
+        ],
+        text: "`quality` measures a grid of walks over the data's controls, each a few cycles chained as `synth` chains them: straight, turn +30 and -30 degrees, sidestep +0.3 and -0.3 m, slow and fast (short and long steps within the data's range), and the corners of the data's control hull (`corner +dx` walks at the hull's largest dx; see `hull`). Each row is one walk at one accuracy level.",
+    },
+    Entry {
+        term: "scene",
+        aliases: &[
+            "camera", "ground", "overview", "density", "seed", "walkers", "field",
+        ],
+        text: "What `crowd` animated: N walkers on a square field sized for the density (walkers per square metre), each on its own path drawn from the seed, seen by a camera: `ground` walks inside the crowd; `overview` circles 40 m up outside the field's edge and sees most of the crowd at every level. The policy (`distance` or `screen`) picks each walker's level from that camera.",
+    },
+    Entry {
+        term: "mean per frame",
+        aliases: &[
+            "cull",
+            "kernels",
+            "poses",
+            "fk",
+            "visible",
+            "clip kernels built per frame",
+            "clip builds",
+        ],
+        text: "Where a `crowd` frame's time goes, averaged over the frames: `cull` (testing walkers against the view), `kernels` (building clip kernels G(c) for the walkers starting a cycle or changing level: `clip kernels built per frame` counts them), `poses` (each walker's pose at its frame), `fk` (forward kinematics of the evaluated joints); `visible` is the mean number of walkers in view.",
+    },
+    Entry {
+        term: "level histogram",
+        aliases: &["levels in the last frame", "root only", "root-only"],
+        text: "How many walkers `crowd` animated at each accuracy level, 0 first: summed over every frame (walker-frames) or in the last frame. The last entry is root only: walkers outside the view or beyond the last level, whose root moves along their path and whose joints are not evaluated.",
     },
 ];
 

@@ -163,6 +163,43 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
             eprintln!("warning: {msg}; clamped");
         }
     }
+    // Each control in its range is not enough: the combination may lie beyond every take.
+    let hull = motion_lod::hull::ControlHull::of(&model);
+    let clamp = model.lod().controls();
+    let outside: Vec<(usize, f64)> = all
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let mut a = c.to_array();
+            for (k, v) in a.iter_mut().enumerate() {
+                *v = v.clamp(clamp.min[k], clamp.max[k]);
+            }
+            (i, hull.distance(&Controls::from_array(a)))
+        })
+        .filter(|&(_, dist)| dist > motion_lod::hull::HULL_TOLERANCE)
+        .collect();
+    if let Some(&(i, dist)) = outside.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
+        let c = all[i];
+        let which = if track.is_some() {
+            format!(
+                "{} of the track's {} rows lie (the farthest, row {}: ",
+                outside.len(),
+                all.len(),
+                i + 1
+            )
+        } else {
+            "the controls lie (".to_string()
+        };
+        eprintln!(
+            "warning: {which}dx {:.3} m, dz {:.3} m, turn {:.1} deg) outside the data's hull, {dist:.2} \
+             standard deviations beyond any mix of the training controls: each control is in its \
+             range but no take walks like that, so the walk extrapolates and may pop or skate (see \
+             `motion-lod explain hull`)",
+            c.dx,
+            c.dz,
+            c.turn.to_degrees()
+        );
+    }
     let req = WalkRequest {
         controls,
         detail: Detail::new(
