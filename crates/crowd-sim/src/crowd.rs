@@ -4,7 +4,7 @@ use crate::camera::{Bounds, Camera, CameraPath, Frustum};
 use crate::culling::WalkerAabbTree;
 use crate::error::CrowdError;
 use crate::levels::{LevelTable, check_control_range};
-use crate::path::{EllipsePath, heading_of, path_controls};
+use crate::path::{EllipsePath, PathPlan, WalkerStart, path_controls};
 use crate::source::ClipSource;
 use crate::stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
 use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
@@ -301,17 +301,9 @@ impl<C: Send> Crowd<C> {
             seam_halflife_s: config.seam_halflife_s,
             foot_lock_levels: config.foot_lock_levels,
         };
-        // Preferred strides and the tightest curvature they can follow with half the turn range.
-        let dz_lo = bounds.min.dz.max(0.2 * bounds.max.dz);
-        let (stride_lo, stride_hi) = (
-            dz_lo + 0.3 * (bounds.max.dz - dz_lo),
-            dz_lo + 0.8 * (bounds.max.dz - dz_lo),
-        );
-        let turn_max = bounds.max.turn.min(-bounds.min.turn);
-        let min_radius = 2.0 * stride_hi / turn_max;
-        // The field EllipsePath::random needs for that radius (half-width >= 1.5 r + border).
-        let needed = 2.0 * ((1.5 * min_radius).max(3.0) + config.border_m) * 1.001;
-        let field_enlarged_from = (config.field_size_m < needed && needed.is_finite()).then(|| {
+        // Preferred strides, the tightest curvature they can follow, and the field that needs.
+        let plan = PathPlan::new(&bounds, config.border_m);
+        let field_enlarged_from = plan.enlarged_field(config.field_size_m).map(|needed| {
             let from = config.field_size_m;
             config.field_size_m = needed;
             from
@@ -322,18 +314,20 @@ impl<C: Send> Crowd<C> {
         })?;
         let make = |i: usize| -> Result<Walker<C>, CrowdError> {
             let mut g = SplitMix64::for_walker(config.seed, i);
-            let path =
-                EllipsePath::random(&mut g, config.field_size_m, config.border_m, min_radius)
-                    .ok_or(CrowdError::FieldTooSmall {
-                        field_m: config.field_size_m,
-                        needed_m: 2.0 * ((1.5 * min_radius).max(3.0) + config.border_m),
-                    })?;
-            let s = g.range(0.0, std::f32::consts::TAU);
-            let stride = g.range(stride_lo, stride_hi);
-            let height = g.range(bounds.min.height, bounds.max.height);
-            let phase = g.next_f32();
-            let base = path.point(s);
-            let heading = heading_of(path.velocity(s));
+            let WalkerStart {
+                path,
+                s,
+                base,
+                heading,
+                stride,
+                height,
+                phase,
+            } = plan.draw(&mut g, config.field_size_m, &bounds).ok_or(
+                CrowdError::FieldTooSmall {
+                    field_m: config.field_size_m,
+                    needed_m: plan.needed_field_m(),
+                },
+            )?;
             // Drawn after the path, phase and stride, and only for a source with styles, so that
             // a crowd without styles is the same walk for walk.
             let mix = source.style_mix();

@@ -220,6 +220,103 @@ pub fn path_controls(
     ]))
 }
 
+/// The paths a crowd's walkers can follow with a source's control range (`bounds`): the strides
+/// they prefer and the tightest curvature those strides allow with half the turn range, and the
+/// field those paths need. One rule for every crowd that draws walkers the same way (the CPU crowd,
+/// `gpu-crowd`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathPlan {
+    /// Preferred strides (m per cycle) are drawn from `[stride_lo, stride_hi)`: 30% to 80% of the
+    /// way from the shortest usable step (the data's, at least a fifth of its longest) to the
+    /// longest.
+    pub stride_lo: f32,
+    /// See `stride_lo`.
+    pub stride_hi: f32,
+    /// Smallest radius of curvature of a path: `2 stride_hi / turn_max`.
+    pub min_radius: f32,
+    /// Border kept between paths and the field's edge (m).
+    pub border_m: f32,
+}
+
+impl PathPlan {
+    /// The plan for a source whose controls span `bounds`, with `border_m` to spare at the field's
+    /// edge.
+    pub fn new(bounds: &ControlRange, border_m: f32) -> PathPlan {
+        let dz_lo = bounds.min.dz.max(0.2 * bounds.max.dz);
+        let (stride_lo, stride_hi) = (
+            dz_lo + 0.3 * (bounds.max.dz - dz_lo),
+            dz_lo + 0.8 * (bounds.max.dz - dz_lo),
+        );
+        let turn_max = bounds.max.turn.min(-bounds.min.turn);
+        PathPlan {
+            stride_lo,
+            stride_hi,
+            min_radius: 2.0 * stride_hi / turn_max,
+            border_m,
+        }
+    }
+
+    /// The smallest field side (m) that fits one path ([`EllipsePath::random`]: half-width at least
+    /// `1.5 r + border`).
+    pub fn needed_field_m(&self) -> f32 {
+        2.0 * ((1.5 * self.min_radius).max(3.0) + self.border_m)
+    }
+
+    /// The field side to use instead of `field_m` when that is too small for the paths (with a
+    /// margin of 0.1% for rounding), or `None` when it fits.
+    pub fn enlarged_field(&self, field_m: f32) -> Option<f32> {
+        let needed = self.needed_field_m() * 1.001;
+        (field_m < needed && needed.is_finite()).then_some(needed)
+    }
+
+    /// Walker `i`'s start in a field of side `field_m` from its generator `g` (seeded by the
+    /// crowd's seed and `i`; it continues for whatever the caller draws next): its path, the path
+    /// parameter and place, the heading along the path, its preferred stride, its height (uniform
+    /// over the data's) and the phase of its first clip. `None` when no path fits the field.
+    pub fn draw(
+        &self,
+        g: &mut SplitMix64,
+        field_m: f32,
+        bounds: &ControlRange,
+    ) -> Option<WalkerStart> {
+        let path = EllipsePath::random(g, field_m, self.border_m, self.min_radius)?;
+        let s = g.range(0.0, TAU);
+        let stride = g.range(self.stride_lo, self.stride_hi);
+        let height = g.range(bounds.min.height, bounds.max.height);
+        let phase = g.next_f32();
+        let base = path.point(s);
+        let heading = heading_of(path.velocity(s));
+        Some(WalkerStart {
+            path,
+            s,
+            base,
+            heading,
+            stride,
+            height,
+            phase,
+        })
+    }
+}
+
+/// Where and how a walker starts ([`PathPlan::draw`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WalkerStart {
+    /// The path it follows.
+    pub path: EllipsePath,
+    /// Its parameter on the path.
+    pub s: f32,
+    /// Its place on the field (x, z).
+    pub base: Vec2,
+    /// Its heading, along the path.
+    pub heading: f32,
+    /// Its preferred stride (m per cycle).
+    pub stride: f32,
+    /// Its standing height (m).
+    pub height: f32,
+    /// The phase of its first clip, in `[0, 1)`.
+    pub phase: f32,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,7 +3,7 @@
 use std::time::{Duration, Instant};
 
 use bytemuck::{Pod, Zeroable};
-use crowd_sim::path::{EllipsePath, heading_of, path_controls};
+use crowd_sim::path::{PathPlan, WalkerStart, path_controls};
 use crowd_sim::{Camera, CrowdConfig, CrowdStyle, Frustum, check_control_range};
 use glam::Vec3;
 use lod_policy::{Detail, LevelPolicy, RuntimeModel, SplitMix64, StyleMix, ViewParams};
@@ -275,17 +275,10 @@ impl GpuCrowd {
             });
         }
 
-        // The walkers, as crowd_sim::Crowd::new draws them.
+        // The walkers, as crowd_sim::Crowd::new draws them (the same plan and draws).
         let bounds = range;
-        let dz_lo = bounds.min.dz.max(0.2 * bounds.max.dz);
-        let (stride_lo, stride_hi) = (
-            dz_lo + 0.3 * (bounds.max.dz - dz_lo),
-            dz_lo + 0.8 * (bounds.max.dz - dz_lo),
-        );
-        let turn_max = bounds.max.turn.min(-bounds.min.turn);
-        let min_radius = 2.0 * stride_hi / turn_max;
-        let needed = 2.0 * ((1.5 * min_radius).max(3.0) + config.border_m) * 1.001;
-        let field_enlarged_from = (config.field_size_m < needed && needed.is_finite()).then(|| {
+        let plan = PathPlan::new(&bounds, config.border_m);
+        let field_enlarged_from = plan.enlarged_field(config.field_size_m).map(|needed| {
             let from = config.field_size_m;
             config.field_size_m = needed;
             from
@@ -295,18 +288,20 @@ impl GpuCrowd {
         let mut walkers = Vec::with_capacity(config.walkers);
         for i in 0..config.walkers {
             let mut g = SplitMix64::for_walker(config.seed, i);
-            let path =
-                EllipsePath::random(&mut g, config.field_size_m, config.border_m, min_radius)
-                    .ok_or(crowd_sim::CrowdError::FieldTooSmall {
-                        field_m: config.field_size_m,
-                        needed_m: 2.0 * ((1.5 * min_radius).max(3.0) + config.border_m),
-                    })?;
-            let s = g.range(0.0, std::f32::consts::TAU);
-            let stride = g.range(stride_lo, stride_hi);
-            let height = g.range(bounds.min.height, bounds.max.height);
-            let phase = g.next_f32();
-            let base = path.point(s);
-            let heading = heading_of(path.velocity(s));
+            let WalkerStart {
+                path,
+                s,
+                base,
+                heading,
+                stride,
+                height,
+                phase,
+            } = plan.draw(&mut g, config.field_size_m, &bounds).ok_or(
+                crowd_sim::CrowdError::FieldTooSmall {
+                    field_m: config.field_size_m,
+                    needed_m: plan.needed_field_m(),
+                },
+            )?;
             let (style, style_id) = if mix.is_empty() {
                 (StyleMix::DATA_MIX, n_styles as u32)
             } else {

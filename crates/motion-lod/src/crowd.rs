@@ -62,7 +62,8 @@ pub struct CrowdOutcome {
 }
 
 /// Steps a crowd of `source` under `policy` for `run.seconds`, timing every frame; renders every n-th
-/// frame when asked (rendering time is not counted).
+/// frame when asked (rendering time is not counted; a rendered crowd is primed first,
+/// [`Crowd::prime`], so that its first frame shows every walker mid-stride at its detail).
 pub fn run_crowd<S, P>(
     source: &S,
     policy: &P,
@@ -86,6 +87,11 @@ where
         Some((dir, _)) => Some(Recorder::new(dir, render_style(source))?),
         None => None,
     };
+    if recorder.is_some() {
+        // A crowd that is watched starts mid-stride: every walker's clip at its detail before the
+        // first frame (timed runs keep the spread of first builds over the first cycle).
+        crowd.prime(source, policy, &path.camera_at(0.0, &lens))?;
+    }
     let mut report = CrowdReport::with_frames(frames);
     let mut last = FrameStats::default();
     let mut rendered = 0;

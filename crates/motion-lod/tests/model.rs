@@ -410,3 +410,34 @@ fn avx2_and_baseline_builds_of_the_kernels_give_the_same_bits() {
     }
     assert!(compared >= 3 * levels, "{compared} kernels compared");
 }
+
+/// A rendered crowd is watched from its first frame, so it starts primed (every walker's clip at
+/// the policy's detail, mid-stride): after one frame the walkers in view have joints, where a timed
+/// run (not rendered) still holds most of them root only while it spreads its first clip builds.
+#[test]
+fn a_rendered_crowd_starts_with_every_walker_at_its_detail() {
+    let (model, _) = built();
+    let source = LodSource::new(model);
+    let policy = DistancePolicy::for_model(model.lod());
+    let dir = std::env::temp_dir().join(format!("mlod-render-{}", std::process::id()));
+    let run = |render: bool| {
+        let run = CrowdRun {
+            config: CrowdConfig::with_density(200, 0.05),
+            seconds: 1.0 / 30.0,
+            lens: Camera::default(),
+            scene: crowd_sim::Scene::Overview,
+            render: render.then(|| (dir.clone(), 1)),
+        };
+        run_crowd(&source, &policy, &run).unwrap()
+    };
+    let root_only = |o: &motion_lod::crowd::CrowdOutcome| *o.last.level_histogram.last().unwrap();
+    let (rendered, timed) = (run(true), run(false));
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(rendered.rendered, 1);
+    assert!(
+        root_only(&rendered) + 20 < root_only(&timed),
+        "root-only walkers after one frame: {} rendered (primed), {} timed",
+        root_only(&rendered),
+        root_only(&timed)
+    );
+}
