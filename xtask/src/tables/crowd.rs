@@ -255,6 +255,10 @@ fn timed_or_skipped<S: ClipSource, P: LevelPolicy + Sync>(
     Ok(row(Some(report), warmup_s, worst, None))
 }
 
+/// Timed frames (at least) of each run that holds the policy to levels `0..=k`
+/// ([`PolicyKind::UpToLevel`]).
+pub const CAPPED_FRAMES: usize = 150;
+
 /// Threads of the main runs (this machine's two cores).
 pub const MAIN_THREADS: usize = 2;
 
@@ -372,12 +376,17 @@ pub fn measure(
                         lod_policy::Detail::new(detail.accuracy.min(k), detail.active_joints)
                     }
                 };
+                // The differences are a few percent: time more frames than the size's default.
+                let long = CrowdSize {
+                    frames: size.frames.max(CAPPED_FRAMES),
+                    ..size
+                };
                 let mut warm = None;
                 rows.push(timed_or_skipped(
                     spec,
                     &lod,
                     &capped,
-                    size,
+                    long,
                     f64::INFINITY,
                     &mut warm,
                 )?);

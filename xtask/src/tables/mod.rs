@@ -597,8 +597,11 @@ fn write_figure5(doc: &mut String, pts: &[timing::DistancePoint], link: &str, mo
         "\n## 3. Figure 5: level of detail against distance from the camera\n\n![Figure 5]({link})\n\n\
          The distance policy (`lod_policy::DistancePolicy`, defaults): full detail below 30 m, one key \
          level more every 50 m (the levels between keys spread over each step), one joint (3 DOF) fewer \
-         every 10 m, root only past the last key step. Size ratio = r_P r_T r_S of the level over that of \
-         level 0. The model has {} joints.\n\n\
+         every 10 m, root only past the last key step; then the screen check (1 px at 1080p, 60 degrees): \
+         where that schedule would show more than a pixel of the level's measured error and foot slide, \
+         the cheapest detail that fits and is nowhere coarser than the schedule's, among the levels \
+         whose motion quality passes (section 7's *used*). Size ratio = r_P r_T r_S of the level over \
+         that of level 0. The model has {} joints.\n\n\
          **paper (published)**: the same schedule (30 m, 50 m, 3 DOF per 10 m) over 10 key tensors from \
          40 x 40 x 60 to 7 x 7 x 9; Figure 5 is a plot without values. The text reports that the error \
          grows monotonically with distance with a jump past 200 m, and that time and key tensor size fall \
@@ -790,9 +793,10 @@ fn write_crowd(doc: &mut String, rows: &[crowd::CrowdRow]) {
             "\nWhat each accuracy level saves: the model under the LOD policy with walkers that have joints \
              held to levels 0..k (where the policy would give a coarser level, the finest allowed; root-only \
              walkers unchanged), one row per level the policies use (levels whose motion quality fails \
-             serve only root-only walkers: section 7), in one run on {} threads. *Saved* is the mean frame \
-             time saved against level 0 and root only, in the same scene.\n",
-            crowd::MAIN_THREADS
+             serve only root-only walkers: section 7), in one run on {} threads, {} timed frames each. \
+             *Saved* is the mean frame time saved against level 0 and root only, in the same scene.\n",
+            crowd::MAIN_THREADS,
+            crowd::CAPPED_FRAMES
         );
         let mut tab = Table::new(&[
             "camera",

@@ -121,11 +121,14 @@ pub fn section(
         "\n## 7. Motion quality per accuracy level\n\n![Motion quality]({figure_link})\n\n\
          The motion-quality meter (`motion_lod::quality`, by forward kinematics) over {walks} walks of \
          {CYCLES} cycles at 30 fps covering the data's controls (straight, turns of +-30 degrees, \
-         sidesteps of +-0.3 m, slow, fast and the corners of the control hull), all {} joints, seams \
-         inertialized and feet planted. Ratios are to the median of the data's own takes ({} takes: \
-         pop {:.2} cm/frame² at 30 fps, skate {:.2} cm/s, facing range {:.1}..{:.1} deg). The issue's \
-         thresholds for near characters: pop at most 1.25x, skate at most 1.5x, floor within 1 cm, \
-         facing inside the data's range. The same command per walk: `motion-lod quality MODEL`.\n",
+         sidesteps of +-0.3 m, slow, fast, the corners of the control hull and its edges along turn \
+         and sidestep from the median straight walk), all {} joints, seams inertialized and feet \
+         planted. Ratios are to the median of the data's own takes ({} takes: pop {:.2} cm/frame² at \
+         30 fps, skate {:.2} cm/s, facing range {:.1}..{:.1} deg). The issue's thresholds for near \
+         characters: pop at most 1.25x, skate at most 1.5x, floor within 1 cm, facing inside the \
+         data's range. *Used*: whether the policies give the level to walkers with joints (level 0, \
+         or a level within the pop, skate and floor thresholds as the build measured it: \
+         `motion-lod info`'s `used` column). The same command per walk: `motion-lod quality MODEL`.\n",
         model.lod().joints(),
         reference.takes,
         m.pop_cm,
@@ -135,13 +138,16 @@ pub fn section(
     );
     let _ = writeln!(
         doc,
-        "| level | pop worst (x data) | pop median | seam pop worst | skate worst (x data) | skate median | largest floor offset (cm) | walks facing outside the data |\n\
-         | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        "| level | pop worst (x data) | pop median | seam pop worst | skate worst (x data) | skate median | largest floor offset (cm) | walks facing outside the data | used |\n\
+         | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
     );
+    let errors = model.lod().level_errors();
     for (l, pw, pm, sw, sm, seam, floor, out) in level_rows(reference, points) {
+        let used = l == 0 || errors.get(l).is_some_and(|e| e.passes_quality());
+        let used = if used { "yes" } else { "no" };
         let _ = writeln!(
             doc,
-            "| {l} | {pw:.2} | {pm:.2} | {seam:.2} | {sw:.2} | {sm:.2} | {floor:.2} | {out} |"
+            "| {l} | {pw:.2} | {pm:.2} | {seam:.2} | {sw:.2} | {sm:.2} | {floor:.2} | {out} | {used} |"
         );
     }
     doc
