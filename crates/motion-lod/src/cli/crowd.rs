@@ -229,6 +229,28 @@ fn frame_ms(report: &CrowdReport, fps: f32) -> Option<FrameMs> {
 }
 
 /// The model to animate and, when the naive or PCA source is needed, the analysis it was built from.
+/// The crowd's styles from `--style` (a name, a blend, or `data`; none: the data's mix).
+pub(super) fn crowd_style(model: &MotionModel, style: Option<&str>) -> anyhow::Result<CrowdStyle> {
+    Ok(match style {
+        None => CrowdStyle::DataMix,
+        Some(text) => match parse_style_mix(model.styles(), text)? {
+            mix if mix.is_data_mix() => CrowdStyle::DataMix,
+            mix => CrowdStyle::Each(mix),
+        },
+    })
+}
+
+/// The lens every crowd command times and renders with: 960 x 540 pixels, the default field of
+/// view.
+pub(super) fn view_lens() -> Camera {
+    Camera {
+        image_width: 960,
+        image_height: 540,
+        aspect: 960.0 / 540.0,
+        ..Camera::default()
+    }
+}
+
 pub(super) fn model_and_analysis(
     path: Option<&PathBuf>,
     need_analysis: bool,
@@ -295,22 +317,11 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             seed: args.seed,
             fps: args.fps,
             culling: args.culling.into(),
-            style: match &args.style {
-                None => CrowdStyle::DataMix,
-                Some(text) => match parse_style_mix(model.styles(), text)? {
-                    mix if mix.is_data_mix() => CrowdStyle::DataMix,
-                    mix => CrowdStyle::Each(mix),
-                },
-            },
+            style: crowd_style(&model, args.style.as_deref())?,
             ..CrowdConfig::with_density(args.walkers, args.density)
         },
         seconds: args.seconds,
-        lens: Camera {
-            image_width: 960,
-            image_height: 540,
-            aspect: 960.0 / 540.0,
-            ..Camera::default()
-        },
+        lens: view_lens(),
         scene: args.camera.into(),
         render: args.render.clone().map(|d| (d, args.render_every)),
     };

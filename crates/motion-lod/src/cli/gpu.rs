@@ -16,10 +16,9 @@ pub fn run(_args: &CrowdArgs) -> anyhow::Result<()> {
 #[cfg(feature = "gpu")]
 pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     use anyhow::Context as _;
-    use crowd_sim::{Camera, CrowdConfig, CrowdStyle, LevelTable, Scene};
+    use crowd_sim::{CrowdConfig, LevelTable, Scene};
     use gpu_crowd::{Gpu, GpuCrowd, GpuOptions};
     use lod_policy::{DistancePolicy, FullDetail, LevelPolicy, ScreenSpacePolicy};
-    use motion_lod::style::parse_style_mix;
 
     use super::crowd::PolicyArg;
 
@@ -32,13 +31,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         // Not on the GPU yet: off, and said so below.
         seam_levels: 0,
         foot_lock_levels: 0,
-        style: match &args.style {
-            None => CrowdStyle::DataMix,
-            Some(text) => match parse_style_mix(model.styles(), text)? {
-                mix if mix.is_data_mix() => CrowdStyle::DataMix,
-                mix => CrowdStyle::Each(mix),
-            },
-        },
+        style: super::crowd::crowd_style(&model, args.style.as_deref())?,
         ..CrowdConfig::with_density(args.walkers, args.density)
     };
     let lod = model.lod();
@@ -58,15 +51,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     let setup = started.elapsed();
     let field = crowd.config().field_size_m;
     let scene: Scene = args.camera.into();
-    let lens = scene.lens(
-        Camera {
-            image_width: 960,
-            image_height: 540,
-            aspect: 960.0 / 540.0,
-            ..Camera::default()
-        },
-        field,
-    );
+    let lens = scene.lens(super::crowd::view_lens(), field);
     let path = scene.path(field);
     let frames = ((args.seconds * args.fps).round() as usize).max(1);
     let dt = 1.0 / args.fps;
