@@ -191,7 +191,10 @@ impl CrowdConfig {
         }
     }
 
-    fn validate(&self) -> Result<(), CrowdError> {
+    /// Checks every value (walkers at least 1; sizes, rates and margins finite and in their
+    /// domains; style weights finite and non-negative): what [`Crowd::new`] asks of a config, for
+    /// any crowd that runs one (`gpu-crowd` too).
+    pub fn validate(&self) -> Result<(), CrowdError> {
         let bad = |field, value: f32| {
             Err(CrowdError::BadConfig {
                 field,
@@ -303,11 +306,7 @@ impl<C: Send> Crowd<C> {
         };
         // Preferred strides, the tightest curvature they can follow, and the field that needs.
         let plan = PathPlan::new(&bounds, config.border_m);
-        let field_enlarged_from = plan.enlarged_field(config.field_size_m).map(|needed| {
-            let from = config.field_size_m;
-            config.field_size_m = needed;
-            from
-        });
+        let field_enlarged_from = plan.fit_field(&mut config.field_size_m);
         let root_only = levels.root_only().ok_or(CrowdError::NoLevels {
             accuracy_levels: levels.accuracy_levels,
             pose_len: levels.pose_len,

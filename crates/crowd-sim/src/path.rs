@@ -262,11 +262,15 @@ impl PathPlan {
         2.0 * ((1.5 * self.min_radius).max(3.0) + self.border_m)
     }
 
-    /// The field side to use instead of `field_m` when that is too small for the paths (with a
-    /// margin of 0.1% for rounding), or `None` when it fits.
-    pub fn enlarged_field(&self, field_m: f32) -> Option<f32> {
+    /// Enlarges `field_m` to fit the paths when it is too small (with a margin of 0.1% for
+    /// rounding); returns the size it had, or `None` when it fitted and is unchanged.
+    pub fn fit_field(&self, field_m: &mut f32) -> Option<f32> {
         let needed = self.needed_field_m() * 1.001;
-        (field_m < needed && needed.is_finite()).then_some(needed)
+        if *field_m < needed && needed.is_finite() {
+            Some(std::mem::replace(field_m, needed))
+        } else {
+            None
+        }
     }
 
     /// Walker `i`'s start in a field of side `field_m` from its generator `g` (seeded by the

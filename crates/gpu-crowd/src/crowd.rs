@@ -278,11 +278,7 @@ impl GpuCrowd {
         // The walkers, as crowd_sim::Crowd::new draws them (the same plan and draws).
         let bounds = range;
         let plan = PathPlan::new(&bounds, config.border_m);
-        let field_enlarged_from = plan.enlarged_field(config.field_size_m).map(|needed| {
-            let from = config.field_size_m;
-            config.field_size_m = needed;
-            from
-        });
+        let field_enlarged_from = plan.fit_field(&mut config.field_size_m);
         let mix = model.data_style_mix();
         let last = tables.levels - 1;
         let mut walkers = Vec::with_capacity(config.walkers);
@@ -815,38 +811,12 @@ impl GpuCrowd {
 /// The CPU crowd's checks of the settings the GPU crowd uses, and the settings it does not
 /// implement.
 fn check_config(c: &CrowdConfig) -> Result<(), GpuError> {
-    let bad = |field: &'static str, value: f32| {
-        Err(crowd_sim::CrowdError::BadConfig {
-            field,
-            value: f64::from(value),
-        }
-        .into())
-    };
-    if c.walkers == 0 {
-        return Err(crowd_sim::CrowdError::NoWalkers.into());
-    }
+    c.validate()?;
     if c.walkers > u32::MAX as usize / 2 {
         return Err(GpuError::Config(format!(
             "{} walkers: at most 2^31",
             c.walkers
         )));
-    }
-    if !(c.field_size_m.is_finite() && c.field_size_m > 0.0) {
-        return bad("field_size_m", c.field_size_m);
-    }
-    if !(c.border_m.is_finite() && c.border_m >= 0.0) {
-        return bad("border_m", c.border_m);
-    }
-    if !(c.cull_margin_m.is_finite() && c.cull_margin_m >= 0.0) {
-        return bad("cull_margin_m", c.cull_margin_m);
-    }
-    if let CrowdStyle::Each(style) = &c.style
-        && let Some(j) = style
-            .weights
-            .iter()
-            .position(|w| !(w.is_finite() && *w >= 0.0))
-    {
-        return bad("style", style.weights[j]);
     }
     if c.seam_levels > 0 || c.foot_lock_levels > 0 {
         return Err(GpuError::Config(format!(

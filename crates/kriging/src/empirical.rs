@@ -272,28 +272,8 @@ impl EmpiricalVariogram {
         binning: &Binning,
     ) -> Result<Self, KrigingError> {
         let (s, d) = coords.shape();
-        if s != values.nrows() {
-            return Err(KrigingError::ShapeMismatch {
-                what: "values rows vs coordinate rows",
-                expected: s,
-                got: values.nrows(),
-            });
-        }
-        if s < 2 {
-            return Err(KrigingError::TooFewSamples {
-                what: "empirical variogram",
-                needed: 2,
-                got: s,
-            });
-        }
-        crate::check_finite("coordinates", coords)?;
-        crate::check_finite("values", values)?;
+        check_inputs(coords, values, binning)?;
         let bins = binning.bins;
-        if bins == 0 {
-            return Err(KrigingError::InvalidConfig(
-                "the empirical variogram needs at least one bin".into(),
-            ));
-        }
         let pts: Vec<f64> = (0..s)
             .flat_map(|i| (0..d).map(move |k| (i, k)))
             .map(|(i, k)| coords[(i, k)])
@@ -351,4 +331,37 @@ impl EmpiricalVariogram {
             counts,
         })
     }
+}
+
+/// The input checks of every empirical variogram ([`EmpiricalVariogram::compute_binned`] and the
+/// directional estimator): one row of `values` per coordinate row, at least two samples, finite
+/// coordinates and values, at least one bin.
+pub(crate) fn check_inputs(
+    coords: MatRef<'_, f64>,
+    values: MatRef<'_, f64>,
+    binning: &Binning,
+) -> Result<(), KrigingError> {
+    let s = coords.nrows();
+    if s != values.nrows() {
+        return Err(KrigingError::ShapeMismatch {
+            what: "values rows vs coordinate rows",
+            expected: s,
+            got: values.nrows(),
+        });
+    }
+    if s < 2 {
+        return Err(KrigingError::TooFewSamples {
+            what: "empirical variogram",
+            needed: 2,
+            got: s,
+        });
+    }
+    crate::check_finite("coordinates", coords)?;
+    crate::check_finite("values", values)?;
+    if binning.bins == 0 {
+        return Err(KrigingError::InvalidConfig(
+            "the empirical variogram needs at least one bin".into(),
+        ));
+    }
+    Ok(())
 }

@@ -189,34 +189,12 @@ impl EmpiricalVariogram {
         opts: &EstimateOptions,
     ) -> Result<Self, KrigingError> {
         let (s, d) = coords.shape();
-        if s != values.len() {
-            return Err(KrigingError::ShapeMismatch {
-                what: "values length vs coordinate rows",
-                expected: s,
-                got: values.len(),
-            });
-        }
-        if s < 2 {
-            return Err(KrigingError::TooFewSamples {
-                what: "empirical variogram",
-                needed: 2,
-                got: s,
-            });
-        }
-        crate::check_finite("coordinates", coords)?;
-        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err(KrigingError::NonFinite {
-                what: "values",
-                row: i,
-                col: 0,
-            });
-        }
+        crate::empirical::check_inputs(
+            coords,
+            MatRef::from_column_major_slice(values, values.len(), 1),
+            binning,
+        )?;
         let bins = binning.bins;
-        if bins == 0 {
-            return Err(KrigingError::InvalidConfig(
-                "the empirical variogram needs at least one bin".into(),
-            ));
-        }
         // The direction, normalised; the tests are GSTools' (acos of the cosine, strict).
         let dir = match &opts.direction {
             None => None,

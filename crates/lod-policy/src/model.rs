@@ -926,6 +926,19 @@ impl LodModel {
     pub fn mean_pose(&self) -> &[f32] {
         &self.parts.mean_pose
     }
+    /// Whether the level-of-detail policies give accuracy level `level` to characters with
+    /// joints: level 0 always; a coarser level when its measured motion quality passes
+    /// ([`LevelError::passes_quality`], true when not measured); never a level the model lacks.
+    /// The others serve only root-only characters.
+    pub fn level_serves_joints(&self, level: usize) -> bool {
+        level == 0
+            || (level < self.parts.levels.len()
+                && self
+                    .parts
+                    .level_errors
+                    .get(level)
+                    .is_none_or(LevelError::passes_quality))
+    }
     /// Measured error per accuracy level (empty if not measured).
     pub fn level_errors(&self) -> &[LevelError] {
         &self.parts.level_errors

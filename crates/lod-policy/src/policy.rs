@@ -372,7 +372,7 @@ fn usable_level_errors(model: &LodModel, shell: bool) -> Vec<f32> {
         .iter()
         .enumerate()
         .map(|(l, e)| {
-            if l > 0 && !e.passes_quality() {
+            if !model.level_serves_joints(l) {
                 f32::INFINITY
             } else {
                 ERROR_MARGIN * e.visible_m(shell)

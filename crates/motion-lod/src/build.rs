@@ -837,8 +837,9 @@ impl MotionModel {
         // Foot slide needs the feet (the quality reference); without them it is 0. Measured over
         // the quality grid (the hull's corners, turns, sidesteps, slow and fast) and the picked
         // training controls: the largest over both.
-        let grid: Vec<Controls> = crate::walk_quality::walk_grid(self)
-            .into_iter()
+        let walks = crate::walk_quality::walk_grid(self);
+        let grid: Vec<Controls> = walks
+            .iter()
             .map(|w| w.controls)
             .chain(picked.iter().copied())
             .collect();
@@ -850,7 +851,6 @@ impl MotionModel {
             ),
             None => None,
         };
-        let walks = crate::walk_quality::walk_grid(self);
         let measure = |detail: Detail, with_quality: bool| -> Result<LevelError, BuildError> {
             let mut meter = ErrorMeter::new(&self.layout);
             for (c, r) in picked.iter().zip(&reference) {

@@ -146,7 +146,7 @@ pub fn summary(model: &MotionModel) -> Summary {
                 pop_x: errors.get(l).map_or(f32::NAN, |e| e.pop_x),
                 skate_x: errors.get(l).map_or(f32::NAN, |e| e.skate_x),
                 floor_cm: errors.get(l).map_or(f32::NAN, |e| e.floor_cm),
-                used: l == 0 || errors.get(l).is_some_and(|e| e.passes_quality()),
+                used: lod.level_serves_joints(l),
             })
             .collect(),
         storage: Storage::of(model),
@@ -280,7 +280,7 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
     let errors = lod.level_errors();
     for (l, lv) in lod.levels().iter().enumerate() {
         let e = errors.get(l).copied().unwrap_or_default();
-        let used = l == 0 || e.passes_quality();
+        let used = lod.level_serves_joints(l);
         writeln!(
             out,
             "  {l:>5}  {:>3}  {:<13}  {:>8.3} cm  {:>8.3} cm  {:>7.2} cm  {:>6.1} m  {:>5.2}  {:>5.2}  {:>5.2} cm  {}",

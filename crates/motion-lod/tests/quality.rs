@@ -217,7 +217,7 @@ fn walks_look_like_the_data(what: &str, model: &MotionModel, min_takes: usize) -
     }
     let lod = model.lod();
     let used: Vec<usize> = (0..lod.levels().len())
-        .filter(|&l| l == 0 || lod.level_errors()[l].passes_quality())
+        .filter(|&l| lod.level_serves_joints(l))
         .collect();
     for &level in &used {
         for g in &grid {

@@ -283,14 +283,7 @@ pub fn measure(
     let full = FullDetail::for_model(model.lod());
     let runs_per_size = 6 + threads.iter().filter(|&&t| t != MAIN_THREADS).count();
     let used_levels = (0..model.lod().levels().len())
-        .filter(|&l| {
-            l == 0
-                || model
-                    .lod()
-                    .level_errors()
-                    .get(l)
-                    .is_some_and(|e| e.passes_quality())
-        })
+        .filter(|&l| model.lod().level_serves_joints(l))
         .count();
     progress.stage(
         "crowds (2 scenes; LOD, naive, PCA; LOD policy and full detail; threads; levels)",
@@ -355,9 +348,8 @@ pub fn measure(
     }
     if let Some(&size) = sizes.iter().max_by_key(|s| s.walkers) {
         // What each accuracy level saves: the policy held to levels 0..=k, for every level it uses.
-        let errors = model.lod().level_errors();
         let used: Vec<usize> = (0..model.lod().levels().len())
-            .filter(|&l| l == 0 || errors.get(l).is_some_and(|e| e.passes_quality()))
+            .filter(|&l| model.lod().level_serves_joints(l))
             .collect();
         for scene in Scene::ALL {
             for &k in &used {

@@ -141,9 +141,8 @@ pub fn section(
         "| level | pop worst (x data) | pop median | seam pop worst | skate worst (x data) | skate median | largest floor offset (cm) | walks facing outside the data | used |\n\
          | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
     );
-    let errors = model.lod().level_errors();
     for (l, pw, pm, sw, sm, seam, floor, out) in level_rows(reference, points) {
-        let used = l == 0 || errors.get(l).is_some_and(|e| e.passes_quality());
+        let used = model.lod().level_serves_joints(l);
         let used = if used { "yes" } else { "no" };
         let _ = writeln!(
             doc,

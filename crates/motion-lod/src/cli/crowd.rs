@@ -229,6 +229,17 @@ fn frame_ms(report: &CrowdReport, fps: f32) -> Option<FrameMs> {
 }
 
 /// The model to animate and, when the naive or PCA source is needed, the analysis it was built from.
+impl CrowdArgs {
+    /// The policy's name as the report prints it.
+    pub(super) fn policy_name(&self) -> &'static str {
+        match (self.no_lod, self.policy) {
+            (true, _) => "no level of detail",
+            (false, PolicyArg::Distance) => "distance",
+            (false, PolicyArg::Screen) => "screen-space",
+        }
+    }
+}
+
 /// The crowd's styles from `--style` (a name, a blend, or `data`; none: the data's mix).
 pub(super) fn crowd_style(model: &MotionModel, style: Option<&str>) -> anyhow::Result<CrowdStyle> {
     Ok(match style {
@@ -420,14 +431,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         },
         args.density,
         args.seed,
-        if args.no_lod {
-            "no level of detail"
-        } else {
-            match args.policy {
-                PolicyArg::Distance => "distance",
-                PolicyArg::Screen => "screen-space",
-            }
-        }
+        args.policy_name()
     );
     if let Some(from) = main.field_enlarged_from {
         println!(

@@ -95,14 +95,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         crowd.adapter_name(),
         args.seconds,
         args.fps,
-        if args.no_lod {
-            "no level of detail"
-        } else {
-            match args.policy {
-                PolicyArg::Distance => "distance",
-                PolicyArg::Screen => "screen-space",
-            }
-        }
+        args.policy_name()
     );
     if gpu.is_software() {
         println!(
