@@ -1,15 +1,17 @@
 // motion-lod live: the runtime compiled to WebAssembly (mlod.js) synthesizes walks in the page.
 // One walker steered from sliders and the keyboard (its controls apply at its next cycle, as the
 // runtime chains cycles, with the foot lock), or a crowd whose level of detail the runtime's
-// policy chooses every frame from this page's camera. The page only draws: bones as instanced
-// segments, a walker the policy leaves root only as a single body, coloured by level.
+// policy chooses every frame from this page's camera. The page only draws: bones as camera-facing
+// ribbons coloured by level, a walker the policy leaves root only as a single grey body (in a
+// crowd a point sprite), on a ground that is cleared rather than drawn (software GL pays for
+// every pixel, line and primitive: see `clearGroundAndSky`, `Bodies`).
 //
 // `motion-lod view MODEL.mlod` serves this page with the model as model.mlod; a model file can
 // also be picked or dropped. For tests, `window.live` runs the scripted walk and crowd of
 // crowd.js, steers the walker, and reports timings.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { Runtime, Model, Walker, TRANSFORM_FLOATS } from './mlod.js';
+import { Runtime, Model, Walker, TRANSFORM_FLOATS, STATE_BYTES } from './mlod.js';
 import { Crowd, runWalk, runCrowd, benchPose, benchStep } from './crowd.js';
 
 const canvas = document.getElementById('view');
@@ -22,19 +24,54 @@ renderer.setPixelRatio(fast ? 1 : Math.min(window.devicePixelRatio, 2));
 
 const BACKGROUND = new THREE.Color(0xdfe7ee);
 const scene = new THREE.Scene();
-scene.background = BACKGROUND;
 const camera = new THREE.PerspectiveCamera(40, 1, 0.05, 3000);
 camera.position.set(3.2, 1.8, 4.2);
 const orbit = new OrbitControls(camera, canvas);
 orbit.target.set(0, 0.9, 0);
 orbit.enableDamping = true;
-scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8577, 1.6));
-const ground = new THREE.Mesh(
-  new THREE.PlaneGeometry(6000, 6000),
-  new THREE.MeshLambertMaterial({ color: 0xbdbbb2 }),
-);
-ground.rotation.x = -Math.PI / 2;
-scene.add(ground);
+// The ground is not drawn but cleared: an endless plane at y = 0 out to the camera's far distance,
+// in the colour a Lambert plane of albedo 0xbdbbb2 under the sky light (white, 1.6) has, and the
+// background above its horizon. Two scissored clears cost next to nothing on software GL, where
+// shading the plane over most of the picture cost the GPU process about 10 ms of CPU a frame.
+const SKY_LIGHT = 1.6;
+const GROUND = new THREE.Color(0xbdbbb2).multiplyScalar(SKY_LIGHT / Math.PI);
+scene.background = null;
+renderer.autoClear = false;
+const groundView = { dir: new THREE.Vector3(), size: new THREE.Vector2() };
+function clearGroundAndSky() {
+  const { width, height } = renderer.getSize(groundView.size);
+  // The camera never rolls (OrbitControls keeps y up), so the ground's far edge is a row: a
+  // point of the ground at the far distance ahead, f along the view, lies at NDC y
+  // (f sin(pitch) - camera y) / (f cos(pitch) tan(fov / 2)); the ground is below it.
+  const dir = camera.getWorldDirection(groundView.dir);
+  const down = -dir.y;
+  const level = Math.hypot(dir.x, dir.z);
+  const f = camera.far;
+  const y = camera.position.y;
+  let rows = 0;
+  if (y > 0) {
+    const ndc = level > 1e-6 ? (f * down - y) / (f * level * Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2)) : 1;
+    rows = Math.min(height, Math.max(0, Math.round(0.5 * (ndc + 1) * height)));
+  }
+  renderer.setScissorTest(true);
+  if (rows > 0) {
+    renderer.setScissor(0, 0, width, rows);
+    renderer.setClearColor(GROUND);
+    renderer.clear(true, true, false);
+  }
+  if (rows < height) {
+    renderer.setScissor(0, rows, width, height - rows);
+    renderer.setClearColor(BACKGROUND);
+    renderer.clear(true, true, false);
+  }
+  renderer.setScissorTest(false);
+}
+
+/// Draws the frame: the ground and sky, then the scene.
+function draw() {
+  clearGroundAndSky();
+  renderer.render(scene, camera);
+}
 let grid = null;
 function setGrid(size, cells) {
   if (grid) scene.remove(grid);
@@ -140,6 +177,80 @@ class Segments {
 const segments = new Segments();
 scene.add(segments.mesh);
 
+/// Root-only walkers of a crowd drawn as points, one vertex a walker (its root x, the top of its
+/// body, z: 3 floats), each a round grey body cut out of its point sprite by the fragment shader,
+/// sized by its distance; the same body the ribbon of `Segments` draws (from 0.08 m to 0.65 m above
+/// the root, radius 0.18 m), seen from the side. On software GL a point is one primitive of one
+/// vertex where a ribbon is two triangles of four vertices of 40 bytes: most of a large crowd is
+/// root only (about 6,900 of 10,000 walkers in view from the page's crowd camera).
+class Bodies {
+  constructor() {
+    this.geometry = new THREE.BufferGeometry();
+    this.material = new THREE.ShaderMaterial({
+      uniforms: { uColor: { value: ROOT_ONLY }, uPixels: { value: 1 } },
+      vertexShader: `
+        uniform float uPixels;
+        varying float vHalf;
+        void main() {
+          float bottom = 0.08;
+          float h = position.y - bottom;
+          vec4 clip = projectionMatrix * viewMatrix * vec4(position.x, bottom + 0.5 * h, position.z, 1.0);
+          float size = max(h * uPixels / max(clip.w, 1e-6), 1.0);
+          gl_PointSize = size;
+          // The body's half width across the sprite, at least a pixel's.
+          vHalf = max(0.18 / h, 0.6 / size);
+          gl_Position = clip;
+        }`,
+      fragmentShader: `
+        uniform vec3 uColor;
+        varying float vHalf;
+        void main() {
+          float side = (gl_PointCoord.x - 0.5) / vHalf;
+          if (abs(side) > 1.0) discard;
+          float light = 0.55 + 0.45 * sqrt(max(1.0 - side * side, 0.0)) - 0.15 * side;
+          gl_FragColor = vec4(uColor * light, 1.0);
+          #include <colorspace_fragment>
+        }`,
+    });
+    this.points = new THREE.Points(this.geometry, this.material);
+    this.points.frustumCulled = false;
+    this.count = 0;
+    this.grow(4096);
+  }
+
+  grow(capacity) {
+    const data = new Float32Array(capacity * 3);
+    if (this.data) data.set(this.data.subarray(0, this.count * 3));
+    this.data = data;
+    this.attribute = new THREE.BufferAttribute(data, 3).setUsage(THREE.DynamicDrawUsage);
+    this.geometry.setAttribute('position', this.attribute);
+    this.capacity = capacity;
+  }
+
+  begin() { this.count = 0; }
+
+  /// A body whose root is at (x, y, z).
+  push(x, y, z) {
+    if (this.count === this.capacity) this.grow(2 * this.capacity);
+    const d = this.data;
+    const i = this.count++ * 3;
+    d[i] = x; d[i + 1] = y + 0.65; d[i + 2] = z;
+  }
+
+  /// Uploads the used range; `uPixels` turns a height over the clip w into pixels.
+  end(camera, renderer) {
+    this.attribute.clearUpdateRanges();
+    this.attribute.addUpdateRange(0, this.count * 3);
+    this.attribute.needsUpdate = true;
+    this.geometry.setDrawRange(0, this.count);
+    this.material.uniforms.uPixels.value = 0.5 * camera.projectionMatrix.elements[5] * renderer.getDrawingBufferSize(bodiesSize).y;
+  }
+}
+const bodiesSize = new THREE.Vector2();
+
+const bodies = new Bodies();
+scene.add(bodies.points);
+
 const ui = Object.fromEntries(['version', 'file-name', 'walk-panel', 'crowd-panel', 'dz', 'turn',
   'dx', 'height', 'style', 'style-row', 'detail', 'foot-lock', 'walk-readout', 'count', 'timing',
   'legend', 'legend-items', 'message', 'open', 'record'].map((id) => [id.replace(/-(\w)/g, (_, c) => c.toUpperCase()), document.getElementById(id)]));
@@ -239,6 +350,8 @@ function clearWalkers() {
   crowd = null;
   segments.begin();
   segments.end();
+  bodies.begin();
+  bodies.end(camera, renderer);
 }
 
 function startWalk() {
@@ -282,13 +395,24 @@ function startCrowd(n) {
   camera.position.set(0, 14, -radius - 20);
   orbit.target.set(0, 0, -radius + 40);
   orbit.update();
-  setGrid(Math.ceil(2.2 * radius / 10) * 10, Math.ceil(2.2 * radius / 10));
+  // Cells of 10 m, doubled until at most 64 a side: each line spans the picture, and software GL
+  // pays for every one (about 3 ms of the GPU process's CPU a frame for 124 lines at 10,000).
+  let cell = 10;
+  while (2.2 * radius / cell > 64) cell *= 2;
+  setGrid(Math.ceil(2.2 * radius / cell) * cell, Math.ceil(2.2 * radius / cell));
   writeCamera();
   crowd.start(cameraPtr);
   followLast = null;
 }
 
-/// Adds a walker's bones (its joints in the world) or, root only, a single body.
+// A walker state's words (MlodWalkerState, mlod.js): root position (f32), level, joints (u32).
+const STATE_WORDS = STATE_BYTES >> 2;
+const STATE_ROOT = 24 >> 2;
+const STATE_LEVEL = 68 >> 2;
+const STATE_JOINTS = 72 >> 2;
+
+/// Adds a walker's bones (its joints in the world) or, root only, a single body (a crowd draws
+/// its root-only walkers as points of `bodies` instead).
 function drawWalker(w, colour) {
   const f = runtime.f32;
   const s = w.state >> 2;
@@ -325,13 +449,14 @@ function frame(now) {
   }
   orbit.update();
   if (!ready) {
-    renderer.render(scene, camera);
+    draw();
     return;
   }
   writeCamera();
   const t0 = performance.now();
   levelCounts.length = 0;
   segments.begin();
+  bodies.begin();
   let t1, t2;
   if (walker) {
     const fixed = panelDetail();
@@ -355,21 +480,34 @@ function frame(now) {
   } else if (crowd) {
     crowd.step(dt, cameraPtr);
     t1 = performance.now();
-    const { walkers, visible } = crowd;
-    for (let i = 0; i < walkers.length; i++) {
-      if (visible[i] && walkers[i].joints() > 0) walkers[i].computeTransforms();
+    // Every walker's state read in place, from the crowd's array of states (no call a walker).
+    const { walkers } = crowd;
+    const n = walkers.length;
+    const { bytes, u32 } = runtime.views();
+    const visible = crowd.visiblePtr;
+    const states = crowd.states >> 2;
+    for (let i = 0, s = states; i < n; i++, s += STATE_WORDS) {
+      if (bytes[visible + i] && u32[s + STATE_JOINTS] > 0) walkers[i].computeTransforms();
     }
     t2 = performance.now();
-    for (let i = 0; i < walkers.length; i++) {
-      if (!visible[i]) continue;
-      const wk = walkers[i];
-      const level = wk.joints() ? wk.level() : model.levels;
+    const f = runtime.f32;
+    let rootOnly = 0;
+    for (let i = 0, s = states; i < n; i++, s += STATE_WORDS) {
+      if (!bytes[visible + i]) continue;
+      if (u32[s + STATE_JOINTS] === 0) {
+        bodies.push(f[s + STATE_ROOT], f[s + STATE_ROOT + 1], f[s + STATE_ROOT + 2]);
+        rootOnly++;
+        continue;
+      }
+      const level = u32[s + STATE_LEVEL];
       levelCounts[level] = (levelCounts[level] ?? 0) + 1;
-      drawWalker(wk, colourOf(wk.level()));
+      drawWalker(walkers[i], colourOf(level));
     }
+    if (rootOnly) levelCounts[model.levels] = rootOnly;
   }
   segments.end();
-  renderer.render(scene, camera);
+  bodies.end(camera, renderer);
+  draw();
   if (sync) renderer.getContext().finish();
   const t3 = performance.now();
   timing.frames++;

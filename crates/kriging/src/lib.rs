@@ -50,8 +50,9 @@
 //!   ([`Kriging::leave_one_out`]) and allocation-free queries;
 //! - [`ProjectedQuery`]: `L b(c)` for a fixed `L` in `R (S+1)` multiply-adds (runtime hot path);
 //! - [`ParamScaling`]: per-dimension scaling (none, standardise, given); constant dimensions dropped;
-//! - [`select_dims`]: drops the dimensions that carry no signal (backward elimination by
-//!   leave-one-out error);
+//! - [`select_dims`]: drops the dimensions that carry no signal (forward selection by
+//!   leave-one-out error); [`select_dims_by_folds`]: keeps every dimension unless dropping it
+//!   lowers the error of a cross-validation over given folds (backward elimination);
 //! - [`Rbf`]: the radial-basis baseline of Rose et al. with the same `fit/weights/predict/loo` shape,
 //!   exact or with a smoothing term chosen by leave-one-out error ([`RbfSmoothing`]).
 //!
@@ -148,7 +149,10 @@ pub use nested::{NestedVariogram, Structure};
 pub use projected::ProjectedQuery;
 pub use rbf::{RBF_SMOOTHING_GRID, Rbf, RbfConfig, RbfKernel, RbfSmoothing, SmoothingCandidate};
 pub use scaling::{ParamScaling, ScalingChoice};
-pub use select::{DimDecision, DimSelection, SelectRule, TRIAL_SEARCH_MAX_SAMPLES, select_dims};
+pub use select::{
+    DimDecision, DimSelection, SelectRule, TRIAL_SEARCH_MAX_SAMPLES, select_dims,
+    select_dims_by_folds,
+};
 pub use simulate::{Realisations, Sgs, SgsMean, SgsPath};
 pub use sphere::{chord_distance, great_circle_distance, latlon_to_xyz};
 pub use variogram::{Variogram, VariogramModel, shape};

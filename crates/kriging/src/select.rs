@@ -1,4 +1,6 @@
-//! Which parameter dimensions carry signal: backward elimination by leave-one-out error.
+//! Which parameter dimensions carry signal: forward selection by leave-one-out error
+//! ([`select_dims`]), or backward elimination by cross-validation over given folds
+//! ([`select_dims_by_folds`]).
 //!
 //! A dimension that varies over the samples only by noise (a control that the data set holds nearly
 //! constant, measured with jitter) still tilts the regression-kriging trend and stretches the distances:
@@ -18,6 +20,12 @@
 //! is added, and the test repeats on the others until none has signal. A control must earn its place:
 //! with few samples a real but weak effect is dropped rather than a noisy one kept, which is the
 //! failure this guards against (a trend tilted by noise).
+//!
+//! The other rule (backward elimination, [`select_dims_by_folds`]) turns the burden around: every
+//! varying dimension stays unless dropping it lowers the error of a cross-validation over folds the
+//! caller gives (whole groups of samples held out together) by more than a margin. Leave-one-out
+//! favours dropping a dimension along which neighbouring samples of one group agree anyway; held-out
+//! groups show whether the dimension predicts new ones.
 
 use faer::MatRef;
 use serde::{Deserialize, Serialize};
@@ -52,12 +60,48 @@ pub enum DimDecision {
         /// Paired t statistic of the fall in per-sample squared error with it.
         t: f64,
     },
+    /// Kept by [`select_dims_by_folds`]: dropping it from the kept dimensions does not lower the
+    /// cross-validated error by more than the margin.
+    KeptByFolds {
+        /// Cross-validated RMSE of the kept dimensions.
+        cv_with: f64,
+        /// Cross-validated RMSE without it (infinite when it is the only dimension kept, or when
+        /// that fit failed).
+        cv_without: f64,
+        /// Folds of the cross-validation.
+        folds: usize,
+    },
+    /// Dropped by [`select_dims_by_folds`]: dropping it lowered the cross-validated error by more
+    /// than the margin.
+    DroppedByFolds {
+        /// Cross-validated RMSE of the dimensions kept before it was dropped (it among them).
+        cv_with: f64,
+        /// Cross-validated RMSE once it was dropped.
+        cv_without: f64,
+        /// Folds of the cross-validation.
+        folds: usize,
+    },
+    /// Kept by [`select_dims_by_folds`] (the figures of [`DimDecision::KeptByFolds`]), then dropped
+    /// by the caller's own check of the fitted model (in `motion-lod`: walks that fail its
+    /// motion-quality thresholds with the dimension in). This crate never decides it.
+    Overruled {
+        /// Cross-validated RMSE of the dimensions the cross-validation kept.
+        cv_with: f64,
+        /// Cross-validated RMSE without this one.
+        cv_without: f64,
+        /// Folds of the cross-validation.
+        folds: usize,
+    },
 }
 
 impl DimDecision {
-    /// True when the dimension is out of the model (constant or no signal).
+    /// True when the dimension is out of the model (constant, no signal, dropped by the
+    /// cross-validation or overruled).
     pub fn dropped(&self) -> bool {
-        !matches!(self, DimDecision::Kept { .. })
+        !matches!(
+            self,
+            DimDecision::Kept { .. } | DimDecision::KeptByFolds { .. }
+        )
     }
 }
 
@@ -77,8 +121,10 @@ pub struct DimSelection {
     pub kriging: Kriging,
     /// One decision per parameter dimension.
     pub decisions: Vec<DimDecision>,
-    /// Leave-one-out RMSE of `kriging` (over the scored columns).
-    pub loo_rmse: f64,
+    /// The error the selection compared, of `kriging`'s dimensions: the leave-one-out RMSE of
+    /// `kriging` over the scored columns ([`select_dims`]), or their RMSE over the held-out folds
+    /// ([`select_dims_by_folds`]).
+    pub rmse: f64,
 }
 
 /// Up to this many samples every trial of [`select_dims`] chooses its own variogram; above, the
@@ -300,6 +346,216 @@ pub fn select_dims(
             .into_iter()
             .map(|d| d.expect("every dimension decided"))
             .collect(),
-        loo_rmse: rmse(&current_err),
+        rmse: rmse(&current_err),
+    })
+}
+
+/// Fits `params` (S x d) to `values` (S x D) with `config` and keeps every varying dimension unless
+/// dropping it lowers the cross-validated error by more than `margin` (relative): backward
+/// elimination by held-out error.
+///
+/// `fold[i]` is the fold of sample `i` (`0..folds`, each fold non-empty: a caller that holds whole
+/// groups out together, e.g. the takes of a motion capture, says so here). The error `E(D)` of a set
+/// of dimensions `D` is the root mean square, over every held-out sample and the value columns
+/// `scored` marks (all when `None`), of the prediction of each fold by a kriging refitted on the
+/// other folds with the dimensions `D` (the scaling of `config.scaling`, the others at scale 0) and
+/// the variogram chosen once on every dimension and every sample. Starting from every varying
+/// dimension, the dimension `k` whose dropping gives the smallest `E(D - k)` is dropped while
+/// `E(D) > (1 + margin) E(D - k)`, down to one dimension (kriging needs one); a trial whose fits
+/// fail counts as infinite error. The returned kriging is the fit on the dimensions kept with its
+/// own variogram search (the search on every dimension when all are kept), with
+/// [`ScalingChoice::Given`] as in [`select_dims`]. Unlike [`select_dims`], a dimension stays
+/// unless the data show that it hurts: the rule never does worse than keeping every dimension on
+/// the error it measures.
+///
+/// Errors: those of [`Kriging::fit`] on all dimensions, a negative or non-finite margin, a fold
+/// vector of the wrong length, fewer than 2 folds or an empty fold, a mask of the wrong length or
+/// scoring nothing. Deterministic (trials run in parallel, their results are taken in dimension
+/// order).
+///
+/// ```
+/// use kriging::faer::Mat;
+/// use kriging::{select_dims_by_folds, KrigingConfig};
+///
+/// // 40 samples over 2 parameters: the values depend on the first only; the second is noise.
+/// let halton = |i: usize, b: usize| {
+///     let (mut f, mut r, mut n) = (1.0, 0.0, i + 1);
+///     while n > 0 { f /= b as f64; r += f * (n % b) as f64; n /= b; }
+///     r
+/// };
+/// let params = Mat::from_fn(40, 2, |i, k| if k == 0 { halton(i, 2) } else { halton(i, 3) });
+/// let values = Mat::from_fn(40, 1, |i, _| (4.0 * params[(i, 0)]).sin() + 0.3 * (halton(i, 5) - 0.5));
+/// let fold: Vec<usize> = (0..40).map(|i| i % 5).collect();
+/// let sel = select_dims_by_folds(params.as_ref(), values.as_ref(), &KrigingConfig::default(), 0.01, &fold, None)?;
+/// assert!(!sel.decisions[0].dropped());
+/// # Ok::<(), kriging::KrigingError>(())
+/// ```
+pub fn select_dims_by_folds(
+    params: MatRef<'_, f64>,
+    values: MatRef<'_, f64>,
+    config: &KrigingConfig,
+    margin: f64,
+    fold: &[usize],
+    scored: Option<&[bool]>,
+) -> Result<DimSelection, KrigingError> {
+    use rayon::prelude::*;
+    if !(margin.is_finite() && margin >= 0.0) {
+        return Err(KrigingError::InvalidConfig(format!(
+            "dimension selection margin {margin} must be finite and >= 0"
+        )));
+    }
+    crate::kriging::check_inputs(params, values)?;
+    let s = params.nrows();
+    if fold.len() != s {
+        return Err(KrigingError::ShapeMismatch {
+            what: "folds vs samples",
+            expected: s,
+            got: fold.len(),
+        });
+    }
+    let folds = fold.iter().max().map_or(0, |&f| f + 1);
+    if folds < 2 || (0..folds).any(|f| !fold.contains(&f)) {
+        return Err(KrigingError::InvalidConfig(format!(
+            "cross-validation needs at least 2 folds, each with a sample (got {folds} folds)"
+        )));
+    }
+    if let Some(mask) = scored {
+        if mask.len() != values.ncols() {
+            return Err(KrigingError::ShapeMismatch {
+                what: "scored columns vs value columns",
+                expected: values.ncols(),
+                got: mask.len(),
+            });
+        }
+        if !mask.iter().any(|&m| m) {
+            return Err(KrigingError::InvalidConfig(
+                "dimension selection scores no value column".into(),
+            ));
+        }
+    }
+    let base = ParamScaling::from_choice(&config.scaling, params)?;
+    let with_scaling = |scaling: &ParamScaling, model: &ModelChoice| KrigingConfig {
+        scaling: ScalingChoice::Given(scaling.clone()),
+        model: *model,
+        ..config.clone()
+    };
+    let all_dims = Kriging::fit(params, values, &with_scaling(&base, &config.model))?;
+    let trial_model = ModelChoice::Given(*all_dims.variogram());
+    let d = base.dims();
+    let only = |on: &[usize]| {
+        let mut sc = base.clone();
+        for (k, v) in sc.scale.iter_mut().enumerate() {
+            if !on.contains(&k) {
+                *v = 0.0;
+            }
+        }
+        sc
+    };
+    // The held-out RMSE of the dimensions `on` (infinite when a fold's fit fails).
+    let rows = |idx: &[usize], m: MatRef<'_, f64>| {
+        faer::Mat::from_fn(idx.len(), m.ncols(), |i, j| m[(idx[i], j)])
+    };
+    let cv = |on: &[usize]| -> f64 {
+        let cfg = with_scaling(&only(on), &trial_model);
+        let per_fold: Vec<Option<(f64, usize)>> = (0..folds)
+            .into_par_iter()
+            .map(|f| {
+                let (test, train): (Vec<usize>, Vec<usize>) = (0..s).partition(|&i| fold[i] == f);
+                let k = Kriging::fit(
+                    rows(&train, params).as_ref(),
+                    rows(&train, values).as_ref(),
+                    &cfg,
+                )
+                .ok()?;
+                let mut out = vec![0.0; values.ncols()];
+                let mut c = vec![0.0; params.ncols()];
+                let mut sq = 0.0;
+                for &i in &test {
+                    for (k, v) in c.iter_mut().enumerate() {
+                        *v = params[(i, k)];
+                    }
+                    k.predict(&c, &mut out).ok()?;
+                    sq += out
+                        .iter()
+                        .enumerate()
+                        .filter(|(j, _)| scored.is_none_or(|m| m[*j]))
+                        .map(|(j, v)| (v - values[(i, j)]).powi(2))
+                        .sum::<f64>();
+                }
+                Some((sq, test.len()))
+            })
+            .collect();
+        let (mut sq, mut n) = (0.0, 0usize);
+        for r in per_fold {
+            match r {
+                Some((e, m)) => {
+                    sq += e;
+                    n += m;
+                }
+                None => return f64::INFINITY,
+            }
+        }
+        let e = (sq / n.max(1) as f64).sqrt();
+        if e.is_finite() { e } else { f64::INFINITY }
+    };
+    let mut decisions: Vec<Option<DimDecision>> = (0..d)
+        .map(|k| (base.scale[k] == 0.0).then_some(DimDecision::Constant))
+        .collect();
+    let mut kept: Vec<usize> = (0..d).filter(|&k| base.scale[k] != 0.0).collect();
+    let mut current = cv(&kept);
+    // The error without each kept dimension, from the last round.
+    let mut without: Vec<(usize, f64)> = Vec::new();
+    while !kept.is_empty() {
+        without = if kept.len() == 1 {
+            vec![(kept[0], f64::INFINITY)]
+        } else {
+            kept.par_iter()
+                .map(|&k| {
+                    let on: Vec<usize> = kept.iter().copied().filter(|&j| j != k).collect();
+                    (k, cv(&on))
+                })
+                .collect()
+        };
+        // The dimension whose dropping lowers the error most (ties: the lowest index).
+        let best = without
+            .iter()
+            .copied()
+            .filter(|&(_, e)| e.is_finite())
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match best {
+            Some((k, e)) if current > (1.0 + margin) * e => {
+                decisions[k] = Some(DimDecision::DroppedByFolds {
+                    cv_with: current,
+                    cv_without: e,
+                    folds,
+                });
+                kept.retain(|&j| j != k);
+                current = e;
+            }
+            _ => break,
+        }
+    }
+    for (k, e) in without {
+        if kept.contains(&k) {
+            decisions[k] = Some(DimDecision::KeptByFolds {
+                cv_with: current,
+                cv_without: e,
+                folds,
+            });
+        }
+    }
+    let varying = (0..d).filter(|&k| base.scale[k] != 0.0).count();
+    let kriging = if kept.len() == varying {
+        all_dims
+    } else {
+        Kriging::fit(params, values, &with_scaling(&only(&kept), &config.model))?
+    };
+    Ok(DimSelection {
+        kriging,
+        decisions: decisions
+            .into_iter()
+            .map(|d| d.expect("every dimension decided"))
+            .collect(),
+        rmse: current,
     })
 }

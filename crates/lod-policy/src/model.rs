@@ -342,23 +342,28 @@ pub struct LevelError {
     /// (`motion_lod::quality`), the distance a foot travels while on the floor per cycle.
     pub slide_cm: f32,
     /// Motion quality of an accuracy level (every joint, seams inertialized, feet locked): the
-    /// largest pop (joint acceleration) over the walks of the quality grid, as a multiple of the
-    /// data's median pop; 0 when not measured (a joint count's entry, or a model without feet).
+    /// largest pop (joint acceleration) over the walks of the quality grid, each as a multiple of
+    /// the data's pop at the walk's step length (the trend of the takes' pop over their steps); 0
+    /// when not measured (a joint count's entry, or a model without feet).
     pub pop_x: f32,
-    /// Likewise the largest foot skate over the grid's walks as a multiple of the data's median
-    /// skate; 0 when not measured.
+    /// Likewise the largest foot skate over the grid's walks as a multiple of the data's skate at
+    /// the walk's step length; 0 when not measured.
     pub skate_x: f32,
     /// Likewise the largest distance between a walk's feet and the data's floor (the meter's floor
     /// offset, above or below), in centimetres; 0 when not measured.
     pub floor_cm: f32,
+    /// Likewise how far the grid's walks face against their travel outside the data's own range
+    /// (the meter's mean facing beyond the 2nd..98th percentile of the takes' one-cycle means), in
+    /// degrees: 0 when every walk lies inside it, or when not measured.
+    pub facing_out_deg: f32,
 }
 
-/// Largest pop (as a multiple of the data's median) that an accuracy level may show on the quality
+/// Largest pop (as a multiple of the data's at the walk's step) that an accuracy level may show on the quality
 /// grid and still be used by the policies ([`LevelError::passes_quality`]): the motion-quality
 /// threshold for near characters.
 pub const QUALITY_POP_LIMIT: f32 = 1.25;
 
-/// Largest foot skate (as a multiple of the data's median) that an accuracy level may show on the
+/// Largest foot skate (as a multiple of the data's at the walk's step) that an accuracy level may show on the
 /// quality grid and still be used by the policies.
 pub const QUALITY_SKATE_LIMIT: f32 = 1.5;
 
@@ -366,15 +371,21 @@ pub const QUALITY_SKATE_LIMIT: f32 = 1.5;
 /// the quality grid and still be used by the policies.
 pub const QUALITY_FLOOR_CM: f32 = 1.0;
 
+/// Largest facing against travel outside the data's range (degrees) that an accuracy level may show
+/// on the quality grid and still be used by the policies: none (a walker must not crab more than
+/// the data do).
+pub const QUALITY_FACING_OUT_DEG: f32 = 0.0;
+
 impl LevelError {
     /// Whether the measured motion quality is within [`QUALITY_POP_LIMIT`],
-    /// [`QUALITY_SKATE_LIMIT`] and [`QUALITY_FLOOR_CM`] (true when not measured): the policies use
-    /// an accuracy level with joints only when it passes; coarser levels that pop, skate or leave
-    /// the floor stay for root-only walkers.
+    /// [`QUALITY_SKATE_LIMIT`], [`QUALITY_FLOOR_CM`] and [`QUALITY_FACING_OUT_DEG`] (true when not
+    /// measured): the policies use an accuracy level with joints only when it passes; coarser
+    /// levels that pop, skate, leave the floor or crab stay for root-only walkers.
     pub fn passes_quality(&self) -> bool {
         self.pop_x <= QUALITY_POP_LIMIT
             && self.skate_x <= QUALITY_SKATE_LIMIT
             && self.floor_cm <= QUALITY_FLOOR_CM
+            && self.facing_out_deg <= QUALITY_FACING_OUT_DEG
     }
 
     /// The larger of the chosen pose error and the foot slide, in metres: what a policy projects to
@@ -780,6 +791,7 @@ impl LodModel {
                 e.pop_x,
                 e.skate_x,
                 e.floor_cm,
+                e.facing_out_deg,
             ] {
                 if !v.is_finite() || v < 0.0 {
                     return Err(ModelError::ErrorTable(format!(

@@ -144,8 +144,9 @@ impl RuntimeModel {
     /// History: 1 (the first sectioned file, format 8: control names, rig joints, the multilinear
     /// model, feet, stature; a model with styles names them among the controls, [`STYLE_PREFIX`]);
     /// 2 (each accuracy level's error records its motion quality, `pop_x`, `skate_x` and `floor_cm`, and its
-    /// foot slide is measured with the foot lock on).
-    pub const SECTION_VERSION: u32 = 2;
+    /// foot slide is measured with the foot lock on); 3 (each accuracy level's error also records
+    /// `facing_out_deg`, and its pop and skate are ratios to the data at each walk's step).
+    pub const SECTION_VERSION: u32 = 3;
 
     /// Decodes the runtime model from the bytes of a model file: the framing and checksums
     /// ([`file::unframe`], [`file::sections`]), then the runtime's own section

@@ -322,6 +322,10 @@ pub struct MlodWalker {
     kernel: ClipKernel,
     scratch: KernelScratch,
     pose: Vec<f32>,
+    /// `pose[mean_from..]` holds the model's mean pose (the rows no clip since evaluated): a
+    /// frame whose clip evaluates `rows >= mean_from` writes only those rows, the rest being what
+    /// a whole pose would write there. A root-only walker so writes 7 floats a frame, not `P`.
+    mean_from: usize,
     transforms: Vec<JointTransform>,
     locals: Vec<Quat>,
     /// The prepared cycle's body scale.
@@ -457,7 +461,12 @@ fn control_values(c: &MlodControls, name: &str) -> Result<Controls, Failure> {
     if let Some(problem) = style.problem() {
         return Err(Failure::invalid(format!("{name}: {problem}")));
     }
-    Ok(Controls::from_array(values).with_style(style))
+    Ok(controls_of(c))
+}
+
+/// The controls as the kernel takes them, for controls [`control_values`] accepted.
+fn controls_of(c: &MlodControls) -> Controls {
+    Controls::from_array([c.dx, c.dz, c.turn, c.height]).with_style(StyleMix { weights: c.style })
 }
 
 /// `detail` for `m`, checked: a level the model has and at most its animated joints.
@@ -1049,6 +1058,7 @@ pub unsafe extern "C" fn mlod_walker_new(
             kernel: ClipKernel::new(lod),
             scratch: KernelScratch::new(lod),
             pose: vec![0.0; lod.p()],
+            mean_from: lod.p(),
             transforms: vec![JointTransform::default(); joints],
             locals: vec![Quat::IDENTITY; joints],
             body_scale: 1.0,
@@ -1116,13 +1126,36 @@ fn build_clip(
     controls: &Controls,
     detail: Detail,
 ) -> Result<(), Failure> {
+    // SAFETY: the walker's own scratch.
+    unsafe { build_clip_with(w, m, controls, detail, None) }
+}
+
+/// [`build_clip`] with the kernel scratch `shared` (another walker's of the same model, which
+/// holds nothing between builds) when not null, else the walker's own: a crowd step builds every
+/// clip in one scratch that stays in the cache.
+///
+/// # Safety
+/// `shared` is null or another live walker's scratch for the same model, used by nothing else
+/// during the call.
+unsafe fn build_clip_with(
+    w: &mut MlodWalker,
+    m: &MlodModel,
+    controls: &Controls,
+    detail: Detail,
+    shared: Option<*mut KernelScratch>,
+) -> Result<(), Failure> {
     w.prepared = false;
     w.posed = false;
     w.walking = false;
     w.seam.clear();
+    let scratch = match shared {
+        // SAFETY: per this function's contract.
+        Some(s) => unsafe { &mut *s },
+        None => &mut w.scratch,
+    };
     m.model
         .lod()
-        .build_kernel(controls, detail, &mut w.scratch, &mut w.kernel)
+        .build_kernel(controls, detail, scratch, &mut w.kernel)
         .map_err(|e| Failure::invalid(e.to_string()))?;
     w.body_scale = m.model.body_scale(controls);
     w.prepared = true;
@@ -1205,8 +1238,10 @@ pub unsafe extern "C" fn mlod_walker_pose(
             Some(unsafe { out_slice(pose, len, lod.p(), "pose") }?)
         };
         let phase = w.kernel.phase_at(seconds);
+        w.mean_from = w.pose.len();
         lod.pose(&w.kernel, phase, &mut w.pose)
             .map_err(|e| Failure::invalid(e.to_string()))?;
+        w.mean_from = w.kernel.rows();
         w.posed = true;
         if let Some(out) = out {
             out[..lod.p()].copy_from_slice(&w.pose);
@@ -1245,8 +1280,18 @@ fn show_frame(w: &mut MlodWalker, m: &MlodModel, dt: f32) -> Result<(), Failure>
     let (lod, rig) = (m.model.lod(), m.model.rig());
     let walk = &mut w.walk;
     w.posed = false;
-    lod.pose(&w.kernel, w.kernel.phase_at(walk.t), &mut w.pose)
-        .map_err(|e| Failure::invalid(e.to_string()))?;
+    let phase = w.kernel.phase_at(walk.t);
+    let rows = w.kernel.rows();
+    // Unknown until the pose is written (a failure leaves it so).
+    let mean_from = std::mem::replace(&mut w.mean_from, w.pose.len());
+    if mean_from <= rows && rows <= w.pose.len() {
+        // The rows after the clip's already hold the mean pose, which `pose` would write there.
+        lod.pose_rows(&w.kernel, phase, &mut w.pose[..rows])
+    } else {
+        lod.pose(&w.kernel, phase, &mut w.pose)
+    }
+    .map_err(|e| Failure::invalid(e.to_string()))?;
+    w.mean_from = rows;
     if w.seam.is_active() {
         let since = walk.t as f32 - w.seam_start;
         let rows = w.kernel.rows().min(w.pose.len());
@@ -1256,6 +1301,10 @@ fn show_frame(w: &mut MlodWalker, m: &MlodModel, dt: f32) -> Result<(), Failure>
     let active = walk.detail.active_joints;
     walk.locked = false;
     if let (true, Some(feet)) = (w.foot_lock, m.model.feet()) {
+        if active > 0 {
+            // The lock may bend legs' rows: the pose's mean rows are not known from here on.
+            w.mean_from = w.pose.len();
+        }
         walk.lock
             .apply(
                 rig,
@@ -1426,6 +1475,23 @@ unsafe fn step_walker(
     detail: Option<Detail>,
     state: *mut MlodWalkerState,
 ) -> Result<(), Failure> {
+    // SAFETY: per this function's contract; the walker's own scratch.
+    unsafe { step_walker_with(w, m, dt_s, controls, detail, state, None) }
+}
+
+/// [`step_walker`] building clips in the scratch `shared` when not null ([`build_clip_with`]).
+///
+/// # Safety
+/// `state` is null or writable; `shared` as [`build_clip_with`] asks.
+unsafe fn step_walker_with(
+    w: &mut MlodWalker,
+    m: &MlodModel,
+    dt_s: f64,
+    controls: Option<Controls>,
+    detail: Option<Detail>,
+    state: *mut MlodWalkerState,
+    shared: Option<*mut KernelScratch>,
+) -> Result<(), Failure> {
     if let Some(c) = controls {
         w.walk.next_controls = c;
     }
@@ -1447,7 +1513,8 @@ unsafe fn step_walker(
             capture_seam(w, m, ending as f32, &motion)?;
         }
         w.walk.frame = w.walk.frame.next(&motion);
-        build_clip(w, m, &values, detail)?;
+        // SAFETY: per this function's contract.
+        unsafe { build_clip_with(w, m, &values, detail, shared) }?;
         if blend && w.kernel.detail().active_joints > 0 {
             start_seam(w, m, w.walk.t as f32)?;
         }
@@ -1591,17 +1658,39 @@ pub unsafe extern "C" fn mlod_walkers_step(
                     format!("walker {i}: no walk: call mlod_walker_start first"),
                 ));
             }
-            control_values(c, &format!("next_controls[{i}]"))?;
+            // The message names the index; formatted only for a failure (a step allocates nothing).
+            if control_values(c, "").is_err() {
+                control_values(c, &format!("next_controls[{i}]"))?;
+            }
         }
         let half = view_half_angle(camera);
+        // Clips are built in the first walker's kernel scratch (the same sizes for every walker of
+        // the model; it holds nothing between builds): one scratch that stays in the cache instead
+        // of each walker's own, cold, at every cycle's end.
+        // SAFETY: checked above: live, distinct walkers; taken as a raw place, no reference.
+        let shared = unsafe { std::ptr::addr_of_mut!((*list[0]).scratch) };
         for (i, (&w, c)) in list.iter().zip(controls).enumerate() {
             // SAFETY: checked above: live, distinct walkers of this model.
             let w = unsafe { &mut *w };
             let (seen_detail, in_view) = seen_checked(m, camera, half, w.walk.root, radius_m)?;
             let detail = checked_detail(m, seen_detail, "detail")?;
-            let values = control_values(c, "next_controls")?;
-            // SAFETY: `states[i]` is writable.
-            unsafe { step_walker(w, m, dt_s, Some(values), Some(detail), &mut states[i]) }?;
+            // Checked by the first loop.
+            let values = controls_of(c);
+            // Walker 0 builds in its own scratch (the shared one).
+            let scratch = (i > 0).then_some(shared);
+            // SAFETY: `states[i]` is writable; `shared` is walker 0's scratch, not walker i's, and
+            // used by nothing else meanwhile.
+            unsafe {
+                step_walker_with(
+                    w,
+                    m,
+                    dt_s,
+                    Some(values),
+                    Some(detail),
+                    &mut states[i],
+                    scratch,
+                )
+            }?;
             if let Some(v) = visible.as_deref_mut() {
                 v[i] = in_view;
             }

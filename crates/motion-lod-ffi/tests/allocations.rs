@@ -1,6 +1,7 @@
 //! A walker allocates nothing after `mlod_walker_new`: starting, advancing across cycles with
 //! controls and details that change, asking the camera for its detail and reading its local
-//! rotations and joint transforms, counted by a global allocator on this test's thread.
+//! rotations and joint transforms, nor a crowd stepped by `mlod_walkers_step`; counted by a global
+//! allocator on this test's thread.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -151,6 +152,92 @@ fn walking_allocates_nothing_after_creation() {
         assert_eq!(during, 0, "allocations while walking");
 
         mlod_walker_free(walker);
+        mlod_model_free(model);
+    }
+}
+
+/// `mlod_walkers_step` allocates nothing either: a crowd stepped across cycles (clips built in one
+/// walker's scratch for all) with a camera that gives walkers in view joints and those behind it none.
+#[test]
+fn crowd_steps_allocate_nothing() {
+    let bytes = model_bytes();
+    unsafe {
+        let mut model: *mut MlodModel = null_mut();
+        assert_eq!(
+            mlod_model_from_bytes(bytes.as_ptr(), bytes.len(), &mut model),
+            MlodStatus::Ok
+        );
+        let (mut lo, mut hi) = (MlodControls::default(), MlodControls::default());
+        assert_eq!(
+            mlod_model_control_range(model, &mut lo, &mut hi),
+            MlodStatus::Ok
+        );
+        let camera = MlodCamera {
+            position: [0.0, 1.7, -3.0],
+            direction: [0.0, 0.0, 1.0],
+            fov_y: 1.0,
+            aspect: 1.5,
+            image_height_px: 1080.0,
+            near_m: 0.1,
+            far_m: 0.0,
+        };
+        let n = 40;
+        let mut walkers: Vec<*mut MlodWalker> = vec![null_mut(); n];
+        let mut controls = vec![lo; n];
+        for (i, c) in controls.iter_mut().enumerate() {
+            let u = (i % 5) as f32 / 4.0;
+            c.dz = lo.dz + (hi.dz - lo.dz) * u;
+            c.height = lo.height + (hi.height - lo.height) * u;
+        }
+        let mut states = vec![MlodWalkerState::default(); n];
+        let mut visible = vec![false; n];
+        let mut detail = MlodDetail::default();
+        assert_eq!(
+            mlod_model_detail_at(model, 1.0, &mut detail),
+            MlodStatus::Ok
+        );
+        for (i, w) in walkers.iter_mut().enumerate() {
+            assert_eq!(mlod_walker_new(model, w), MlodStatus::Ok);
+            // A row of walkers 8 m apart along the camera's view, the first ten behind it.
+            assert_eq!(
+                mlod_walker_start(
+                    *w,
+                    model,
+                    &controls[i],
+                    detail,
+                    0.0,
+                    8.0 * (i as f32 - 10.0),
+                    0.0,
+                    &mut states[i]
+                ),
+                MlodStatus::Ok
+            );
+        }
+        let before = allocations();
+        for _ in 0..150 {
+            assert_eq!(
+                mlod_walkers_step(
+                    walkers.as_ptr(),
+                    n,
+                    model,
+                    &camera,
+                    1.0,
+                    1.0 / 30.0,
+                    controls.as_ptr(),
+                    states.as_mut_ptr(),
+                    visible.as_mut_ptr(),
+                ),
+                MlodStatus::Ok
+            );
+        }
+        let during = allocations() - before;
+        assert!(states.iter().all(|s| s.cycle >= 3), "{:?}", states[0]);
+        assert!(states.iter().any(|s| s.detail.joints > 0));
+        assert!(states.iter().any(|s| s.detail.joints == 0));
+        assert_eq!(during, 0, "allocations while stepping the crowd");
+        for w in walkers {
+            mlod_walker_free(w);
+        }
         mlod_model_free(model);
     }
 }

@@ -8,14 +8,26 @@
 //!    decomposition) and set the layout's rest rotations to the data's mean;
 //! 3. the greedy key-level search with ALS (section 4.2) and the hybrid accuracy levels between keys;
 //! 4. universal kriging of the samples over the controls (eq. 8, appendix A), variogram chosen by
-//!    leave-one-out error; controls that carry no signal beyond [`BuildConfig::control_margin`] are
-//!    dropped ([`kriging::select_dims`]); one kriging system serves every level;
+//!    leave-one-out error; every varying control is kept unless leaving it out lowers the error of
+//!    [`CONTROL_FOLDS`]-fold cross-validation by take by more than [`BuildConfig::control_margin`]
+//!    ([`kriging::select_dims_by_folds`]; with fewer than 2 takes per fold, the leave-one-out rule
+//!    of [`kriging::select_dims`]); one kriging system serves every level;
 //! 5. per key level the runtime parts: `Q = [U_S^T; C] A^{-1}[:S, :]` and `V = U_S^T C^+`;
-//! 6. the measured error of every accuracy level and every joint count ([`crate::metrics`]).
+//! 6. the measured error of every accuracy level and every joint count ([`crate::metrics`]);
+//! 7. the quality guard: when level 0 fails the motion-quality thresholds
+//!    ([`LevelError::passes_quality`]) and the cross-validation kept controls that the
+//!    leave-one-out rule drops, the model is rebuilt without them (each alone first, the one whose
+//!    loss costs the cross-validation least first, then together) and the first whose level-0 walks
+//!    pass is kept; its dropped controls read [`DimDecision::Overruled`] and the report keeps the
+//!    level-0 quality that failed ([`crate::BuildReport::overruled_quality`]). Nothing of this runs
+//!    when level 0 passes.
 
 use faer::Mat;
 use hosvd_als::{AlsOptions, AlsReport, KeyLevels, KeySearchConfig, Tucker, hybrid_levels};
-use kriging::{DimDecision, Kriging, KrigingConfig, SelectRule, select_dims};
+use kriging::{
+    DimDecision, DimSelection, Kriging, KrigingConfig, SelectRule, select_dims,
+    select_dims_by_folds,
+};
 use lod_policy::{
     AccuracyLevel, Controls, Detail, LevelError, LodModel, ModelParts, Ranks, RuntimeModel,
 };
@@ -23,8 +35,8 @@ use motion_io::PoseLayout;
 use tensor_ops::Tensor3;
 
 pub use crate::config::{
-    BuildConfig, CONTROL_DEFINED_ROWS, CONTROL_MARGIN, CONTROL_MIN_T, MIN_SAMPLES, PAPER_DOF,
-    RowWeights, STYLE_FOLDS, STYLE_WEIGHTS,
+    BuildConfig, CONTROL_DEFINED_ROWS, CONTROL_FOLDS, CONTROL_MARGIN, CONTROL_MIN_T, MIN_SAMPLES,
+    PAPER_DOF, RowWeights, STYLE_FOLDS, STYLE_WEIGHTS,
 };
 pub use crate::dataset::TrainingSet;
 use crate::importance::{
@@ -190,6 +202,176 @@ fn fit_to_sample_count(
     }
     out.scaling = kriging::ScalingChoice::Given(scaling);
     Ok((out, dropped))
+}
+
+/// The style weight and the trials that chose it ([`Analysis::style_weight`]).
+type StyleWeight = (f64, Vec<WeightTrial>);
+
+/// The inputs of the kriging over the controls (step 4), shared by the control selection and the
+/// quality guard.
+struct ControlFit {
+    /// The controls, `S x 4`.
+    params: Mat<f64>,
+    /// The samples with their rows weighted as in the decomposition, `S x PT`.
+    values: Mat<f64>,
+    /// The value columns the leave-one-out rule scores (not the rows the controls define).
+    scored: Vec<bool>,
+    /// The kriging settings for the sample count ([`fit_to_sample_count`]).
+    kriging_config: KrigingConfig,
+    /// Controls left out for the sample count.
+    dropped_for_samples: Vec<usize>,
+}
+
+impl ControlFit {
+    fn new(
+        set: &TrainingSet,
+        weighted: &Tensor3,
+        config: &BuildConfig,
+    ) -> Result<ControlFit, BuildError> {
+        let [p, t, s] = weighted.dims();
+        let params = control_matrix(&set.controls);
+        // The rows weighted as in the decomposition: the variogram is chosen on what shows.
+        let values = Mat::from_fn(s, p * t, |i, j| weighted.sample(i)[j]);
+        // The controls measure the root's ground path and heading over the cycle: they predict those
+        // rows by construction. The leave-one-out rule judges a control on the rest (pose, height,
+        // lean, timing).
+        let scored: Vec<bool> = (0..p * t)
+            .map(|j| !CONTROL_DEFINED_ROWS.contains(&(j % p)))
+            .collect();
+        let (kriging_config, dropped_for_samples) = fit_to_sample_count(&params, &config.kriging)?;
+        Ok(ControlFit {
+            params,
+            values,
+            scored,
+            kriging_config,
+            dropped_for_samples,
+        })
+    }
+
+    /// The kriging over the controls and what the selection decided per control: by
+    /// cross-validation by take when the data have at least 2 takes per fold ([`control_folds`]),
+    /// else by leave-one-out; every varying control with `config.select_controls` off.
+    fn select(
+        &self,
+        set: &TrainingSet,
+        config: &BuildConfig,
+    ) -> Result<(Kriging, Vec<DimDecision>), BuildError> {
+        let s = self.params.nrows();
+        // Leave-one-out needs a sample more than the fewest a model builds from.
+        let select = config.select_controls && s > MIN_SAMPLES;
+        let (kriging, mut decisions) = match control_folds(&set.sources) {
+            Some(fold) if select => {
+                let selection = select_dims_by_folds(
+                    self.params.as_ref(),
+                    self.values.as_ref(),
+                    &self.kriging_config,
+                    config.control_margin,
+                    &fold,
+                    None,
+                )?;
+                (selection.kriging, selection.decisions)
+            }
+            None if select => {
+                let selection = self.select_by_loo(config)?;
+                (selection.kriging, selection.decisions)
+            }
+            _ => {
+                let kriging = Kriging::fit(
+                    self.params.as_ref(),
+                    self.values.as_ref(),
+                    &self.kriging_config,
+                )?;
+                let decisions = (0..CONTROL_NAMES.len())
+                    .map(|k| {
+                        if kriging.dropped_dims().contains(&k) {
+                            DimDecision::Constant
+                        } else {
+                            DimDecision::Kept {
+                                loo_with: f64::NAN,
+                                loo_without: f64::NAN,
+                                t: f64::NAN,
+                            }
+                        }
+                    })
+                    .collect();
+                (kriging, decisions)
+            }
+        };
+        for &k in &self.dropped_for_samples {
+            decisions[k] = DimDecision::Constant;
+        }
+        Ok((kriging, decisions))
+    }
+
+    /// The leave-one-out rule ([`kriging::select_dims`] over the scored columns).
+    fn select_by_loo(&self, config: &BuildConfig) -> Result<DimSelection, BuildError> {
+        Ok(select_dims(
+            self.params.as_ref(),
+            self.values.as_ref(),
+            &self.kriging_config,
+            SelectRule {
+                margin: config.control_margin,
+                min_t: config.control_min_t,
+            },
+            Some(&self.scored),
+        )?)
+    }
+
+    /// `kriging` (over the controls kept) with the style code beside them for a set with styles
+    /// ([`style_kriging`]), and the style weight with its trials; `kriging` itself without styles.
+    fn with_styles(
+        &self,
+        kriging: Kriging,
+        set: &TrainingSet,
+        config: &BuildConfig,
+        progress: &dyn Progress,
+    ) -> Result<(Kriging, Option<StyleWeight>), BuildError> {
+        let Some(labels) = &set.styles else {
+            return Ok((kriging, None));
+        };
+        progress.stage("style weight (cross-validation by take)", 1);
+        let (kriging, weight, trials) = style_kriging(
+            &kriging,
+            set,
+            labels,
+            self.values.as_ref(),
+            &self.scored,
+            config,
+            &self.kriging_config,
+        )?;
+        progress.inc(1);
+        Ok((kriging, Some((weight, trials))))
+    }
+
+    /// The kriging over the controls that `decisions` keep, its variogram chosen anew.
+    fn fit_kept(&self, decisions: &[DimDecision]) -> Result<Kriging, BuildError> {
+        let mut scaling =
+            kriging::ParamScaling::from_choice(&self.kriging_config.scaling, self.params.as_ref())?;
+        for (k, d) in decisions.iter().enumerate() {
+            if d.dropped() {
+                scaling.scale[k] = 0.0;
+            }
+        }
+        let cfg = KrigingConfig {
+            scaling: kriging::ScalingChoice::Given(scaling),
+            ..self.kriging_config.clone()
+        };
+        Ok(Kriging::fit(
+            self.params.as_ref(),
+            self.values.as_ref(),
+            &cfg,
+        )?)
+    }
+}
+
+/// The fold of every sample for the control selection by [`CONTROL_FOLDS`]-fold cross-validation
+/// by take (`crate::folds::fold_of_samples`), or `None` when the data have fewer than 2 takes per
+/// fold (the build then selects by leave-one-out).
+pub fn control_folds(sources: &[String]) -> Option<Vec<usize>> {
+    if crate::folds::distinct_takes(sources).len() < 2 * CONTROL_FOLDS {
+        return None;
+    }
+    crate::folds::fold_of_samples(sources, CONTROL_FOLDS, crate::folds::FoldBy::Take).ok()
 }
 
 /// Controls as an `S x 4` matrix, one row per sample (the controls alone, without styles).
@@ -512,71 +694,13 @@ impl Analysis {
 
         // 4. Universal kriging of the samples over the controls.
         progress.stage("kriging", 1);
-        let params = control_matrix(&set.controls);
-        // The rows weighted as in the decomposition: the variogram is chosen on what shows.
-        let values = Mat::from_fn(s, p * t, |i, j| weighted.sample(i)[j]);
-        // The controls measure the root's ground path and heading over the cycle: they predict those
-        // rows by construction. Whether a control carries signal is judged on the rest (pose, height,
-        // lean, timing).
-        let scored: Vec<bool> = (0..p * t)
-            .map(|j| !CONTROL_DEFINED_ROWS.contains(&(j % p)))
-            .collect();
-        let (kriging_config, dropped_for_samples) = fit_to_sample_count(&params, &config.kriging)?;
-        // Leave-one-out needs a sample more than the fewest a model builds from.
-        let select = config.select_controls && s > MIN_SAMPLES;
-        let (kriging, mut control_decisions) = if select {
-            let selection = select_dims(
-                params.as_ref(),
-                values.as_ref(),
-                &kriging_config,
-                SelectRule {
-                    margin: config.control_margin,
-                    min_t: config.control_min_t,
-                },
-                Some(&scored),
-            )?;
-            (selection.kriging, selection.decisions)
-        } else {
-            let kriging = Kriging::fit(params.as_ref(), values.as_ref(), &kriging_config)?;
-            let decisions = (0..CONTROL_NAMES.len())
-                .map(|k| {
-                    if kriging.dropped_dims().contains(&k) {
-                        DimDecision::Constant
-                    } else {
-                        DimDecision::Kept {
-                            loo_with: f64::NAN,
-                            loo_without: f64::NAN,
-                            t: f64::NAN,
-                        }
-                    }
-                })
-                .collect();
-            (kriging, decisions)
-        };
-        for &k in &dropped_for_samples {
-            control_decisions[k] = DimDecision::Constant;
-        }
+        let fit = ControlFit::new(set, &weighted, config)?;
+        let (kriging, control_decisions) = fit.select(set, config)?;
         progress.inc(1);
         // 4b. The style code beside the controls kept.
-        let (kriging, style_weight) = match &set.styles {
-            None => (kriging, None),
-            Some(labels) => {
-                progress.stage("style weight (cross-validation by take)", 1);
-                let fitted = style_kriging(
-                    &kriging,
-                    set,
-                    labels,
-                    values.as_ref(),
-                    &scored,
-                    config,
-                    &kriging_config,
-                )?;
-                progress.inc(1);
-                (fitted.0, Some((fitted.1, fitted.2)))
-            }
-        };
+        let (kriging, style_weight) = fit.with_styles(kriging, set, config, progress)?;
         Ok(Analysis {
-            dropped_for_samples,
+            dropped_for_samples: fit.dropped_for_samples,
             layout,
             tensor,
             time_scale,
@@ -593,6 +717,34 @@ impl Analysis {
             styles: set.styles.clone(),
             style_weight,
         })
+    }
+
+    /// Steps 1-4 and the quality guard of step 7 ([`crate::build`]): the analysis of the model
+    /// that [`MotionModel::build`] builds from `set`, without measuring its level errors. When the
+    /// cross-validation kept controls and `set` has the motion-quality reference, this measures
+    /// level 0's motion quality on the quality grid (the guard's test), which [`Analysis::run`]
+    /// does not. What `eval` compares, so that its figures are the model's.
+    pub fn run_guarded(
+        set: &TrainingSet,
+        config: &BuildConfig,
+        progress: &dyn Progress,
+    ) -> Result<Analysis, BuildError> {
+        let analysis = Analysis::run(set, config, progress)?;
+        let cv_kept = analysis
+            .control_decisions
+            .iter()
+            .any(|d| matches!(d, DimDecision::KeptByFolds { .. }));
+        let Some(reference) = set.quality.as_ref().filter(|_| cv_kept) else {
+            return Ok(analysis);
+        };
+        let model = MotionModel::prepared(&analysis, set, config, progress)?;
+        let level0 = level0_quality(&model, reference, analysis.style_report(set).as_ref())?;
+        Ok(
+            match quality_guard(&analysis, level0, reference, set, config, progress)? {
+                Some((guarded, _)) => guarded,
+                None => analysis,
+            },
+        )
     }
 
     /// The style report of a model built from this analysis of `set` (`None` without styles).
@@ -732,6 +884,7 @@ impl Analysis {
                 static_joints: self.static_joints.clone(),
                 order_note: self.order_note.clone(),
                 kriging_loo_rmse: None,
+                overruled_quality: None,
                 quality: None,
                 data: None,
                 config: config.clone(),
@@ -765,6 +918,30 @@ impl MotionModel {
         progress: &dyn Progress,
     ) -> Result<(MotionModel, Analysis), BuildError> {
         let analysis = Analysis::run(set, config, progress)?;
+        let model = MotionModel::prepared(&analysis, set, config, progress)?;
+        let model = model.measured(&analysis, set, config, progress)?;
+        // 7. The quality guard (nothing to do when level 0 passes).
+        let level0 = model.lod().level_errors().first().copied();
+        if let (Some(level0), Some(reference)) = (level0, &model.report.quality) {
+            if let Some((guarded, mut candidate)) =
+                quality_guard(&analysis, level0, reference, set, config, progress)?
+            {
+                candidate.report.overruled_quality = Some(level0);
+                let model = candidate.measured(&guarded, set, config, progress)?;
+                return Ok((model, guarded));
+            }
+        }
+        Ok((model, analysis))
+    }
+
+    /// Step 5 and the feet: the runtime model of `analysis` with the feet, the stature and the
+    /// motion-quality reference of `set` (level errors not yet measured).
+    fn prepared(
+        analysis: &Analysis,
+        set: &TrainingSet,
+        config: &BuildConfig,
+        progress: &dyn Progress,
+    ) -> Result<MotionModel, BuildError> {
         let mut model = analysis.runtime_model(config, progress)?;
         // The decompositions' vector kernels may leave the AVX upper state dirty on every thread
         // they ran on, which slows this crate's SSE code (the runtime after a build in the same
@@ -782,18 +959,32 @@ impl MotionModel {
             .and_then(|q| q.stature_m)
             .map(|h| h as f32);
         let (runtime, layout, report) = model.into_parts();
-        let model = MotionModel {
+        Ok(MotionModel {
             runtime: runtime.with_feet(feet)?.with_stature(stature_m)?,
             layout,
             report,
             style: None,
-        };
-        // 6. Measured errors of every accuracy level and joint count.
+        })
+    }
+
+    /// Step 6 on a [`MotionModel::prepared`] model: the measured errors of every accuracy level and
+    /// joint count, and the style report.
+    fn measured(
+        self,
+        analysis: &Analysis,
+        set: &TrainingSet,
+        config: &BuildConfig,
+        progress: &dyn Progress,
+    ) -> Result<MotionModel, BuildError> {
         progress.stage("level errors", 1);
-        let (level_errors, joint_errors) =
-            model.measure_lod_errors(&set.controls, set.styles.as_ref(), config.error_samples)?;
-        let (runtime, layout, report) = model.into_parts();
         let style = analysis.style_report(set);
+        let (level_errors, joint_errors) = self.measure_lod_errors(
+            &set.controls,
+            set.styles.as_ref(),
+            style.as_ref(),
+            config.error_samples,
+        )?;
+        let (runtime, layout, report) = self.into_parts();
         let model = MotionModel {
             runtime: runtime.with_errors(level_errors, joint_errors)?,
             layout,
@@ -802,7 +993,7 @@ impl MotionModel {
         }
         .with_style_report(style)?;
         progress.inc(1);
-        Ok((model, analysis))
+        Ok(model)
     }
 
     /// Error of every accuracy level (all joints) and of every joint count (level 0) relative to the
@@ -813,6 +1004,7 @@ impl MotionModel {
         &self,
         controls: &[[f64; 4]],
         styles: Option<&StyleLabels>,
+        styles_report: Option<&crate::style::StyleReport>,
         max_samples: usize,
     ) -> Result<(Vec<LevelError>, Vec<LevelError>), BuildError> {
         let lod = self.lod();
@@ -868,19 +1060,20 @@ impl MotionModel {
                 }
                 None => 0.0,
             };
-            let (pop_x, skate_x, floor_cm) = match &self.report.quality {
+            let quality = match &self.report.quality {
                 Some(reference) if with_quality => {
-                    level_quality(self, &reference.median, &walks, detail)?
+                    level_quality(self, reference, styles_report, &walks, detail)?
                 }
-                _ => (0.0, 0.0, 0.0),
+                _ => LevelQuality::default(),
             };
             Ok(LevelError {
                 mean_joint_cm: e.mean_joint_cm as f32,
                 shell_cm: e.shell_cm as f32,
                 slide_cm,
-                pop_x,
-                skate_x,
-                floor_cm,
+                pop_x: quality.pop_x,
+                skate_x: quality.skate_x,
+                floor_cm: quality.floor_cm,
+                facing_out_deg: quality.facing_out_deg,
             })
         };
         debug_assert!(p > 0 && t > 0);
@@ -894,20 +1087,151 @@ impl MotionModel {
     }
 }
 
-/// The motion quality of `detail` over the quality grid's `walks` (each [`QUALITY_WALK_CYCLES`]
-/// cycles at 30 fps, seams inertialized, the foot lock on: as the crowd plays a walker), as the
-/// largest pop and the largest skate over the walks, each a multiple of the data's median
-/// (`data`), and the largest floor offset (cm, either side): the figures of `motion-lod quality`
-/// that [`LevelError::passes_quality`] holds to the near-character thresholds.
+/// Step 7 of the module documentation: when `level0` (the level-0 errors of the model of
+/// `analysis`, with their motion quality against `reference`) fails the motion-quality thresholds
+/// and the cross-validation kept controls that the leave-one-out rule drops, the analysis rebuilt
+/// without the fewest of them whose level-0 walks pass, and its model ([`MotionModel::prepared`],
+/// errors not yet measured); `None` when level 0 passes, when there is no such control, or when no
+/// rebuild passes either (the controls are not what fails).
+fn quality_guard(
+    analysis: &Analysis,
+    level0: LevelError,
+    reference: &crate::quality::QualityReference,
+    set: &TrainingSet,
+    config: &BuildConfig,
+    progress: &dyn Progress,
+) -> Result<Option<(Analysis, MotionModel)>, BuildError> {
+    let cv_kept: Vec<usize> = (0..analysis.control_decisions.len())
+        .filter(|&k| {
+            matches!(
+                analysis.control_decisions[k],
+                DimDecision::KeptByFolds { .. }
+            )
+        })
+        .collect();
+    if level0.passes_quality() || cv_kept.is_empty() {
+        return Ok(None);
+    }
+    progress.stage("quality guard (controls kept by cross-validation)", 1);
+    let fit = ControlFit::new(
+        set,
+        &weigh_rows(&analysis.tensor, &analysis.row_weights),
+        config,
+    )?;
+    let loo = fit.select_by_loo(config)?;
+    // What dropping a control costs the cross-validation.
+    let cost = |k: usize| match analysis.control_decisions[k] {
+        DimDecision::KeptByFolds {
+            cv_with,
+            cv_without,
+            ..
+        } => cv_without - cv_with,
+        _ => f64::INFINITY,
+    };
+    let candidates: Vec<usize> = cv_kept
+        .into_iter()
+        .filter(|&k| loo.decisions[k].dropped())
+        .collect();
+    // Every non-empty subset: the fewest controls first, then the cheapest (ties: lowest indices).
+    let mut subsets: Vec<Vec<usize>> = (1u32..1 << candidates.len())
+        .map(|bits| {
+            (0..candidates.len())
+                .filter(|i| bits & (1 << i) != 0)
+                .map(|i| candidates[i])
+                .collect()
+        })
+        .collect();
+    let total = |d: &[usize]| d.iter().map(|&k| cost(k)).sum::<f64>();
+    subsets.sort_by(|a, b| {
+        a.len()
+            .cmp(&b.len())
+            .then(total(a).total_cmp(&total(b)))
+            .then(a.cmp(b))
+    });
+    for drop in subsets {
+        let mut decisions = analysis.control_decisions.clone();
+        for &k in &drop {
+            if let DimDecision::KeptByFolds {
+                cv_with,
+                cv_without,
+                folds,
+            } = decisions[k]
+            {
+                decisions[k] = DimDecision::Overruled {
+                    cv_with,
+                    cv_without,
+                    folds,
+                };
+            }
+        }
+        let kriging = fit.fit_kept(&decisions)?;
+        let (kriging, style_weight) = fit.with_styles(kriging, set, config, progress)?;
+        let guarded = Analysis {
+            kriging,
+            style_weight,
+            control_decisions: decisions,
+            ..analysis.clone()
+        };
+        let candidate = MotionModel::prepared(&guarded, set, config, progress)?;
+        if level0_quality(&candidate, reference, guarded.style_report(set).as_ref())?
+            .passes_quality()
+        {
+            progress.inc(1);
+            return Ok(Some((guarded, candidate)));
+        }
+    }
+    progress.inc(1);
+    Ok(None)
+}
+
+/// The worst motion quality of one detail over the quality grid (the fields of [`LevelError`] of
+/// the same names).
+#[derive(Debug, Clone, Copy, Default)]
+struct LevelQuality {
+    pop_x: f32,
+    skate_x: f32,
+    floor_cm: f32,
+    facing_out_deg: f32,
+}
+
+/// The motion quality of `model`'s level 0 over the quality grid ([`level_quality`]) as a
+/// [`LevelError`] (its pose errors 0, as level 0's).
+fn level0_quality(
+    model: &MotionModel,
+    reference: &crate::quality::QualityReference,
+    styles: Option<&crate::style::StyleReport>,
+) -> Result<LevelError, BuildError> {
+    let walks = crate::walk_quality::walk_grid(model);
+    let q = level_quality(model, reference, styles, &walks, model.lod().full_detail())?;
+    Ok(LevelError {
+        pop_x: q.pop_x,
+        skate_x: q.skate_x,
+        floor_cm: q.floor_cm,
+        facing_out_deg: q.facing_out_deg,
+        ..LevelError::default()
+    })
+}
+
+/// The motion quality of `detail` over the quality grid's `walks` inside the data's hull
+/// ([`crate::walk_quality::GridWalk::in_hull`]; each [`QUALITY_WALK_CYCLES`]
+/// cycles at 30 fps, seams inertialized, the foot lock on: as the crowd plays a walker): the largest
+/// pop and the largest skate over the walks, each a multiple of the data's at the walk's step
+/// length ([`crate::quality::QualityReference::at_controls`]; the data: `pooled`, or for a walk of
+/// one style in a model with styles that style's own takes, [`crate::style::StyleReport::reference_for`]),
+/// the largest floor offset (cm, either side) and the largest facing against travel outside the
+/// data's range (degrees): the figures of
+/// `motion-lod quality` that [`LevelError::passes_quality`] holds to the near-character thresholds.
 fn level_quality(
     model: &MotionModel,
-    data: &crate::quality::MotionQuality,
+    pooled: &crate::quality::QualityReference,
+    styles: Option<&crate::style::StyleReport>,
     walks: &[crate::walk_quality::GridWalk],
     detail: Detail,
-) -> Result<(f32, f32, f32), BuildError> {
+) -> Result<LevelQuality, BuildError> {
     let ratio = |v: f64, of: f64| (v / of.max(1e-9)).min(1e6) as f32;
-    let (mut pop, mut skate, mut floor) = (0.0f32, 0.0f32, 0.0f32);
-    for w in walks {
+    let mut worst = LevelQuality::default();
+    // Inside the data's hull only: outside it the model extrapolates (and `synth` warns).
+    for w in walks.iter().filter(|w| w.in_hull) {
         let fail = |e: &dyn std::fmt::Display| {
             BuildError::Data(format!("quality of `{}` at {detail:?}: {e}", w.name))
         };
@@ -922,11 +1246,19 @@ fn level_quality(
             })
             .map_err(|e| fail(&e))?;
         let q = crate::walk_quality::measure_walk(model, &walk).map_err(|e| fail(&e))?;
-        pop = pop.max(ratio(q.pop_cm, data.pop_cm));
-        skate = skate.max(ratio(q.skate_cm_s, data.skate_cm_s));
-        floor = floor.max(q.floor_offset_cm.abs().min(1e6) as f32);
+        // A walk of one style (a corner of a model with styles) is held to that style's takes.
+        let reference = styles
+            .and_then(|st| st.reference_for(&w.controls.style, Some(pooled)))
+            .unwrap_or(pooled);
+        let (lo, hi) = reference.facing_range_deg;
+        let data = reference.at_controls(&w.controls);
+        worst.pop_x = worst.pop_x.max(ratio(q.pop_cm, data.pop_cm));
+        worst.skate_x = worst.skate_x.max(ratio(q.skate_cm_s, data.skate_cm_s));
+        worst.floor_cm = worst.floor_cm.max(q.floor_offset_cm.abs().min(1e6) as f32);
+        let facing_out = (lo - q.facing_deg).max(q.facing_deg - hi).max(0.0);
+        worst.facing_out_deg = worst.facing_out_deg.max(facing_out.min(1e6) as f32);
     }
-    Ok((pop, skate, floor))
+    Ok(worst)
 }
 
 /// Cycles of each walk the build's per-level motion quality measures (as `motion-lod quality`).

@@ -37,13 +37,18 @@ pub struct BuildConfig {
     /// training poses is static: it holds its mean rotation and is not counted nor evaluated
     /// ([`crate::importance::static_joints`]).
     pub static_rms_deg: f64,
-    /// A control stays in the kriging (trend and distances) only when leaving it out raises the
+    /// A varying control stays in the kriging (trend and distances) unless leaving it out lowers
+    /// the RMSE of [`CONTROL_FOLDS`]-fold cross-validation by take by more than this fraction
+    /// ([`kriging::select_dims_by_folds`]). With fewer than 2 takes per fold the build falls back
+    /// to the leave-one-out rule: a control stays only when leaving it out raises the
     /// leave-one-out RMSE by more than this fraction ([`kriging::select_dims`]).
     pub control_margin: f64,
-    /// ... and only when that rise is beyond noise: its paired t statistic over the samples reaches
-    /// this value ([`kriging::select_dims`]).
+    /// For the leave-one-out rule only: the rise must also be beyond noise, its paired t statistic
+    /// over the samples reaching this value ([`kriging::select_dims`]).
     pub control_min_t: f64,
-    /// Select the controls as above; when false every non-constant control is kept (the paper).
+    /// Select the controls as above (a control kept by the cross-validation whose level-0 walks
+    /// fail the motion-quality thresholds is dropped again: [`crate::build`]'s quality guard);
+    /// when false every non-constant control is kept (the paper).
     pub select_controls: bool,
     /// For a training set with style labels: the scale of each style's one-hot code in the
     /// kriging's standardised control space; `None` (the default) chooses it among
@@ -61,6 +66,11 @@ pub const STYLE_WEIGHTS: [f64; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 /// Folds of the build's cross-validation of the style weight (by take; fewer when the data have
 /// fewer takes).
 pub const STYLE_FOLDS: usize = 5;
+
+/// Folds of the build's control selection by cross-validation by take
+/// ([`BuildConfig::control_margin`]); it needs at least 2 takes per fold, else the build selects
+/// by leave-one-out.
+pub const CONTROL_FOLDS: usize = 5;
 
 impl Default for BuildConfig {
     fn default() -> Self {

@@ -76,14 +76,28 @@ impl TrainingSet {
             .map(|(s, &j)| (take_of(s), j))
             .collect();
         let [p, t, _] = self.tensor.dims();
+        // Each take's mean step length over its samples.
+        let mut steps_of_take: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+        for (s, c) in self.sources.iter().zip(&self.controls) {
+            steps_of_take
+                .entry(take_of(s))
+                .or_default()
+                .push(c[0].hypot(c[1]));
+        }
+        let take_steps: BTreeMap<&str, f64> = steps_of_take
+            .iter()
+            .filter_map(|(&take, steps)| Some((take, mean_step(steps)?)))
+            .collect();
         Some(
             (0..labels.len())
                 .map(|j| {
-                    let takes: Vec<(MotionQuality, f64)> = self
+                    let takes: Vec<(MotionQuality, f64, f64)> = self
                         .take_quality
                         .iter()
                         .filter(|(take, _, _)| style_of_take.get(take.as_str()) == Some(&j))
-                        .map(|(_, q, floor)| (*q, *floor))
+                        .filter_map(|(take, q, floor)| {
+                            Some((*q, *floor, *take_steps.get(take.as_str())?))
+                        })
                         .collect();
                     let steps = (0..self.controls.len())
                         .filter(|&i| labels.of_sample[i] == j)
@@ -694,7 +708,20 @@ fn cycles_from_takes(
             take_quality(&layout.scaled(scale).ok()?, feet, &n.motion, &report.cycles)
         })
         .collect();
-    let takes_quality: Vec<(MotionQuality, f64)> = measured.iter().flatten().copied().collect();
+    // Each measured take's figures, floor and mean step length (what the reference pools by step).
+    let takes_quality: Vec<(MotionQuality, f64, f64)> = measured
+        .iter()
+        .zip(&segmented)
+        .filter_map(|(q, r)| {
+            let (q, floor) = (*q)?;
+            let cycles = &r.as_ref().ok()?.cycles;
+            let steps: Vec<f64> = cycles
+                .iter()
+                .map(|c| c.controls.dx.hypot(c.controls.dz))
+                .collect();
+            Some((q, floor, mean_step(&steps)?))
+        })
+        .collect();
     let mut takes: Vec<TakeSummary> = failed
         .iter()
         .map(|f| TakeSummary {
@@ -779,6 +806,11 @@ fn cycles_from_takes(
         conventions: Some(conventions),
         takes,
     })
+}
+
+/// The mean of a take's cycle step lengths (m); `None` without cycles.
+fn mean_step(steps: &[f64]) -> Option<f64> {
+    (!steps.is_empty()).then(|| steps.iter().sum::<f64>() / steps.len() as f64)
 }
 
 /// The take restricted to its walking segments (the whole take, borrowed, when nothing is skipped).

@@ -555,7 +555,7 @@ pub struct FoldReport {
     pub pooled: EvalReport,
 }
 
-/// K-fold cross-validation by refitting: for each fold, the whole pipeline ([`Analysis::run`]:
+/// K-fold cross-validation by refitting: for each fold, the whole pipeline ([`Analysis::run_guarded`]:
 /// joint order, row weights, key levels, the variogram chosen by leave-one-out on the training
 /// folds, and in the comparison the RBF smoothing and the PCA basis) is fitted on the other folds
 /// with `build`, and every method predicts the fold's cycles at their own controls
@@ -579,7 +579,7 @@ pub fn k_fold(
         fold_sizes.push(test.len());
         let training = set.select(&train);
         let held = set.select(&test);
-        let analysis = Analysis::run(&training, build, &crate::progress::NoProgress)?;
+        let analysis = Analysis::run_guarded(&training, build, &crate::progress::NoProgress)?;
         let model = analysis.runtime_model(build, &crate::progress::NoProgress)?;
         let key_bytes: Vec<usize> = (0..model.lod().keys().len())
             .map(|k| model.lod().key_bytes(k, lod_policy::Precision::F64))

@@ -27,13 +27,17 @@ pub struct LevelSummary {
     /// check uses the level no nearer.
     pub one_pixel_from_m: f32,
     /// Largest pop over the quality grid's walks (every joint, seams inertialized, feet locked), as
-    /// a multiple of the data's median (0: not measured).
+    /// a multiple of the data's at the walk's step ([`crate::quality::QualityReference::at_step`];
+    /// 0: not measured).
     pub pop_x: f32,
-    /// Largest foot skate over the same walks, as a multiple of the data's median (0: not
-    /// measured).
+    /// Largest foot skate over the same walks, as a multiple of the data's at the walk's step (0:
+    /// not measured).
     pub skate_x: f32,
     /// Largest floor offset over the same walks, cm (either side; 0: not measured).
     pub floor_cm: f32,
+    /// Largest facing against travel outside the data's range over the same walks, degrees (0:
+    /// inside, or not measured).
+    pub facing_out_deg: f32,
     /// Whether the policies give this level to walkers with joints: level 0, or a level whose
     /// measured motion quality passes (`lod_policy::LevelError::passes_quality`).
     pub used: bool,
@@ -146,6 +150,7 @@ pub fn summary(model: &MotionModel) -> Summary {
                 pop_x: errors.get(l).map_or(f32::NAN, |e| e.pop_x),
                 skate_x: errors.get(l).map_or(f32::NAN, |e| e.skate_x),
                 floor_cm: errors.get(l).map_or(f32::NAN, |e| e.floor_cm),
+                facing_out_deg: errors.get(l).map_or(f32::NAN, |e| e.facing_out_deg),
                 used: lod.level_serves_joints(l),
             })
             .collect(),
@@ -267,15 +272,17 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
         "accuracy levels (error against full detail: pose at the training controls, foot slide per \
          stance over the quality walks with the foot lock; 1 px from: the nearest distance where both, \
          with the policies' margin, cover one pixel at 1080p, 60 deg; pop and skate: the worst of the \
-         quality walks, x the data's median; used: whether the policies give the level to walkers \
-         with joints, which needs pop <= {}, skate <= {} and the feet within {} cm of the floor):",
+         quality walks, x the data at each walk's step length; facing: degrees the walks face against \
+         travel beyond the data's range; used: whether the policies give the level to walkers with \
+         joints, which needs pop <= {}, skate <= {}, the feet within {} cm of the floor and facing {}):",
         lod_policy::QUALITY_POP_LIMIT,
         lod_policy::QUALITY_SKATE_LIMIT,
-        lod_policy::QUALITY_FLOOR_CM
+        lod_policy::QUALITY_FLOOR_CM,
+        lod_policy::QUALITY_FACING_OUT_DEG
     )?;
     writeln!(
         out,
-        "  level  key  ranks          joint error  shell error  foot slide  1 px from    pop  skate     floor  used"
+        "  level  key  ranks          joint error  shell error  foot slide  1 px from    pop  skate     floor  facing  used"
     )?;
     let errors = lod.level_errors();
     for (l, lv) in lod.levels().iter().enumerate() {
@@ -283,7 +290,7 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
         let used = lod.level_serves_joints(l);
         writeln!(
             out,
-            "  {l:>5}  {:>3}  {:<13}  {:>8.3} cm  {:>8.3} cm  {:>7.2} cm  {:>6.1} m  {:>5.2}  {:>5.2}  {:>5.2} cm  {}",
+            "  {l:>5}  {:>3}  {:<13}  {:>8.3} cm  {:>8.3} cm  {:>7.2} cm  {:>6.1} m  {:>5.2}  {:>5.2}  {:>5.2} cm  {:>6.2}  {}",
             lv.key,
             format!("[{}, {}, {}]", lv.ranks.p, lv.ranks.t, lv.ranks.s),
             e.mean_joint_cm,
@@ -293,6 +300,7 @@ pub fn write_report(out: &mut impl Write, model: &MotionModel) -> std::io::Resul
             e.pop_x,
             e.skate_x,
             e.floor_cm,
+            e.facing_out_deg,
             if used { "yes" } else { "no" }
         )?;
     }
@@ -338,12 +346,27 @@ fn describe_weights(r: &crate::BuildReport) -> String {
     }
 }
 
-/// One line per control: ignored because constant over the data, ignored because it carries no signal,
-/// or used, with the leave-one-out errors that decided it (RMSE of the weighted samples, whose squared
-/// error approximates the squared joint displacement in metres).
+/// One line per control: ignored because constant over the data, ignored because the selection
+/// dropped it, dropped by the quality guard, or used, with the errors that decided it (RMSE of the
+/// weighted samples, whose squared error approximates the squared joint displacement in metres:
+/// of 5-fold cross-validation by take, or of leave-one-out when the data have too few takes, which
+/// a first line then says).
 pub fn control_notes(r: &crate::BuildReport) -> Vec<String> {
     use kriging::DimDecision;
     let mut lines = Vec::new();
+    let by_loo = r.control_decisions.iter().any(|d| match d {
+        DimDecision::Kept { loo_with, .. } => !loo_with.is_nan(),
+        DimDecision::NoSignal { .. } => true,
+        _ => false,
+    });
+    if by_loo {
+        lines.push(format!(
+            "control selection by leave-one-out: {} takes are fewer than 2 per fold of {}-fold \
+             cross-validation by take",
+            crate::folds::distinct_takes(&r.sources).len(),
+            crate::config::CONTROL_FOLDS
+        ));
+    }
     for (k, name) in crate::CONTROL_NAMES.iter().enumerate() {
         match r.control_decisions.get(k) {
             Some(DimDecision::Constant) if r.dropped_for_samples.contains(&k) => {
@@ -375,6 +398,44 @@ pub fn control_notes(r: &crate::BuildReport) -> Vec<String> {
             }) => lines.push(format!(
                 "control {name} used: leave-one-out RMSE {loo_with:.4} with it, {loo_without:.4} \
                  without, t = {t:.2}"
+            )),
+            Some(DimDecision::KeptByFolds {
+                cv_with,
+                cv_without,
+                folds,
+            }) if cv_without.is_infinite() => lines.push(format!(
+                "control {name} used: the only control left ({folds}-fold cross-validation by take \
+                 RMSE {cv_with:.4})"
+            )),
+            Some(DimDecision::KeptByFolds {
+                cv_with,
+                cv_without,
+                folds,
+            }) => lines.push(format!(
+                "control {name} used: {folds}-fold cross-validation by take RMSE {cv_with:.4} with \
+                 it, {cv_without:.4} without"
+            )),
+            Some(DimDecision::DroppedByFolds {
+                cv_with,
+                cv_without,
+                folds,
+            }) => lines.push(format!(
+                "control {name} ignored: leaving it out lowers the error of {folds}-fold \
+                 cross-validation by take (RMSE {cv_with:.4} with it, {cv_without:.4} without; kept \
+                 unless more than {:.1}% lower)",
+                100.0 * r.config.control_margin
+            )),
+            Some(DimDecision::Overruled {
+                cv_with,
+                cv_without,
+                folds,
+            }) => lines.push(format!(
+                "control {name} dropped: kept by {folds}-fold cross-validation by take (RMSE \
+                 {cv_with:.4} with it, {cv_without:.4} without) but level-0 walks with it fail the \
+                 motion-quality thresholds ({}; the quality guard)",
+                r.overruled_quality
+                    .as_ref()
+                    .map_or_else(|| "figures not kept".to_string(), crate::model::quality_failures)
             )),
             None if r.dropped_controls.contains(&k) => {
                 lines.push(format!("control {name} ignored: constant over the data"));

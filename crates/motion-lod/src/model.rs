@@ -69,6 +69,10 @@ pub struct BuildReport {
     pub order_note: Option<String>,
     /// Leave-one-out RMSE of the kriging fit, when measured.
     pub kriging_loo_rmse: Option<f64>,
+    /// The level-0 motion quality of the model with every control the cross-validation kept, when
+    /// it failed the thresholds and the build's quality guard dropped the controls whose decision
+    /// reads [`kriging::DimDecision::Overruled`] ([`crate::build`], step 7); `None` otherwise.
+    pub overruled_quality: Option<lod_policy::LevelError>,
     /// The motion-quality meter on the training takes (the reference of [`crate::quality`]).
     pub quality: Option<crate::quality::QualityReference>,
     /// Where the training data came from (set by the command line; `None` for in-memory data).
@@ -406,7 +410,7 @@ impl MotionModel {
     }
 
     /// For every control, whether the model ignores it (constant over the data, or dropped at build
-    /// for carrying no signal; its scale in the control space is 0).
+    /// by the control selection or its quality guard; its scale in the control space is 0).
     pub fn ignored_controls(&self) -> [bool; 4] {
         let scale = &self.lod().controls().scale;
         std::array::from_fn(|k| scale.get(k).is_none_or(|&v| v == 0.0))
@@ -435,6 +439,28 @@ impl MotionModel {
                 100.0 * r.config.control_margin,
                 r.config.control_min_t
             ),
+            Some(DimDecision::DroppedByFolds {
+                cv_with,
+                cv_without,
+                folds,
+            }) => format!(
+                "dropped at build: leaving it out lowers the error of {folds}-fold \
+                 cross-validation by take (RMSE {cv_with:.4} with it, {cv_without:.4} without; \
+                 kept unless more than {:.1}% lower)",
+                100.0 * r.config.control_margin
+            ),
+            Some(DimDecision::Overruled {
+                cv_with,
+                cv_without,
+                folds,
+            }) => format!(
+                "dropped at build by the quality guard: kept by {folds}-fold cross-validation by \
+                 take (RMSE {cv_with:.4} with it, {cv_without:.4} without) but level-0 walks with \
+                 it fail the motion-quality thresholds ({})",
+                r.overruled_quality
+                    .as_ref()
+                    .map_or_else(|| "figures not kept".to_string(), quality_failures)
+            ),
             _ => {
                 let (lo, _) = self.control_range()[k];
                 format!("constant over the data ({lo:.3})")
@@ -446,5 +472,44 @@ impl MotionModel {
     pub fn control_range(&self) -> [(f32, f32); 4] {
         let c = self.lod().controls();
         std::array::from_fn(|k| (c.min[k], c.max[k]))
+    }
+}
+
+/// The motion-quality figures of `e` beyond the near-character thresholds
+/// ([`lod_policy::LevelError::passes_quality`]), e.g. `pop 1.65x (at most 1.25x), floor 2.24 cm
+/// (at most 1 cm)`; `passes` when none is.
+pub fn quality_failures(e: &lod_policy::LevelError) -> String {
+    use lod_policy::{
+        QUALITY_FACING_OUT_DEG, QUALITY_FLOOR_CM, QUALITY_POP_LIMIT, QUALITY_SKATE_LIMIT,
+    };
+    let mut out = Vec::new();
+    if e.pop_x > QUALITY_POP_LIMIT {
+        out.push(format!(
+            "pop {:.2}x (at most {QUALITY_POP_LIMIT}x)",
+            e.pop_x
+        ));
+    }
+    if e.skate_x > QUALITY_SKATE_LIMIT {
+        out.push(format!(
+            "skate {:.2}x (at most {QUALITY_SKATE_LIMIT}x)",
+            e.skate_x
+        ));
+    }
+    if e.floor_cm > QUALITY_FLOOR_CM {
+        out.push(format!(
+            "floor {:.2} cm (at most {QUALITY_FLOOR_CM} cm)",
+            e.floor_cm
+        ));
+    }
+    if e.facing_out_deg > QUALITY_FACING_OUT_DEG {
+        out.push(format!(
+            "facing {:.1} deg beyond the data's range",
+            e.facing_out_deg
+        ));
+    }
+    if out.is_empty() {
+        "passes".to_string()
+    } else {
+        out.join(", ")
     }
 }

@@ -36,15 +36,19 @@ pub const REPORT_SECTION: [u8; 4] = *b"RPRT";
 /// The format version of the report section; another version is refused with a request to
 /// rebuild. History: 1 (format 8: the pose layout, then the build report); 2 (the motion-quality
 /// meter finds contacts from the feet's own motion and reports floating,
-/// [`crate::quality::MotionQuality::floating_cm`]).
-pub const REPORT_VERSION: u32 = 2;
+/// [`crate::quality::MotionQuality::floating_cm`]); 3 (the reference keeps every take's figures by
+/// step length, [`crate::quality::QualityReference::take_steps`]); 4 (control selection by
+/// cross-validation by take and its quality guard: the decisions `KeptByFolds`, `DroppedByFolds`
+/// and `Overruled` of [`kriging::DimDecision`], and [`BuildReport::overruled_quality`]).
+pub const REPORT_VERSION: u32 = 4;
 
 /// The tag of the style report's section, written only for a model with styles (a model without
 /// them is byte for byte what it was before styles existed).
 pub const STYLE_SECTION: [u8; 4] = *b"STYL";
 /// The format version of the style section. History: 1 (the first); 2 (each style's
-/// motion-quality reference by the meter of [`REPORT_VERSION`] 2).
-pub const STYLE_VERSION: u32 = 2;
+/// motion-quality reference by the meter of [`REPORT_VERSION`] 2); 3 (the references of
+/// [`REPORT_VERSION`] 3).
+pub const STYLE_VERSION: u32 = 3;
 
 /// The runtime's payload decoder ([`lod_policy::file::decode_payload`]): the entry point for fuzzing
 /// the decoder itself.

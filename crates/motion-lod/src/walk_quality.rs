@@ -18,15 +18,24 @@ pub struct GridWalk {
     pub name: String,
     /// Controls of every cycle.
     pub controls: Controls,
+    /// Whether the controls lie inside the data's hull ([`crate::hull::ControlHull::contains`]).
+    /// A walk outside it is measured and shown but held to no threshold: the model extrapolates
+    /// there, and `synth` warns (the fixed turns and sidesteps can leave the hull: Bandai's turns of
+    /// 30 degrees at the median step lie just beyond it).
+    #[serde(default)]
+    pub in_hull: bool,
 }
 
 /// The walks the `quality` command and the tables measure, covering the data's hull: straight at the
 /// data's median step, turns of 30 degrees both ways and sidesteps of 0.3 m (each pulled inside the
 /// data's range), slow and fast (the 10th and 90th percentile of dz), and the training samples that
 /// reach furthest along each of the six control directions (`+-dx`, `+-dz`, `+-turn`, in units of each
-/// control's range): the corners of the hull, inside it by construction; and the hull's edges
+/// control's range, at the sample's own height): the corners of the hull, inside it by
+/// construction; and the hull's edges
 /// ([`crate::hull::ControlHull::edge`]) from the median straight walk along turn and sidestep, each
-/// way: the sharpest turn and the widest sidestep the data hold at the median step.
+/// way: the sharpest turn and the widest sidestep the data hold at the median step. Each walk says
+/// whether it lies inside the hull ([`GridWalk::in_hull`]); the motion-quality thresholds hold
+/// inside it.
 pub fn walk_grid(model: &MotionModel) -> Vec<GridWalk> {
     let cs = model.lod().controls();
     let s = model.lod().s();
@@ -44,22 +53,33 @@ pub fn walk_grid(model: &MotionModel) -> Vec<GridWalk> {
         v[((q * (s - 1) as f64).round() as usize).min(s - 1)] as f32
     };
     let height = 0.5 * (cs.min[3] + cs.max[3]);
+    let n_styles = cs.style_count();
     let dz = pct(1, 0.5);
     let inside = |k: usize, v: f32| v.clamp(0.9 * cs.min[k], 0.9 * cs.max[k]);
-    let mut grid = vec![
-        ("straight".to_string(), [0.0, dz, 0.0, height]),
+    let mut grid: Vec<(String, [f32; 4], Option<lod_policy::StyleMix>)> = vec![
+        ("straight".to_string(), [0.0, dz, 0.0, height], None),
         (
             "turn +30".into(),
             [0.0, dz, inside(2, 30f32.to_radians()), height],
+            None,
         ),
         (
             "turn -30".into(),
             [0.0, dz, inside(2, -30f32.to_radians()), height],
+            None,
         ),
-        ("sidestep +0.3".into(), [inside(0, 0.3), dz, 0.0, height]),
-        ("sidestep -0.3".into(), [inside(0, -0.3), dz, 0.0, height]),
-        ("slow".into(), [0.0, pct(1, 0.1), 0.0, height]),
-        ("fast".into(), [0.0, pct(1, 0.9), 0.0, height]),
+        (
+            "sidestep +0.3".into(),
+            [inside(0, 0.3), dz, 0.0, height],
+            None,
+        ),
+        (
+            "sidestep -0.3".into(),
+            [inside(0, -0.3), dz, 0.0, height],
+            None,
+        ),
+        ("slow".into(), [0.0, pct(1, 0.1), 0.0, height], None),
+        ("fast".into(), [0.0, pct(1, 0.9), 0.0, height], None),
     ];
     for (k, name) in lod_policy::Controls::NAMES.into_iter().enumerate().take(3) {
         if k >= d || cs.max[k] <= cs.min[k] {
@@ -84,9 +104,19 @@ pub fn walk_grid(model: &MotionModel) -> Vec<GridWalk> {
                     score(a).total_cmp(&score(b)).then(b.cmp(&a))
                 })
                 .expect("a model has samples");
-            let c = [raw(best, 0), raw(best, 1), raw(best, 2), height];
+            // The sample's own controls, its height included (inside the hull: a training point),
+            // and in a model with styles the sample's own style (the data's mix of styles at a
+            // corner that one style holds is a walk the data never did).
+            let c = [raw(best, 0), raw(best, 1), raw(best, 2), raw(best, 3)];
+            let style = (n_styles > 0)
+                .then(|| {
+                    (0..n_styles)
+                        .max_by(|&a, &b| raw(best, 4 + a).total_cmp(&raw(best, 4 + b)))
+                        .map(lod_policy::StyleMix::one)
+                })
+                .flatten();
             let sign = if sign > 0.0 { '+' } else { '-' };
-            grid.push((format!("corner {sign}{name}"), c));
+            grid.push((format!("corner {sign}{name}"), c, style));
         }
     }
     // The hull's edges from the median straight walk: the sharpest turn and the widest sidestep
@@ -101,14 +131,19 @@ pub fn walk_grid(model: &MotionModel) -> Vec<GridWalk> {
             let span = cs.max[k] - cs.min[k];
             let edge = hull.edge(centre, k, sign, span);
             if edge != centre {
-                grid.push((format!("{name} edge {mark}"), edge.to_array()));
+                grid.push((format!("{name} edge {mark}"), edge.to_array(), None));
             }
         }
     }
     grid.into_iter()
-        .map(|(name, controls)| GridWalk {
-            name,
-            controls: Controls::from_array(controls),
+        .map(|(name, controls, style)| {
+            let controls = Controls::from_array(controls);
+            let controls = style.map_or(controls, |st| controls.with_style(st));
+            GridWalk {
+                name,
+                controls,
+                in_hull: hull.contains(&controls),
+            }
         })
         .collect()
 }

@@ -163,7 +163,8 @@ fn loo(spec: &DataSpec, config: &BuildConfig) -> EvalReport {
     let loaded = spec
         .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
         .expect("data loads");
-    let analysis = Analysis::run(&loaded.training, config, &NoProgress).expect("analysis runs");
+    let analysis =
+        Analysis::run_guarded(&loaded.training, config, &NoProgress).expect("analysis runs");
     leave_one_out(&analysis, 0, &[], &EvalConfig::default(), &NoProgress).expect("evaluation runs")
 }
 

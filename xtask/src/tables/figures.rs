@@ -227,7 +227,7 @@ pub fn figure5(path: &Path, pts: &[DistancePoint], data: &str) -> Result<()> {
     Ok(())
 }
 
-/// Section 7's figure: pop and skate as ratios to the data's median, worst and median over the grid
+/// Section 7's figure: pop and skate as ratios to the data's takes of similar step length, worst and median over the grid
 /// walks per accuracy level (left), and at level 0 per walk against its step length (right).
 pub fn quality_figure(
     path: &Path,
@@ -247,7 +247,7 @@ pub fn quality_figure(
         &left,
         &format!("Pop and skate per level ({data})"),
         "accuracy level",
-        "ratio to the data's median",
+        "ratio to the data at that step",
         &[
             by_level("pop, worst walk", COLORS[0], &|r| r.1),
             by_level("skate, worst walk", COLORS[1], &|r| r.3),
@@ -261,7 +261,7 @@ pub fn quality_figure(
         &right,
         "Level 0: pop and skate against the walk's step",
         "step per cycle, |(dx, dz)| (m)",
-        "ratio to the data's median",
+        "ratio to the data at that step",
         &[
             Series {
                 name: "pop",

@@ -452,11 +452,11 @@ pub fn run(config: &TablesConfig) -> Result<()> {
     if let Some((reference, points)) = &motion_quality {
         let path = config.figures.join("quality.svg");
         let rows = quality::level_rows(reference, points);
-        let m = &reference.median;
         let level0: Vec<(f64, f64, f64)> = points
             .iter()
             .filter(|p| p.level == 0)
             .map(|p| {
+                let m = reference.at_controls(&p.walk.controls);
                 (
                     f64::from(p.walk.controls.dx).hypot(f64::from(p.walk.controls.dz)),
                     p.quality.pop_cm / m.pop_cm,

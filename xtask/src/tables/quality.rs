@@ -79,27 +79,32 @@ pub type LevelRow = (usize, f64, f64, f64, f64, f64, f64, usize);
 
 /// The per-level summary rows of `points`.
 pub fn level_rows(reference: &QualityReference, points: &[QualityPoint]) -> Vec<LevelRow> {
-    let m = &reference.median;
     let (lo, hi) = reference.facing_range_deg;
     let levels = points.iter().map(|p| p.level + 1).max().unwrap_or(0);
     (0..levels)
         .map(|l| {
-            let at: Vec<&MotionQuality> = points
+            // Each walk against the data's takes of similar step length.
+            let at: Vec<(&MotionQuality, MotionQuality)> = points
                 .iter()
                 .filter(|p| p.level == l)
-                .map(|p| &p.quality)
+                .map(|p| (&p.quality, reference.at_controls(&p.walk.controls)))
                 .collect();
-            let (pop_w, pop_m) = worst_median(at.iter().map(|q| q.pop_cm / m.pop_cm).collect());
-            let (sk_w, sk_m) =
-                worst_median(at.iter().map(|q| q.skate_cm_s / m.skate_cm_s).collect());
-            let (seam_w, _) = worst_median(at.iter().map(|q| q.seam_pop_cm / m.pop_cm).collect());
+            let (pop_w, pop_m) =
+                worst_median(at.iter().map(|(q, d)| q.pop_cm / d.pop_cm).collect());
+            let (sk_w, sk_m) = worst_median(
+                at.iter()
+                    .map(|(q, d)| q.skate_cm_s / d.skate_cm_s)
+                    .collect(),
+            );
+            let (seam_w, _) =
+                worst_median(at.iter().map(|(q, d)| q.seam_pop_cm / d.pop_cm).collect());
             let floor = at
                 .iter()
-                .map(|q| q.floor_offset_cm.abs())
+                .map(|(q, _)| q.floor_offset_cm.abs())
                 .fold(0.0, f64::max);
             let facing_out = at
                 .iter()
-                .filter(|q| q.facing_min_deg < lo || q.facing_max_deg > hi)
+                .filter(|(q, _)| q.facing_min_deg < lo || q.facing_max_deg > hi)
                 .count();
             (l, pop_w, pop_m, sk_w, sk_m, seam_w, floor, facing_out)
         })
@@ -123,8 +128,10 @@ pub fn section(
          {CYCLES} cycles at 30 fps covering the data's controls (straight, turns of +-30 degrees, \
          sidesteps of +-0.3 m, slow, fast, the corners of the control hull and its edges along turn \
          and sidestep from the median straight walk), all {} joints, seams inertialized and feet \
-         planted. Ratios are to the median of the data's own takes ({} takes: pop {:.2} cm/frame² at \
-         30 fps, skate {:.2} cm/s, facing range {:.1}..{:.1} deg). The issue's thresholds for near \
+         planted. Ratios are to the data's own takes of similar step length (the median of the takes \
+         whose mean step is within 10% of the walk's, the 9 nearest when fewer: the data's pop and \
+         skate grow with the step; all {} takes: pop {:.2} cm/frame² at 30 fps, skate {:.2} cm/s, \
+         facing range {:.1}..{:.1} deg). The issue's thresholds for near \
          characters: pop at most 1.25x, skate at most 1.5x, floor within 1 cm, facing inside the \
          data's range. *Used*: whether the policies give the level to walkers with joints (level 0, \
          or a level within the pop, skate and floor thresholds as the build measured it: \

@@ -41,15 +41,17 @@ pub struct ModelArgs {
     /// tensor.
     #[arg(long, value_enum, default_value_t = Weights::Position)]
     pub row_weights: Weights,
-    /// A control stays in the model only when leaving it out raises the kriging's leave-one-out
-    /// error by more than this fraction (0.01 = 1%) ...
+    /// A varying control stays in the model unless leaving it out lowers the error of 5-fold
+    /// cross-validation by take by more than this fraction (0.01 = 1%); with fewer than 10 takes,
+    /// only when leaving it out raises the kriging's leave-one-out error by more than it ...
     #[arg(long, value_name = "FRACTION", default_value_t = BuildConfig::default().control_margin)]
     pub control_margin: f64,
-    /// ... and only when that rise is beyond noise: its paired t statistic over the samples reaches
-    /// this value (1 = about 84% one-sided, 2 = about 97.5%; 0 tests the margin alone).
+    /// ... and (leave-one-out only) when that rise is beyond noise: its paired t statistic over the
+    /// samples reaches this value (1 = about 84% one-sided, 2 = about 97.5%; 0 tests the margin
+    /// alone).
     #[arg(long, value_name = "T", default_value_t = BuildConfig::default().control_min_t)]
     pub control_min_t: f64,
-    /// Keep every control that varies over the data (no selection by leave-one-out error).
+    /// Keep every control that varies over the data (no selection, no quality guard).
     #[arg(long)]
     pub keep_controls: bool,
 }

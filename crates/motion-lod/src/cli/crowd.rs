@@ -288,7 +288,7 @@ pub(super) fn model_and_analysis(
     )?;
     let style = model.style.as_ref().map(|s| s.spec.clone());
     let loaded = load(&spec, style.as_ref(), quiet)?;
-    let analysis = Analysis::run(&loaded.training, &model.report.config, &NoProgress)
+    let analysis = Analysis::run_guarded(&loaded.training, &model.report.config, &NoProgress)
         .context("rebuilding the samples for the naive or PCA source")?;
     Ok((model, Some(analysis)))
 }

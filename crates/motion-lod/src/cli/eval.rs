@@ -192,7 +192,7 @@ pub fn evaluate(
     let bar = BarProgress::new(!quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bar };
     let analysis =
-        Analysis::run(&loaded.training, config, progress).context("analysing the data")?;
+        Analysis::run_guarded(&loaded.training, config, progress).context("analysing the data")?;
     let model = analysis
         .runtime_model(config, progress)
         .context("building the runtime model")?;

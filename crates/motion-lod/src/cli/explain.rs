@@ -33,7 +33,7 @@ pub const GLOSSARY: &[Entry] = &[
     Entry {
         term: "controls",
         aliases: &["control", "dx", "dz", "turn", "height", "d"],
-        text: "The parameters a walk is synthesized for, per cycle: dx (sideways root displacement, metres, + = the character's left), dz (forward root displacement, metres), turn (heading change, radians in files and the library, degrees on the command line), height (the performer's standing height, metres), and for a model built with style labels the style (see `style`). A control constant over the data, or carrying no signal (see `leave-one-out`), is ignored by the model and reported by `build` and `info`; `synth` warns when such a control is given a value, with the figures that dropped it.",
+        text: "The parameters a walk is synthesized for, per cycle: dx (sideways root displacement, metres, + = the character's left), dz (forward root displacement, metres), turn (heading change, radians in files and the library, degrees on the command line), height (the performer's standing height, metres), and for a model built with style labels the style (see `style`). A control constant over the data, or dropped by the control selection (see `control selection`) or its `quality guard`, is ignored by the model and reported by `build` and `info`; `synth` warns when such a control is given a value, with the figures that dropped it.",
     },
     Entry {
         term: "hull",
@@ -44,12 +44,12 @@ pub const GLOSSARY: &[Entry] = &[
             "turn edge",
             "sidestep edge",
         ],
-        text: "The convex hull of the training cycles' controls (dx, dz, turn and height, those the model uses, each in standard deviations of the data): the combinations the takes hold. Each control can be in its range while the combination is not (a sharp turn at the longest step); there the model extrapolates and walks may pop or skate, so `synth` warns (with how many standard deviations beyond the hull the controls lie). The quality grid's `turn edge` and `sidestep edge` walks are where the hull ends along turn and sidestep from the median straight walk, each way (`motion_lod::hull`).",
+        text: "The convex hull of the training cycles' controls (dx, dz, turn and height, those the model uses, each in standard deviations of the data): the combinations the takes hold. Each control can be in its range while the combination is not (a sharp turn at the longest step); there the model extrapolates and walks may pop or skate, so `synth` warns (with how many standard deviations beyond the hull the controls lie). The quality grid's `turn edge` and `sidestep edge` walks are where the hull ends along turn and sidestep from the median straight walk, each way (`motion_lod::hull`). `quality` lists the grid's walks that lie outside the hull (at the median step, turns of 30 degrees and sidesteps of 0.3 m can): they are measured and shown but held to no threshold, neither by the tests nor by the build's per-level gate (`explain used`).",
     },
     Entry {
         term: "used",
         aliases: &["used by the policies", "passes quality", "quality gate"],
-        text: "`info`'s last column per accuracy level: whether the level-of-detail policies give the level to walkers with joints. Level 0 always; a coarser level only when its motion quality on the quality grid (every joint, seams inertialized, feet locked; the `pop` and `skate` columns, the worst walk as a multiple of the data's median) is within the near-character thresholds, pop at most 1.25x, skate at most 1.5x and the feet within 1 cm of the floor (`floor`). A level that fails serves only root-only walkers (`lod_policy::LevelError::passes_quality`).",
+        text: "`info`'s last column per accuracy level: whether the level-of-detail policies give the level to walkers with joints. Level 0 always; a coarser level only when its motion quality on the quality grid (every joint, seams inertialized, feet locked; the `pop` and `skate` columns, the worst walk as a multiple of the data's at its step length, `explain x data`) is within the near-character thresholds, pop at most 1.25x, skate at most 1.5x, the feet within 1 cm of the floor (`floor`) and no walk facing against its travel beyond the data's range (`facing`, degrees beyond it). A level that fails serves only root-only walkers (`lod_policy::LevelError::passes_quality`).",
     },
     Entry {
         term: "style",
@@ -156,12 +156,17 @@ pub const GLOSSARY: &[Entry] = &[
     Entry {
         term: "pop",
         aliases: &["pop (cm/frame^2)", "seam"],
-        text: "The largest joint acceleration of a walk, in cm per frame squared at 30 fps: a jump at a cycle seam shows here. `seam` is the largest within one frame of a seam; `x data` divides by the data's (the median over its takes of each take's largest).",
+        text: "The largest joint acceleration of a walk, in cm per frame squared at 30 fps: a jump at a cycle seam shows here. `seam` is the largest within one frame of a seam; `x data` divides by the data's (`explain x data`).",
     },
     Entry {
         term: "skate",
         aliases: &["skate (cm/s)", "contact", "contact share"],
         text: "The mean horizontal speed of a foot's lowest point (ankle or toe) while the foot is in contact, cm/s; `x data` divides by the data's. Contacts come from the foot's own motion, not from a floor: a foot is in contact when its lowest point is within 2 cm of its stance floor (the 10th percentile of its height over the gait cycle around the frame) and moves slower than 1 m/s, so feet that float still count. `contact` is the share of (foot, frame) pairs in contact.",
+    },
+    Entry {
+        term: "x data",
+        aliases: &["ratio to the data", "step length"],
+        text: "A walk's pop or skate over the data's. The data's own pop and skate can grow with the step (the embedded data: pop 5.4 cm per frame squared in its 1.03 m takes, 17.5 in its 1.64 m take), so a walk of the quality grid is compared with the data at its step length: the robust (Theil-Sen) line through every take's figure against its mean step (sqrt(dx^2 + dz^2)), kept within the takes' own range. A crowd (`quality --crowd`) and a recorded walk (`--recorded`), whose steps change, are compared with the median of all takes (the `data` line). The build's per-level `pop` and `skate` (`info`) are the worst of the grid's ratios, and a level serves walkers with joints only when pop <= 1.25 and skate <= 1.5.",
     },
     Entry {
         term: "floating",
@@ -199,7 +204,24 @@ pub const GLOSSARY: &[Entry] = &[
     Entry {
         term: "leave-one-out",
         aliases: &["loo", "leave one out", "RMSE", "t"],
-        text: "Each sample predicted from all the others. With `eval DIR` (no --folds) the factors are fitted on all samples (fast, optimistic); `--folds K` refits everything per fold. For control selection: the kriging's leave-one-out RMSE with and without a control, and the paired t statistic of the difference.",
+        text: "Each sample predicted from all the others. With `eval DIR` (no --folds) the factors are fitted on all samples (fast, optimistic); `--folds K` refits everything per fold. For control selection on data with fewer than 10 takes (see `control selection`): the kriging's leave-one-out RMSE with and without a control, and the paired t statistic of the difference.",
+    },
+    Entry {
+        term: "control selection",
+        aliases: &[
+            "cross-validation by take",
+            "5-fold cross-validation by take",
+            "--control-margin",
+            "--control-min-t",
+            "--keep-controls",
+            "selection",
+        ],
+        text: "Which controls the build's kriging uses. Every control that varies over the data is kept unless leaving it out lowers the error of 5-fold cross-validation by take (whole takes held out, each fold predicted by a kriging refitted on the others; RMSE of the weighted samples, whose square approximates the squared joint displacement in metres) by more than `--control-margin` (1%). With fewer than 2 takes per fold (10 takes) the build falls back to leave-one-out (see `leave-one-out`): a control stays only when it lowers that error by more than the margin with t >= `--control-min-t`, and `build` says so. `--keep-controls` keeps every varying control. A control kept by the cross-validation can still be dropped by the `quality guard`.",
+    },
+    Entry {
+        term: "quality guard",
+        aliases: &["guard", "overruled", "dropped by the quality guard"],
+        text: "When the model's level 0 fails the motion-quality thresholds on the quality grid (pop at most 1.25x, skate at most 1.5x, feet within 1 cm of the floor, facing within the data's range; `explain used`) and the cross-validation kept controls that the leave-one-out rule would drop, the build rebuilds without them (one at a time first, the one whose loss costs the cross-validation least first, then together) and keeps the first whose level-0 walks pass. `build`, `info` and `synth`'s warning name such a control with its cross-validation figures and the level-0 figures that failed. Nothing runs when level 0 passes; when no rebuild passes, the controls stay.",
     },
     Entry {
         term: "refit",
@@ -288,12 +310,11 @@ pub const GLOSSARY: &[Entry] = &[
         aliases: &[
             "data",
             "takes",
-            "x data",
             "evaluated",
             "training samples",
             "multilinear",
         ],
-        text: "`build` and `info` open with the model: P DOF (and its rotating joints), T frames, S samples (training cycles) and d controls, then `data`: the folders it was built from and the time alignment. In `quality`, `data` is the data's own takes measured by the same meter (the median over the takes), and `x data` a walk's figure over that median. In `eval`, `multilinear` is this model at each key level (the paper's method), `evaluated` the cycles predicted and `training samples` the cycles each prediction may use.",
+        text: "`build` and `info` open with the model: P DOF (and its rotating joints), T frames, S samples (training cycles) and d controls, then `data`: the folders it was built from and the time alignment. In `quality`, `data` is the data's own takes measured by the same meter (the median over the takes; `explain x data`). In `eval`, `multilinear` is this model at each key level (the paper's method), `evaluated` the cycles predicted and `training samples` the cycles each prediction may use.",
     },
     Entry {
         term: "evaluation order",

@@ -76,6 +76,13 @@ struct Row {
     level: usize,
     joints: usize,
     quality: MotionQuality,
+    /// The data's figures at the walk's step length (`QualityReference::at_step`): what `x data`
+    /// divides by.
+    data: MotionQuality,
+    /// The walk's pop over the data's at its step (`x data`).
+    pop_x: f64,
+    /// The walk's skate over the data's at its step (`x data`).
+    skate_x: f64,
     cycle_seconds: f64,
     data_cycle_seconds: Option<f64>,
     /// Knee extension and head pitch of the walk, for a model with styles.
@@ -136,7 +143,12 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     for &level in &chosen {
         for walk in &grid {
             let req = WalkRequest {
-                controls: walk.controls.with_style(style),
+                // The grid's own style (a corner's sample's, else the data's mix) unless asked.
+                controls: if args.style.is_some() {
+                    walk.controls.with_style(style)
+                } else {
+                    walk.controls
+                },
                 detail: Detail::new(level, joints),
                 cycles: args.cycles,
                 fps: 30.0,
@@ -149,6 +161,14 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             let q = walk_quality::measure_walk(&model, &w)
                 .with_context(|| format!("measuring `{}` at level {level}", walk.name))?;
             let step = f64::from(walk.controls.dx).hypot(f64::from(walk.controls.dz));
+            // A corner walk of one style (a model with styles, no --style) against that style's takes.
+            let walk_reference = match (&args.style, &model.style) {
+                (None, Some(st)) => st
+                    .reference_for(&walk.controls.style, Some(&pooled))
+                    .unwrap_or(&reference),
+                _ => &reference,
+            };
+            let data = walk_reference.at_step(step);
             let posture = postures.and_then(|_| walk_quality::walk_posture(&model, &w));
             let looks_like = posture.zip(postures).and_then(|(p, styles)| {
                 motion_lod::posture::nearest_style(&p, styles).map(|j| styles[j].style.clone())
@@ -158,6 +178,9 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
                 level,
                 joints,
                 quality: q,
+                data,
+                pop_x: q.pop_cm / data.pop_cm,
+                skate_x: q.skate_cm_s / data.skate_cm_s,
                 cycle_seconds: w.cycle_seconds,
                 data_cycle_seconds: reference.duration_for_step(step),
                 posture,
@@ -173,6 +196,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         }
         let mut reference = reference.clone();
         reference.cycle_steps.clear();
+        reference.take_steps.clear();
         println!(
             "{}",
             serde_json::to_string(&Doc {
@@ -219,6 +243,9 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         String::new()
     };
     println!(
+        "x data: the walk's figure over the data's takes of similar step length (`explain x data`)"
+    );
+    println!(
         "{:<16} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>12}{posture_head}",
         "walk",
         "level",
@@ -250,10 +277,10 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             r.walk.name,
             r.level,
             q.pop_cm,
-            q.pop_cm / m.pop_cm,
+            r.pop_x,
             q.seam_pop_cm,
             q.skate_cm_s,
-            q.skate_cm_s / m.skate_cm_s,
+            r.skate_x,
             q.contact_share,
             q.floating_cm,
             q.floor_offset_cm,
@@ -262,6 +289,17 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             r.data_cycle_seconds
                 .map(|d| format!("{:.2}/{:.2}", r.cycle_seconds, d))
                 .unwrap_or_default()
+        );
+    }
+    let outside: Vec<&str> = grid
+        .iter()
+        .filter(|w| !w.in_hull)
+        .map(|w| w.name.as_str())
+        .collect();
+    if !outside.is_empty() {
+        println!(
+            "outside the data's hull (measured, held to no threshold; `explain hull`): {}",
+            outside.join(", ")
         );
     }
     Ok(())
