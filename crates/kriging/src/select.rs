@@ -148,6 +148,26 @@ fn sample_errors(k: &Kriging, scored: Option<&[bool]>) -> Result<Vec<f64>, Krigi
         .collect())
 }
 
+/// The mask of scored value columns, when given, has one entry per column and scores one at least.
+fn check_scored(scored: Option<&[bool]>, columns: usize) -> Result<(), KrigingError> {
+    let Some(mask) = scored else {
+        return Ok(());
+    };
+    if mask.len() != columns {
+        return Err(KrigingError::ShapeMismatch {
+            what: "scored columns vs value columns",
+            expected: columns,
+            got: mask.len(),
+        });
+    }
+    if !mask.iter().any(|&m| m) {
+        return Err(KrigingError::InvalidConfig(
+            "dimension selection scores no value column".into(),
+        ));
+    }
+    Ok(())
+}
+
 fn rmse(sq: &[f64]) -> f64 {
     (sq.iter().sum::<f64>() / sq.len().max(1) as f64).sqrt()
 }
@@ -213,20 +233,7 @@ pub fn select_dims(
         }
     }
     crate::kriging::check_inputs(params, values)?;
-    if let Some(mask) = scored {
-        if mask.len() != values.ncols() {
-            return Err(KrigingError::ShapeMismatch {
-                what: "scored columns vs value columns",
-                expected: values.ncols(),
-                got: mask.len(),
-            });
-        }
-        if !mask.iter().any(|&m| m) {
-            return Err(KrigingError::InvalidConfig(
-                "dimension selection scores no value column".into(),
-            ));
-        }
-    }
+    check_scored(scored, values.ncols())?;
     let base = ParamScaling::from_choice(&config.scaling, params)?;
     // `model`: the variogram choice of the fit (the caller's for the fits that are kept, the one
     // chosen on every dimension for the trials).
@@ -419,20 +426,7 @@ pub fn select_dims_by_folds(
             "cross-validation needs at least 2 folds, each with a sample (got {folds} folds)"
         )));
     }
-    if let Some(mask) = scored {
-        if mask.len() != values.ncols() {
-            return Err(KrigingError::ShapeMismatch {
-                what: "scored columns vs value columns",
-                expected: values.ncols(),
-                got: mask.len(),
-            });
-        }
-        if !mask.iter().any(|&m| m) {
-            return Err(KrigingError::InvalidConfig(
-                "dimension selection scores no value column".into(),
-            ));
-        }
-    }
+    check_scored(scored, values.ncols())?;
     let base = ParamScaling::from_choice(&config.scaling, params)?;
     let with_scaling = |scaling: &ParamScaling, model: &ModelChoice| KrigingConfig {
         scaling: ScalingChoice::Given(scaling.clone()),
