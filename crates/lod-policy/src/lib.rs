@@ -128,7 +128,7 @@ pub use kernel::TURN_CONTROL;
 pub use math::{ease_in_out, wrap_angle};
 pub use model::{
     ALWAYS_ROWS, CONTROL_VALUES, HEIGHT_CONTROL, QUALITY_FACING_OUT_DEG, QUALITY_FLOOR_CM,
-    QUALITY_POP_LIMIT, QUALITY_SKATE_LIMIT, ROWS_PER_JOINT, TIME_ROW,
+    QUALITY_POP_LIMIT, QUALITY_SKATE_LIMIT, QualityFigure, ROWS_PER_JOINT, TIME_ROW,
 };
 pub use rng::SplitMix64;
 pub use time_table::{MIN_INCREMENT, TimeTable};

@@ -376,16 +376,43 @@ pub const QUALITY_FLOOR_CM: f32 = 1.0;
 /// the data do).
 pub const QUALITY_FACING_OUT_DEG: f32 = 0.0;
 
+/// One motion-quality figure of a [`LevelError`] ([`LevelError::quality_figures`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum QualityFigure {
+    /// [`LevelError::pop_x`] against [`QUALITY_POP_LIMIT`].
+    Pop,
+    /// [`LevelError::skate_x`] against [`QUALITY_SKATE_LIMIT`].
+    Skate,
+    /// [`LevelError::floor_cm`] against [`QUALITY_FLOOR_CM`].
+    Floor,
+    /// [`LevelError::facing_out_deg`] against [`QUALITY_FACING_OUT_DEG`].
+    Facing,
+}
+
 impl LevelError {
+    /// Each motion-quality figure with its measured value and its threshold, `(figure, value,
+    /// limit)`: the one list [`LevelError::passes_quality`] and the reports read.
+    pub fn quality_figures(&self) -> [(QualityFigure, f32, f32); 4] {
+        [
+            (QualityFigure::Pop, self.pop_x, QUALITY_POP_LIMIT),
+            (QualityFigure::Skate, self.skate_x, QUALITY_SKATE_LIMIT),
+            (QualityFigure::Floor, self.floor_cm, QUALITY_FLOOR_CM),
+            (
+                QualityFigure::Facing,
+                self.facing_out_deg,
+                QUALITY_FACING_OUT_DEG,
+            ),
+        ]
+    }
+
     /// Whether the measured motion quality is within [`QUALITY_POP_LIMIT`],
     /// [`QUALITY_SKATE_LIMIT`], [`QUALITY_FLOOR_CM`] and [`QUALITY_FACING_OUT_DEG`] (true when not
-    /// measured): the policies use an accuracy level with joints only when it passes; coarser
-    /// levels that pop, skate, leave the floor or crab stay for root-only walkers.
+    /// measured: every figure 0): the policies use an accuracy level with joints only when it
+    /// passes; coarser levels that pop, skate, leave the floor or crab stay for root-only walkers.
     pub fn passes_quality(&self) -> bool {
-        self.pop_x <= QUALITY_POP_LIMIT
-            && self.skate_x <= QUALITY_SKATE_LIMIT
-            && self.floor_cm <= QUALITY_FLOOR_CM
-            && self.facing_out_deg <= QUALITY_FACING_OUT_DEG
+        self.quality_figures()
+            .iter()
+            .all(|&(_, value, limit)| value <= limit)
     }
 
     /// The larger of the chosen pose error and the foot slide, in metres: what a policy projects to

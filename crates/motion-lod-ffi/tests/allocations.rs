@@ -11,8 +11,6 @@ use motion_lod_ffi::*;
 
 mod common;
 
-use common::model_bytes;
-
 /// The system allocator, counting the allocations of each thread.
 struct Counting;
 
@@ -47,13 +45,8 @@ fn allocations() -> usize {
 
 #[test]
 fn walking_allocates_nothing_after_creation() {
-    let bytes = model_bytes();
+    let model = common::load_model();
     unsafe {
-        let mut model: *mut MlodModel = null_mut();
-        assert_eq!(
-            mlod_model_from_bytes(bytes.as_ptr(), bytes.len(), &mut model),
-            MlodStatus::Ok
-        );
         let (mut levels, mut joints, mut animated) = (0, 0, 0);
         assert_eq!(
             mlod_model_sizes(model, &mut levels, &mut joints, &mut animated, null_mut()),
@@ -64,15 +57,7 @@ fn walking_allocates_nothing_after_creation() {
             mlod_model_control_range(model, &mut lo, &mut hi),
             MlodStatus::Ok
         );
-        let camera = MlodCamera {
-            position: [0.0, 1.7, -3.0],
-            direction: [0.0, 0.0, 1.0],
-            fov_y: 1.0,
-            aspect: 1.5,
-            image_height_px: 1080.0,
-            near_m: 0.1,
-            far_m: 0.0,
-        };
+        let camera = common::camera_behind_origin();
         let mut walker: *mut MlodWalker = null_mut();
         assert_eq!(mlod_walker_new(model, &mut walker), MlodStatus::Ok);
         let mut rotations = vec![MlodQuat::default(); joints];
@@ -160,27 +145,14 @@ fn walking_allocates_nothing_after_creation() {
 /// walker's scratch for all) with a camera that gives walkers in view joints and those behind it none.
 #[test]
 fn crowd_steps_allocate_nothing() {
-    let bytes = model_bytes();
+    let model = common::load_model();
     unsafe {
-        let mut model: *mut MlodModel = null_mut();
-        assert_eq!(
-            mlod_model_from_bytes(bytes.as_ptr(), bytes.len(), &mut model),
-            MlodStatus::Ok
-        );
         let (mut lo, mut hi) = (MlodControls::default(), MlodControls::default());
         assert_eq!(
             mlod_model_control_range(model, &mut lo, &mut hi),
             MlodStatus::Ok
         );
-        let camera = MlodCamera {
-            position: [0.0, 1.7, -3.0],
-            direction: [0.0, 0.0, 1.0],
-            fov_y: 1.0,
-            aspect: 1.5,
-            image_height_px: 1080.0,
-            near_m: 0.1,
-            far_m: 0.0,
-        };
+        let camera = common::camera_behind_origin();
         let n = 40;
         let mut walkers: Vec<*mut MlodWalker> = vec![null_mut(); n];
         let mut controls = vec![lo; n];

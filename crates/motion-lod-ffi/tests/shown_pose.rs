@@ -11,8 +11,6 @@ use motion_lod_ffi::*;
 
 mod common;
 
-use common::model_bytes;
-
 #[test]
 fn root_only_frames_show_the_whole_pose_of_their_clip() {
     for foot_lock in [true, false] {
@@ -21,13 +19,8 @@ fn root_only_frames_show_the_whole_pose_of_their_clip() {
 }
 
 fn walk_and_compare(foot_lock: bool) {
-    let bytes = model_bytes();
+    let model = common::load_model();
     unsafe {
-        let mut model: *mut MlodModel = null_mut();
-        assert_eq!(
-            mlod_model_from_bytes(bytes.as_ptr(), bytes.len(), &mut model),
-            MlodStatus::Ok
-        );
         let (mut levels, mut joints, mut animated, mut p) = (0, 0, 0, 0);
         assert_eq!(
             mlod_model_sizes(model, &mut levels, &mut joints, &mut animated, &mut p),

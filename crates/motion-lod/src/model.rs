@@ -479,34 +479,18 @@ impl MotionModel {
 /// ([`lod_policy::LevelError::passes_quality`]), e.g. `pop 1.65x (at most 1.25x), floor 2.24 cm
 /// (at most 1 cm)`; `passes` when none is.
 pub fn quality_failures(e: &lod_policy::LevelError) -> String {
-    use lod_policy::{
-        QUALITY_FACING_OUT_DEG, QUALITY_FLOOR_CM, QUALITY_POP_LIMIT, QUALITY_SKATE_LIMIT,
-    };
-    let mut out = Vec::new();
-    if e.pop_x > QUALITY_POP_LIMIT {
-        out.push(format!(
-            "pop {:.2}x (at most {QUALITY_POP_LIMIT}x)",
-            e.pop_x
-        ));
-    }
-    if e.skate_x > QUALITY_SKATE_LIMIT {
-        out.push(format!(
-            "skate {:.2}x (at most {QUALITY_SKATE_LIMIT}x)",
-            e.skate_x
-        ));
-    }
-    if e.floor_cm > QUALITY_FLOOR_CM {
-        out.push(format!(
-            "floor {:.2} cm (at most {QUALITY_FLOOR_CM} cm)",
-            e.floor_cm
-        ));
-    }
-    if e.facing_out_deg > QUALITY_FACING_OUT_DEG {
-        out.push(format!(
-            "facing {:.1} deg beyond the data's range",
-            e.facing_out_deg
-        ));
-    }
+    use lod_policy::QualityFigure;
+    let out: Vec<String> = e
+        .quality_figures()
+        .into_iter()
+        .filter(|&(_, value, limit)| value > limit || value.is_nan())
+        .map(|(figure, value, limit)| match figure {
+            QualityFigure::Pop => format!("pop {value:.2}x (at most {limit}x)"),
+            QualityFigure::Skate => format!("skate {value:.2}x (at most {limit}x)"),
+            QualityFigure::Floor => format!("floor {value:.2} cm (at most {limit} cm)"),
+            QualityFigure::Facing => format!("facing {value:.1} deg beyond the data's range"),
+        })
+        .collect();
     if out.is_empty() {
         "passes".to_string()
     } else {

@@ -36,8 +36,8 @@ pub const REPORT_SECTION: [u8; 4] = *b"RPRT";
 /// The format version of the report section; another version is refused with a request to
 /// rebuild. History: 1 (format 8: the pose layout, then the build report); 2 (the motion-quality
 /// meter finds contacts from the feet's own motion and reports floating,
-/// [`crate::quality::MotionQuality::floating_cm`]); 3 (the reference keeps every take's figures by
-/// step length, [`crate::quality::QualityReference::take_steps`]); 4 (control selection by
+/// [`crate::quality::MotionQuality::floating_cm`]); 3 (the reference keeps the trends of the takes'
+/// pop and skate by step length, [`crate::quality::QualityReference::step_trends`]); 4 (control selection by
 /// cross-validation by take and its quality guard: the decisions `KeptByFolds`, `DroppedByFolds`
 /// and `Overruled` of [`kriging::DimDecision`], and [`BuildReport::overruled_quality`]).
 pub const REPORT_VERSION: u32 = 4;

@@ -179,10 +179,19 @@ pub struct QualityReference {
     pub facing_range_deg: (f64, f64),
     /// `(step length m, duration s)` of every training cycle, sorted by step length.
     pub cycle_steps: Vec<(f64, f64)>,
-    /// `(mean step length m, figures)` of every measured take, sorted by step length (the step of a
-    /// take is the mean `sqrt(dx^2 + dz^2)` of its cycles): what [`QualityReference::at_step`]
-    /// fits its trends to.
-    pub take_steps: Vec<(f64, MotionQuality)>,
+    /// The takes' pop and skate against their mean step length (the step of a take is the mean
+    /// `sqrt(dx^2 + dz^2)` of its cycles), fitted once when the reference is made: what
+    /// [`QualityReference::at_step`] reads. `None` with fewer than two takes.
+    pub step_trends: Option<StepTrends>,
+}
+
+/// The trends of [`QualityReference::step_trends`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct StepTrends {
+    /// Pop (cm per frame²) against the step (m).
+    pub pop_cm: StepTrend,
+    /// Skate (cm/s) against the step (m).
+    pub skate_cm_s: StepTrend,
 }
 
 impl QualityReference {
@@ -220,20 +229,16 @@ impl QualityReference {
     /// over the takes' steps ([`StepTrend`], the Theil-Sen line through every take's `(mean step,
     /// figure)`, kept within the takes' own range). The data's pop and skate grow with the step (the
     /// embedded data: pop 5.4 cm per frame² in its 1.03 m takes, 17.5 in its 1.64 m one), so a fast
-    /// walk is held to what the data do at that pace. The pooled median when no take carries its
-    /// step (a reference without `take_steps`).
+    /// walk is held to what the data do at that pace. The pooled median without trends (fewer
+    /// than two takes).
     pub fn at_step(&self, step_m: f64) -> MotionQuality {
-        if self.take_steps.len() < 2 {
-            return self.median;
-        }
-        let trend = |f: &dyn Fn(&MotionQuality) -> f64| {
-            let points: Vec<(f64, f64)> = self.take_steps.iter().map(|(s, q)| (*s, f(q))).collect();
-            StepTrend::fit(&points).at(step_m)
-        };
-        MotionQuality {
-            pop_cm: trend(&|q| q.pop_cm),
-            skate_cm_s: trend(&|q| q.skate_cm_s),
-            ..self.median
+        match &self.step_trends {
+            Some(t) => MotionQuality {
+                pop_cm: t.pop_cm.at(step_m),
+                skate_cm_s: t.skate_cm_s.at(step_m),
+                ..self.median
+            },
+            None => self.median,
         }
     }
 
@@ -296,7 +301,7 @@ fn median_quality(qs: &[MotionQuality]) -> MotionQuality {
 /// estimator: the slope is the median of the slopes between every pair of points with different
 /// steps, the intercept the median of `value - slope x step`. One take far off the line moves it
 /// little (unlike least squares). [`StepTrend::at`] keeps the line within the points' own values.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct StepTrend {
     /// Change of the value per metre of step.
     pub slope: f64,
@@ -628,9 +633,14 @@ pub fn reference_from_takes(
         percentile(&|m| m.facing_max_deg, 0.98),
     );
     cycle_steps.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut take_steps: Vec<(f64, MotionQuality)> =
-        takes.iter().map(|&(q, _, step)| (step, q)).collect();
-    take_steps.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let trend = |f: &dyn Fn(&MotionQuality) -> f64| {
+        let points: Vec<(f64, f64)> = takes.iter().map(|&(q, _, step)| (step, f(&q))).collect();
+        StepTrend::fit(&points)
+    };
+    let step_trends = (takes.len() >= 2).then(|| StepTrends {
+        pop_cm: trend(&|q| q.pop_cm),
+        skate_cm_s: trend(&|q| q.skate_cm_s),
+    });
     Some(QualityReference {
         feet: feet.clone(),
         stature_m,
@@ -642,7 +652,7 @@ pub fn reference_from_takes(
         },
         facing_range_deg: facing_range,
         cycle_steps,
-        take_steps,
+        step_trends,
     })
 }
 
@@ -708,9 +718,9 @@ mod tests {
         assert_eq!(r.at_controls(&c), r.at_step(step));
         // Cycle durations: the median of the cycles within 10% of the step, or the 9 nearest.
         assert!((r.duration_for_step(0.5).unwrap() - 1.8).abs() < 1e-9);
-        // Without per-take steps (a reference written before them): the pooled median.
+        // Without trends (fewer than two takes): the pooled median.
         let pooled = QualityReference {
-            take_steps: Vec::new(),
+            step_trends: None,
             ..r.clone()
         };
         assert_eq!(pooled.at_step(2.4), pooled.median);

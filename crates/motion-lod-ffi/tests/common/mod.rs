@@ -10,6 +10,32 @@ pub fn model_bytes() -> Vec<u8> {
     BYTES.get_or_init(build_model_bytes).clone()
 }
 
+/// The model of [`model_bytes`] loaded through the C ABI (`mlod_model_from_bytes`, asserted to
+/// succeed); the caller frees it with `mlod_model_free`.
+pub fn load_model() -> *mut motion_lod_ffi::MlodModel {
+    let bytes = model_bytes();
+    let mut model = std::ptr::null_mut();
+    // SAFETY: `bytes` holds `len` bytes; `model` is a writable out pointer.
+    let status =
+        unsafe { motion_lod_ffi::mlod_model_from_bytes(bytes.as_ptr(), bytes.len(), &mut model) };
+    assert_eq!(status, motion_lod_ffi::MlodStatus::Ok);
+    assert!(!model.is_null());
+    model
+}
+
+/// A camera 3 m behind the origin at eye height, looking along +z (1080 px high, no far plane).
+pub fn camera_behind_origin() -> motion_lod_ffi::MlodCamera {
+    motion_lod_ffi::MlodCamera {
+        position: [0.0, 1.7, -3.0],
+        direction: [0.0, 0.0, 1.0],
+        fov_y: 1.0,
+        aspect: 1.5,
+        image_height_px: 1080.0,
+        near_m: 0.1,
+        far_m: 0.0,
+    }
+}
+
 fn build_model_bytes() -> Vec<u8> {
     use motion_lod::BuildConfig;
     use motion_lod::dataset::DataSpec;

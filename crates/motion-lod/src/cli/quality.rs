@@ -196,7 +196,6 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         }
         let mut reference = reference.clone();
         reference.cycle_steps.clear();
-        reference.take_steps.clear();
         println!(
             "{}",
             serde_json::to_string(&Doc {
