@@ -10,33 +10,13 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use kriging::faer::Mat;
 use kriging::{Drift, Krige, Neighbourhood, NestedVariogram, VariogramModel};
 
+mod halton_points;
+
 const N: usize = 2000;
 const GRID: usize = 100;
 
-fn radical_inverse(mut i: usize, b: usize) -> f64 {
-    let (mut f, mut r) = (1.0, 0.0);
-    while i > 0 {
-        f /= b as f64;
-        r += f * (i % b) as f64;
-        i /= b;
-    }
-    r
-}
-
 fn data() -> (Mat<f64>, Vec<f64>) {
-    let pts: Vec<[f64; 2]> = (1..=N)
-        .map(|i| {
-            [
-                10000.0 * radical_inverse(i, 2),
-                10000.0 * radical_inverse(i, 3),
-            ]
-        })
-        .collect();
-    let z = pts
-        .iter()
-        .map(|p| (p[0] / 1500.0).sin() + (p[1] / 900.0).cos() + 1e-4 * p[0])
-        .collect();
-    (Mat::from_fn(N, 2, |i, k| pts[i][k]), z)
+    halton_points::problem(N)
 }
 
 fn grid() -> Vec<f64> {

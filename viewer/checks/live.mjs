@@ -5,7 +5,7 @@
 //   node checks/live.mjs --bin target/debug/motion-lod --ref target/web-ref [--screenshot FILE]
 //                        [--crowd-screenshot FILE]
 //
-// target/web-ref/ is written by `cargo test -p motion-lod-ffi --test web_reference`: the model,
+// target/web-ref/ is written by `cargo test -p motion-lod-ffi --test integration web_reference::`: the model,
 // the scripts (a walk whose controls and detail change over 10 cycles; a crowd of 1,000 walkers
 // for 300 frames, their details from a camera) and what the native runtime gives for them. The
 // page runs the same scripts (viewer/crowd.js) and every value must agree within 1e-5 (metres,
@@ -22,7 +22,7 @@ const ref = args.ref ?? 'target/web-ref';
 const TOLERANCE = 1e-5;
 const browserPath = chromiumPath();
 if (!existsSync(join(ref, 'script.json'))) {
-  throw new Error(`${ref}/script.json is missing: run \`cargo test -p motion-lod-ffi --test web_reference\` first`);
+  throw new Error(`${ref}/script.json is missing: run \`cargo test -p motion-lod-ffi --test integration web_reference::\` first`);
 }
 
 const { check, done } = tally();

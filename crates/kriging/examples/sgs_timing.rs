@@ -1,6 +1,7 @@
 //! Sequential Gaussian simulation at the scale of issue 37's goal: 100 realisations of a 200 x 200
-//! grid conditioned on 2,000 points, timed once (the criterion bench is `benches/sgs.rs`; GSTools'
-//! time for the same job comes from `scripts/sgs_gstools_timing.py`).
+//! grid conditioned on 2,000 points, timed once (the criterion bench is the workspace's
+//! `benches/kriging_sgs.rs`; GSTools' time for the same job comes from
+//! `scripts/sgs_gstools_timing.py`).
 //!
 //! Usage: `cargo run --release -p kriging --example sgs_timing -- [k] [realisations] [shared]`
 //! (defaults: 16 neighbours, 100 realisations, a path per realisation; `shared` for one path).

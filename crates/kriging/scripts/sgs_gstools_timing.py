@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Times GSTools 1.7.0's conditioned random field on the job of crates/kriging/benches/sgs.rs.
+"""Times GSTools 1.7.0's conditioned random field on the job of benches/kriging_sgs.rs.
 
 The job (the same as the Rust bench and `examples/sgs_timing.rs`): 100 realisations of a
 200 x 200 grid over [0, 10000]^2 conditioned on 2,000 points (Halton sequence, bases 2 and 3, on

@@ -3,7 +3,7 @@
 // Reference loops are index-style on purpose (they mirror the formulas).
 #![allow(clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 
 use common::*;
 use faer::Mat;

@@ -2,7 +2,7 @@
 //! numbers (ordinary and simple kriging, a duplicated site, a pure nugget), smoothing at the
 //! samples, leave-one-out against explicit refits, neighbourhoods, serde, and the option off.
 
-mod common;
+use crate::common;
 
 use common::gstools_points::{XS, YS, Z};
 use kriging::faer::Mat;

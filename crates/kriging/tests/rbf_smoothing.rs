@@ -2,7 +2,7 @@
 //! leave-one-out error.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 
 use common::*;
 use faer::Mat;

@@ -1,6 +1,6 @@
 //! The leave-one-out variogram search (`Selection::LooSearch`, the default).
 
-mod common;
+use crate::common;
 
 use common::*;
 use faer::Mat;

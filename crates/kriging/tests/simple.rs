@@ -2,7 +2,7 @@
 //! its relation to ordinary kriging, neighbourhoods, anisotropy, leave-one-out, determinism,
 //! GSTools reference numbers and the errors.
 
-mod common;
+use crate::common;
 
 use common::gstools_points::{XS, YS, Z};
 use kriging::faer::Mat;

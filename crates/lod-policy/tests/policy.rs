@@ -2,7 +2,7 @@
 // Index loops mirror the formulas' subscripts.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 
 use common::*;
 use lod_policy::{

@@ -10,8 +10,9 @@
 //! paths and their culling; `crowd-sim` is the Rust one).
 //!
 //! The header `include/motion_lod.h` is generated from this file by cbindgen (regenerate it with
-//! `MOTION_LOD_BLESS_HEADER=1 cargo test -p motion-lod-ffi --test header`) and checked in; a test
-//! fails when it is out of date, and another when it names a function or type that does not exist.
+//! `MOTION_LOD_BLESS_HEADER=1 cargo test -p motion-lod-ffi --test integration header::`) and
+//! checked in; a test fails when it is out of date, and another when it names a function or type
+//! that does not exist.
 //! `examples/crowd.c` walks a crowd of 1,000 characters through it, and a test checks every value it
 //! prints against the Rust API bit for bit.
 //!

@@ -5,7 +5,7 @@ use std::ptr::{null, null_mut};
 
 use motion_lod_ffi::*;
 
-mod common;
+use crate::common;
 
 use common::model_bytes;
 

@@ -1,7 +1,8 @@
 //! The checked-in C header is what cbindgen makes of the current source, and every library name it
 //! mentions, in a declaration or a comment, is a function, type or constant the library has.
 //!
-//! To regenerate it after changing the ABI: `MOTION_LOD_BLESS_HEADER=1 cargo test -p motion-lod-ffi --test header`.
+//! To regenerate it after changing the ABI:
+//! `MOTION_LOD_BLESS_HEADER=1 cargo test -p motion-lod-ffi --test integration header::`.
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -29,7 +30,7 @@ fn header_is_current() {
     assert!(
         checked_in == generated,
         "{} is out of date with src/lib.rs; regenerate it with \
-         `MOTION_LOD_BLESS_HEADER=1 cargo test -p motion-lod-ffi --test header`",
+         `MOTION_LOD_BLESS_HEADER=1 cargo test -p motion-lod-ffi --test integration header::`",
         path.display()
     );
 }

@@ -9,7 +9,7 @@ use std::ptr::null_mut;
 
 use motion_lod_ffi::*;
 
-mod common;
+use crate::common;
 
 #[test]
 fn root_only_frames_show_the_whole_pose_of_their_clip() {

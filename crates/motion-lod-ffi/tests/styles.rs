@@ -8,7 +8,7 @@ use std::ptr::{null, null_mut};
 use lod_policy::{ClipKernel, Controls, Detail, KernelScratch, RuntimeModel, StyleMix};
 use motion_lod_ffi::*;
 
-mod common;
+use crate::common;
 
 use common::{model_bytes, styled_model_bytes};
 

@@ -13,7 +13,7 @@
 //! and level of detail change every cycle, with the foot lock; and a crowd of 1,000 walkers for
 //! 300 frames, each on its own path of control presets, its detail from a camera every frame.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -34,6 +34,7 @@ use tensor_ops::Tensor3;
 use crate::build::{Analysis, BuildError};
 use crate::metrics::ErrorMeter;
 use crate::progress::Progress;
+use rayon::prelude::*;
 
 /// Settings of [`leave_one_out`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -560,7 +561,8 @@ pub struct FoldReport {
 /// folds, and in the comparison the RBF smoothing and the PCA basis) is fitted on the other folds
 /// with `build`, and every method predicts the fold's cycles at their own controls
 /// ([`held_out`]). Nothing of a held-out cycle enters its prediction except through the time
-/// alignment of the data set (the reference cycle and `T`), which is fixed before the split.
+/// alignment of the data set (the reference cycle and `T`), which is fixed before the split. The
+/// folds are refitted in parallel and pooled in fold order: the same report on any thread count.
 pub fn k_fold(
     set: &crate::build::TrainingSet,
     build: &crate::build::BuildConfig,
@@ -571,31 +573,44 @@ pub fn k_fold(
 ) -> Result<FoldReport, BuildError> {
     set.validate()?;
     let fold = fold_of_samples(&set.sources, folds, by)?;
+    // The folds are independent refits: they run in parallel and are pooled in fold order, so the
+    // report is the same for any pool size.
+    progress.stage("folds (each a refit of the model)", folds as u64);
+    let reports: Vec<Result<(usize, EvalReport), BuildError>> = (0..folds)
+        .into_par_iter()
+        .map(|f| {
+            let (test, train): (Vec<usize>, Vec<usize>) =
+                (0..fold.len()).partition(|&i| fold[i] == f);
+            let training = set.select(&train);
+            let held = set.select(&test);
+            let quiet = crate::progress::NoProgress;
+            let analysis = Analysis::run_guarded(&training, build, &quiet)?;
+            let model = analysis.runtime_model(build, &quiet)?;
+            let key_bytes: Vec<usize> = (0..model.lod().keys().len())
+                .map(|k| model.lod().key_bytes(k, lod_policy::Precision::F64))
+                .collect();
+            let model_bytes = crate::storage::Storage::of(&model).model_f64;
+            let targets = analysis.prepare(&set.layout, &held.tensor);
+            let report = held_out(
+                &analysis,
+                &targets,
+                &held.controls,
+                held.styles.as_ref().map(|l| l.of_sample.as_slice()),
+                model_bytes,
+                &key_bytes,
+                config,
+                &quiet,
+            )?;
+            progress.inc(1);
+            Ok((test.len(), report))
+        })
+        .collect();
     let mut pooled: Option<EvalReport> = None;
     let mut weights: Vec<f64> = Vec::new();
     let mut fold_sizes = Vec::with_capacity(folds);
-    for f in 0..folds {
-        let (test, train): (Vec<usize>, Vec<usize>) = (0..fold.len()).partition(|&i| fold[i] == f);
-        fold_sizes.push(test.len());
-        let training = set.select(&train);
-        let held = set.select(&test);
-        let analysis = Analysis::run_guarded(&training, build, &crate::progress::NoProgress)?;
-        let model = analysis.runtime_model(build, &crate::progress::NoProgress)?;
-        let key_bytes: Vec<usize> = (0..model.lod().keys().len())
-            .map(|k| model.lod().key_bytes(k, lod_policy::Precision::F64))
-            .collect();
-        let model_bytes = crate::storage::Storage::of(&model).model_f64;
-        let targets = analysis.prepare(&set.layout, &held.tensor);
-        let report = held_out(
-            &analysis,
-            &targets,
-            &held.controls,
-            held.styles.as_ref().map(|l| l.of_sample.as_slice()),
-            model_bytes,
-            &key_bytes,
-            config,
-            progress,
-        )?;
+    for (f, result) in reports.into_iter().enumerate() {
+        let (size, report) = result?;
+        fold_sizes.push(size);
         let n = report.evaluated as f64;
         match &mut pooled {
             None => {

@@ -5,7 +5,7 @@ use crowd_sim::{ClipSource, CrowdConfig, Scene};
 use lod_policy::DistancePolicy;
 use motion_lod::LodSource;
 
-mod common;
+use crate::common;
 
 use common::{Frame, built, crowd_frames};
 

@@ -23,12 +23,11 @@
 //! On the embedded data, and on Bandai's when `../shared/mocap` holds it (skipped with a message
 //! when absent; a failure under `MOTION_LOD_REQUIRE_DATA=1`, as in CI).
 
-mod common;
+use crate::common;
 
+use motion_lod::MotionModel;
 use motion_lod::crowd::{WalkerTrack, measure_track_range, record_walkers};
 use motion_lod::crowd_sim::{CrowdConfig, Scene};
-use motion_lod::progress::NoProgress;
-use motion_lod::{BuildConfig, MotionModel};
 
 const FRAMES: usize = 131;
 const START: std::ops::Range<usize> = 0..32;
@@ -164,20 +163,10 @@ fn embedded_crowd_starts_mid_stride() {
 
 #[test]
 fn bandai_crowd_starts_mid_stride() {
-    let Some(dir) =
-        motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), "bandai-namco-2-walk")
-    else {
+    let Some((model, _)) = common::bandai() else {
         return;
     };
-    let loaded = motion_lod::dataset::DataSpec {
-        dirs: vec![dir],
-        ..Default::default()
-    }
-    .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
-    .expect("data loads");
-    let model =
-        MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress).expect("builds");
-    check_start("bandai", &model);
+    check_start("bandai", model);
 }
 
 /// A recorded crowd is primed the same way on any thread count: the same tracks on one thread and

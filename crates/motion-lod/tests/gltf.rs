@@ -15,13 +15,13 @@
 //! The files are left in `target/gltf-out/` (or `$MOTION_LOD_GLTF_OUT`) for `.ci/web-checks`, which
 //! runs the Khronos glTF validator over them and loads one in a browser.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 use std::path::PathBuf;
 
 use glam::{DQuat, DVec3};
-use motion_lod::dataset::{DataSpec, Preset};
+use motion_lod::dataset::DataSpec;
 use motion_lod::gltf::crowd::{CrowdClip, export_crowd};
 use motion_lod::progress::NoProgress;
 use motion_lod::synth::WalkRequest;
@@ -437,18 +437,11 @@ fn bandai_walk_and_crowd_export_to_glb() {
 
 #[test]
 fn cmu_walk_and_crowd_export_to_glb() {
-    let Some(dir) =
-        motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), "cmu-daz-walk-s07-s08")
-    else {
+    let Some((model, _)) = common::cmu() else {
         return;
     };
-    let model = build(&DataSpec {
-        dirs: vec![dir],
-        preset: Preset::Cmu,
-        ..DataSpec::default()
-    });
-    check_walk("cmu", &model, mid_controls(&model, 0.0));
-    check_crowd("cmu", &model);
+    check_walk("cmu", model, mid_controls(model, 0.0));
+    check_crowd("cmu", model);
 }
 
 /// Issue 34: an exported crowd starts mid-stride. Its walkers start at their detail and phase

@@ -1,7 +1,7 @@
 //! The naive-kriging crowd (the baseline of every crowd table) is deterministic whatever the thread
 //! count: the same poses, bit for bit, for 1, 2 and 8 threads, at the level its policy gives.
 
-mod common;
+use crate::common;
 
 use crowd_sim::{Camera, CrowdConfig};
 use lod_policy::FullDetail;

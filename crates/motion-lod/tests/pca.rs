@@ -10,7 +10,7 @@ use motion_lod::build::Analysis;
 use motion_lod::metrics::ErrorMeter;
 use motion_lod::{MotionModel, NaiveSource, PcaSource, TIME_ROW};
 
-mod common;
+use crate::common;
 
 use common::built;
 

@@ -17,17 +17,14 @@
 //! anew at controls the build did not measure (midpoints between training samples), shows at most
 //! one pixel of pose error (shell) and of foot slide at the nearest distance it is used.
 
-mod common;
-mod fk_probe;
+use crate::common;
+use crate::fk_probe;
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
-use std::sync::OnceLock;
 
 use lod_policy::{Controls, Detail, DistancePolicy, LevelPolicy, ScreenSpacePolicy, ViewParams};
 use motion_lod::MotionModel;
 use motion_lod::build::foot_slide_cm;
-use motion_lod::dataset::DataSpec;
 use motion_lod::metrics::ErrorMeter;
 use motion_lod::progress::NoProgress;
 use motion_lod::quality::{self, MotionQuality};
@@ -36,10 +33,6 @@ use motion_lod::walk_quality;
 
 /// The data folder `name` under `../shared/mocap`, or `None` (with the skip message) when absent; a
 /// test failure instead when `MOTION_LOD_REQUIRE_DATA` is set (CI).
-fn mocap(name: &str) -> Option<PathBuf> {
-    motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), name)
-}
-
 fn walk(model: &MotionModel, controls: Controls, blend: bool, plant_feet: bool) -> MotionQuality {
     walk_at(
         model,
@@ -70,43 +63,14 @@ fn walk_at(
     walk_quality::measure_walk(model, &w).expect("walk measures")
 }
 
-/// What the Bandai model is built from (all 800 cycles); `None` (skipped) without the data.
-fn bandai_spec() -> Option<DataSpec> {
-    Some(DataSpec {
-        dirs: vec![mocap("bandai-namco-2-walk")?],
-        ..DataSpec::default()
-    })
-}
-
-/// What the CMU model is built from (`Preset::Cmu`); `None` (skipped) without the data.
-fn cmu_spec() -> Option<DataSpec> {
-    Some(DataSpec {
-        dirs: vec![mocap("cmu-daz-walk-s07-s08")?],
-        preset: motion_lod::dataset::Preset::Cmu,
-        ..DataSpec::default()
-    })
-}
-
-/// The model of `spec` with the default settings, and its training controls.
-fn build(spec: &DataSpec) -> (MotionModel, Vec<[f64; 4]>) {
-    let loaded = spec
-        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
-        .expect("data loads");
-    let model = MotionModel::build(&loaded.training, &Default::default(), &NoProgress)
-        .expect("model builds");
-    (model, loaded.training.controls.clone())
-}
-
-/// The Bandai model and its training controls, built once per test binary.
+/// The Bandai model (all 800 cycles) and its training controls ([`common::bandai`]).
 fn bandai() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
-    static MODEL: OnceLock<Option<(MotionModel, Vec<[f64; 4]>)>> = OnceLock::new();
-    MODEL.get_or_init(|| Some(build(&bandai_spec()?))).as_ref()
+    common::bandai()
 }
 
-/// The CMU model and its training controls, built once per test binary.
+/// The CMU model and its training controls ([`common::cmu`]).
 fn cmu() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
-    static MODEL: OnceLock<Option<(MotionModel, Vec<[f64; 4]>)>> = OnceLock::new();
-    MODEL.get_or_init(|| Some(build(&cmu_spec()?))).as_ref()
+    common::cmu()
 }
 
 /// Every detail the two policies use (1080p, 60 degrees, 0 to 1000 m), measured at midpoints between
@@ -311,8 +275,8 @@ fn cmu_walks_look_like_the_data() {
 #[test]
 fn shared_data_sets_build_to_the_same_bytes_on_one_thread() {
     let sets = [
-        ("bandai", bandai().map(|(m, _)| m), bandai_spec()),
-        ("cmu", cmu().map(|(m, _)| m), cmu_spec()),
+        ("bandai", bandai().map(|(m, _)| m), common::bandai_spec()),
+        ("cmu", cmu().map(|(m, _)| m), common::cmu_spec()),
     ];
     for (what, model, spec) in sets {
         let (Some(model), Some(spec)) = (model, spec) else {

@@ -10,7 +10,7 @@
 //!   absent, failed under `MOTION_LOD_REQUIRE_DATA`). The same check on the quality grid's walks is
 //!   in `tests/quality.rs`.
 
-mod fk_probe;
+use crate::fk_probe;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -10,7 +10,7 @@ use lod_policy::{ClipKernel, Detail, FileError, JointTransform, KernelScratch, R
 use motion_io::PoseLayout;
 use motion_lod::model_file::{self, FORMAT_VERSION, HEADER_LEN, SECTION_HEADER_LEN};
 
-mod common;
+use crate::common;
 
 use common::built;
 

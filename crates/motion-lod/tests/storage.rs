@@ -1,7 +1,7 @@
 //! One model, one size: the storage `info` reports (a built model, error tables measured) equals the
 //! storage `eval` reports (the runtime model of the same analysis, before its errors are measured).
 
-mod common;
+use crate::common;
 
 use motion_lod::BuildConfig;
 use motion_lod::progress::NoProgress;

@@ -1,6 +1,6 @@
 //! Alignment to a reference, the time-increment channel, and the medoid.
 
-mod common;
+use crate::common;
 
 use timewarp::{
     AlignConfig, AlignMethod, DtwConfig, DtwWorkspace, FrameSeq, TimewarpError, align,

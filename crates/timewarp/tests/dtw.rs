@@ -1,6 +1,6 @@
 //! DTW against a brute-force search, constraints, and known warps.
 
-mod common;
+use crate::common;
 
 use proptest::prelude::*;
 use timewarp::{DtwConfig, DtwWorkspace, FrameSeq, TimewarpError, dtw, dtw_cost_with, dtw_with};

@@ -1,6 +1,6 @@
 //! The time table and playback of aligned sequences.
 
-mod common;
+use crate::common;
 
 use lod_policy::TimeTable;
 use timewarp::{

@@ -902,6 +902,18 @@ fn write_benches(doc: &mut String) {
             "model_file",
             "clip kernels, kriging weights and poses of a model file (`MOTION_LOD_BENCH_MODEL=FILE`, e.g. the Bandai model)",
         ),
+        (
+            "model_build",
+            "the offline build on the embedded data set, and the clip kernel and pose of its model at the first and last accuracy levels",
+        ),
+        (
+            "kriging_geo",
+            "geostatistical kriging (`kriging::Krige`) on the problem of PyKrige's and GSTools' timings: 2,000 points, a 100 x 100 grid",
+        ),
+        (
+            "kriging_sgs",
+            "sequential Gaussian simulation: 100 realisations of a 200 x 200 grid conditioned on 2,000 points",
+        ),
     ] {
         t.row(&[format!("`{name}`"), what.to_string()]);
     }
@@ -911,6 +923,38 @@ fn write_benches(doc: &mut String) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Section 8 describes every `[[bench]]` of `benches/Cargo.toml`, in any order.
+    #[test]
+    fn the_bench_table_lists_every_bench() {
+        let manifest = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../benches/Cargo.toml"
+        ))
+        .unwrap();
+        // The first `name = "..."` after each `[[bench]]` header line.
+        let mut declared = Vec::new();
+        let mut in_bench = false;
+        for line in manifest.lines().map(str::trim) {
+            if line.starts_with('[') {
+                in_bench = line == "[[bench]]";
+            } else if in_bench && line.starts_with("name") {
+                declared.push(line.split('"').nth(1).expect("a quoted name").to_string());
+                in_bench = false;
+            }
+        }
+        assert!(declared.len() >= 10, "{declared:?}");
+        let mut doc = String::new();
+        write_benches(&mut doc);
+        let mut listed: Vec<String> = doc
+            .lines()
+            .filter_map(|l| l.strip_prefix("| `"))
+            .map(|l| l.split('`').next().unwrap().to_string())
+            .collect();
+        declared.sort();
+        listed.sort();
+        assert_eq!(listed, declared);
+    }
 
     #[test]
     fn figures_folder_follows_the_output_name() {

@@ -1,6 +1,6 @@
 //! An independent, deliberately naive implementation used as the reference in the tests:
 //! plain Vec<Vec<f64>>, Gaussian elimination, formulas typed again from the paper.
-#![allow(dead_code, clippy::needless_range_loop)]
+#![allow(clippy::needless_range_loop)]
 
 pub mod gstools_points;
 

@@ -1,4 +1,5 @@
-//! Shared by the integration tests: the model built once from the embedded data set.
+//! Shared by the integration tests: the models built once per run from the embedded data set and
+//! from the shared Bandai and CMU sets.
 
 use std::sync::OnceLock;
 
@@ -8,7 +9,7 @@ use motion_lod::progress::NoProgress;
 use motion_lod::{BuildConfig, MotionModel};
 
 /// The model (and its analysis) built from the embedded data set with the default settings, once per
-/// test binary.
+/// test run.
 pub fn built() -> &'static (MotionModel, Analysis) {
     static MODEL: OnceLock<(MotionModel, Analysis)> = OnceLock::new();
     MODEL.get_or_init(|| {
@@ -23,7 +24,6 @@ pub fn built() -> &'static (MotionModel, Analysis) {
 /// Everything a crowd step leaves per walker: rows of the pose, joint positions, level bin; and the
 /// frame's visible count.
 #[derive(Debug, PartialEq)]
-#[allow(dead_code)] // not every test binary that includes this module runs crowds
 pub struct Frame {
     pub poses: Vec<Vec<f32>>,
     pub joints: Vec<Vec<[f32; 3]>>,
@@ -33,7 +33,6 @@ pub struct Frame {
 
 /// `frames` steps at 30 fps of a crowd of `source` under `policy` with `config`, the camera of
 /// `scene`: what every step left.
-#[allow(dead_code)] // not every test binary that includes this module runs crowds
 pub fn crowd_frames<S, P>(
     source: &S,
     policy: &P,
@@ -68,4 +67,55 @@ where
             }
         })
         .collect()
+}
+
+/// The shared Bandai data set (all 800 cycles); `None` (skipped) without it.
+pub fn bandai_spec() -> Option<DataSpec> {
+    Some(DataSpec {
+        dirs: vec![motion_io::test_data::shared_mocap(
+            env!("CARGO_MANIFEST_DIR"),
+            "bandai-namco-2-walk",
+        )?],
+        ..DataSpec::default()
+    })
+}
+
+/// The shared CMU data set (`Preset::Cmu`); `None` (skipped) without it.
+pub fn cmu_spec() -> Option<DataSpec> {
+    Some(DataSpec {
+        dirs: vec![motion_io::test_data::shared_mocap(
+            env!("CARGO_MANIFEST_DIR"),
+            "cmu-daz-walk-s07-s08",
+        )?],
+        preset: motion_lod::dataset::Preset::Cmu,
+        ..DataSpec::default()
+    })
+}
+
+/// The model of `spec` with the default settings, and its training controls.
+fn build_with_controls(spec: &DataSpec) -> (MotionModel, Vec<[f64; 4]>) {
+    let loaded = spec
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("data loads");
+    let model = MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress)
+        .expect("model builds");
+    (model, loaded.training.controls.clone())
+}
+
+/// The Bandai model ([`bandai_spec`], default settings) and its training controls, built once per
+/// test run; `None` without the data.
+pub fn bandai() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
+    static MODEL: OnceLock<Option<(MotionModel, Vec<[f64; 4]>)>> = OnceLock::new();
+    MODEL
+        .get_or_init(|| Some(build_with_controls(&bandai_spec()?)))
+        .as_ref()
+}
+
+/// The CMU model ([`cmu_spec`], default settings) and its training controls, built once per test
+/// run; `None` without the data.
+pub fn cmu() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
+    static MODEL: OnceLock<Option<(MotionModel, Vec<[f64; 4]>)>> = OnceLock::new();
+    MODEL
+        .get_or_init(|| Some(build_with_controls(&cmu_spec()?)))
+        .as_ref()
 }

@@ -100,7 +100,6 @@ pub fn skate(motion: &Motion, x: &[Vec<DVec3>], dt: f64, cycle_s: f64) -> Probe 
 }
 
 /// Median of `v` (0 when empty).
-#[allow(dead_code)] // not every test binary that includes this module uses it
 pub fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return 0.0;

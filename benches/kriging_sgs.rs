@@ -4,7 +4,7 @@
 //! values `sin(x/1500) + cos(y/900) + 1e-4 x`, exponential variogram without nugget, partial sill
 //! 1, practical range 3000, simple kriging with the data mean).
 //!
-//! Run: `cargo bench -p kriging --bench sgs -- --sample-size 10`.
+//! Run: `cargo bench -p motion-lod-benches --bench kriging_sgs -- --sample-size 10`.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -13,29 +13,14 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use kriging::faer::Mat;
 use kriging::{NestedVariogram, Sgs, SgsPath, VariogramModel};
 
+mod halton_points;
+
 const N: usize = 2000;
 const GRID: usize = 200;
 const REALISATIONS: usize = 100;
 
-fn radical_inverse(mut i: usize, b: usize) -> f64 {
-    let (mut f, mut r) = (1.0, 0.0);
-    while i > 0 {
-        f /= b as f64;
-        r += f * (i % b) as f64;
-        i /= b;
-    }
-    r
-}
-
 fn data() -> (Mat<f64>, Vec<f64>) {
-    let coords = Mat::from_fn(N, 2, |i, c| 10000.0 * radical_inverse(i + 1, [2, 3][c]));
-    let z = (0..N)
-        .map(|i| {
-            let (x, y) = (coords[(i, 0)], coords[(i, 1)]);
-            (x / 1500.0).sin() + (y / 900.0).cos() + 1e-4 * x
-        })
-        .collect();
-    (coords, z)
+    halton_points::problem(N)
 }
 
 fn bench(c: &mut Criterion) {

@@ -1,0 +1,9 @@
+//! timewarp's integration tests, one test binary: each file of this folder is a module (run one
+//! with `cargo test -p timewarp --test integration FILE::`). One binary links once instead of 3
+//! times (the workspace's first build, issue 36).
+
+mod common;
+
+mod align;
+mod dtw;
+mod playback;
