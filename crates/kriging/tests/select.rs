@@ -1,45 +1,18 @@
 //! `select_dims`: dimensions that carry signal stay, noise dimensions and constants go.
 
 use faer::Mat;
+
+use crate::common;
 use kriging::{DimDecision, KrigingConfig, SelectRule, select_dims};
-
-/// Deterministic uniform numbers in [-1, 1) (a 64-bit LCG).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
-}
 
 const RULE: SelectRule = SelectRule {
     margin: 0.01,
     min_t: 2.0,
 };
 
-/// 60 samples over three parameters: `a` spread over [-1, 1], `b` likewise, `c` constant; values are
-/// a smooth function of `a` (and of `b` when `b_matters`) plus independent noise.
+/// [`common::selection_data`]: `b` carries signal when `b_matters`.
 fn data(b_matters: bool) -> (Mat<f64>, Mat<f64>) {
-    let mut rng = Lcg(7);
-    let s = 60;
-    let rows: Vec<[f64; 3]> = (0..s).map(|_| [rng.next(), rng.next(), 2.5]).collect();
-    let params = Mat::from_fn(s, 3, |i, k| rows[i][k]);
-    let noise: Vec<f64> = (0..s * 4).map(|_| 0.05 * rng.next()).collect();
-    let values = Mat::from_fn(s, 4, |i, j| {
-        let [a, b, _] = rows[i];
-        let signal = (1.0 + j as f64) * (1.5 * a).sin() + 0.3 * a * a;
-        let extra = if b_matters {
-            (j as f64 - 1.5) * b + 0.5 * b * b
-        } else {
-            0.0
-        };
-        signal + extra + noise[i * 4 + j]
-    });
-    (params, values)
+    common::selection_data(7, if b_matters { 1.0 } else { 0.0 })
 }
 
 #[test]

@@ -2,39 +2,17 @@
 //! cross-validation over the given folds; a dimension that only adds noise goes.
 
 use faer::Mat;
+
+use crate::common;
 use kriging::{DimDecision, KrigingConfig, select_dims_by_folds};
-
-/// Deterministic uniform numbers in [-1, 1) (a 64-bit LCG).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
-}
 
 const MARGIN: f64 = 0.01;
 
-/// 60 samples in 20 groups of 3 (the folds deal whole groups) over three parameters: `a` and `b`
-/// spread over [-1, 1], `c` constant; values a smooth function of `a`, plus `b_weight` times one of
-/// `b`, plus independent noise.
+/// [`common::selection_data`] with `b_weight`, and its 60 samples in 20 groups of 3 (group
+/// `g = i / 3`), the groups dealt round-robin to 5 folds (the folds deal whole groups).
 fn data(b_weight: f64) -> (Mat<f64>, Mat<f64>, Vec<usize>) {
-    let mut rng = Lcg(11);
-    let s = 60;
-    let rows: Vec<[f64; 3]> = (0..s).map(|_| [rng.next(), rng.next(), 2.5]).collect();
-    let params = Mat::from_fn(s, 3, |i, k| rows[i][k]);
-    let noise: Vec<f64> = (0..s * 4).map(|_| 0.05 * rng.next()).collect();
-    let values = Mat::from_fn(s, 4, |i, j| {
-        let [a, b, _] = rows[i];
-        let signal = (1.0 + j as f64) * (1.5 * a).sin() + 0.3 * a * a;
-        signal + b_weight * ((j as f64 - 1.5) * b + 0.5 * b * b) + noise[i * 4 + j]
-    });
-    // Group g = i / 3, groups dealt round-robin to 5 folds.
-    let fold = (0..s).map(|i| (i / 3) % 5).collect();
+    let (params, values) = common::selection_data(11, b_weight);
+    let fold = (0..params.nrows()).map(|i| (i / 3) % 5).collect();
     (params, values, fold)
 }
 

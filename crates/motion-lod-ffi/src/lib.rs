@@ -1464,27 +1464,12 @@ pub unsafe extern "C" fn mlod_walker_start(
 
 /// The checked step of `mlod_walker_advance` and `mlod_walkers_step`: keeps the next cycle's
 /// controls and detail (when given), moves the walk `dt_s` seconds on (chaining cycles, each seam
-/// inertialized when both cycles animate joints) and shows the frame there.
-///
-/// # Safety
-/// `state` is null or writable.
-unsafe fn step_walker(
-    w: &mut MlodWalker,
-    m: &MlodModel,
-    dt_s: f64,
-    controls: Option<Controls>,
-    detail: Option<Detail>,
-    state: *mut MlodWalkerState,
-) -> Result<(), Failure> {
-    // SAFETY: per this function's contract; the walker's own scratch.
-    unsafe { step_walker_with(w, m, dt_s, controls, detail, state, None) }
-}
-
-/// [`step_walker`] building clips in the scratch `shared` when not null ([`build_clip_with`]).
+/// inertialized when both cycles animate joints) and shows the frame there. Clips are built in the
+/// scratch `shared` when given ([`build_clip_with`]), else in the walker's own.
 ///
 /// # Safety
 /// `state` is null or writable; `shared` as [`build_clip_with`] asks.
-unsafe fn step_walker_with(
+unsafe fn step_walker(
     w: &mut MlodWalker,
     m: &MlodModel,
     dt_s: f64,
@@ -1577,7 +1562,7 @@ pub unsafe extern "C" fn mlod_walker_advance(
             None => None,
         };
         // SAFETY: `state` is null or writable per the contract.
-        unsafe { step_walker(w, m, dt_s, controls, detail, state) }
+        unsafe { step_walker(w, m, dt_s, controls, detail, state, None) }
     })
 }
 
@@ -1682,7 +1667,7 @@ pub unsafe extern "C" fn mlod_walkers_step(
             // SAFETY: `states[i]` is writable; `shared` is walker 0's scratch, not walker i's, and
             // used by nothing else meanwhile.
             unsafe {
-                step_walker_with(
+                step_walker(
                     w,
                     m,
                     dt_s,

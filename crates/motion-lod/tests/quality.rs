@@ -63,16 +63,6 @@ fn walk_at(
     walk_quality::measure_walk(model, &w).expect("walk measures")
 }
 
-/// The Bandai model (all 800 cycles) and its training controls ([`common::bandai`]).
-fn bandai() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
-    common::bandai()
-}
-
-/// The CMU model and its training controls ([`common::cmu`]).
-fn cmu() -> Option<&'static (MotionModel, Vec<[f64; 4]>)> {
-    common::cmu()
-}
-
 /// Every detail the two policies use (1080p, 60 degrees, 0 to 1000 m), measured at midpoints between
 /// training samples: shell error against full detail and foot slide beyond full detail's, projected at
 /// the nearest distance the detail is used, at most one pixel.
@@ -152,7 +142,7 @@ fn embedded_policies_keep_pose_error_and_foot_slide_under_a_pixel() {
 
 #[test]
 fn bandai_policies_keep_pose_error_and_foot_slide_under_a_pixel() {
-    let Some((model, controls)) = bandai() else {
+    let Some((model, controls)) = common::bandai() else {
         return;
     };
     details_stay_under_a_pixel(model, controls);
@@ -228,7 +218,7 @@ fn walks_look_like_the_data(what: &str, model: &MotionModel, min_takes: usize) -
 /// pop up to 2.7x or skate up to 8x the data even with the lock and serve only root-only walkers).
 #[test]
 fn bandai_walks_look_like_the_data() {
-    let Some((model, _)) = bandai() else {
+    let Some((model, _)) = common::bandai() else {
         return;
     };
     let used = walks_look_like_the_data("bandai", model, 100);
@@ -264,7 +254,7 @@ fn embedded_walks_look_like_the_data() {
 /// walk straight, and the turn walks turn within the data's +-3 degrees).
 #[test]
 fn cmu_walks_look_like_the_data() {
-    let Some((model, _)) = cmu() else {
+    let Some((model, _)) = common::cmu() else {
         return;
     };
     walks_look_like_the_data("cmu", model, 10);
@@ -275,8 +265,12 @@ fn cmu_walks_look_like_the_data() {
 #[test]
 fn shared_data_sets_build_to_the_same_bytes_on_one_thread() {
     let sets = [
-        ("bandai", bandai().map(|(m, _)| m), common::bandai_spec()),
-        ("cmu", cmu().map(|(m, _)| m), common::cmu_spec()),
+        (
+            "bandai",
+            common::bandai().map(|(m, _)| m),
+            common::bandai_spec(),
+        ),
+        ("cmu", common::cmu().map(|(m, _)| m), common::cmu_spec()),
     ];
     for (what, model, spec) in sets {
         let (Some(model), Some(spec)) = (model, spec) else {
@@ -390,7 +384,7 @@ fn embedded_meter_agrees_with_an_independent_probe_on_the_grid() {
 
 #[test]
 fn bandai_meter_agrees_with_an_independent_probe_on_the_grid() {
-    let Some((model, _)) = bandai() else {
+    let Some((model, _)) = common::bandai() else {
         return;
     };
     meter_agrees_with_the_probe_on_the_grid("bandai", model);
@@ -563,7 +557,7 @@ fn distance_policy_crowd(
 #[test]
 fn cmu_crowd_walkers_stand_on_the_floor() {
     use motion_lod::crowd_sim::Scene;
-    let Some((model, _)) = cmu() else {
+    let Some((model, _)) = common::cmu() else {
         return;
     };
     let data = model.report.quality.as_ref().expect("reference").median;
@@ -591,7 +585,7 @@ fn cmu_crowd_walkers_stand_on_the_floor() {
 #[test]
 fn bandai_crowds_under_the_distance_policy_look_like_the_data() {
     use motion_lod::crowd_sim::Scene;
-    let Some((model, _)) = bandai() else {
+    let Some((model, _)) = common::bandai() else {
         return;
     };
     let data = model.report.quality.as_ref().expect("reference").median;
@@ -645,7 +639,7 @@ fn bandai_crowds_under_the_distance_policy_look_like_the_data() {
 /// the lock takes most of the free feet's skate away (a quarter of it at most remains).
 #[test]
 fn bandai_crowd_walkers_look_like_the_data() {
-    let Some((model, _)) = bandai() else {
+    let Some((model, _)) = common::bandai() else {
         return;
     };
     let data = model.report.quality.as_ref().expect("reference").median;
@@ -695,7 +689,7 @@ fn bandai_crowd_walkers_look_like_the_data() {
 fn bandai_crowd_fast_path_matches_the_reference_path() {
     use motion_lod::LodSource;
     use motion_lod::crowd_sim::{CrowdConfig, Scene};
-    let Some((model, _)) = bandai() else {
+    let Some((model, _)) = common::bandai() else {
         return;
     };
     let policy = DistancePolicy::for_model(model.lod());

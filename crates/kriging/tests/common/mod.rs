@@ -234,3 +234,33 @@ pub fn to_mat(v: &[Vec<f64>]) -> Mat<f64> {
 pub fn var(model: VariogramModel, nugget: f64) -> Variogram {
     Variogram::new(model, nugget, 1.3, 0.9, 1.4).unwrap()
 }
+
+/// Deterministic uniform numbers in [-1, 1) (a 64-bit LCG).
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+}
+
+/// The control-selection tests' data: 60 samples (`seed` of the LCG) over three parameters, `a` and
+/// `b` spread over [-1, 1], `c` constant (2.5); four values, a smooth function of `a`, plus `b_weight`
+/// times one of `b`, plus independent noise (0.05).
+pub fn selection_data(seed: u64, b_weight: f64) -> (Mat<f64>, Mat<f64>) {
+    let mut rng = Lcg(seed);
+    let s = 60;
+    let rows: Vec<[f64; 3]> = (0..s).map(|_| [rng.next(), rng.next(), 2.5]).collect();
+    let params = Mat::from_fn(s, 3, |i, k| rows[i][k]);
+    let noise: Vec<f64> = (0..s * 4).map(|_| 0.05 * rng.next()).collect();
+    let values = Mat::from_fn(s, 4, |i, j| {
+        let [a, b, _] = rows[i];
+        let signal = (1.0 + j as f64) * (1.5 * a).sin() + 0.3 * a * a;
+        signal + b_weight * ((j as f64 - 1.5) * b + 0.5 * b * b) + noise[i * 4 + j]
+    });
+    (params, values)
+}
