@@ -47,6 +47,19 @@ fn tables_pipeline_writes_every_section_and_figure() {
             && doc.contains("| ground | 200 | lod | LOD, tree culling |"),
         "{doc}"
     );
+    // Frame times of the quick size (300 walkers) in both scenes on one and two threads.
+    for row in [
+        "| ground | 300 | 1 |",
+        "| ground | 300 | 2 |",
+        "| overview | 300 | 1 |",
+        "| overview | 300 | 2 |",
+    ] {
+        assert!(
+            doc.contains(row),
+            "missing frame-time row {row:?} in:\n{doc}"
+        );
+    }
+    assert!(doc.contains("| worst / median | goal |"), "{doc}");
     for f in ["figure4.svg", "figure5.svg", "quality.svg"] {
         let svg = std::fs::read_to_string(figures.join(f)).expect("figure written");
         assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{f}");

@@ -16,11 +16,17 @@
 //!   ([`motion_lod::NaiveSource`]) blends the raw samples whatever the distance. Both baselines use the
 //!   `O(S D)` dual form of kriging.
 //! - *no level of detail*: every walker at full detail (all joints, finest level), visible or not.
+//!
+//! Frame times ([`measure_frame_times`]): the model under its policy at 100,000 and 1,000,000 walkers
+//! on each thread count, the median, 99th percentile and slowest of 150 frames after the warm-up, and
+//! the clip builds per frame.
 
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, CrowdReport, Culling, FrameStats, Scene};
+use crowd_sim::{
+    Camera, ClipSource, Crowd, CrowdConfig, CrowdReport, Culling, FrameStats, FrameTimes, Scene,
+};
 use lod_policy::{DistancePolicy, FullDetail, LevelPolicy, ViewParams};
 use motion_lod::progress::Progress;
 use motion_lod::{Analysis, LodSource, MotionModel, NaiveSource, PcaSource};
@@ -64,6 +70,91 @@ pub fn full_sizes() -> Vec<CrowdSize> {
             frames: 20,
         },
     ]
+}
+
+/// The crowd sizes whose frame times are measured ([`measure_frame_times`]): 100,000 and 1,000,000
+/// walkers, [`FRAME_TIME_FRAMES`] timed frames each.
+pub fn frame_time_sizes() -> Vec<CrowdSize> {
+    [100_000, 1_000_000]
+        .map(|walkers| CrowdSize {
+            walkers,
+            frames: FRAME_TIME_FRAMES,
+        })
+        .to_vec()
+}
+
+/// Timed frames of each frame-time run: enough for a 99th percentile that is not the worst frame.
+pub const FRAME_TIME_FRAMES: usize = 150;
+
+/// The frame-time goal: the slowest timed frame at most this many times the median.
+pub const WORST_OVER_MEDIAN_GOAL: f64 = 1.5;
+
+/// Frame times of the model under the LOD policy at one size, scene and thread count.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameTimeRow {
+    /// Camera scene.
+    pub scene: Scene,
+    /// Walkers.
+    pub walkers: usize,
+    /// Rayon threads.
+    pub threads: usize,
+    /// Median, 99th percentile and worst of the timed frames (after [`WARMUP_S`]).
+    pub times: FrameTimes,
+    /// Clip kernels built per timed frame: median and most (no frame rebuilds a burst).
+    pub builds_median: usize,
+    /// The most clip kernels one timed frame built.
+    pub builds_max: usize,
+}
+
+/// Frame times of the model under the distance policy at each of `sizes`, in both scenes, on each of
+/// `threads`: the median, 99th percentile and slowest frame after the warm-up, and the clip builds per
+/// frame (issue 35's smooth-frames goal: the slowest frame at most [`WORST_OVER_MEDIAN_GOAL`] times
+/// the median).
+pub fn measure_frame_times(
+    model: &MotionModel,
+    sizes: &[CrowdSize],
+    threads: &[usize],
+    progress: &dyn Progress,
+) -> Result<Vec<FrameTimeRow>> {
+    let lod = LodSource::new(model);
+    let policy = DistancePolicy::for_model(model.lod());
+    progress.stage(
+        "frame times (the model under its policy; 2 scenes; sizes; threads)",
+        (Scene::ALL.len() * sizes.len() * threads.len()) as u64,
+    );
+    let mut rows = Vec::new();
+    for &size in sizes {
+        for scene in Scene::ALL {
+            for &t in threads {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .context("thread pool")?;
+                let run = pool
+                    .install(|| run_one(&lod, &policy, scene, Culling::Scan, size))
+                    .with_context(|| {
+                        format!(
+                            "frame times of {} walkers ({}, {t} threads)",
+                            size.walkers,
+                            scene.name()
+                        )
+                    })?;
+                let times = run.report.frame_times(0).context("no timed frame")?;
+                let mut builds = run.builds.clone();
+                builds.sort_unstable();
+                rows.push(FrameTimeRow {
+                    scene,
+                    walkers: size.walkers,
+                    threads: t,
+                    times,
+                    builds_median: builds[(builds.len() - 1) / 2],
+                    builds_max: builds.last().copied().unwrap_or(0),
+                });
+                progress.inc(1);
+            }
+        }
+    }
+    Ok(rows)
 }
 
 /// Which detail policy a run used.
@@ -147,15 +238,26 @@ impl CrowdRow {
     }
 }
 
-/// Runs one crowd: [`WARMUP_S`] of warm-up frames, then `frames` timed frames. Returns the report,
-/// the warm-up's total and slowest frame (s).
+/// What [`run_one`] measured.
+struct Timed {
+    /// Frame rates and stage timings of the timed frames.
+    report: CrowdReport,
+    /// Seconds of the warm-up.
+    warmup_s: f64,
+    /// Its slowest frame (s).
+    warmup_worst_s: f64,
+    /// Clip kernels built in each timed frame.
+    builds: Vec<usize>,
+}
+
+/// Runs one crowd: [`WARMUP_S`] of warm-up frames, then `frames` timed frames.
 fn run_one<S: ClipSource, P: LevelPolicy + Sync>(
     source: &S,
     policy: &P,
     scene: Scene,
     culling: Culling,
     size: CrowdSize,
-) -> Result<(CrowdReport, f64, f64)> {
+) -> Result<Timed> {
     let config = CrowdConfig {
         culling,
         ..CrowdConfig::with_density(size.walkers, DENSITY)
@@ -183,14 +285,21 @@ fn run_one<S: ClipSource, P: LevelPolicy + Sync>(
         worst = worst.max(s);
     }
     let mut report = CrowdReport::with_frames(size.frames);
+    let mut builds = Vec::with_capacity(size.frames);
     for f in warmup..warmup + size.frames {
         let cam = path.camera_at(f as f32 * dt, &lens);
         crowd
             .step_into(source, policy, &cam, dt, &mut stats)
             .with_context(|| format!("frame {f}"))?;
         report.add(&stats);
+        builds.push(stats.kernels_built);
     }
-    Ok((report, warmup_s, worst))
+    Ok(Timed {
+        report,
+        warmup_s,
+        warmup_worst_s: worst,
+        builds,
+    })
 }
 
 /// What one run is: scene, source, policy, threads.
@@ -240,7 +349,7 @@ fn timed_or_skipped<S: ClipSource, P: LevelPolicy + Sync>(
         .num_threads(spec.threads)
         .build()
         .context("thread pool")?;
-    let (report, warmup_s, worst) = pool
+    let run = pool
         .install(|| run_one(source, policy, spec.scene, spec.culling, size))
         .with_context(|| {
             format!(
@@ -251,8 +360,13 @@ fn timed_or_skipped<S: ClipSource, P: LevelPolicy + Sync>(
                 spec.threads
             )
         })?;
-    *warmup_per_walker = Some(warmup_s / size.walkers as f64);
-    Ok(row(Some(report), warmup_s, worst, None))
+    *warmup_per_walker = Some(run.warmup_s / size.walkers as f64);
+    Ok(row(
+        Some(run.report),
+        run.warmup_s,
+        run.warmup_worst_s,
+        None,
+    ))
 }
 
 /// Timed frames (at least) of each run that holds the policy to levels `0..=k`
