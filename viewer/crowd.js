@@ -122,8 +122,8 @@ export function runWalk(runtime, model, script) {
 }
 
 /// Runs a scripted crowd (`Crowd` with the script's starts, presets and camera) for `frames`
-/// frames. Returns per frame and walker the root position (3) and [level, joints, visible]
-/// (Float32Array each), and the joint transforms of every `sampleWalkers`-th walker at every
+/// frames. Returns per frame and walker the root position (3, Float64Array) and [level, joints,
+/// visible] (Float32Array), and the joint transforms of every `sampleWalkers`-th walker at every
 /// `sampleFrames`-th frame and the last.
 export function runCrowd(runtime, model, script) {
   const { dt, frames, camera, starts, presets, radius, sampleWalkers, sampleFrames } = script;
@@ -132,7 +132,7 @@ export function runCrowd(runtime, model, script) {
   const cameraPtr = runtime.alloc(64);
   runtime.writeCamera(cameraPtr, camera);
   const crowd = new Crowd(model, { starts, presets, radius, footLock: true });
-  const roots = new Float32Array(frames * n * 3);
+  const roots = new Float64Array(frames * n * 3);
   const details = new Float32Array(frames * n * 3);
   const sampled = [];
   try {

@@ -405,24 +405,29 @@ function startCrowd(n) {
   followLast = null;
 }
 
-// A walker state's words (MlodWalkerState, mlod.js): root position (f32), level, joints (u32).
+// A walker state's words (MlodWalkerState, mlod.js): level, joints (u32), and in doubles (index of
+// the state's first double plus): root position, the cycle frame's origin x, z and heading.
 const STATE_WORDS = STATE_BYTES >> 2;
-const STATE_ROOT = 24 >> 2;
-const STATE_LEVEL = 68 >> 2;
-const STATE_JOINTS = 72 >> 2;
+const STATE_LEVEL = 92 >> 2;
+const STATE_JOINTS = 96 >> 2;
+const STATE_ROOT_F64 = 24 >> 3;
+const STATE_FRAME_F64 = 48 >> 3;
 
 /// Adds a walker's bones (its joints in the world) or, root only, a single body (a crowd draws
 /// its root-only walkers as points of `bodies` instead).
 function drawWalker(w, colour) {
   const f = runtime.f32;
-  const s = w.state >> 2;
+  const d = runtime.f64;
+  const s = w.state >> 3;
   const joints = w.joints();
   if (joints === 0) {
-    const x = f[s + 6], y = f[s + 7], z = f[s + 8];
+    const r = s + STATE_ROOT_F64;
+    const x = d[r], y = d[r + 1], z = d[r + 2];
     segments.push(x, 0.08, z, x, y + 0.65, z, ROOT_ONLY, 0.18);
     return;
   }
-  const h = f[s + 15], cx = f[s + 13], cz = f[s + 14];
+  const o = s + STATE_FRAME_F64;
+  const cx = d[o], cz = d[o + 1], h = d[o + 2];
   const c = Math.cos(h), sn = Math.sin(h);
   const at = w.transforms >> 2;
   const parents = model.parents;
@@ -490,12 +495,14 @@ function frame(now) {
       if (bytes[visible + i] && u32[s + STATE_JOINTS] > 0) walkers[i].computeTransforms();
     }
     t2 = performance.now();
-    const f = runtime.f32;
+    const d = runtime.f64;
     let rootOnly = 0;
     for (let i = 0, s = states; i < n; i++, s += STATE_WORDS) {
       if (!bytes[visible + i]) continue;
       if (u32[s + STATE_JOINTS] === 0) {
-        bodies.push(f[s + STATE_ROOT], f[s + STATE_ROOT + 1], f[s + STATE_ROOT + 2]);
+        // The state's doubles start at word s (states are 8-byte aligned).
+        const r = (s >> 1) + STATE_ROOT_F64;
+        bodies.push(d[r], d[r + 1], d[r + 2]);
         rootOnly++;
         continue;
       }

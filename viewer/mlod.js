@@ -7,18 +7,20 @@
 //   MlodControls      48 bytes: dx, dz, turn, height (f32), style[8] (f32)
 //   MlodDetail         8 bytes: level, joints (u32)
 //   MlodJointTransform 28 bytes: rotation x, y, z, w (f32), translation x, y, z (f32)
-//   MlodWalkerState   88 bytes: time_in_cycle_s (f64, 0), cycle_duration_s (f64, 8), cycle (u64,
-//                     16), root_position (3 f32, 24), root_rotation (4 f32, 36), cycle_x (52),
-//                     cycle_z (56), heading (60), body_scale (64), detail (68), cycles_begun (u32,
-//                     76), foot_locked (bool, 80)
-//   MlodCamera        44 bytes: position (3 f32), direction (3 f32), fov_y, aspect,
-//                     image_height_px, near_m, far_m
+//   MlodWalkerState  112 bytes: time_in_cycle_s (f64, 0), cycle_duration_s (f64, 8), cycle (u64,
+//                     16), root_position (3 f64, 24), cycle_x (f64, 48), cycle_z (f64, 56),
+//                     heading (f64, 64), root_rotation (4 f32, 72), body_scale (88), detail (92),
+//                     cycles_begun (u32, 100), foot_locked (bool, 104)
+//   MlodCamera        56 bytes: position (3 f64, 0), direction (3 f32, 24), fov_y, aspect,
+//                     image_height_px, near_m, far_m (f32, 36..56)
+// The walker's frame on the ground (cycle_x, cycle_z, heading), its root and the camera's eye are
+// doubles: positions far from the origin keep millimetres (ABI 5).
 
-export const ABI_VERSION = 4;
+export const ABI_VERSION = 5;
 export const MAX_STYLES = 8;
 export const CONTROLS_BYTES = 48;
-export const STATE_BYTES = 88;
-export const CAMERA_BYTES = 44;
+export const STATE_BYTES = 112;
+export const CAMERA_BYTES = 56;
 export const TRANSFORM_FLOATS = 7;
 
 const STATUS = ['ok', 'null pointer', 'invalid argument', 'invalid model', 'io', 'buffer too small',
@@ -57,13 +59,15 @@ export class Runtime {
     if (this.buffer !== buffer) {
       this.buffer = buffer;
       this.v = { bytes: new Uint8Array(buffer), f32: new Float32Array(buffer),
-        u32: new Uint32Array(buffer), i32: new Int32Array(buffer), dv: new DataView(buffer) };
+        f64: new Float64Array(buffer), u32: new Uint32Array(buffer), i32: new Int32Array(buffer),
+        dv: new DataView(buffer) };
     }
     return this.v;
   }
 
   get bytes() { return this.views().bytes; }
   get f32() { return this.views().f32; }
+  get f64() { return this.views().f64; }
   get u32() { return this.views().u32; }
   get i32() { return this.views().i32; }
   get dv() { return this.views().dv; }
@@ -109,11 +113,13 @@ export class Runtime {
   /// Writes a camera `{ position: [x,y,z], direction: [x,y,z] (unit), fovY, aspect, heightPx,
   /// near, far }` as an MlodCamera at `ptr`.
   writeCamera(ptr, c) {
+    const d = this.f64;
+    const k = ptr >> 3;
+    d[k] = c.position[0]; d[k + 1] = c.position[1]; d[k + 2] = c.position[2];
     const f = this.f32;
-    const i = ptr >> 2;
-    f[i] = c.position[0]; f[i + 1] = c.position[1]; f[i + 2] = c.position[2];
-    f[i + 3] = c.direction[0]; f[i + 4] = c.direction[1]; f[i + 5] = c.direction[2];
-    f[i + 6] = c.fovY; f[i + 7] = c.aspect; f[i + 8] = c.heightPx; f[i + 9] = c.near; f[i + 10] = c.far;
+    const i = (ptr + 24) >> 2;
+    f[i] = c.direction[0]; f[i + 1] = c.direction[1]; f[i + 2] = c.direction[2];
+    f[i + 3] = c.fovY; f[i + 4] = c.aspect; f[i + 5] = c.heightPx; f[i + 6] = c.near; f[i + 7] = c.far;
   }
 }
 
@@ -193,7 +199,7 @@ export class Walker {
     const out = rt.scratch;
     rt.check('mlod_walker_new', rt.x.mlod_walker_new(model.ptr, out));
     this.ptr = rt.u32[out >> 2];
-    // One block: controls (48), detail (8), visible (8), state (88), transforms (28 J).
+    // One block: controls (48), detail (8), visible (8), state (112), transforms (28 J).
     this.blockLen = CONTROLS_BYTES + 16 + STATE_BYTES + 4 * TRANSFORM_FLOATS * model.joints;
     this.block = rt.alloc(this.blockLen);
     this.controls = this.block;
@@ -246,7 +252,7 @@ export class Walker {
     if (controls) rt.writeControls(this.controls, controls);
     rt.check('mlod_walker_advance', rt.x.mlod_walker_advance(this.ptr, this.model.ptr, dt,
       controls ? this.controls : 0, this.detail, this.state));
-    return rt.u32[(this.state + 76) >> 2];
+    return rt.u32[(this.state + 100) >> 2];
   }
 
   /// Computes the joint transforms of the last frame (cycle frame) into the walker's block and
@@ -294,16 +300,16 @@ export class Walker {
       timeInCycle: dv.getFloat64(s, true),
       cycleDuration: dv.getFloat64(s + 8, true),
       cycle: Number(dv.getBigUint64(s + 16, true)),
-      root: [dv.getFloat32(s + 24, true), dv.getFloat32(s + 28, true), dv.getFloat32(s + 32, true)],
-      rootRotation: [0, 1, 2, 3].map((k) => dv.getFloat32(s + 36 + 4 * k, true)),
-      cycleX: dv.getFloat32(s + 52, true),
-      cycleZ: dv.getFloat32(s + 56, true),
-      heading: dv.getFloat32(s + 60, true),
-      bodyScale: dv.getFloat32(s + 64, true),
-      level: dv.getUint32(s + 68, true),
-      joints: dv.getUint32(s + 72, true),
-      cyclesBegun: dv.getUint32(s + 76, true),
-      footLocked: dv.getUint8(s + 80) !== 0,
+      root: [dv.getFloat64(s + 24, true), dv.getFloat64(s + 32, true), dv.getFloat64(s + 40, true)],
+      cycleX: dv.getFloat64(s + 48, true),
+      cycleZ: dv.getFloat64(s + 56, true),
+      heading: dv.getFloat64(s + 64, true),
+      rootRotation: [0, 1, 2, 3].map((k) => dv.getFloat32(s + 72 + 4 * k, true)),
+      bodyScale: dv.getFloat32(s + 88, true),
+      level: dv.getUint32(s + 92, true),
+      joints: dv.getUint32(s + 96, true),
+      cyclesBegun: dv.getUint32(s + 100, true),
+      footLocked: dv.getUint8(s + 104) !== 0,
     };
   }
 
@@ -311,11 +317,11 @@ export class Walker {
   cycle() { return this.rt.u32[(this.state + 16) >> 2]; }
 
   /// The current detail's level and joints, and the root's world position (x, y, z), cheaply.
-  level() { return this.rt.u32[(this.state + 68) >> 2]; }
-  joints() { return this.rt.u32[(this.state + 72) >> 2]; }
-  rootX() { return this.rt.f32[(this.state + 24) >> 2]; }
-  rootY() { return this.rt.f32[(this.state + 28) >> 2]; }
-  rootZ() { return this.rt.f32[(this.state + 32) >> 2]; }
+  level() { return this.rt.u32[(this.state + 92) >> 2]; }
+  joints() { return this.rt.u32[(this.state + 96) >> 2]; }
+  rootX() { return this.rt.f64[(this.state + 24) >> 3]; }
+  rootY() { return this.rt.f64[(this.state + 32) >> 3]; }
+  rootZ() { return this.rt.f64[(this.state + 40) >> 3]; }
 
   free() {
     this.rt.x.mlod_walker_free(this.ptr);

@@ -50,7 +50,7 @@ const script = JSON.parse(readFileSync(join(ref, 'script.json'), 'utf8'));
 const expected = {
   walk_states: [Float64Array, 'walk_states.f64'],
   walk_joints: [Float32Array, 'walk_joints.f32'],
-  crowd_roots: [Float32Array, 'crowd_roots.f32'],
+  crowd_roots: [Float64Array, 'crowd_roots.f64'],
   crowd_details: [Float32Array, 'crowd_details.f32'],
   crowd_joints: [Float32Array, 'crowd_joints.f32'],
 };

@@ -8,10 +8,10 @@ use crate::path::{EllipsePath, PathPlan, WalkerStart, path_controls};
 use crate::source::ClipSource;
 use crate::stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
 use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use lod_policy::SeamScratch;
 use lod_policy::SplitMix64;
-use lod_policy::{Controls, Detail, LevelPolicy, StyleMix};
+use lod_policy::{Controls, CycleFrame, Detail, LevelPolicy, StyleMix};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
@@ -360,9 +360,15 @@ impl<C: Send> Crowd<C> {
                 s,
                 stride,
                 height,
-                base,
-                heading,
-                heading_sc: heading.sin_cos(),
+                frame: CycleFrame {
+                    x: f64::from(base.x),
+                    z: f64::from(base.y),
+                    heading: f64::from(heading),
+                },
+                heading_sc: {
+                    let (sin, cos) = f64::from(heading).sin_cos();
+                    (sin as f32, cos as f32)
+                },
                 t: phase * dur,
                 controls,
                 cur,
@@ -831,9 +837,9 @@ impl<C> Crowd<C> {
         self.walkers[i].controls
     }
 
-    /// Origin `(x, z)` and heading of walker `i`'s current cycle frame.
-    pub fn cycle_frame(&self, i: usize) -> (Vec2, f32) {
-        (self.walkers[i].base, self.walkers[i].heading)
+    /// Walker `i`'s current cycle frame: origin `(x, z)` and heading, in double precision.
+    pub fn cycle_frame(&self, i: usize) -> CycleFrame {
+        self.walkers[i].frame
     }
 
     /// Pose vector of walker `i` from the last step, in its cycle frame ([`Crowd::cycle_frame`]):

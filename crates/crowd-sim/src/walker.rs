@@ -4,10 +4,10 @@
 
 use crate::error::ClipError;
 use crate::levels::LevelTable;
-use crate::path::{EllipsePath, forward, left, path_controls};
+use crate::path::{EllipsePath, path_controls};
 use crate::source::ClipSource;
 use glam::{Vec2, Vec3};
-use lod_policy::{ControlRange, Controls, CycleFrame, Detail, FootLock, RootMotion, wrap_angle};
+use lod_policy::{ControlRange, Controls, CycleFrame, Detail, FootLock, RootMotion};
 use lod_policy::{SeamScratch, SeamTransition};
 
 /// Settings the stages need, copied out of the crowd config.
@@ -41,15 +41,17 @@ pub(crate) struct Walker<C> {
     /// World root position after the last frame.
     pub root: Vec3,
     pub height: f32,
-    /// Ground position of the current cycle frame's origin.
-    pub base: Vec2,
-    /// `heading.sin_cos()`, kept with it (the FK stage places every walker every frame).
+    /// The current cycle frame (origin and heading, in double precision: `lod_policy::CycleFrame`),
+    /// chained by each clip's root motion ([`CycleFrame::next`]).
+    pub frame: CycleFrame,
+    /// The frame's heading's `sin_cos()` in single precision, kept with it (the FK stage rotates
+    /// every walker's points every frame).
     pub heading_sc: (f32, f32),
     /// Rows of the pose vector written this frame.
     pub rows: usize,
     /// Joint positions written this frame.
     pub n_joints: usize,
-    /// The walker's foot lock (`lod_policy::FootLock`, 200 bytes), allocated when it first comes
+    /// The walker's foot lock (`lod_policy::FootLock`, 240 bytes), allocated when it first comes
     /// near enough to plant its feet and kept (released) when it leaves, so walkers never near
     /// hold no lock state and the frame loop never allocates for one that returns.
     pub lock: Option<Box<FootLock>>,
@@ -61,12 +63,10 @@ pub(crate) struct Walker<C> {
     pub cur: C,
     // Read at cycle ends only.
     pub path: EllipsePath,
-    /// Path parameter closest to the current cycle's base.
+    /// Path parameter closest to the current cycle frame's origin.
     pub s: f32,
     /// Preferred forward displacement per cycle (m).
     pub stride: f32,
-    /// Heading of the current cycle frame.
-    pub heading: f32,
     pub controls: Controls,
     pub cur_motion: RootMotion,
 }
@@ -248,13 +248,25 @@ impl<C> Walker<C> {
         if rows < 3 {
             return;
         }
+        self.root = self.to_world(Vec3::new(out[0], out[1], out[2]));
+    }
+
+    /// A point of the current cycle frame in the world: `(x, z) + R_y(h) p` with
+    /// `R_y(h) (x, y, z) = (x cos h + z sin h, y, -x sin h + z cos h)`, rotated in single precision
+    /// and moved in double ([`CycleFrame::to_world`]), then rounded to single.
+    #[inline]
+    fn to_world(&self, p: Vec3) -> Vec3 {
         let (sh, ch) = self.heading_sc;
-        let (x, y, z) = (out[0], out[1], out[2]);
-        self.root = Vec3::new(
-            self.base.x + x * ch + z * sh,
-            y,
-            self.base.y - x * sh + z * ch,
-        );
+        Vec3::new(
+            (self.frame.x + f64::from(p.x * ch + p.z * sh)) as f32,
+            p.y,
+            (self.frame.z + f64::from(-p.x * sh + p.z * ch)) as f32,
+        )
+    }
+
+    /// The frame's origin on the ground in single precision, for steering along the path.
+    fn base(&self) -> Vec2 {
+        Vec2::new(self.frame.x as f32, self.frame.z as f32)
     }
 
     /// Kernel stage: advance time by `dt`; at each cycle end move the cycle frame by the clip's
@@ -279,16 +291,17 @@ impl<C> Walker<C> {
             let m = self.cur_motion;
             let end = self.cur_dur;
             self.t -= end;
-            self.base += left(self.heading) * m.dx + forward(self.heading) * m.dz;
-            self.heading = wrap_angle(self.heading + m.turn);
-            self.heading_sc = self.heading.sin_cos();
-            self.s = self.path.closest_param_near(self.base, self.s);
+            self.frame = self.frame.next(&m);
+            let (sin, cos) = self.frame.heading.sin_cos();
+            self.heading_sc = (sin as f32, cos as f32);
+            let base = self.base();
+            self.s = self.path.closest_param_near(base, self.s);
             let held = self.controls;
             self.controls = path_controls(
                 &self.path,
                 self.s,
-                self.base,
-                self.heading,
+                base,
+                self.frame.heading as f32,
                 self.stride,
                 self.height,
                 &p.bounds,
@@ -347,29 +360,20 @@ impl<C> Walker<C> {
             }
             return;
         }
-        let frame = CycleFrame {
-            x: self.base.x,
-            z: self.base.y,
-            heading: self.heading,
-        };
+        let frame = self.frame;
         let lock = self.lock.get_or_insert_with(Box::default);
         let rows = self.rows;
         src.plant_feet(&self.cur, &frame, dt, lock, &mut out[..rows]);
     }
 
-    /// FK stage: cycle-frame joint positions from the source, then `world = base + R_y(h) p`
-    /// with `R_y(h) (x, y, z) = (x cos h + z sin h, y, -x sin h + z cos h)`.
+    /// FK stage: cycle-frame joint positions from the source, then placed in the world by the
+    /// cycle frame (`to_world`).
     pub fn place<S: ClipSource<Clip = C>>(&mut self, src: &S, pose: &[f32], out: &mut [Vec3]) {
         let n = src
             .joints(&self.cur, &pose[..self.rows], out)
             .min(out.len());
-        let (sh, ch) = self.heading_sc;
         for q in &mut out[..n] {
-            *q = Vec3::new(
-                self.base.x + q.x * ch + q.z * sh,
-                q.y,
-                self.base.y - q.x * sh + q.z * ch,
-            );
+            *q = self.to_world(*q);
         }
         self.n_joints = n;
         if n > 0 {

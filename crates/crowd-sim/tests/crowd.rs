@@ -6,7 +6,7 @@ use crowd_sim::{
     LevelTable,
 };
 use glam::{Vec2, Vec3};
-use lod_policy::{ControlRange, Controls, Detail, RootMotion, ViewParams};
+use lod_policy::{ControlRange, Controls, CycleFrame, Detail, RootMotion, ViewParams};
 
 const DT: f32 = 1.0 / 30.0;
 
@@ -118,7 +118,7 @@ fn root_motion_is_continuous_across_cycle_boundaries() {
     crowd.step(&source, &policy, &cam, DT).unwrap();
     let mut prev: Vec<Vec3> = (0..crowd.len()).map(|i| crowd.root_position(i)).collect();
     let mut prev_step = vec![f32::NAN; crowd.len()];
-    let mut bases: Vec<Vec2> = (0..crowd.len()).map(|i| crowd.cycle_frame(i).0).collect();
+    let mut bases: Vec<CycleFrame> = (0..crowd.len()).map(|i| crowd.cycle_frame(i)).collect();
     let mut boundaries = 0;
     for f in 1..240 {
         let cam = orbit().camera_at(f as f32 * DT, &lens);
@@ -128,7 +128,7 @@ fn root_motion_is_continuous_across_cycle_boundaries() {
             let step = r.distance(prev[i]);
             // At most ~1.7 m/s plus sway and bob: 7 cm per frame at 30 fps.
             assert!(step < 0.08, "walker {i} jumped {step} m at frame {f}");
-            let base = crowd.cycle_frame(i).0;
+            let base = crowd.cycle_frame(i);
             if base != bases[i] {
                 boundaries += 1;
                 // The step over a boundary is like its neighbours' (no jump beyond speed changes).

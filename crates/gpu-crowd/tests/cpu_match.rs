@@ -107,7 +107,8 @@ fn compare(gpu: &Gpu, model: &MotionModel, scene: Scene, frames: usize) -> (f32,
     // The CPU walkers' cycle frames at the frame before, and the walker-frames beyond the
     // tolerance, judged once the next frame shows whether they were at a seam: (frame, walker,
     // distance, whether a cycle began at that frame).
-    let mut before: Vec<(glam::Vec2, f32)> = (0..cpu.len()).map(|i| cpu.cycle_frame(i)).collect();
+    let mut before: Vec<lod_policy::CycleFrame> =
+        (0..cpu.len()).map(|i| cpu.cycle_frame(i)).collect();
     let mut pending: Vec<(usize, usize, f32, bool)> = Vec::new();
     let mut seam_sides = 0usize;
     for f in 0..frames {

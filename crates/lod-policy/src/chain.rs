@@ -23,10 +23,10 @@
 //! jump. The paper's ease-in/out blend of the overlapping halves (section 5) only hides the jump in
 //! position and leaves a kink in velocity; [`SeamTransition`] replaces it.
 
-use glam::{Quat, Vec3};
+use glam::{DVec3, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::math::wrap_angle;
+use crate::math::wrap_angle_f64;
 use crate::model::{ALWAYS_ROWS, TIME_ROW};
 
 /// Default half-life of a seam offset (s), chosen with the motion-quality meter (`motion-lod
@@ -53,45 +53,64 @@ pub struct RootMotion {
 }
 
 /// A cycle frame on the ground: origin `(x, z)` and heading (radians about +y, 0 = facing +z).
+///
+/// In double precision, as large worlds keep their object frames: a walker an hour's walk from the
+/// origin, or 1 km away, chains thousands of cycles whose displacements would otherwise be rounded
+/// to the single-precision spacing there (61 µm at 1 km) at every cycle end. The pose inside the
+/// frame stays in single precision (metres from the frame's origin); [`CycleFrame::to_world`]
+/// places its points in double precision.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct CycleFrame {
     /// Ground x of the origin (m).
-    pub x: f32,
+    pub x: f64,
     /// Ground z of the origin (m).
-    pub z: f32,
-    /// Heading (radians).
-    pub heading: f32,
+    pub z: f64,
+    /// Heading (radians), in `(-pi, pi]` once chained ([`CycleFrame::next`]).
+    pub heading: f64,
 }
 
 impl CycleFrame {
-    /// The frame's rotation.
+    /// The frame's rotation, in single precision: it rotates points of the cycle frame (metres
+    /// from its origin), whose error it scales by their length.
     pub fn rotation(&self) -> Quat {
-        Quat::from_rotation_y(self.heading)
+        Quat::from_rotation_y(self.heading as f32)
     }
 
-    /// A point of the cycle frame in the world.
-    pub fn to_world(&self, p: Vec3) -> Vec3 {
-        self.rotation() * p + Vec3::new(self.x, 0.0, self.z)
+    /// A point of the cycle frame in the world, in double precision:
+    /// `(x + p_x cos h + p_z sin h, p_y, z - p_x sin h + p_z cos h)`, the rotation applied in
+    /// single precision ([`CycleFrame::rotation`]) and the origin added in double.
+    pub fn to_world(&self, p: Vec3) -> DVec3 {
+        let v = self.rotation() * p;
+        DVec3::new(
+            self.x + f64::from(v.x),
+            f64::from(v.y),
+            self.z + f64::from(v.z),
+        )
     }
 
     /// Places the root of `pose` (a pose vector of this cycle frame, at least 6 rows) in the world:
-    /// rows `0..3` become the world position ([`CycleFrame::to_world`]), rows `3..6` the exponential
-    /// map of the world orientation (the frame's rotation times the root's). The other rows are
-    /// local and stay as they are.
+    /// rows `0..3` become the world position ([`CycleFrame::to_world`], rounded to single
+    /// precision: for poses near the origin, such as a synthesized take written to a file; far
+    /// from it keep the frame and the pose apart), rows `3..6` the exponential map of the world
+    /// orientation (the frame's rotation times the root's). The other rows are local and stay as
+    /// they are.
     pub fn place_root(&self, pose: &mut [f32]) {
-        let root = self.to_world(Vec3::from_slice(&pose[0..3]));
+        let root = self.to_world(Vec3::from_slice(&pose[0..3])).as_vec3();
         let orient = self.rotation() * exp_map_to_quat(Vec3::from_slice(&pose[3..6]));
         pose[0..3].copy_from_slice(&root.to_array());
         pose[3..6].copy_from_slice(&quat_to_exp_map(orient).to_array());
     }
 
-    /// The frame after `motion` (step 1 of the module documentation); the heading wraps to `(-pi, pi]`.
+    /// The frame after `motion` (step 1 of the module documentation), in double precision: the
+    /// origin moves by the clip's displacement rotated by the heading, the heading turns by the
+    /// clip's turn and wraps to `(-pi, pi]`.
     pub fn next(&self, motion: &RootMotion) -> CycleFrame {
-        let v = self.rotation() * Vec3::new(motion.dx, 0.0, motion.dz);
+        let (sin, cos) = self.heading.sin_cos();
+        let (dx, dz) = (f64::from(motion.dx), f64::from(motion.dz));
         CycleFrame {
-            x: self.x + v.x,
-            z: self.z + v.z,
-            heading: wrap_angle(self.heading + motion.turn),
+            x: self.x + dx * cos + dz * sin,
+            z: self.z - dx * sin + dz * cos,
+            heading: wrap_angle_f64(self.heading + f64::from(motion.turn)),
         }
     }
 }
@@ -637,6 +656,36 @@ mod tests {
     }
 
     #[test]
+    fn frames_far_from_the_origin_chain_as_near_it() {
+        // An hour of 1.1 s cycles (3,300) walked 1 km from the origin lands where the same walk
+        // from the origin does, moved by 1 km: single precision would round every cycle's step to
+        // 61 um there.
+        let m = RootMotion {
+            dx: 0.013,
+            dz: 0.71,
+            turn: 0.0021,
+        };
+        let (mut near, mut far) = (
+            CycleFrame::default(),
+            CycleFrame {
+                x: 1000.0,
+                z: -1000.0,
+                heading: 0.0,
+            },
+        );
+        for _ in 0..3300 {
+            near = near.next(&m);
+            far = far.next(&m);
+        }
+        let (ex, ez) = ((far.x - 1000.0) - near.x, (far.z + 1000.0) - near.z);
+        assert!(ex.abs() < 1e-9 && ez.abs() < 1e-9, "{ex} {ez}");
+        assert_eq!(far.heading, near.heading);
+        // The placed point is in double precision: 1 mm in the frame is 1 mm in the world.
+        let p = far.to_world(Vec3::new(0.001, 0.0, 0.0)) - far.to_world(Vec3::ZERO);
+        assert!((p.length() - 0.001).abs() < 1e-9, "{p}");
+    }
+
+    #[test]
     fn frames_chain_by_the_root_motion() {
         let f = CycleFrame::default();
         let m = RootMotion {
@@ -649,7 +698,7 @@ mod tests {
             (g.z - 1.0).abs() < 1e-6 && (g.x - 1.0).abs() < 1e-6,
             "{g:?}"
         );
-        assert!((g.heading - std::f32::consts::PI).abs() < 1e-6);
+        assert!(wrap_angle_f64(g.heading - std::f64::consts::PI).abs() < 1e-6);
         // A state at the end of the clip is at the origin of the next frame.
         let mut s = PoseState::new(7);
         s.pose[0..3].copy_from_slice(&[0.0, 0.9, 1.0]);

@@ -42,7 +42,7 @@
 //! A leg whose three joints are not all evaluated at the pose's detail (fewer active joints) is not
 //! locked, and its correction is released. [`FootLock::release`] forgets the anchors (a teleport).
 
-use glam::{Quat, Vec3};
+use glam::{DVec2, DVec3, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::chain::{CycleFrame, nearest_branch, quat_to_exp_map};
@@ -183,8 +183,10 @@ fn evaluated(rig: &Rig, j: usize, active: usize) -> bool {
 /// The lock state of one foot (module documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct FootState {
-    /// The previous frame's uncorrected foot points in the world (ankle, toe), once seen.
-    prev: Option<[Vec3; 2]>,
+    /// The previous frame's uncorrected foot points on the ground (world `(x, z)` of ankle and
+    /// toe), once seen, in double precision: a foot's motion over one frame is their difference,
+    /// millimetres however far from the origin the walker is.
+    prev: Option<[DVec2; 2]>,
     /// In contact at the previous frame.
     planted: bool,
     /// Seconds since the contact started.
@@ -252,20 +254,23 @@ fn grounded(h: f32) -> f32 {
 impl FootState {
     /// Advances the state by one frame with the foot's uncorrected world points; returns the world
     /// correction to show.
-    fn step(&mut self, points: [Vec3; 2], floor: f32, dt: f32) -> Vec3 {
+    fn step(&mut self, points: [DVec3; 2], floor: f32, dt: f32) -> Vec3 {
         let pivot = usize::from(points[1].y < points[0].y);
-        let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
-        let moved = self.prev.map(|prev| flat(points[pivot] - prev[pivot]));
-        self.prev = Some(points);
+        let ground = points.map(|p| DVec2::new(p.x, p.z));
+        let moved = self.prev.map(|prev| {
+            let m = ground[pivot] - prev[pivot];
+            Vec3::new(m.x as f32, 0.0, m.y as f32)
+        });
+        self.prev = Some(ground);
         let speed = moved.map(|m| m.length() / dt);
         if speed.is_some_and(|s| s.is_nan() || s >= TELEPORT_SPEED_M_S) {
             *self = FootState {
-                prev: Some(points),
+                prev: Some(ground),
                 ..FootState::default()
             };
             return Vec3::ZERO;
         }
-        let height = points[pivot].y - floor;
+        let height = points[pivot].y as f32 - floor;
         let contact = height < LOCK_HEIGHT_M && speed.is_some_and(|s| s < LOCK_SPEED_M_S);
         let before = self.offset;
         if contact {

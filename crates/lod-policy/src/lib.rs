@@ -125,7 +125,7 @@ pub use file::{FileError, InvalidModel};
 /// The math types of the runtime API (`Vec3`, `Quat`), so an engine uses the same version.
 pub use glam;
 pub use kernel::TURN_CONTROL;
-pub use math::{ease_in_out, wrap_angle};
+pub use math::{ease_in_out, wrap_angle, wrap_angle_f64};
 pub use model::{
     ALWAYS_ROWS, CONTROL_VALUES, HEIGHT_CONTROL, QUALITY_FACING_OUT_DEG, QUALITY_FLOOR_CM,
     QUALITY_POP_LIMIT, QUALITY_SKATE_LIMIT, QualityFigure, ROWS_PER_JOINT, TIME_ROW,

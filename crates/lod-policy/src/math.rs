@@ -66,6 +66,13 @@ pub fn wrap_angle(a: f32) -> f32 {
     if w <= -PI { w + TAU } else { w }
 }
 
+/// [`wrap_angle`] in double precision: the heading of a cycle frame, summed over hours of turns.
+pub fn wrap_angle_f64(a: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let w = a - TAU * (a / TAU).round();
+    if w <= -PI { w + TAU } else { w }
+}
+
 /// Ease-in/out weight `3u^2 - 2u^3` (smoothstep) for `u` clamped to `[0, 1]`: 0 at 0, 1 at 1,
 /// zero slope at both ends.
 pub fn ease_in_out(u: f32) -> f32 {
@@ -76,6 +83,21 @@ pub fn ease_in_out(u: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn wrap_angle_f64_lands_in_half_open_interval() {
+        use std::f64::consts::PI;
+        assert!((wrap_angle_f64(3.0 * PI) - PI).abs() < 1e-12);
+        assert_eq!(wrap_angle_f64(-PI), PI);
+        for k in -50..50 {
+            let a = f64::from(k) * 0.37;
+            let w = wrap_angle_f64(a);
+            assert!(-PI < w && w <= PI, "{a} -> {w}");
+            // The same angle: a whole number of turns apart.
+            let turns = (a - w) / std::f64::consts::TAU;
+            assert!((turns - turns.round()).abs() < 1e-12, "{a} -> {w}");
+        }
+    }
 
     #[test]
     fn wrap_angle_lands_in_half_open_interval() {

@@ -99,14 +99,18 @@ static size_t state_words(const MlodWalkerState *s, uint32_t *out) {
     out[n++] = (uint32_t)(d >> 32);
     out[n++] = (uint32_t)s->cycle;
     out[n++] = (uint32_t)(s->cycle >> 32);
-    for (int k = 0; k < 3; k++) out[n++] = bits(s->root_position[k]);
+    const double doubles[6] = {s->root_position[0], s->root_position[1], s->root_position[2],
+                               s->cycle_x, s->cycle_z, s->heading};
+    for (int k = 0; k < 6; k++) {
+        uint64_t u;
+        memcpy(&u, &doubles[k], sizeof u);
+        out[n++] = (uint32_t)u;
+        out[n++] = (uint32_t)(u >> 32);
+    }
     out[n++] = bits(s->root_rotation.x);
     out[n++] = bits(s->root_rotation.y);
     out[n++] = bits(s->root_rotation.z);
     out[n++] = bits(s->root_rotation.w);
-    out[n++] = bits(s->cycle_x);
-    out[n++] = bits(s->cycle_z);
-    out[n++] = bits(s->heading);
     out[n++] = bits(s->body_scale);
     out[n++] = s->detail.level;
     out[n++] = s->detail.joints;
@@ -178,7 +182,7 @@ int main(int argc, char **argv) {
     /* A camera 1.7 m above the ground, looking along +z over the crowd; walkers behind it, beside
      * its view or beyond its far distance are out of view. */
     const MlodCamera camera = {
-        .position = {0.0f, 1.7f, -8.0f},
+        .position = {0.0, 1.7, -8.0},
         .direction = {0.0f, 0.0f, 1.0f},
         .fov_y = 1.0471976f, /* 60 degrees */
         .aspect = 16.0f / 9.0f,

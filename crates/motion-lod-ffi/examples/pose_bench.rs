@@ -147,8 +147,8 @@ unsafe fn crowd_step(
     unsafe {
         for (i, w) in walkers.iter_mut().enumerate() {
             ok(mlod_walker_new(model, w), "walker");
-            let x = ((i % CROWD_COLUMNS) as f32 - 24.5) * 2.0;
-            let z = (i / CROWD_COLUMNS) as f32 * 2.0;
+            let x = ((i % CROWD_COLUMNS) as f64 - 24.5) * 2.0;
+            let z = (i / CROWD_COLUMNS) as f64 * 2.0;
             ok(
                 mlod_walker_start(*w, model, controls, detail, x, z, 0.0, std::ptr::null_mut()),
                 "start",

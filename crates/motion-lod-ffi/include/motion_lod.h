@@ -37,7 +37,7 @@
  `motion_lod.h`. It changes whenever any of them changes; a program compiled against a header
  whose `MLOD_ABI_VERSION` differs from what `mlod_abi_version` returns must not use the library.
  */
-#define MLOD_ABI_VERSION 4
+#define MLOD_ABI_VERSION 5
 
 /*
  The most styles a model holds: the length of [`MlodControls`]'s `style` weights.
@@ -181,9 +181,9 @@ typedef struct MlodDetail {
  */
 typedef struct MlodCamera {
   /*
-   Eye position in the world, metres.
+   Eye position in the world, metres (double precision, as walkers' positions).
    */
-  float position[3];
+  double position[3];
   /*
    View direction, a unit vector (length within 1e-3 of 1).
    */
@@ -280,27 +280,28 @@ typedef struct MlodWalkerState {
    */
   uint64_t cycle;
   /*
-   The root joint's position in the world, metres.
+   The root joint's position in the world, metres (double precision, as the cycle frame).
    */
-  float root_position[3];
+  double root_position[3];
+  /*
+   Origin of the current cycle frame on the ground, metres (world x). The cycle frame is kept in
+   double precision: a walker far from the origin chains its cycles as exactly as one near it.
+   */
+  double cycle_x;
+  /*
+   Origin of the current cycle frame on the ground, metres (world z).
+   */
+  double cycle_z;
+  /*
+   Heading of the current cycle frame, radians about +y (0 = facing +z), in `(-pi, pi]`: the
+   start heading plus every chained cycle's turn.
+   */
+  double heading;
   /*
    The root joint's rotation in the world: the cycle frame's heading times the root's rotation
    in the cycle frame (which is the root's entry of `mlod_walker_local_rotations`).
    */
   struct MlodQuat root_rotation;
-  /*
-   Origin of the current cycle frame on the ground, metres (world x).
-   */
-  float cycle_x;
-  /*
-   Origin of the current cycle frame on the ground, metres (world z).
-   */
-  float cycle_z;
-  /*
-   Heading of the current cycle frame, radians about +y (0 = facing +z), in `(-pi, pi]`: the
-   start heading plus every chained cycle's turn.
-   */
-  float heading;
   /*
    The current cycle's body scale (see `MlodCycle`).
    */
@@ -502,9 +503,9 @@ enum MlodStatus mlod_model_detail_at(const struct MlodModel *model,
  */
 enum MlodStatus mlod_model_detail_from_camera(const struct MlodModel *model,
                                               const struct MlodCamera *camera,
-                                              float x,
-                                              float y,
-                                              float z,
+                                              double x,
+                                              double y,
+                                              double z,
                                               float radius_m,
                                               struct MlodDetail *out,
                                               bool *visible);
@@ -576,9 +577,9 @@ enum MlodStatus mlod_walker_start(struct MlodWalker *walker,
                                   const struct MlodModel *model,
                                   const struct MlodControls *controls,
                                   struct MlodDetail detail,
-                                  float x,
-                                  float z,
-                                  float heading,
+                                  double x,
+                                  double z,
+                                  double heading,
                                   struct MlodWalkerState *state);
 
 /*

@@ -67,7 +67,10 @@
 //!   `dz` forward displacement (m), `turn` (rad, positive towards +x), `height` of the performer (m),
 //!   and the performer's `style`: a weight per style of the model (all 0, as a zero-initialised
 //!   struct has them, is the data's own mix of styles; a model without styles ignores them).
-//!   The world is +y up; a heading is a rotation about +y, 0 facing +z.
+//!   The world is +y up; a heading is a rotation about +y, 0 facing +z. World positions (a
+//!   walker's cycle frame and root, the camera's eye) are doubles, as large worlds keep them: a
+//!   walker an hour's walk or kilometres from the origin chains its cycles to the same
+//!   micrometres as one near it. Poses, rotations and transforms in the cycle frame are floats.
 //! - Poses are the model's pose vectors (the `pose_len` of [`mlod_model_sizes`] floats: root
 //!   position, root exponential map, the time row, then three exponential-map rows per animated
 //!   joint in the model's evaluation order, legs first, the order a detail's `joints` counts in).
@@ -83,17 +86,17 @@ use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
-use lod_policy::glam::{Quat, Vec3};
+use lod_policy::glam::{DVec3, Quat, Vec3};
 use lod_policy::{
     ClipKernel, Controls, CycleFrame, DEFAULT_HALFLIFE_S, Detail, DistancePolicy, FileError,
     FootLock, JointTransform, KernelScratch, LevelPolicy, RootMotion, RuntimeModel, SeamScratch,
-    SeamTransition, StyleMix, ViewParams, wrap_angle,
+    SeamTransition, StyleMix, ViewParams, wrap_angle_f64,
 };
 
 /// The version of this C ABI: the functions, their arguments and the layouts of the structs in
 /// `motion_lod.h`. It changes whenever any of them changes; a program compiled against a header
 /// whose `MLOD_ABI_VERSION` differs from what `mlod_abi_version` returns must not use the library.
-pub const MLOD_ABI_VERSION: u32 = 4;
+pub const MLOD_ABI_VERSION: u32 = 5;
 
 /// The most styles a model holds: the length of [`MlodControls`]'s `style` weights.
 pub const MLOD_MAX_STYLES: usize = 8;
@@ -239,18 +242,19 @@ pub struct MlodWalkerState {
     /// Index of the current cycle: 0 for the cycle `mlod_walker_start` built, one more for each
     /// cycle chained after it.
     pub cycle: u64,
-    /// The root joint's position in the world, metres.
-    pub root_position: [f32; 3],
+    /// The root joint's position in the world, metres (double precision, as the cycle frame).
+    pub root_position: [f64; 3],
+    /// Origin of the current cycle frame on the ground, metres (world x). The cycle frame is kept in
+    /// double precision: a walker far from the origin chains its cycles as exactly as one near it.
+    pub cycle_x: f64,
+    /// Origin of the current cycle frame on the ground, metres (world z).
+    pub cycle_z: f64,
+    /// Heading of the current cycle frame, radians about +y (0 = facing +z), in `(-pi, pi]`: the
+    /// start heading plus every chained cycle's turn.
+    pub heading: f64,
     /// The root joint's rotation in the world: the cycle frame's heading times the root's rotation
     /// in the cycle frame (which is the root's entry of `mlod_walker_local_rotations`).
     pub root_rotation: MlodQuat,
-    /// Origin of the current cycle frame on the ground, metres (world x).
-    pub cycle_x: f32,
-    /// Origin of the current cycle frame on the ground, metres (world z).
-    pub cycle_z: f32,
-    /// Heading of the current cycle frame, radians about +y (0 = facing +z), in `(-pi, pi]`: the
-    /// start heading plus every chained cycle's turn.
-    pub heading: f32,
     /// The current cycle's body scale (see `MlodCycle`).
     pub body_scale: f32,
     /// The detail the current cycle was built with (joints clamped to the model's).
@@ -272,8 +276,8 @@ pub struct MlodWalkerState {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct MlodCamera {
-    /// Eye position in the world, metres.
-    pub position: [f32; 3],
+    /// Eye position in the world, metres (double precision, as walkers' positions).
+    pub position: [f64; 3],
     /// View direction, a unit vector (length within 1e-3 of 1).
     pub direction: [f32; 3],
     /// Vertical field of view, radians, in `(0, pi)`.
@@ -310,7 +314,7 @@ struct Walk {
     /// The current cycle's detail (resolved).
     detail: Detail,
     /// The root in the world at the last frame shown.
-    root: Vec3,
+    root: DVec3,
     root_rotation: Quat,
     locked: bool,
 }
@@ -906,7 +910,7 @@ pub unsafe extern "C" fn mlod_model_detail_at(
 /// Checks every field of a camera (see [`MlodCamera`]).
 fn check_camera(c: &MlodCamera) -> Result<(), Failure> {
     let bad = |what: String| Err(Failure::invalid(format!("camera: {what}")));
-    if !c.position.iter().chain(&c.direction).all(|v| v.is_finite()) {
+    if !(c.position.iter().all(|v| v.is_finite()) && c.direction.iter().all(|v| v.is_finite())) {
         return bad("position or direction is not finite".into());
     }
     let length = Vec3::from_array(c.direction).length();
@@ -965,7 +969,7 @@ fn in_view(c: &MlodCamera, half: f32, offset: Vec3, distance: f32, radius: f32) 
 fn seen(
     m: &MlodModel,
     camera: &MlodCamera,
-    p: Vec3,
+    p: DVec3,
     radius_m: f32,
 ) -> Result<(MlodDetail, bool), Failure> {
     check_camera(camera)?;
@@ -977,7 +981,7 @@ fn seen_checked(
     m: &MlodModel,
     camera: &MlodCamera,
     half: f32,
-    p: Vec3,
+    p: DVec3,
     radius_m: f32,
 ) -> Result<(MlodDetail, bool), Failure> {
     if !p.is_finite() {
@@ -988,7 +992,8 @@ fn seen_checked(
             "radius {radius_m} m must be finite and >= 0"
         )));
     }
-    let offset = p - Vec3::from_array(camera.position);
+    // The offset from the eye in double precision: metres, however far both are from the origin.
+    let offset = (p - DVec3::from_array(camera.position)).as_vec3();
     let distance = offset.length();
     let visible = in_view(camera, half, offset, distance, radius_m);
     let view = ViewParams {
@@ -1012,9 +1017,9 @@ fn seen_checked(
 pub unsafe extern "C" fn mlod_model_detail_from_camera(
     model: *const MlodModel,
     camera: *const MlodCamera,
-    x: f32,
-    y: f32,
-    z: f32,
+    x: f64,
+    y: f64,
+    z: f64,
     radius_m: f32,
     out: *mut MlodDetail,
     visible: *mut bool,
@@ -1026,7 +1031,7 @@ pub unsafe extern "C" fn mlod_model_detail_from_camera(
         let camera = unsafe { reference(camera, "camera") }?;
         // SAFETY: per this function's contract.
         let out = unsafe { mutable(out, "out") }?;
-        let (detail, seen_now) = seen(m, camera, Vec3::new(x, y, z), radius_m)?;
+        let (detail, seen_now) = seen(m, camera, DVec3::new(x, y, z), radius_m)?;
         *out = detail;
         // SAFETY: null or writable per the contract.
         if let Some(v) = unsafe { visible.as_mut() } {
@@ -1074,7 +1079,7 @@ pub unsafe extern "C" fn mlod_walker_new(
                 next_controls: Controls::default(),
                 next_detail: lod.root_only(),
                 detail: lod.root_only(),
-                root: Vec3::ZERO,
+                root: DVec3::ZERO,
                 root_rotation: Quat::IDENTITY,
                 locked: false,
             },
@@ -1422,9 +1427,9 @@ pub unsafe extern "C" fn mlod_walker_start(
     model: *const MlodModel,
     controls: *const MlodControls,
     detail: MlodDetail,
-    x: f32,
-    z: f32,
-    heading: f32,
+    x: f64,
+    z: f64,
+    heading: f64,
     state: *mut MlodWalkerState,
 ) -> MlodStatus {
     guard("mlod_walker_start", || {
@@ -1445,7 +1450,7 @@ pub unsafe extern "C" fn mlod_walker_start(
             frame: CycleFrame {
                 x,
                 z,
-                heading: wrap_angle(heading),
+                heading: wrap_angle_f64(heading),
             },
             lock: FootLock::new(),
             t: 0.0,
@@ -1453,7 +1458,7 @@ pub unsafe extern "C" fn mlod_walker_start(
             next_controls: values,
             next_detail: detail,
             detail,
-            root: Vec3::ZERO,
+            root: DVec3::ZERO,
             root_rotation: Quat::IDENTITY,
             locked: false,
         };

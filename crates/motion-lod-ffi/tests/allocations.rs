@@ -178,7 +178,7 @@ fn crowd_steps_allocate_nothing() {
                     &controls[i],
                     detail,
                     0.0,
-                    8.0 * (i as f32 - 10.0),
+                    8.0 * (i as f64 - 10.0),
                     0.0,
                     &mut states[i]
                 ),

@@ -9,11 +9,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use lod_policy::glam::{Quat, Vec3};
+use lod_policy::glam::{DVec3, Quat, Vec3};
 use lod_policy::{
     ClipKernel, Controls, CycleFrame, DEFAULT_HALFLIFE_S, Detail, DistancePolicy, FootLock,
     JointTransform, KernelError, KernelScratch, LevelPolicy, RuntimeModel, SeamScratch,
-    SeamTransition, ViewParams, wrap_angle,
+    SeamTransition, ViewParams, wrap_angle_f64,
 };
 use motion_lod::dataset::DataSpec;
 use motion_lod::progress::NoProgress;
@@ -31,7 +31,7 @@ const RADIUS_M: f32 = 1.2;
 
 /// The camera of `examples/crowd.c`.
 struct Camera {
-    position: Vec3,
+    position: DVec3,
     direction: Vec3,
     fov_y: f32,
     aspect: f32,
@@ -41,7 +41,7 @@ struct Camera {
 }
 
 const CAMERA: Camera = Camera {
-    position: Vec3::new(0.0, 1.7, -8.0),
+    position: DVec3::new(0.0, 1.7, -8.0),
     direction: Vec3::Z,
     fov_y: std::f32::consts::FRAC_PI_3, // 1.0471976f in crowd.c, the same float
     aspect: 16.0 / 9.0,
@@ -107,8 +107,8 @@ fn controls_for(lo: &[f32], hi: &[f32], i: usize, k: u64) -> Controls {
 /// Whether a sphere of `radius` around `p` is in the camera's view: the cone through the image's
 /// corners, between the near and far distances along the view direction (as `MlodCamera`
 /// documents it).
-fn in_view(c: &Camera, p: Vec3, radius: f32) -> (f32, bool) {
-    let offset = p - c.position;
+fn in_view(c: &Camera, p: DVec3, radius: f32) -> (f32, bool) {
+    let offset = (p - c.position).as_vec3();
     let distance = offset.length();
     let along = offset.dot(c.direction);
     let before_near = c.near_m > 0.0 && along + radius < c.near_m;
@@ -127,7 +127,7 @@ fn in_view(c: &Camera, p: Vec3, radius: f32) -> (f32, bool) {
 
 /// The detail the distance policy gives a sphere of `RADIUS_M` around `p` seen by the camera,
 /// root only at the smallest level when it has no joints, and whether it is in view.
-fn camera_detail(model: &RuntimeModel, policy: &DistancePolicy, p: Vec3) -> (Detail, bool) {
+fn camera_detail(model: &RuntimeModel, policy: &DistancePolicy, p: DVec3) -> (Detail, bool) {
     let (distance, visible) = in_view(&CAMERA, p, RADIUS_M);
     let view = ViewParams {
         fov_y_radians: CAMERA.fov_y,
@@ -151,6 +151,17 @@ fn hex(words: &[u32]) -> String {
 
 fn float_words(values: impl IntoIterator<Item = f32>) -> Vec<u32> {
     values.into_iter().map(f32::to_bits).collect()
+}
+
+/// Doubles as `examples/crowd.c` splits them: low word, then high.
+fn double_words(values: impl IntoIterator<Item = f64>) -> Vec<u32> {
+    values
+        .into_iter()
+        .flat_map(|v| {
+            let b = v.to_bits();
+            [b as u32, (b >> 32) as u32]
+        })
+        .collect()
 }
 
 /// What `crowd.c --dump` prints, computed through the Rust runtime API, and how many walker-frames
@@ -178,16 +189,17 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
         let z = ((i / COLUMNS) as f32 - 5.0) * SPACING_M;
         // 0.39269908f in crowd.c, the same float.
         let heading = (i % 16) as f32 * std::f32::consts::FRAC_PI_8 - 3.0;
-        let (mut detail, mut visible) = camera_detail(model, &policy, Vec3::new(x, 1.0, z));
+        let (mut detail, mut visible) =
+            camera_detail(model, &policy, DVec3::new(f64::from(x), 1.0, f64::from(z)));
         let mut controls = controls_for(lo, hi, i, 0);
         lod.build_kernel(&controls, detail, &mut scratch, &mut kernel)
             .expect("kernel");
         let mut body_scale = model.body_scale(&controls);
         let mut cycle_detail = detail;
         let mut frame = CycleFrame {
-            x,
-            z,
-            heading: wrap_angle(heading),
+            x: f64::from(x),
+            z: f64::from(z),
+            heading: wrap_angle_f64(f64::from(heading)),
         };
         let mut lock = FootLock::new();
         // The inertialized seams between cycles that both animate joints.
@@ -196,7 +208,7 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
         let mut seam_start = 0.0f32;
         let mut t = 0.0f64;
         let mut cycle = 0u64;
-        let mut root = Vec3::ZERO;
+        let mut root = DVec3::ZERO;
         let mut h: u64 = 0xcbf29ce484222325;
         for f in 0..FRAMES {
             let mut begun = 0u32;
@@ -277,9 +289,10 @@ fn rust_dump(model: &RuntimeModel) -> (String, usize) {
                 cycle as u32,
                 (cycle >> 32) as u32,
             ];
-            state.extend(float_words(root.to_array()));
+            state.extend(double_words(root.to_array()));
+            state.extend(double_words([frame.x, frame.z, frame.heading]));
             state.extend(float_words(root_rotation.to_array()));
-            state.extend(float_words([frame.x, frame.z, frame.heading, body_scale]));
+            state.extend(float_words([body_scale]));
             state.extend([
                 cycle_detail.accuracy as u32,
                 cycle_detail.active_joints as u32,

@@ -292,7 +292,7 @@ fn walking_misuse_is_a_status_with_a_message() {
         );
 
         // Start: null pointers, NaN controls or position, a level the model lacks, another model.
-        let start = |w, m, c, d: MlodDetail, x: f32, state: *mut MlodWalkerState| {
+        let start = |w, m, c, d: MlodDetail, x: f64, state: *mut MlodWalkerState| {
             mlod_walker_start(w, m, c, d, x, 2.0, 0.5, state)
         };
         assert_eq!(
@@ -319,7 +319,7 @@ fn walking_misuse_is_a_status_with_a_message() {
         );
         assert!(message().contains("height"), "{}", message());
         assert_eq!(
-            start(walker, model, &controls, full, f32::INFINITY, null_mut()),
+            start(walker, model, &controls, full, f64::INFINITY, null_mut()),
             MlodStatus::InvalidArgument
         );
         assert!(message().contains("x is inf"), "{}", message());
@@ -469,7 +469,7 @@ fn walking_misuse_is_a_status_with_a_message() {
         );
         assert!(root < joints && parent < root as i32);
         let quat = |q: MlodQuat| lod_policy::glam::Quat::from_xyzw(q.x, q.y, q.z, q.w);
-        let heading = lod_policy::glam::Quat::from_rotation_y(state.heading);
+        let heading = lod_policy::glam::Quat::from_rotation_y(state.heading as f32);
         let world = heading * quat(rotations[root]);
         assert!(
             world.dot(quat(state.root_rotation)).abs() > 1.0 - 1e-6,
@@ -500,7 +500,7 @@ fn walking_misuse_is_a_status_with_a_message() {
             ),
             (
                 MlodCamera {
-                    position: [f32::NAN, 0.0, 0.0],
+                    position: [f64::NAN, 0.0, 0.0],
                     ..cam
                 },
                 "finite",
@@ -604,7 +604,7 @@ fn walking_misuse_is_a_status_with_a_message() {
             mlod_model_detail_from_camera(
                 model,
                 &cam,
-                f32::NAN,
+                f64::NAN,
                 1.0,
                 0.0,
                 1.0,
@@ -698,7 +698,7 @@ fn a_crowd_step_is_the_walkers_steps_and_checks_first() {
         let mut single = [null_mut::<MlodWalker>(); 3];
         for (k, w) in batch.iter_mut().chain(single.iter_mut()).enumerate() {
             assert_eq!(mlod_walker_new(model, w), MlodStatus::Ok);
-            let x = (k % 3) as f32 * 4.0 - 4.0;
+            let x = (k % 3) as f64 * 4.0 - 4.0;
             assert_eq!(
                 mlod_walker_start(*w, model, &controls, detail, x, 10.0, 0.2, null_mut()),
                 MlodStatus::Ok

@@ -13,22 +13,23 @@ fn the_layouts_the_page_uses() {
     assert_eq!(size_of::<MlodDetail>(), 8);
     assert_eq!(size_of::<MlodJointTransform>(), 28);
     assert_eq!(offset_of!(MlodJointTransform, translation), 16);
-    assert_eq!(size_of::<MlodCamera>(), 44);
-    assert_eq!(offset_of!(MlodCamera, far_m), 40);
-    assert_eq!(size_of::<MlodWalkerState>(), 88);
+    assert_eq!(size_of::<MlodCamera>(), 56);
+    assert_eq!(offset_of!(MlodCamera, direction), 24);
+    assert_eq!(offset_of!(MlodCamera, far_m), 52);
+    assert_eq!(size_of::<MlodWalkerState>(), 112);
     let state = [
         (offset_of!(MlodWalkerState, time_in_cycle_s), 0),
         (offset_of!(MlodWalkerState, cycle_duration_s), 8),
         (offset_of!(MlodWalkerState, cycle), 16),
         (offset_of!(MlodWalkerState, root_position), 24),
-        (offset_of!(MlodWalkerState, root_rotation), 36),
-        (offset_of!(MlodWalkerState, cycle_x), 52),
+        (offset_of!(MlodWalkerState, cycle_x), 48),
         (offset_of!(MlodWalkerState, cycle_z), 56),
-        (offset_of!(MlodWalkerState, heading), 60),
-        (offset_of!(MlodWalkerState, body_scale), 64),
-        (offset_of!(MlodWalkerState, detail), 68),
-        (offset_of!(MlodWalkerState, cycles_begun), 76),
-        (offset_of!(MlodWalkerState, foot_locked), 80),
+        (offset_of!(MlodWalkerState, heading), 64),
+        (offset_of!(MlodWalkerState, root_rotation), 72),
+        (offset_of!(MlodWalkerState, body_scale), 88),
+        (offset_of!(MlodWalkerState, detail), 92),
+        (offset_of!(MlodWalkerState, cycles_begun), 100),
+        (offset_of!(MlodWalkerState, foot_locked), 104),
     ];
     for (k, (offset, expected)) in state.into_iter().enumerate() {
         assert_eq!(offset, expected, "MlodWalkerState field {k}");

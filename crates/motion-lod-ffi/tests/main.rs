@@ -6,6 +6,7 @@ mod common;
 
 mod c_example;
 mod errors;
+mod far_from_origin;
 mod header;
 mod layouts;
 mod shown_pose;

@@ -4,7 +4,7 @@
 //!
 //! Writes to `target/web-ref/` (or `$MOTION_LOD_WEB_REF`): `model.mlod` (a model of the checkout's
 //! fixtures with three styles), `script.json` (the scripts), and what the native runtime gives for
-//! them: `walk_states.f64`, `walk_joints.f32`, `crowd_roots.f32`, `crowd_details.f32`,
+//! them: `walk_states.f64`, `walk_joints.f32`, `crowd_roots.f64`, `crowd_details.f32`,
 //! `crowd_joints.f32` (little-endian arrays, laid out as `viewer/crowd.js` returns them).
 //! `.ci/web-checks` serves the model with `motion-lod view`, runs the scripts in headless Chromium
 //! (`viewer/checks/live.mjs`) and fails when any value differs by more than 1e-5.
@@ -62,7 +62,7 @@ fn controls_json(c: &MlodControls) -> Value {
 fn camera_json(c: &MlodCamera) -> Value {
     let v = |a: &[f32]| a.iter().map(|&x| f64::from(x)).collect::<Vec<_>>();
     json!({
-        "position": v(&c.position), "direction": v(&c.direction), "fovY": f64::from(c.fov_y),
+        "position": c.position, "direction": v(&c.direction), "fovY": f64::from(c.fov_y),
         "aspect": f64::from(c.aspect), "heightPx": f64::from(c.image_height_px),
         "near": f64::from(c.near_m), "far": f64::from(c.far_m),
     })
@@ -73,16 +73,16 @@ fn state_values(s: &MlodWalkerState, out: &mut Vec<f64>) {
     out.extend([
         s.time_in_cycle_s,
         s.cycle as f64,
-        f64::from(s.root_position[0]),
-        f64::from(s.root_position[1]),
-        f64::from(s.root_position[2]),
+        s.root_position[0],
+        s.root_position[1],
+        s.root_position[2],
         f64::from(r.x),
         f64::from(r.y),
         f64::from(r.z),
         f64::from(r.w),
-        f64::from(s.cycle_x),
-        f64::from(s.cycle_z),
-        f64::from(s.heading),
+        s.cycle_x,
+        s.cycle_z,
+        s.heading,
         f64::from(s.body_scale),
         f64::from(s.detail.level),
         f64::from(s.detail.joints),
@@ -187,7 +187,7 @@ fn the_pages_scripts_walked_natively() {
             (c, d)
         })
         .collect();
-    let (x0, z0, heading0) = (1.5f32, -2.0f32, 0.3f32);
+    let (x0, z0, heading0) = (1.5f64, -2.0f64, 0.3f64);
     let mut walker: *mut MlodWalker = std::ptr::null_mut();
     // SAFETY: live model, writable out pointer.
     ok(unsafe { mlod_walker_new(model, &mut walker) }, "walker");
@@ -260,11 +260,11 @@ fn the_pages_scripts_walked_natively() {
             }
         })
         .collect();
-    let starts: Vec<[f32; 3]> = (0..CROWD)
+    let starts: Vec<[f64; 3]> = (0..CROWD)
         .map(|i| {
-            let x = ((i % COLUMNS) as f32 - 19.5) * 2.5;
-            let z = ((i / COLUMNS) as f32 - 5.0) * 2.5;
-            let heading = (i % 16) as f32 * std::f32::consts::FRAC_PI_8 - 3.0;
+            let x = ((i % COLUMNS) as f64 - 19.5) * 2.5;
+            let z = ((i / COLUMNS) as f64 - 5.0) * 2.5;
+            let heading = (i % 16) as f64 * std::f64::consts::FRAC_PI_8 - 3.0;
             [x, z, heading]
         })
         .collect();
@@ -362,7 +362,7 @@ fn the_pages_scripts_walked_natively() {
         "dt": DT,
         "walk": {
             "frames": WALK_FRAMES,
-            "x": f64::from(x0), "z": f64::from(z0), "heading": f64::from(heading0),
+            "x": x0, "z": z0, "heading": heading0,
             "footLock": true,
             "cycles": cycles.iter().map(|(c, d)| json!({
                 "controls": controls_json(c),
@@ -373,7 +373,7 @@ fn the_pages_scripts_walked_natively() {
             "frames": CROWD_FRAMES,
             "camera": camera_json(&camera),
             "radius": f64::from(RADIUS_M),
-            "starts": starts.iter().map(|s| s.iter().map(|&v| f64::from(v)).collect::<Vec<_>>()).collect::<Vec<_>>(),
+            "starts": starts,
             "presets": presets.iter().map(controls_json).collect::<Vec<_>>(),
             "sampleWalkers": SAMPLE_WALKERS,
             "sampleFrames": SAMPLE_FRAMES,
@@ -388,7 +388,7 @@ fn the_pages_scripts_walked_natively() {
     .expect("write the script");
     write_f64("walk_states.f64", &walk_states);
     write_f32("walk_joints.f32", &walk_joints);
-    write_f32("crowd_roots.f32", &roots);
+    write_f64("crowd_roots.f64", &roots);
     write_f32("crowd_details.f32", &details);
     write_f32("crowd_joints.f32", &crowd_joints);
     assert_eq!(walk_states.len(), WALK_FRAMES * STATE_VALUES);

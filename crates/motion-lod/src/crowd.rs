@@ -194,23 +194,18 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
             visible: Vec::with_capacity(frames),
         })
         .collect();
-    let mut frames_of: Vec<Option<(glam::Vec2, f32)>> = vec![None; tracks.len()];
+    let mut frames_of: Vec<Option<lod_policy::CycleFrame>> = vec![None; tracks.len()];
     let mut stats = FrameStats::default();
     for f in 0..frames {
         let camera = path.camera_at(f as f32 * dt, &lens);
         crowd.step_into(&source, policy, &camera, dt, &mut stats)?;
         for (track, last) in tracks.iter_mut().zip(&mut frames_of) {
             let i = track.walker;
-            let (base, heading) = crowd.cycle_frame(i);
-            if last.is_some_and(|l| l != (base, heading)) {
+            let frame = crowd.cycle_frame(i);
+            if last.is_some_and(|l| l != frame) {
                 track.seams.push(f);
             }
-            *last = Some((base, heading));
-            let frame = lod_policy::CycleFrame {
-                x: base.x,
-                z: base.y,
-                heading,
-            };
+            *last = Some(frame);
             let shown = crowd.pose(i);
             if shown.len() >= 6 {
                 // The rows the clip wrote, the root placed in the world; the rest at rest.

@@ -29,7 +29,7 @@
 //! turns in degrees).
 //!
 //! ```no_run
-//! use motion_lod::glam::{Quat, Vec3};
+//! use motion_lod::glam::{DVec3, Quat, Vec3};
 //! use motion_lod::lod_policy::{
 //!     ClipKernel, Controls, CycleFrame, DistancePolicy, KernelScratch, LevelPolicy, RuntimeModel,
 //!     ViewParams,
@@ -58,7 +58,8 @@
 //!     lod.pose(&kernel, kernel.phase_at(t), &mut pose)?;
 //!     // For skinning: each joint's rotation relative to its parent, and the root in the world.
 //!     rig.local_rotations(&pose, detail.active_joints, &mut local)?;
-//!     let root_world: Vec3 = cycle_frame.to_world(Vec3::new(pose[0], pose[1], pose[2]));
+//!     // The frame is in double precision, and so is the world position it gives.
+//!     let root_world: DVec3 = cycle_frame.to_world(Vec3::new(pose[0], pose[1], pose[2]));
 //!     let root_rotation: Quat = cycle_frame.rotation() * local[rig.root()];
 //!     # let _ = (root_world, root_rotation);
 //!     t += 1.0 / 60.0;

@@ -52,11 +52,11 @@ pub struct RecordedFrame {
     /// Index of the cycle the frame is in (0 for the walk's first).
     pub cycle: u64,
     /// The cycle frame's origin on the ground, metres (world x).
-    pub cycle_x: f32,
+    pub cycle_x: f64,
     /// The cycle frame's origin on the ground, metres (world z).
-    pub cycle_z: f32,
+    pub cycle_z: f64,
     /// The cycle frame's heading, radians about +y.
-    pub heading: f32,
+    pub heading: f64,
     /// Accuracy level of the cycle.
     pub level: usize,
     /// Animated joints of the cycle.
@@ -154,7 +154,7 @@ impl Recording {
                 ("cycleX", frame.cycle_x),
                 ("cycleZ", frame.cycle_z),
                 ("heading", frame.heading),
-                ("bodyScale", frame.body_scale),
+                ("bodyScale", f64::from(frame.body_scale)),
             ];
             let bad = scalars
                 .into_iter()
@@ -165,12 +165,12 @@ impl Recording {
                         .pose
                         .iter()
                         .position(|v| !v.is_finite())
-                        .map(|k| (format!("pose value {k}"), frame.pose[k]))
+                        .map(|k| (format!("pose value {k}"), f64::from(frame.pose[k])))
                 });
             if let Some((what, value)) = bad {
                 return Err(RecordingError::NotFinite {
                     what: format!("frame {f}: {what}"),
-                    value: f64::from(value),
+                    value,
                 });
             }
         }
@@ -265,13 +265,23 @@ mod tests {
         let zero = text(FRAME).replace("0.0166", "0");
         let err = Recording::parse(&zero).unwrap_err().to_string();
         assert!(err.contains("frameTime is 0"), "{err}");
-        // JSON has no NaN: a number beyond f32 is refused, either by the JSON reader (out of range,
-        // with serde_json's float_roundtrip feature on, as the workspace has it) or as infinite.
-        let huge = text(&FRAME.replace("\"heading\":0", "\"heading\":1e60"));
+        // JSON has no NaN: a number beyond f32 in a float field is refused, either by the JSON
+        // reader (out of range, with serde_json's float_roundtrip feature on, as the workspace has
+        // it) or as infinite; the cycle frame's fields are doubles, and beyond f64 is refused too.
+        let huge = text(&FRAME.replace("\"bodyScale\":1", "\"bodyScale\":1e60"));
         let err = Recording::parse(&huge).unwrap_err().to_string();
         assert!(
-            err.contains("frame 0: heading is inf") || err.contains("number out of range"),
+            err.contains("frame 0: bodyScale is inf") || err.contains("number out of range"),
             "{err}"
+        );
+        let far = text(&FRAME.replace("\"heading\":0", "\"heading\":1e400"));
+        let err = Recording::parse(&far).unwrap_err().to_string();
+        assert!(err.contains("number out of range"), "{err}");
+        // A walk far from the origin keeps its frame to the double.
+        let km = text(&FRAME.replace("\"cycleX\":0", "\"cycleX\":1000.000001"));
+        assert_eq!(
+            Recording::parse(&km).unwrap().frames[0].cycle_x,
+            1000.000001
         );
     }
 }

@@ -17,7 +17,7 @@
 
 use std::error::Error;
 
-use lod_policy::glam::{Quat, Vec3};
+use lod_policy::glam::{DVec3, Quat, Vec3};
 use lod_policy::{
     ClipKernel, Controls, CycleFrame, DistancePolicy, FootLock, KernelScratch, LevelPolicy,
     RuntimeModel, ViewParams,
@@ -28,8 +28,10 @@ use lod_policy::{
 pub struct Frame {
     /// Seconds since the walk began.
     pub time_s: f64,
-    /// The root joint's position in the world (metres).
-    pub root_position: Vec3,
+    /// The root joint's position in the world (metres), in double precision as the cycle frame
+    /// (`CycleFrame::to_world`): an engine with a large world keeps it so, or subtracts its
+    /// camera's position before rounding to single precision.
+    pub root_position: DVec3,
     /// The root joint's orientation in the world.
     pub root_rotation: Quat,
     /// Every joint's rotation relative to its parent, in the rig's joint order (parents first);
@@ -38,7 +40,7 @@ pub struct Frame {
     /// Index of the gait cycle the frame belongs to.
     pub cycle: usize,
     /// Heading of that cycle's frame (radians about +y, 0 = +z): the cycles' root motion summed.
-    pub cycle_heading: f32,
+    pub cycle_heading: f64,
     /// The character's body scale (`RuntimeModel::body_scale` of its height): the skeleton's bone
     /// translations below the root are drawn this many times as long.
     pub body_scale: f32,
@@ -62,7 +64,7 @@ pub fn walk(
     let mut lock = FootLock::new();
     let mut frame = Frame {
         time_s: 0.0,
-        root_position: Vec3::ZERO,
+        root_position: DVec3::ZERO,
         root_rotation: Quat::IDENTITY,
         local_rotations: vec![Quat::IDENTITY; rig.joint_count()],
         cycle: 0,
@@ -181,7 +183,7 @@ mod tests {
         // Continuous: no frame moves the root much more than a typical frame does, seams included.
         let steps: Vec<f32> = frames
             .windows(2)
-            .map(|w| (w[1].root_position - w[0].root_position).length())
+            .map(|w| (w[1].root_position - w[0].root_position).length() as f32)
             .collect();
         let mut sorted = steps.clone();
         sorted.sort_by(f32::total_cmp);
@@ -193,11 +195,12 @@ mod tests {
         );
         // Turning: the direction of travel turns with the cycle frames, by the model's turn per
         // cycle (the embedded model ignores the turn control: its walker's turns carry no signal).
-        let heading = |a: Vec3, b: Vec3| (b.x - a.x).atan2(b.z - a.z);
+        let heading = |a: DVec3, b: DVec3| (b.x - a.x).atan2(b.z - a.z);
         let first = heading(frames[0].root_position, frames[60].root_position);
         let last = heading(frames[299].root_position, frames[359].root_position);
-        let turned = lod_policy::wrap_angle(last - first);
-        let expected = lod_policy::wrap_angle(frames[329].cycle_heading - frames[30].cycle_heading);
+        let turned = lod_policy::wrap_angle_f64(last - first);
+        let expected =
+            lod_policy::wrap_angle_f64(frames[329].cycle_heading - frames[30].cycle_heading);
         assert!(
             (turned - expected).abs() < 0.1,
             "travel turned {turned} rad, the cycle frames {expected}"

@@ -86,17 +86,16 @@ fn world_pose(
     layout: &PoseLayout,
     rest_rows: &[f64],
     pose: &[f32],
-    base: glam::Vec2,
-    heading: f32,
+    frame: &lod_policy::CycleFrame,
 ) -> Vec<f64> {
     let mut out = rest_rows.to_vec();
     for (o, &v) in out.iter_mut().zip(pose) {
         *o = f64::from(v);
     }
-    let (sh, ch) = heading.sin_cos();
-    let (x, z) = (pose[0], pose[2]);
-    out[0] = f64::from(base.x + x * ch + z * sh);
-    out[2] = f64::from(base.y - x * sh + z * ch);
+    let root = frame.to_world(Vec3::new(pose[0], pose[1], pose[2]));
+    out[0] = root.x;
+    out[2] = root.z;
+    let heading = frame.heading as f32;
     let q = lod_policy::offline::exp_to_quat(Vec3::new(pose[3], pose[4], pose[5]));
     let world = (Quat::from_rotation_y(heading) * q).normalize();
     let e = quat_to_exp(world.as_dquat());
@@ -172,8 +171,7 @@ pub fn export_crowd<P: LevelPolicy + Sync>(
                     pose.len()
                 )));
             }
-            let (base, heading) = crowd.cycle_frame(i);
-            let world = world_pose(layout, &rest_rows, pose, base, heading);
+            let world = world_pose(layout, &rest_rows, pose, &crowd.cycle_frame(i));
             let root = crowd.root_position(i);
             let drift = Vec3::new(world[0] as f32, world[1] as f32, world[2] as f32).distance(root);
             if drift > 1e-3 {
