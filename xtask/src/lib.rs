@@ -43,6 +43,7 @@ pub mod leg_ik;
 pub mod readme;
 pub mod rig;
 pub mod rng;
+pub mod scaling;
 pub mod tables;
 pub mod variants;
 pub mod walker;

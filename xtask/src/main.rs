@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand};
-use xtask::{fixtures, imports, readme, tables, web};
+use xtask::{fixtures, imports, readme, scaling, tables, web};
 
 /// Project tasks of the motion-lod workspace.
 #[derive(Debug, Parser)]
@@ -34,6 +34,10 @@ enum Command {
     /// Build the viewer's assets: the runtime as WebAssembly (`viewer/wasm/motion_lod.wasm`) and
     /// the three.js modules the pages import (`viewer/vendor/three/`, from `npm ci` in `viewer/`).
     Web(WebArgs),
+    /// Measure how the offline build's time and peak memory grow with the number of cycles (sets
+    /// grown from a folder of takes by performers of other heights) and the threads, and write
+    /// `docs/scaling.md`.
+    Scaling(ScalingArgs),
     /// Produce every deterministic figure README.md quotes with the command registered for it in
     /// `docs/readme-figures.toml` and rewrite README's values (`--check`: fail on any difference,
     /// and on a timing that names no date).
@@ -53,6 +57,34 @@ struct ReadmeArgs {
     /// Do not print each command with its time.
     #[arg(long)]
     quiet: bool,
+}
+
+/// Options of `xtask scaling`.
+#[derive(Debug, Args)]
+struct ScalingArgs {
+    /// Folder of BVH takes to grow the sets from.
+    #[arg(
+        long,
+        value_name = "DIR",
+        default_value = "../shared/mocap/bandai-namco-2-walk"
+    )]
+    data: PathBuf,
+    /// Cycle counts, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "800,2000,5000,10000")]
+    sizes: Vec<usize>,
+    /// Thread counts, comma-separated (default: 1 and this machine's cores, at most 16).
+    #[arg(long, value_delimiter = ',')]
+    threads: Vec<usize>,
+    /// Stop a build after this many seconds.
+    #[arg(long, default_value_t = 600)]
+    limit_s: u64,
+    /// The document to write.
+    #[arg(long, default_value = "docs/scaling.md")]
+    out: PathBuf,
+    /// Build `N` cycles once in this process and print what it measured as one JSON line (what
+    /// the runs above do in a child process each).
+    #[arg(long, value_name = "N")]
+    one: Option<usize>,
 }
 
 /// Options of `xtask web`.
@@ -131,6 +163,7 @@ fn main() -> Result<()> {
                 },
             )
         }
+        Command::Scaling(args) => run_scaling(&args),
         Command::Web(args) => {
             let root = tables::workspace_root();
             let root = root.canonicalize().unwrap_or(root);
@@ -140,6 +173,42 @@ fn main() -> Result<()> {
             Ok(())
         }
     }
+}
+
+fn run_scaling(args: &ScalingArgs) -> Result<()> {
+    if let Some(n) = args.one {
+        let measured = scaling::build_one(&args.data, n)?;
+        println!("{}", serde_json::to_string(&measured)?);
+        return Ok(());
+    }
+    let threads = if args.threads.is_empty() {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let mut t = vec![1];
+        t.extend([2, 4, 8, 16].into_iter().filter(|&k| k <= cores));
+        t
+    } else {
+        args.threads.clone()
+    };
+    let mut command = format!(
+        "cargo xtask scaling --sizes {}",
+        args.sizes
+            .iter()
+            .map(usize::to_string)
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    if !args.threads.is_empty() {
+        let list: Vec<String> = threads.iter().map(usize::to_string).collect();
+        command.push_str(&format!(" --threads {}", list.join(",")));
+    }
+    scaling::run(&scaling::ScalingConfig {
+        data: args.data.clone(),
+        sizes: args.sizes.clone(),
+        threads,
+        limit: std::time::Duration::from_secs(args.limit_s),
+        out: args.out.clone(),
+        command,
+    })
 }
 
 fn run_imports(args: &ImportsArgs) -> Result<()> {

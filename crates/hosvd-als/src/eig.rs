@@ -47,6 +47,68 @@ pub(crate) fn leading_eigen(
     Ok((values, lead))
 }
 
+/// The leading `r` left singular vectors of the mode-2 unfolding `Y_(2)` (`I_2 x I_0 I_1`) of the
+/// tensor with storage `y` and shape `dims`, when it has more rows than columns (`I_2 > I_0 I_1`,
+/// more samples than fibres): from the eigenvectors `V` of the smaller Gram `Y_(2)^T Y_(2)`
+/// (`I_0 I_1` square) as `U = Y_(2) V Lambda^(-1/2)`, re-orthonormalised (modified Gram-Schmidt)
+/// and sign-normalised as [`leading_eigen`]'s. The same subspace as the eigenvectors of
+/// `Y_(2) Y_(2)^T` (`I_2` square, `I_2^3` work) in `(I_0 I_1)^3` work. `None` when a leading
+/// eigenvalue is not above `1e-13` of the largest (a rank-deficient unfolding: the caller takes
+/// the larger Gram).
+pub(crate) fn leading_mode2_vectors(
+    y: &[f64],
+    dims: [usize; 3],
+    r: usize,
+) -> Result<Option<Mat<f64>>, HosvdError> {
+    use faer::linalg::matmul::matmul;
+    let (m, s) = (dims[0] * dims[1], dims[2]);
+    debug_assert!(s > m && r <= m);
+    // Columns of `y_mat` are the samples: Y_(2)^T.
+    let y_mat = MatRef::from_column_major_slice(y, m, s);
+    let mut h = Mat::<f64>::zeros(m, m);
+    matmul(
+        h.as_mut(),
+        faer::Accum::Replace,
+        y_mat,
+        y_mat.transpose(),
+        1.0,
+        Par::Seq,
+    );
+    let (values, v) = leading_eigen(h.as_ref(), r, 2)?;
+    let top = values.first().copied().unwrap_or(0.0);
+    // Also false for NaN: a leading value that is not clearly positive sends the caller back.
+    let clear = |l: f64| l.is_finite() && l > 1e-13 * top;
+    if !(top.is_finite() && top > 0.0 && values[..r].iter().all(|&l| clear(l))) {
+        return Ok(None);
+    }
+    let mut u = Mat::<f64>::zeros(s, r);
+    matmul(
+        u.as_mut(),
+        faer::Accum::Replace,
+        y_mat.transpose(),
+        v.as_ref(),
+        1.0,
+        Par::Seq,
+    );
+    for c in 0..r {
+        for k in 0..c {
+            let dot: f64 = (0..s).map(|i| u[(i, k)] * u[(i, c)]).sum();
+            for i in 0..s {
+                u[(i, c)] -= dot * u[(i, k)];
+            }
+        }
+        let norm = (0..s).map(|i| u[(i, c)] * u[(i, c)]).sum::<f64>().sqrt();
+        if !(norm > 0.0 && norm.is_finite()) {
+            return Ok(None);
+        }
+        for i in 0..s {
+            u[(i, c)] /= norm;
+        }
+    }
+    normalize_signs(u.as_mut());
+    Ok(Some(u))
+}
+
 /// Flips columns so that each column's largest-magnitude entry is positive. Returns which
 /// columns were flipped.
 pub(crate) fn normalize_signs(mut m: MatMut<'_, f64>) -> Vec<bool> {

@@ -1,9 +1,10 @@
 //! HOOI / ALS: the best rank-`(R_0, R_1, R_2)` Tucker approximation by alternating least squares
 //! (de Lathauwer, De Moor, Vandewalle 2000b; paper section 3.2 and 4.1).
 
-use crate::eig::leading_eigen;
+use crate::eig::{leading_eigen, leading_mode2_vectors};
 use crate::gram::gram_into;
 use crate::hosvd::{hosvd_factors, validate};
+use crate::project::multi_product;
 use crate::{HosvdError, Tucker};
 use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
@@ -91,13 +92,34 @@ pub fn hooi(
 ) -> Result<(Tucker, AlsReport), HosvdError> {
     validate(x, ranks)?;
     opts.validate()?;
-    let start = hosvd_factors(x, ranks)?;
+    let start = start_factors(x, ranks)?;
     run(
         x,
         ranks,
         [start[0].as_ref(), start[1].as_ref(), start[2].as_ref()],
         opts,
     )
+}
+
+/// HOOI's starting factors: the HOSVD's (`crate::hosvd`), except with more samples (mode 2) than
+/// the product of the other two ranks (and a sample rank within that product), where the sample factor is that of the tensor projected on
+/// the first two HOSVD factors, `X x_0 U_0^T x_1 U_1^T`, through its smaller Gram (the sequentially
+/// truncated HOSVD's last step, Vannieuwenhoven et al. 2012): the `S x S` Gram of a set of
+/// thousands of cycles is never formed.
+fn start_factors(x: &Tensor3, ranks: [usize; 3]) -> Result<[Mat<f64>; 3], HosvdError> {
+    let d = x.dims();
+    if d[2] <= ranks[0] * ranks[1] || ranks[2] > ranks[0] * ranks[1] {
+        return hosvd_factors(x, ranks);
+    }
+    let mut g = [0, 1].map(|n| Mat::<f64>::zeros(d[n], d[n]));
+    gram_into(x.as_slice(), d, 0, g[0].as_mut());
+    gram_into(x.as_slice(), d, 1, g[1].as_mut());
+    let u0 = leading_eigen(g[0].as_ref(), ranks[0], 0)?.1;
+    let u1 = leading_eigen(g[1].as_ref(), ranks[1], 1)?.1;
+    let y = multi_product(x, [Some(u0.transpose()), Some(u1.transpose()), None])?;
+    let mut g2 = Mat::<f64>::zeros(0, 0);
+    let u2 = sample_factor(y.as_slice(), y.dims(), ranks[2], &mut g2)?;
+    Ok([u0, u1, u2])
 }
 
 /// HOOI started from given factors `U_n` (`I_n x R_n`, orthonormal columns), e.g. the leading
@@ -181,7 +203,15 @@ fn run(
         w0: vec![0.0; r[0] * d[1] * d[2]],
         y2: vec![0.0; r[0] * r[1] * d[2]],
         core: vec![0.0; r[0] * r[1] * r[2]],
-        g: std::array::from_fn(|n| Mat::<f64>::zeros(d[n], d[n])),
+        // The sample mode's Gram is only formed when it is the smaller one (see `sample_factor`).
+        g: std::array::from_fn(|n| {
+            let size = if n == 2 && d[2] > r[0] * r[1] && r[2] <= r[0] * r[1] {
+                0
+            } else {
+                d[n]
+            };
+            Mat::<f64>::zeros(size, size)
+        }),
     };
     let mut prev_norm: Option<f64> = None;
     let mut core_norm2 = 0.0;
@@ -205,8 +235,7 @@ fn run(
         // Mode 2: Y2 = X x_0 U0^T x_1 U1^T (R0 x R1 x I2).
         let dw0 = product(x.as_slice(), d, 0, u[0].transpose(), &mut b.w0)?;
         let dy2 = product(&b.w0, dw0, 1, u[1].transpose(), &mut b.y2)?;
-        gram_into(&b.y2, dy2, 2, b.g[2].as_mut());
-        u[2] = leading_eigen(b.g[2].as_ref(), r[2], 2)?.1;
+        u[2] = sample_factor(&b.y2, dy2, r[2], &mut b.g[2])?;
         // Core Z = Y2 x_2 U2^T.
         product(&b.y2, dy2, 2, u[2].transpose(), &mut b.core)?;
         core_norm2 = tensor_ops::squared_norm(&b.core);
@@ -232,6 +261,30 @@ fn run(
     ))
 }
 
+/// The leading `r` left singular vectors of the mode-2 (sample) unfolding of `y` (shape `dims`):
+/// through the `I_0 I_1` Gram when there are more samples than that ([`leading_mode2_vectors`]:
+/// a build over thousands of cycles never forms the `S x S` Gram, whose eigenvectors cost `S^3`),
+/// else the eigenvectors of the sample Gram, formed in `g` (resized when it is not `I_2`
+/// square).
+pub(crate) fn sample_factor(
+    y: &[f64],
+    dims: [usize; 3],
+    r: usize,
+    g: &mut Mat<f64>,
+) -> Result<Mat<f64>, HosvdError> {
+    if dims[2] > dims[0] * dims[1]
+        && r <= dims[0] * dims[1]
+        && let Some(u) = leading_mode2_vectors(y, dims, r)?
+    {
+        return Ok(u);
+    }
+    if g.nrows() != dims[2] {
+        *g = Mat::zeros(dims[2], dims[2]);
+    }
+    gram_into(y, dims, 2, g.as_mut());
+    Ok(leading_eigen(g.as_ref(), r, 2)?.1)
+}
+
 /// `trace(U^T G U) = sum_c u_c^T G u_c`.
 fn quad_trace(g: MatRef<'_, f64>, u: MatRef<'_, f64>) -> f64 {
     let mut t = 0.0;
@@ -246,4 +299,90 @@ fn quad_trace(g: MatRef<'_, f64>, u: MatRef<'_, f64>) -> f64 {
         }
     }
     t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic tensor with decaying structure in every mode plus a little noise.
+    fn tensor(dims: [usize; 3]) -> Tensor3 {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        Tensor3::from_fn(dims, |i, j, k| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let noise = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let (a, b, c) = (i as f64, j as f64, k as f64);
+            (0.3 * a + 0.1 * c).sin() * (1.0 + 0.2 * b).cos()
+                + 0.5 * (0.05 * c * (1.0 + a)).cos() * (0.3 * b).sin()
+                + 0.1 * (0.01 * c * b).sin()
+                + 0.01 * noise
+        })
+        .expect("finite")
+    }
+
+    /// `U U^t`, the projector on the columns of `u`.
+    fn projector(u: MatRef<'_, f64>) -> Mat<f64> {
+        u * u.transpose()
+    }
+
+    #[test]
+    fn the_sample_factor_through_the_small_gram_spans_the_large_grams_subspace() {
+        // 4 x 5 fibres (20) and 300 samples: the small Gram is 20 square, the large 300.
+        let x = tensor([4, 5, 300]);
+        let d = x.dims();
+        let mut g = Mat::zeros(0, 0);
+        let small = sample_factor(x.as_slice(), d, 6, &mut g).expect("small route");
+        assert_eq!(g.nrows(), 0, "the large Gram was not formed");
+        let mut big = Mat::zeros(d[2], d[2]);
+        gram_into(x.as_slice(), d, 2, big.as_mut());
+        let large = leading_eigen(big.as_ref(), 6, 2).expect("eigen").1;
+        let diff = projector(small.as_ref()) - projector(large.as_ref());
+        let worst = (0..d[2])
+            .flat_map(|i| (0..d[2]).map(move |j| (i, j)))
+            .fold(0.0f64, |m, (i, j)| m.max(diff[(i, j)].abs()));
+        assert!(worst < 1e-9, "projectors differ by {worst}");
+        // Orthonormal columns, signs as leading_eigen gives them.
+        let gram = small.transpose() * small.as_ref();
+        for i in 0..6 {
+            for j in 0..6 {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!(
+                    (gram[(i, j)] - want).abs() < 1e-12,
+                    "({i}, {j}): {}",
+                    gram[(i, j)]
+                );
+            }
+            assert!((small[(0, i)] * large[(0, i)]) >= 0.0 || small[(0, i)].abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn hooi_with_many_samples_reaches_the_error_of_the_large_gram_route() {
+        // Ranks 3 x 3 (9 fibres) over 120 samples: HOOI starts from the projected sample factor
+        // and updates it through the small Gram; its error is no worse than that of the run
+        // started from the classical HOSVD (ALS from two starts stops at two nearby points).
+        let x = tensor([6, 7, 120]);
+        let opts = AlsOptions::default();
+        let ranks = [3, 3, 5];
+        let (_, fast) = hooi(&x, ranks, &opts).expect("hooi");
+        let classical = hosvd_factors(&x, ranks).expect("hosvd");
+        let (_, reference) = hooi_with_start(
+            &x,
+            [
+                classical[0].as_ref(),
+                classical[1].as_ref(),
+                classical[2].as_ref(),
+            ],
+            &opts,
+        )
+        .expect("hooi from the HOSVD");
+        assert!(
+            fast.mse <= reference.mse * (1.0 + 1e-4),
+            "{} against {}",
+            fast.mse,
+            reference.mse
+        );
+    }
 }

@@ -19,7 +19,9 @@
 //! Cost: every candidate needs its own `(S+1)` inverse (candidates are scored in parallel). The values enter the leave-one-out error
 //! linearly, so candidates are ranked on the values compressed to their [`SEARCH_COLUMNS`] leading
 //! principal columns (`X V_k`, exact when `X` has at most that rank), which keeps each candidate at
-//! about one inverse whatever the number of values.
+//! about one inverse whatever the number of values; and on at most [`SEARCH_SAMPLES`] samples
+//! ([`search_rows`]), which keeps the search's cost the same beyond that many samples (the
+//! winner is installed on all of them: one inverse of the full system).
 //!
 //! ```
 //! use kriging::faer::Mat;
@@ -66,6 +68,24 @@ pub const SEARCH_RANGES: [f64; 5] = [0.5, 1.0, 2.0, 4.0, 8.0];
 pub const SEARCH_NUGGETS: [f64; 5] = [0.0, 0.03, 0.1, 0.3, 1.0];
 /// Principal columns of the values on which candidates are ranked.
 pub const SEARCH_COLUMNS: usize = 48;
+/// Most samples candidates are ranked on: beyond it, on this many evenly strided samples
+/// ([`search_rows`]), so that the search costs the same whatever the sample count (each candidate's
+/// leave-one-out needs its own `(S + 1)` inverse, `S^3` work); the winner is then installed on all
+/// samples.
+pub const SEARCH_SAMPLES: usize = 1000;
+
+/// The samples candidates are ranked on: all of `s` up to [`SEARCH_SAMPLES`], else
+/// [`SEARCH_SAMPLES`] of them evenly strided (`floor(k s / SEARCH_SAMPLES)`), which keeps the
+/// spread of a set whose samples come in order (takes, performers).
+pub fn search_rows(s: usize) -> Vec<usize> {
+    if s <= SEARCH_SAMPLES {
+        (0..s).collect()
+    } else {
+        (0..SEARCH_SAMPLES)
+            .map(|k| k * s / SEARCH_SAMPLES)
+            .collect()
+    }
+}
 
 /// `X V_k`: the values (S x D) projected on their `k` leading right singular vectors (from the
 /// eigenvectors of `X X^t`: `X V_k = Q_k Lambda_k^(1/2)`). Returned unchanged when `D <= k`.
@@ -203,4 +223,28 @@ pub(crate) fn rank(
             .then(a.cmp(&b))
     });
     order
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_search_rows_are_all_samples_up_to_the_limit_then_evenly_strided() {
+        assert_eq!(search_rows(5), vec![0, 1, 2, 3, 4]);
+        assert_eq!(search_rows(SEARCH_SAMPLES).len(), SEARCH_SAMPLES);
+        for s in [SEARCH_SAMPLES + 1, 2 * SEARCH_SAMPLES + 7, 10_000] {
+            let rows = search_rows(s);
+            assert_eq!(rows.len(), SEARCH_SAMPLES);
+            assert_eq!(rows[0], 0);
+            assert!(rows.windows(2).all(|w| w[0] < w[1]), "increasing");
+            assert!(*rows.last().unwrap() < s);
+            // Even: consecutive picks are floor(s / limit) or one more apart.
+            let step = s / SEARCH_SAMPLES;
+            assert!(
+                rows.windows(2)
+                    .all(|w| w[1] - w[0] == step || w[1] - w[0] == step + 1)
+            );
+        }
+    }
 }

@@ -134,3 +134,51 @@ fn the_choice_does_not_depend_on_the_thread_count() {
     };
     assert_eq!(run(1), run(2));
 }
+
+/// Beyond `SEARCH_SAMPLES` samples the shapes are ranked on an evenly strided subset
+/// (`search::search_rows`) and the winner is installed on every sample: the fit interpolates all
+/// of them, and it predicts held-out points of the smooth field as well as a search over the
+/// subset alone predicts them.
+#[test]
+fn a_search_over_more_samples_than_it_ranks_on_installs_the_winner_on_all() {
+    use kriging::search::{SEARCH_SAMPLES, search_rows};
+    let n = SEARCH_SAMPLES + 200;
+    let (p, x, _) = noisy(n, 0.0, 41);
+    let all = Kriging::fit(p.as_ref(), x.as_ref(), &config(Selection::LooSearch)).unwrap();
+    assert_eq!(all.n_samples(), n);
+    let ranked = all
+        .candidates()
+        .iter()
+        .filter(|c| c.loo_rmse.is_some())
+        .count();
+    assert!(ranked > 10, "{ranked} candidates ranked");
+    // Installed on all samples: the system is (S + 1) square.
+    assert_eq!(all.system_inverse().nrows(), n + 1);
+    // The subset alone, searched the same way.
+    let rows = search_rows(n);
+    let pick = |m: &Mat<f64>| Mat::from_fn(rows.len(), m.ncols(), |i, k| m[(rows[i], k)]);
+    let subset = Kriging::fit(
+        pick(&p).as_ref(),
+        pick(&x).as_ref(),
+        &config(Selection::LooSearch),
+    )
+    .unwrap();
+    let (q, truth, _) = noisy(50, 0.0, 97);
+    let mut out = vec![0.0; x.ncols()];
+    let mut err = |k: &Kriging| {
+        let mut sq = 0.0;
+        for i in 0..q.nrows() {
+            let c: Vec<f64> = (0..q.ncols()).map(|j| q[(i, j)]).collect();
+            k.predict(&c, &mut out).unwrap();
+            sq += (0..out.len())
+                .map(|j| (out[j] - truth[(i, j)]).powi(2))
+                .sum::<f64>();
+        }
+        (sq / q.nrows() as f64).sqrt()
+    };
+    let (e_all, e_subset) = (err(&all), err(&subset));
+    assert!(
+        e_all <= e_subset * 1.05 + 1e-12,
+        "all {e_all} against the subset's {e_subset}"
+    );
+}

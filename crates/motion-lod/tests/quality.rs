@@ -722,14 +722,11 @@ fn bandai_crowd_fast_path_matches_the_reference_path() {
     }
 }
 
-/// The two sources' walkers keep the same cycle frames, to the bit, for 60 s (1,800 frames), and
-/// their roots within 1e-5 m: the bound above allows differences in the arithmetic of a pose, but
-/// none in a walker's trajectory. World positions are f32 and a walker's cycle frame moves by the
-/// sum of its clips' root motions, so one ulp of difference in one clip's root motion (kriging
-/// weights, `K(c)` or a time table summed in another order, in f32, or with fused multiply-adds)
-/// is carried by every later cycle, and one ulp of a position is already 7.6e-6 m from 64 m to
-/// 128 m from the origin and 1.5e-5 m or more beyond (this field is 173 m wide). See
-/// docs/architecture.md, "Precision".
+/// The two sources' walkers keep the same trajectories for 60 s (1,800 frames), within the
+/// runtime's bound for the world (docs/architecture.md, "Precision"): cycle frames within 1 mm per
+/// simulated minute and headings within 1e-5 rad per minute, roots within 1e-5 m. The bound allows
+/// the arithmetic of a clip to differ in the last bits (a root motion an ulp apart carries into
+/// every later cycle frame, in double precision since ABI 5); the trajectories may not drift.
 fn same_trajectories_for_a_minute(
     model: &MotionModel,
     policy: &DistancePolicy,
@@ -744,21 +741,24 @@ fn same_trajectories_for_a_minute(
     let path = scene.path(config.field_size_m);
     let lens = scene.lens(Camera::default(), config.field_size_m);
     let (mut sa, mut sb) = (FrameStats::default(), FrameStats::default());
-    let mut builds = 0;
-    for f in 0..1800 {
+    let (mut builds, mut worst) = (0, 0.0f64);
+    for f in 0..1800u32 {
         let cam = path.camera_at(f as f32 / 30.0, &lens);
         a.step_into(&fast, policy, &cam, 1.0 / 30.0, &mut sa)
             .expect("step");
         b.step_into(&reference, policy, &cam, 1.0 / 30.0, &mut sb)
             .expect("step");
         builds += sa.kernels_built;
+        let minutes = f64::from(f + 1) / 30.0 / 60.0;
         for i in 0..a.len() {
             let (fa, fb) = (a.cycle_frame(i), b.cycle_frame(i));
+            let moved = (fa.x - fb.x).abs().max((fa.z - fb.z).abs());
+            let turned = lod_policy::wrap_angle_f64(fa.heading - fb.heading).abs();
             assert!(
-                (fa.x.to_bits(), fa.z.to_bits(), fa.heading.to_bits())
-                    == (fb.x.to_bits(), fb.z.to_bits(), fb.heading.to_bits()),
+                moved <= 1e-3 * minutes && turned <= 1e-5 * minutes,
                 "{scene:?} frame {f} walker {i}: cycle frame {fa:?} against the reference's {fb:?}"
             );
+            worst = worst.max(moved);
             let (p, q) = (a.root_position(i), b.root_position(i));
             assert!(
                 (p - q).abs().max_element() <= 1e-5,
@@ -766,6 +766,9 @@ fn same_trajectories_for_a_minute(
             );
         }
     }
+    eprintln!(
+        "bandai {scene:?}: cycle frames within {worst:.1e} m of the reference's after a minute"
+    );
     // About two cycles a second for each of 300 walkers: every walker chained many clips.
     assert!(builds > 300 * 50, "{scene:?}: {builds} clips built");
 }
