@@ -275,9 +275,10 @@ fn document(config: &ScalingConfig, rows: &[(usize, usize, Option<Outcome>)]) ->
          Written by `{}` on {} ({} cores). Each row is one `MotionModel::build` with the default \
          settings in a process of its own (`RAYON_NUM_THREADS` threads): *build* is the build's wall \
          time, *load* reading, aligning and growing the data before it, *peak* the process's \
-         largest resident memory (load and build). Sets beyond the data's {} are grown from it: \
-         copies of every take as walked by performers 2%, 4%, ... taller and shorter, every length \
-         and the `dx`, `dz` and height controls scaled, time by the square root (`xtask/src/scaling.rs`). \
+         largest resident memory (load and build). The data: `{}`; sets beyond its cycles are grown \
+         from it: copies of every take as walked by performers 2%, 4%, ... taller and shorter, every \
+         length and the `dx`, `dz` and height controls scaled, time by the square root \
+         (`xtask/src/scaling.rs`). *Longest stages*: the build's three longest progress stages. \
          Issue 35's goal: 10,000 cycles in under 2 minutes on two cores, in under 4 GB. A build \
          longer than {} s is stopped.\n",
         config.command,
