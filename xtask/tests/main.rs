@@ -4,5 +4,6 @@
 
 mod imports;
 mod motion_io_segmentation;
+mod scaling;
 mod tables_smoke;
 mod walker_properties;

@@ -61,18 +61,16 @@ fn cycle_inputs(
 fn an_hour_one_kilometre_away_walks_as_at_the_origin() {
     let model = common::load_model();
     // SAFETY: live model and walkers created here; writable outputs; buffers of `p` floats.
+    let common::ModelFacts {
+        levels,
+        animated,
+        pose_len: p,
+        lo,
+        hi,
+        ..
+    } = common::model_facts(model);
+    assert!(levels >= 2);
     unsafe {
-        let (mut levels, mut joints, mut animated, mut p) = (0, 0, 0, 0);
-        assert_eq!(
-            mlod_model_sizes(model, &mut levels, &mut joints, &mut animated, &mut p),
-            MlodStatus::Ok
-        );
-        assert!(levels >= 2);
-        let (mut lo, mut hi) = (MlodControls::default(), MlodControls::default());
-        assert_eq!(
-            mlod_model_control_range(model, &mut lo, &mut hi),
-            MlodStatus::Ok
-        );
         let animated = animated as u32;
         let (mut near, mut far) = (null_mut(), null_mut());
         assert_eq!(mlod_walker_new(model, &mut near), MlodStatus::Ok);

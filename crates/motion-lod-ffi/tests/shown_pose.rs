@@ -20,17 +20,15 @@ fn root_only_frames_show_the_whole_pose_of_their_clip() {
 
 fn walk_and_compare(foot_lock: bool) {
     let model = common::load_model();
+    let common::ModelFacts {
+        levels,
+        animated,
+        pose_len: p,
+        lo,
+        hi,
+        ..
+    } = common::model_facts(model);
     unsafe {
-        let (mut levels, mut joints, mut animated, mut p) = (0, 0, 0, 0);
-        assert_eq!(
-            mlod_model_sizes(model, &mut levels, &mut joints, &mut animated, &mut p),
-            MlodStatus::Ok
-        );
-        let (mut lo, mut hi) = (MlodControls::default(), MlodControls::default());
-        assert_eq!(
-            mlod_model_control_range(model, &mut lo, &mut hi),
-            MlodStatus::Ok
-        );
         let mut controls = lo;
         controls.dz = 0.5 * (lo.dz + hi.dz);
         controls.height = 0.5 * (lo.height + hi.height);

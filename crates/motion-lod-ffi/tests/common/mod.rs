@@ -23,6 +23,54 @@ pub fn load_model() -> *mut motion_lod_ffi::MlodModel {
     model
 }
 
+/// What a walk needs to know of a model: `mlod_model_sizes` and `mlod_model_control_range`.
+pub struct ModelFacts {
+    /// Accuracy levels.
+    pub levels: usize,
+    /// Joints of the skeleton.
+    pub joints: usize,
+    /// Joints a detail can animate.
+    pub animated: usize,
+    /// Floats of a pose vector.
+    pub pose_len: usize,
+    /// The smallest controls of the data.
+    pub lo: motion_lod_ffi::MlodControls,
+    /// The largest controls of the data.
+    pub hi: motion_lod_ffi::MlodControls,
+}
+
+/// The [`ModelFacts`] of a live `model`, both calls asserted to succeed.
+pub fn model_facts(model: *const motion_lod_ffi::MlodModel) -> ModelFacts {
+    use motion_lod_ffi::*;
+    let (mut levels, mut joints, mut animated, mut pose_len) = (0, 0, 0, 0);
+    let (mut lo, mut hi) = (MlodControls::default(), MlodControls::default());
+    // SAFETY: a live model (the caller's contract) and writable outputs.
+    unsafe {
+        assert_eq!(
+            mlod_model_sizes(
+                model,
+                &mut levels,
+                &mut joints,
+                &mut animated,
+                &mut pose_len
+            ),
+            MlodStatus::Ok
+        );
+        assert_eq!(
+            mlod_model_control_range(model, &mut lo, &mut hi),
+            MlodStatus::Ok
+        );
+    }
+    ModelFacts {
+        levels,
+        joints,
+        animated,
+        pose_len,
+        lo,
+        hi,
+    }
+}
+
 /// A camera 3 m behind the origin at eye height, looking along +z (1080 px high, no far plane).
 pub fn camera_behind_origin() -> motion_lod_ffi::MlodCamera {
     motion_lod_ffi::MlodCamera {

@@ -1,0 +1,52 @@
+//! `cargo xtask scaling`'s grown sets: copies of the data's takes by performers of other heights.
+
+use motion_lod::dataset::DataSpec;
+use motion_lod::folds::take_of;
+use xtask::scaling::{copy_scale, grown};
+
+#[test]
+fn a_grown_set_is_the_data_then_taller_and_shorter_performers() {
+    assert_eq!(
+        (0..5).map(copy_scale).collect::<Vec<_>>(),
+        vec![1.0, 1.02, 0.98, 1.04, 0.96]
+    );
+    let data = DataSpec {
+        samples: Some(10),
+        ..DataSpec::default()
+    }
+    .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+    .expect("fixtures load")
+    .training;
+    let [p, t, s] = data.tensor.dims();
+    let n = 2 * s + 3;
+    let set = grown(&data, n).expect("grows");
+    assert_eq!(set.tensor.dims(), [p, t, n]);
+    assert_eq!((set.controls.len(), set.sources.len()), (n, n));
+    for i in 0..n {
+        let (j, scale) = (i % s, copy_scale(i / s));
+        let (a, b) = (data.tensor.sample(j), set.tensor.sample(i));
+        for (e, (&x, &y)) in a.iter().zip(b).enumerate() {
+            let want = match e % p {
+                0..=2 => x * scale,
+                6 => x * scale.sqrt(),
+                _ => x,
+            };
+            assert!(
+                (y - want).abs() <= 1e-12 * want.abs().max(1.0),
+                "sample {i} value {e}"
+            );
+        }
+        let ([dx, dz, turn, h], [gx, gz, gt, gh]) = (data.controls[j], set.controls[i]);
+        assert_eq!([gx, gz, gt, gh], [dx * scale, dz * scale, turn, h * scale]);
+        if i >= s {
+            // A copy is a take of its own.
+            assert_ne!(take_of(&set.sources[i]), take_of(&data.sources[j]));
+            assert!(set.sources[i].contains(&format!("(x{scale:.2})")));
+        }
+    }
+    assert!(set.styles.is_none());
+    assert!(
+        grown(&data, s).is_err(),
+        "growing to the data's own size is refused"
+    );
+}
