@@ -7,7 +7,7 @@ use crate::levels::{LevelTable, check_control_range};
 use crate::path::{EllipsePath, PathPlan, WalkerStart, path_controls};
 use crate::source::ClipSource;
 use crate::stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
-use crate::walker::{StageParams, Walker, WalkerFault, valid_duration};
+use crate::walker::{StageParams, Walker, WalkerFault, heading_sin_cos, valid_duration};
 use glam::Vec3;
 use lod_policy::SeamScratch;
 use lod_policy::SplitMix64;
@@ -349,6 +349,11 @@ impl<C: Send> Crowd<C> {
                 });
             }
             let cur_motion = source.clip_root_motion(&cur);
+            let frame = CycleFrame {
+                x: f64::from(base.x),
+                z: f64::from(base.y),
+                heading: f64::from(heading),
+            };
             // Drawn last, so that the paths, phases and strides do not depend on the option.
             let hold_s = if config.spread_first_builds {
                 g.next_f32() * dur
@@ -360,15 +365,8 @@ impl<C: Send> Crowd<C> {
                 s,
                 stride,
                 height,
-                frame: CycleFrame {
-                    x: f64::from(base.x),
-                    z: f64::from(base.y),
-                    heading: f64::from(heading),
-                },
-                heading_sc: {
-                    let (sin, cos) = f64::from(heading).sin_cos();
-                    (sin as f32, cos as f32)
-                },
+                frame,
+                heading_sc: heading_sin_cos(&frame),
                 t: phase * dur,
                 controls,
                 cur,

@@ -71,6 +71,13 @@ pub(crate) struct Walker<C> {
     pub cur_motion: RootMotion,
 }
 
+/// The single-precision `(sin, cos)` of a cycle frame's heading, computed in double: what
+/// [`Walker::heading_sc`] caches.
+pub(crate) fn heading_sin_cos(frame: &CycleFrame) -> (f32, f32) {
+    let (sin, cos) = frame.heading.sin_cos();
+    (sin as f32, cos as f32)
+}
+
 /// Duration check: finite and at least 1 ms.
 pub(crate) fn valid_duration(d: f32) -> bool {
     d.is_finite() && d >= 1e-3
@@ -292,8 +299,7 @@ impl<C> Walker<C> {
             let end = self.cur_dur;
             self.t -= end;
             self.frame = self.frame.next(&m);
-            let (sin, cos) = self.frame.heading.sin_cos();
-            self.heading_sc = (sin as f32, cos as f32);
+            self.heading_sc = heading_sin_cos(&self.frame);
             let base = self.base();
             self.s = self.path.closest_param_near(base, self.s);
             let held = self.controls;

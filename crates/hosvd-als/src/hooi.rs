@@ -3,7 +3,7 @@
 
 use crate::eig::{leading_eigen, leading_mode2_vectors};
 use crate::gram::gram_into;
-use crate::hosvd::{hosvd_factors, validate};
+use crate::hosvd::{hosvd_factors, mode_factor, validate};
 use crate::project::multi_product;
 use crate::{HosvdError, Tucker};
 use faer::{Mat, MatRef};
@@ -107,15 +107,10 @@ pub fn hooi(
 /// truncated HOSVD's last step, Vannieuwenhoven et al. 2012): the `S x S` Gram of a set of
 /// thousands of cycles is never formed.
 fn start_factors(x: &Tensor3, ranks: [usize; 3]) -> Result<[Mat<f64>; 3], HosvdError> {
-    let d = x.dims();
-    if d[2] <= ranks[0] * ranks[1] || ranks[2] > ranks[0] * ranks[1] {
+    if !fibre_gram_is_smaller([ranks[0], ranks[1], x.dims()[2]], ranks[2]) {
         return hosvd_factors(x, ranks);
     }
-    let mut g = [0, 1].map(|n| Mat::<f64>::zeros(d[n], d[n]));
-    gram_into(x.as_slice(), d, 0, g[0].as_mut());
-    gram_into(x.as_slice(), d, 1, g[1].as_mut());
-    let u0 = leading_eigen(g[0].as_ref(), ranks[0], 0)?.1;
-    let u1 = leading_eigen(g[1].as_ref(), ranks[1], 1)?.1;
+    let (u0, u1) = (mode_factor(x, 0, ranks[0])?, mode_factor(x, 1, ranks[1])?);
     let y = multi_product(x, [Some(u0.transpose()), Some(u1.transpose()), None])?;
     let mut g2 = Mat::<f64>::zeros(0, 0);
     let u2 = sample_factor(y.as_slice(), y.dims(), ranks[2], &mut g2)?;
@@ -205,7 +200,7 @@ fn run(
         core: vec![0.0; r[0] * r[1] * r[2]],
         // The sample mode's Gram is only formed when it is the smaller one (see `sample_factor`).
         g: std::array::from_fn(|n| {
-            let size = if n == 2 && d[2] > r[0] * r[1] && r[2] <= r[0] * r[1] {
+            let size = if n == 2 && fibre_gram_is_smaller([r[0], r[1], d[2]], r[2]) {
                 0
             } else {
                 d[n]
@@ -272,8 +267,7 @@ pub(crate) fn sample_factor(
     r: usize,
     g: &mut Mat<f64>,
 ) -> Result<Mat<f64>, HosvdError> {
-    if dims[2] > dims[0] * dims[1]
-        && r <= dims[0] * dims[1]
+    if fibre_gram_is_smaller(dims, r)
         && let Some(u) = leading_mode2_vectors(y, dims, r)?
     {
         return Ok(u);
@@ -283,6 +277,14 @@ pub(crate) fn sample_factor(
     }
     gram_into(y, dims, 2, g.as_mut());
     Ok(leading_eigen(g.as_ref(), r, 2)?.1)
+}
+
+/// Whether the sample factor (rank `r`) of a tensor of shape `dims` (`I_0 I_1` fibres, `I_2`
+/// samples) comes from the fibre Gram ([`leading_mode2_vectors`]): more samples than fibres, and
+/// no more components than fibres.
+fn fibre_gram_is_smaller(dims: [usize; 3], r: usize) -> bool {
+    let fibres = dims[0] * dims[1];
+    dims[2] > fibres && r <= fibres
 }
 
 /// `trace(U^T G U) = sum_c u_c^T G u_c`.

@@ -20,14 +20,19 @@ pub(crate) fn validate(x: &Tensor3, ranks: [usize; 3]) -> Result<(), HosvdError>
 /// The leading `ranks[n]` eigenvectors of each mode's Gram matrix `X_(n) X_(n)^T`, i.e. the
 /// leading left singular vectors of each unfolding, without any SVD of a wide unfolding.
 pub(crate) fn hosvd_factors(x: &Tensor3, ranks: [usize; 3]) -> Result<[Mat<f64>; 3], HosvdError> {
-    let d = x.dims();
     let mut out: [Mat<f64>; 3] = std::array::from_fn(|_| Mat::<f64>::zeros(0, 0));
     for (mode, f) in out.iter_mut().enumerate() {
-        let mut g = Mat::<f64>::zeros(d[mode], d[mode]);
-        gram_into(x.as_slice(), d, mode, g.as_mut());
-        *f = leading_eigen(g.as_ref(), ranks[mode], mode)?.1;
+        *f = mode_factor(x, mode, ranks[mode])?;
     }
     Ok(out)
+}
+
+/// The leading `rank` eigenvectors of mode `mode`'s Gram matrix `X_(n) X_(n)^T`: one HOSVD factor.
+pub(crate) fn mode_factor(x: &Tensor3, mode: usize, rank: usize) -> Result<Mat<f64>, HosvdError> {
+    let d = x.dims();
+    let mut g = Mat::<f64>::zeros(d[mode], d[mode]);
+    gram_into(x.as_slice(), d, mode, g.as_mut());
+    Ok(leading_eigen(g.as_ref(), rank, mode)?.1)
 }
 
 /// The projection core `Z = X x_0 U_0^T x_1 U_1^T x_2 U_2^T`.

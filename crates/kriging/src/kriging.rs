@@ -327,19 +327,17 @@ impl Kriging {
                     config.bins,
                 )?;
                 let mut reports = crate::search::candidates(&emp, &dist, s, &opts);
+                // Ranked on at most SEARCH_SAMPLES of the samples (a copy only when fewer).
                 let rows = crate::search::search_rows(s);
-                let order = if rows.len() == s {
-                    let probe = crate::search::compress(values, crate::search::SEARCH_COLUMNS);
-                    crate::search::rank(params, probe.as_ref(), config, &mut reports)
-                } else {
-                    let pick = |m: MatRef<'_, f64>| {
-                        Mat::from_fn(rows.len(), m.ncols(), |i, k| m[(rows[i], k)])
-                    };
-                    let (p_rows, v_rows) = (pick(params), pick(values));
-                    let probe =
-                        crate::search::compress(v_rows.as_ref(), crate::search::SEARCH_COLUMNS);
-                    crate::search::rank(p_rows.as_ref(), probe.as_ref(), config, &mut reports)
+                let pick = |m: MatRef<'_, f64>| {
+                    Mat::from_fn(rows.len(), m.ncols(), |i, k| m[(rows[i], k)])
                 };
+                let picked = (rows.len() < s).then(|| (pick(params), pick(values)));
+                let (p_rank, v_rank) = picked
+                    .as_ref()
+                    .map_or((params, values), |(p, v)| (p.as_ref(), v.as_ref()));
+                let probe = crate::search::compress(v_rank, crate::search::SEARCH_COLUMNS);
+                let order = crate::search::rank(p_rank, probe.as_ref(), config, &mut reports);
                 model.empirical = Some(emp);
                 model.install_first(&dist, reports, &order)?;
             }

@@ -126,13 +126,8 @@ pub fn measure_frame_times(
     for &size in sizes {
         for scene in Scene::ALL {
             for &t in threads {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(t)
-                    .build()
-                    .context("thread pool")?;
-                let run = pool
-                    .install(|| run_one(&lod, &policy, scene, Culling::Scan, size))
-                    .with_context(|| {
+                let run =
+                    run_on(t, &lod, &policy, scene, Culling::Scan, size).with_context(|| {
                         format!(
                             "frame times of {} walkers ({}, {t} threads)",
                             size.walkers,
@@ -140,7 +135,7 @@ pub fn measure_frame_times(
                         )
                     })?;
                 let times = run.report.frame_times(0).context("no timed frame")?;
-                let mut builds = run.builds.clone();
+                let mut builds = run.builds;
                 builds.sort_unstable();
                 rows.push(FrameTimeRow {
                     scene,
@@ -302,6 +297,22 @@ fn run_one<S: ClipSource, P: LevelPolicy + Sync>(
     })
 }
 
+/// [`run_one`] on a pool of `threads` threads.
+fn run_on<S: ClipSource, P: LevelPolicy + Sync>(
+    threads: usize,
+    source: &S,
+    policy: &P,
+    scene: Scene,
+    culling: Culling,
+    size: CrowdSize,
+) -> Result<Timed> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("thread pool")?
+        .install(|| run_one(source, policy, scene, culling, size))
+}
+
 /// What one run is: scene, source, policy, threads.
 #[derive(Debug, Clone, Copy)]
 struct RunSpec {
@@ -345,13 +356,8 @@ fn timed_or_skipped<S: ClipSource, P: LevelPolicy + Sync>(
             )),
         ));
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(spec.threads)
-        .build()
-        .context("thread pool")?;
-    let run = pool
-        .install(|| run_one(source, policy, spec.scene, spec.culling, size))
-        .with_context(|| {
+    let run = run_on(spec.threads, source, policy, spec.scene, spec.culling, size).with_context(
+        || {
             format!(
                 "{} crowd of {} walkers ({}, {} threads)",
                 spec.source,
@@ -359,7 +365,8 @@ fn timed_or_skipped<S: ClipSource, P: LevelPolicy + Sync>(
                 spec.scene.name(),
                 spec.threads
             )
-        })?;
+        },
+    )?;
     *warmup_per_walker = Some(run.warmup_s / size.walkers as f64);
     Ok(row(
         Some(run.report),

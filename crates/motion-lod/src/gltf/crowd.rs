@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use crowd_sim::{Camera, Crowd, CrowdConfig, Scene as CameraScene};
-use glam::{Quat, Vec3};
+use glam::Vec3;
 use lod_policy::LevelPolicy;
 use motion_io::PoseLayout;
 use motion_io::expmap::quat_to_exp;
@@ -81,7 +81,8 @@ fn pick_walkers<C>(crowd: &Crowd<C>, eye: Vec3, n: usize) -> Vec<usize> {
 
 /// A full pose vector (f64, `layout.dof()` rows) in the world frame from a crowd pose in the
 /// walker's cycle frame (`rows` rows written; the joints beyond them are at the rest rotation, as
-/// the crowd's forward kinematics places them), the cycle frame's origin `base` (x, z) and heading.
+/// the crowd's forward kinematics places them) and the cycle frame (`CycleFrame::to_world` for the
+/// root, its rotation for the root's orientation).
 fn world_pose(
     layout: &PoseLayout,
     rest_rows: &[f64],
@@ -95,9 +96,8 @@ fn world_pose(
     let root = frame.to_world(Vec3::new(pose[0], pose[1], pose[2]));
     out[0] = root.x;
     out[2] = root.z;
-    let heading = frame.heading as f32;
     let q = lod_policy::offline::exp_to_quat(Vec3::new(pose[3], pose[4], pose[5]));
-    let world = (Quat::from_rotation_y(heading) * q).normalize();
+    let world = (frame.rotation() * q).normalize();
     let e = quat_to_exp(world.as_dquat());
     out[3..6].copy_from_slice(&e.to_array());
     debug_assert_eq!(out.len(), layout.dof());
