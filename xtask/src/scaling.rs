@@ -280,7 +280,10 @@ fn document(config: &ScalingConfig, rows: &[(usize, usize, Option<Outcome>)]) ->
          length and the `dx`, `dz` and height controls scaled, time by the square root \
          (`xtask/src/scaling.rs`). *Longest stages*: the build's three longest progress stages. \
          Issue 35's goal: 10,000 cycles in under 2 minutes on two cores, in under 4 GB. A build \
-         longer than {} s is stopped.\n",
+         longer than {} s is stopped. Above 1,000 cycles the kriging stage works on its value \
+         columns compressed to their leading directions and keeps the system's LU factors instead \
+         of its inverse; above 1,200 the control selection decides on whole takes holding at most \
+         1,200 cycles (`crates/motion-lod/src/build.rs`, module documentation).\n",
         config.command,
         today(),
         std::thread::available_parallelism().map_or(0, |n| n.get()),

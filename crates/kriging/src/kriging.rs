@@ -7,9 +7,10 @@ use crate::config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoi
 use crate::empirical::{EmpiricalVariogram, PairDistances};
 use crate::error::KrigingError;
 use crate::fit::{FitOptions, fit_variogram};
-use crate::linalg::{checked_inverse, matmul, matmul_par_cols, sym_pinv};
+use crate::linalg::{CheckedLu, checked_inverse_of, matmul, matmul_par_cols, sym_pinv};
 use crate::scaling::ParamScaling;
 use crate::variogram::{Variogram, VariogramModel};
+use std::sync::OnceLock;
 
 /// A fitted ordinary or regression kriging model over S samples with d parameters and D values.
 ///
@@ -39,8 +40,8 @@ pub struct Kriging {
     /// (d+1) x (d+1) Gram matrix C C^t and (d+1) x D product C X (regression only, for the LOO).
     gram: Option<Mat<f64>>,
     cx: Option<Mat<f64>>,
-    /// (S+1) x (S+1) symmetric inverse of the kriging matrix.
-    ainv: Mat<f64>,
+    /// The factorised kriging matrix and its symmetric inverse ((S+1) x (S+1)).
+    system: System,
     /// Row-major (S+1) x D dual coefficients `A^-1[:, :S] R`.
     dual: Vec<f64>,
     empirical: Option<EmpiricalVariogram>,
@@ -164,12 +165,13 @@ fn check_residuals_vary(
     Ok(())
 }
 
-/// Builds and inverts the kriging matrix `A = [Gamma 1; 1^t 0]`.
-fn kriging_inverse(
-    dist: &PairDistances,
+/// The entries of the kriging matrix `A = [Gamma 1; 1^t 0]` for variogram `v`, after refusing
+/// coinciding samples without a nugget ([`KrigingError::DuplicateParams`]).
+fn kriging_entries<'a>(
+    dist: &'a PairDistances,
     s: usize,
-    v: &Variogram,
-) -> Result<Mat<f64>, KrigingError> {
+    v: &'a Variogram,
+) -> Result<impl Fn(usize, usize) -> f64 + Sync + 'a, KrigingError> {
     if v.nugget == 0.0 {
         if let Some((first, second)) = dist.first_duplicate(dist.duplicate_tol()) {
             return Err(KrigingError::DuplicateParams {
@@ -179,7 +181,7 @@ fn kriging_inverse(
             });
         }
     }
-    let a = Mat::from_fn(s + 1, s + 1, |i, j| {
+    Ok(move |i: usize, j: usize| {
         if i == s || j == s {
             if i == j { 0.0 } else { 1.0 }
         } else if i == j {
@@ -187,23 +189,79 @@ fn kriging_inverse(
         } else {
             v.between_samples(dist.get(i, j))
         }
-    });
-    checked_inverse(a.as_ref(), true, "kriging")
+    })
+}
+
+/// Builds and inverts the kriging matrix `A = [Gamma 1; 1^t 0]`.
+fn kriging_inverse(
+    dist: &PairDistances,
+    s: usize,
+    v: &Variogram,
+) -> Result<Mat<f64>, KrigingError> {
+    let entry = kriging_entries(dist, s, v)?;
+    checked_inverse_of(Mat::from_fn(s + 1, s + 1, &entry), &entry, true, "kriging")
+}
+
+/// The kriging matrix's factorisation for a system above [`EAGER_INVERSE_MAX_SAMPLES`] samples
+/// (same checks as [`kriging_inverse`]).
+fn kriging_factor(
+    dist: &PairDistances,
+    s: usize,
+    v: &Variogram,
+) -> Result<CheckedLu, KrigingError> {
+    let entry = kriging_entries(dist, s, v)?;
+    CheckedLu::factor(Mat::from_fn(s + 1, s + 1, &entry), &entry, "kriging")
+}
+
+/// Up to this many samples a fit forms the inverse of its kriging system at once (leave-one-out,
+/// the weights and the search use it); above, it keeps the LU factorisation, solves for the dual
+/// coefficients and forms the inverse only when asked ([`Kriging::system_inverse`],
+/// [`Kriging::loo_errors`], [`Kriging::weights`]): the inverse of a system over ten thousand samples
+/// costs twice its factorisation and another 800 MB.
+pub const EAGER_INVERSE_MAX_SAMPLES: usize = 1000;
+
+/// The factorised kriging system (see [`EAGER_INVERSE_MAX_SAMPLES`]).
+#[derive(Debug, Clone, Default)]
+struct System {
+    /// The LU factors (large systems only).
+    lu: Option<CheckedLu>,
+    /// The symmetric inverse: set by the fit for small systems, on first use for large ones.
+    inverse: OnceLock<Mat<f64>>,
+}
+
+impl System {
+    fn inverse(&self) -> &Mat<f64> {
+        self.inverse.get_or_init(|| {
+            self.lu
+                .as_ref()
+                .map_or_else(|| Mat::zeros(0, 0), |lu| lu.inverse(true))
+        })
+    }
+}
+
+/// `[m; 0]`: `m` (S x k) with a row of zeros below, the right-hand side of `A X = [m; 0]`.
+fn with_zero_row(m: MatRef<'_, f64>) -> Mat<f64> {
+    let s = m.nrows();
+    Mat::from_fn(s + 1, m.ncols(), |i, j| if i < s { m[(i, j)] } else { 0.0 })
+}
+
+/// A matrix's entries row by row.
+fn row_major(m: MatRef<'_, f64>) -> Vec<f64> {
+    let (r, c) = m.shape();
+    let mut out = Vec::with_capacity(r * c);
+    for i in 0..r {
+        for j in 0..c {
+            out.push(m[(i, j)]);
+        }
+    }
+    out
 }
 
 /// Row-major `A^-1[:, :S] R` (`n x D` for an `n x n` inverse of a system over `S` samples): the dual
 /// coefficients of kriging (`n = S + 1`) and of the RBF baseline (`n = S + q`).
 pub(crate) fn dual_coefficients(ainv: MatRef<'_, f64>, residuals: MatRef<'_, f64>) -> Vec<f64> {
     let s = residuals.nrows();
-    let dm = matmul_par_cols(ainv.subcols(0, s), residuals);
-    let (r, c) = dm.shape();
-    let mut out = Vec::with_capacity(r * c);
-    for i in 0..r {
-        for j in 0..c {
-            out.push(dm[(i, j)]);
-        }
-    }
-    out
+    row_major(matmul_par_cols(ainv.subcols(0, s), residuals).as_ref())
 }
 
 impl Kriging {
@@ -285,7 +343,7 @@ impl Kriging {
             trend_rank,
             gram,
             cx,
-            ainv: Mat::zeros(0, 0),
+            system: System::default(),
             dual: Vec::new(),
             empirical: None,
             candidates: Vec::new(),
@@ -303,11 +361,7 @@ impl Kriging {
                 model.install(&dist, v)?;
             }
             ModelChoice::Fixed(m) => {
-                let emp = EmpiricalVariogram::from_distances(
-                    &dist,
-                    model.residuals.as_ref(),
-                    config.bins,
-                )?;
+                let emp = model.empirical_variogram(&dist, config.bins)?;
                 let fitted = fit_variogram(&emp, m, &opts)?;
                 model.candidates.push(CandidateReport {
                     model: m,
@@ -321,11 +375,7 @@ impl Kriging {
                 model.install(&dist, fitted.variogram)?;
             }
             ModelChoice::Auto(Selection::LooSearch) => {
-                let emp = EmpiricalVariogram::from_distances(
-                    &dist,
-                    model.residuals.as_ref(),
-                    config.bins,
-                )?;
+                let emp = model.empirical_variogram(&dist, config.bins)?;
                 let mut reports = crate::search::candidates(&emp, &dist, s, &opts);
                 // Ranked on at most SEARCH_SAMPLES of the samples (a copy only when fewer).
                 let rows = crate::search::search_rows(s);
@@ -342,11 +392,7 @@ impl Kriging {
                 model.install_first(&dist, reports, &order)?;
             }
             ModelChoice::Auto(sel) => {
-                let emp = EmpiricalVariogram::from_distances(
-                    &dist,
-                    model.residuals.as_ref(),
-                    config.bins,
-                )?;
+                let emp = model.empirical_variogram(&dist, config.bins)?;
                 model.auto_select(&dist, &emp, sel, &opts)?;
                 model.empirical = Some(emp);
             }
@@ -354,11 +400,54 @@ impl Kriging {
         Ok(model)
     }
 
+    /// The empirical variogram of the residuals ([`EmpiricalVariogram`]): over every pair of
+    /// samples up to [`crate::search::SEARCH_SAMPLES`], else over the pairs of that many evenly
+    /// strided samples ([`crate::search::search_rows`]; the bins then span their largest
+    /// distance). Its cost grows as the pairs times the value columns; a variogram's shape is
+    /// estimated as well from a thousand samples' half a million pairs.
+    fn empirical_variogram(
+        &self,
+        dist: &PairDistances,
+        bins: usize,
+    ) -> Result<EmpiricalVariogram, KrigingError> {
+        let s = self.n_samples();
+        let rows = crate::search::search_rows(s);
+        if rows.len() == s {
+            return EmpiricalVariogram::from_distances(dist, self.residuals.as_ref(), bins);
+        }
+        let scaled = Mat::from_fn(rows.len(), self.scaled.ncols(), |i, k| {
+            self.scaled[(rows[i], k)]
+        });
+        let residuals = Mat::from_fn(rows.len(), self.residuals.ncols(), |i, k| {
+            self.residuals[(rows[i], k)]
+        });
+        EmpiricalVariogram::from_distances(
+            &PairDistances::new(scaled.as_ref()),
+            residuals.as_ref(),
+            bins,
+        )
+    }
+
     /// Factorises the system for `v` and stores everything that depends on it.
     fn install(&mut self, dist: &PairDistances, v: Variogram) -> Result<(), KrigingError> {
-        let ainv = kriging_inverse(dist, self.n_samples(), &v)?;
-        self.dual = dual_coefficients(ainv.as_ref(), self.residuals.as_ref());
-        self.ainv = ainv;
+        let s = self.n_samples();
+        if s <= EAGER_INVERSE_MAX_SAMPLES {
+            let ainv = kriging_inverse(dist, s, &v)?;
+            self.dual = dual_coefficients(ainv.as_ref(), self.residuals.as_ref());
+            self.system = System {
+                lu: None,
+                inverse: OnceLock::from(ainv),
+            };
+        } else {
+            let lu = kriging_factor(dist, s, &v)?;
+            // A^-1[:, :S] R = A^-1 [R; 0].
+            let rhs = with_zero_row(self.residuals.as_ref());
+            self.dual = row_major(lu.solve(rhs.as_ref()).as_ref());
+            self.system = System {
+                lu: Some(lu),
+                inverse: OnceLock::new(),
+            };
+        }
         self.variogram = v;
         Ok(())
     }
@@ -521,12 +610,54 @@ impl Kriging {
         self.residuals.as_ref()
     }
 
-    /// The symmetric inverse of the kriging matrix `A^-1` ((S+1) x (S+1)).
+    /// The symmetric inverse of the kriging matrix `A^-1` ((S+1) x (S+1)). Above
+    /// [`EAGER_INVERSE_MAX_SAMPLES`] samples it is formed from the factorisation on the first call
+    /// (and kept); [`Kriging::project_rows`] needs only the factorisation.
     pub fn system_inverse(&self) -> MatRef<'_, f64> {
-        self.ainv.as_ref()
+        self.system.inverse().as_ref()
     }
 
-    /// The empirical variogram the model was fitted to (`None` for [`ModelChoice::Given`]).
+    /// `U^t A^-1[:S, :]` (m x (S+1)) for `u` (S x m): the rows of the kriging's linear map from
+    /// `[gamma(c); 1]` to the weights' projection `U^t b(c)` (appendix A), what a runtime keeps
+    /// per key (`u = U_S`) and for the trend (`u = C^t`). With the inverse at hand (up to
+    /// [`EAGER_INVERSE_MAX_SAMPLES`] samples) each entry is the dot product of a column of `u`
+    /// with a column of `A^-1`, summed in sample order; above, the factorisation solves
+    /// `A X = [u; 0]` (`X^t` is the result, `A` being symmetric). Deterministic for any thread
+    /// count.
+    ///
+    /// Errors: `u` with other than S rows, or a non-finite entry.
+    pub fn project_rows(&self, u: MatRef<'_, f64>) -> Result<Mat<f64>, KrigingError> {
+        use rayon::prelude::*;
+        let s = self.n_samples();
+        if u.nrows() != s {
+            return Err(KrigingError::ShapeMismatch {
+                what: "rows of the projected matrix vs samples",
+                expected: s,
+                got: u.nrows(),
+            });
+        }
+        crate::check_finite("projected matrix", u)?;
+        let m = u.ncols();
+        if let Some(lu) = &self.system.lu {
+            return Ok(lu.solve(with_zero_row(u).as_ref()).transpose().to_owned());
+        }
+        let a = self.system.inverse();
+        let cols: Vec<Vec<f64>> = (0..m).map(|l| u.col(l).iter().copied().collect()).collect();
+        let per_col: Vec<Vec<f64>> = (0..=s)
+            .into_par_iter()
+            .map(|j| {
+                let acol = &a.col_as_slice(j)[..s];
+                cols.iter()
+                    .map(|ucol| ucol.iter().zip(acol).map(|(u, a)| u * a).sum())
+                    .collect()
+            })
+            .collect();
+        Ok(Mat::from_fn(m, s + 1, |l, j| per_col[j][l]))
+    }
+
+    /// The empirical variogram the model was fitted to (`None` for [`ModelChoice::Given`]): over
+    /// every pair of samples, or above [`crate::search::SEARCH_SAMPLES`] samples over the pairs
+    /// of that many evenly strided ones.
     pub fn empirical(&self) -> Option<&EmpiricalVariogram> {
         self.empirical.as_ref()
     }
@@ -558,10 +689,11 @@ impl Kriging {
     pub fn weights(&self, c: &[f64], out: &mut [f64]) -> Result<(), KrigingError> {
         let s = self.n_samples();
         self.check_query(c, out.len(), s)?;
-        out.copy_from_slice(&self.ainv.col_as_slice(s)[..s]);
+        let ainv = self.system.inverse();
+        out.copy_from_slice(&ainv.col_as_slice(s)[..s]);
         for j in 0..s {
             let g = self.variogram.eval(self.dist_to(c, j));
-            let col = &self.ainv.col_as_slice(j)[..s];
+            let col = &ainv.col_as_slice(j)[..s];
             for (o, a) in out.iter_mut().zip(col) {
                 *o += g * a;
             }
@@ -597,6 +729,55 @@ impl Kriging {
         Ok(())
     }
 
+    /// The predictions at every row of `queries` (n x d, unscaled like [`Kriging::predict`]'s
+    /// `c`), as an n x D matrix: the same dual form as matrix products,
+    /// `[Gamma_q 1] (A^-1[:, :S] R) + Z F^t`, with `Gamma_q` the n x S variogram values between
+    /// queries and samples and `Z` the scaled queries `[c; 1]`. Agrees with [`Kriging::predict`]
+    /// row by row up to the order of the sums (rounding); the products stream the dual
+    /// coefficients once per block of queries instead of once per query, which is what
+    /// cross-validating many held-out samples needs. Deterministic for any thread count (column
+    /// blocks of fixed width).
+    ///
+    /// Errors: a query of the wrong length or with a non-finite entry (its row in the message).
+    pub fn predict_rows(&self, queries: MatRef<'_, f64>) -> Result<Mat<f64>, KrigingError> {
+        let s = self.n_samples();
+        let d = self.n_params();
+        let dv = self.n_values();
+        let n = queries.nrows();
+        if queries.ncols() != d {
+            return Err(KrigingError::ShapeMismatch {
+                what: "query parameter length",
+                expected: d,
+                got: queries.ncols(),
+            });
+        }
+        crate::check_finite("queries", queries)?;
+        let mut c = vec![0.0; d];
+        let mut gamma = Mat::zeros(n, s + 1);
+        for i in 0..n {
+            for (k, v) in c.iter_mut().enumerate() {
+                *v = queries[(i, k)];
+            }
+            for j in 0..s {
+                gamma[(i, j)] = self.variogram.eval(self.dist_to(&c, j));
+            }
+            gamma[(i, s)] = 1.0;
+        }
+        let dual = MatRef::from_row_major_slice(&self.dual, s + 1, dv);
+        let mut out = crate::linalg::matmul_par_cols(gamma.as_ref(), dual);
+        if let Some(f) = &self.trend {
+            let z = Mat::from_fn(n, d + 1, |i, k| {
+                if k == d {
+                    1.0
+                } else {
+                    (queries[(i, k)] - self.scaling.offset[k]) * self.scaling.scale[k]
+                }
+            });
+            out += crate::linalg::matmul_par_cols(z.as_ref(), f.transpose());
+        }
+        Ok(out)
+    }
+
     /// Leave-one-out errors `e_k = x_k - x_hat_{-k}(c_k)` (S x D) without refactorising.
     ///
     /// Ordinary kriging (Dubrule 1983): with `B = A^-1` and `alpha = B[:S, :S] R`,
@@ -610,7 +791,7 @@ impl Kriging {
         let s = self.n_samples();
         let dv = self.n_values();
         let d = self.n_params();
-        let b = &self.ainv;
+        let b = self.system.inverse();
         let mut err = Mat::zeros(s, dv);
         for k in 0..s {
             let bkk = b[(k, k)];

@@ -143,15 +143,15 @@ pub use geo::{
     Drift, Krige, KrigeModel, LooStats, Neighbourhood, Prediction, Predictions, VariogramChoice,
     VariogramFitReport,
 };
-pub use kriging::{Kriging, augmented_params, variogram_column};
-pub use linalg::{PINV_RTOL, sym_pinv};
+pub use kriging::{EAGER_INVERSE_MAX_SAMPLES, Kriging, augmented_params, variogram_column};
+pub use linalg::{PINV_RTOL, compress_columns, sym_pinv};
 pub use nested::{NestedVariogram, Structure};
 pub use projected::ProjectedQuery;
 pub use rbf::{RBF_SMOOTHING_GRID, Rbf, RbfConfig, RbfKernel, RbfSmoothing, SmoothingCandidate};
 pub use scaling::{ParamScaling, ScalingChoice};
 pub use select::{
-    DimDecision, DimSelection, SelectRule, TRIAL_SEARCH_MAX_SAMPLES, select_dims,
-    select_dims_by_folds,
+    DimDecision, DimSelection, SelectRule, TRIAL_SEARCH_MAX_SAMPLES, held_out_squared_error,
+    select_dims, select_dims_by_folds,
 };
 pub use simulate::{Realisations, Sgs, SgsMean, SgsPath};
 pub use sphere::{chord_distance, great_circle_distance, latlon_to_xyz};

@@ -2,7 +2,7 @@
 //! bit-identical whatever the size of rayon's pool.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::lu::partial_pivoting::{factor, inverse};
+use faer::linalg::lu::partial_pivoting::{factor, inverse, solve};
 use faer::{Accum, Mat, MatRef, Par};
 
 use crate::error::KrigingError;
@@ -30,98 +30,226 @@ pub(crate) fn checked_inverse(
     symmetric: bool,
     what: &'static str,
 ) -> Result<Mat<f64>, KrigingError> {
-    let n = a.nrows();
-    debug_assert_eq!(n, a.ncols());
-    let mut lu = a.to_owned();
-    let mut perm = vec![0usize; n];
-    let mut perm_inv = vec![0usize; n];
-    let mut mem = MemBuffer::new(factor::lu_in_place_scratch::<usize, f64>(
-        n,
-        n,
-        Par::Seq,
-        Default::default(),
-    ));
-    let (_, p) = factor::lu_in_place(
-        lu.as_mut(),
-        &mut perm,
-        &mut perm_inv,
-        Par::Seq,
-        MemStack::new(&mut mem),
-        Default::default(),
-    );
-    let mut umax = 0.0f64;
-    let mut umin = f64::INFINITY;
-    for i in 0..n {
-        let u = lu[(i, i)].abs();
-        umax = umax.max(u);
-        umin = umin.min(u);
-    }
-    let pivot_ratio = if umax > 0.0 && umax.is_finite() {
-        umin / umax
-    } else {
-        0.0
-    };
-    let singular = |residual: f64| KrigingError::Singular {
-        what,
-        size: n,
-        pivot_ratio,
-        residual,
-    };
-    if pivot_ratio.is_nan() || pivot_ratio < PIVOT_RATIO_MIN {
-        return Err(singular(f64::NAN));
-    }
-    let mut inv = Mat::zeros(n, n);
-    let mut mem = MemBuffer::new(inverse::inverse_scratch::<usize, f64>(n, Par::Seq));
-    inverse::inverse(
-        inv.as_mut(),
-        lu.as_ref(),
-        lu.as_ref(),
-        p,
-        Par::Seq,
-        MemStack::new(&mut mem),
-    );
-    if symmetric {
-        for j in 0..n {
-            for i in 0..j {
-                let m = 0.5 * (inv[(i, j)] + inv[(j, i)]);
-                inv[(i, j)] = m;
-                inv[(j, i)] = m;
-            }
-        }
-    }
-    for j in 0..n {
-        for i in 0..n {
-            if !inv[(i, j)].is_finite() {
-                return Err(singular(f64::INFINITY));
-            }
-        }
+    checked_inverse_of(a.to_owned(), &|i, j| a[(i, j)], symmetric, what)
+}
+
+/// [`checked_inverse`] of a matrix given by value, factorised in its own storage (one `n x n`
+/// matrix less at the peak: what a system over ten thousand samples needs); `entry(i, j)` gives
+/// the matrix's entries again for the probe solve.
+pub(crate) fn checked_inverse_of(
+    a: Mat<f64>,
+    entry: &(dyn Fn(usize, usize) -> f64 + Sync),
+    symmetric: bool,
+    what: &'static str,
+) -> Result<Mat<f64>, KrigingError> {
+    let lu = CheckedLu::factor_unprobed(a, what)?;
+    let inv = lu.inverse(symmetric);
+    if inv.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+        return Err(lu.singular(f64::INFINITY));
     }
     // Probe: v_i in [1, 2), x = inv v, r = a x - v.
-    let v: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 / 7.0).collect();
-    let mut x = vec![0.0; n];
+    let v = probe_vector(lu.n());
+    let mut x = vec![0.0; lu.n()];
     for (j, &vj) in v.iter().enumerate() {
         for (i, xi) in x.iter_mut().enumerate() {
             *xi += inv[(i, j)] * vj;
         }
     }
-    let mut rmax = 0.0f64;
-    let mut anorm = 0.0f64;
-    for i in 0..n {
-        let mut r = -v[i];
-        let mut row = 0.0;
-        for (j, xj) in x.iter().enumerate() {
-            r += a[(i, j)] * xj;
-            row += a[(i, j)].abs();
-        }
-        rmax = rmax.max(r.abs());
-        anorm = anorm.max(row);
-    }
-    let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let residual = rmax / (anorm * xmax + 2.0);
-    if residual.is_nan() || residual > RESIDUAL_MAX {
-        return Err(singular(residual));
-    }
+    lu.check_probe(&v, &x, entry)?;
     Ok(inv)
+}
+
+/// The probe right-hand side of the factorisation checks: `v_i` in `[1, 2)`.
+fn probe_vector(n: usize) -> Vec<f64> {
+    (0..n).map(|i| 1.0 + (i % 7) as f64 / 7.0).collect()
+}
+
+/// Column-block width of [`CheckedLu::solve`]: fixed, so that the result does not depend on the
+/// number of threads.
+const SOLVE_BLOCK: usize = 64;
+
+/// An LU factorisation with partial pivoting of a square matrix, checked as [`checked_inverse`]
+/// checks (pivot ratio, finite probe solve with a small residual): what a large kriging system
+/// keeps instead of its inverse, which it forms only when asked.
+#[derive(Debug, Clone)]
+pub(crate) struct CheckedLu {
+    lu: Mat<f64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    pivot_ratio: f64,
+    what: &'static str,
+}
+
+impl CheckedLu {
+    /// Factorises `a` in its own storage and checks it; `entry(i, j)` gives `a`'s entries again
+    /// for the probe solve's residual.
+    pub(crate) fn factor(
+        a: Mat<f64>,
+        entry: &(dyn Fn(usize, usize) -> f64 + Sync),
+        what: &'static str,
+    ) -> Result<CheckedLu, KrigingError> {
+        let lu = CheckedLu::factor_unprobed(a, what)?;
+        let v = probe_vector(lu.n());
+        let x = lu.solve(MatRef::from_column_major_slice(&v, v.len(), 1));
+        let x: Vec<f64> = x.col(0).iter().copied().collect();
+        if x.iter().any(|v| !v.is_finite()) {
+            return Err(lu.singular(f64::INFINITY));
+        }
+        lu.check_probe(&v, &x, entry)?;
+        Ok(lu)
+    }
+
+    /// The factorisation and its pivot check, without the probe solve.
+    fn factor_unprobed(a: Mat<f64>, what: &'static str) -> Result<CheckedLu, KrigingError> {
+        let n = a.nrows();
+        debug_assert_eq!(n, a.ncols());
+        let mut lu = a;
+        let mut perm = vec![0usize; n];
+        let mut perm_inv = vec![0usize; n];
+        let mut mem = MemBuffer::new(factor::lu_in_place_scratch::<usize, f64>(
+            n,
+            n,
+            Par::Seq,
+            Default::default(),
+        ));
+        factor::lu_in_place(
+            lu.as_mut(),
+            &mut perm,
+            &mut perm_inv,
+            Par::Seq,
+            MemStack::new(&mut mem),
+            Default::default(),
+        );
+        let mut umax = 0.0f64;
+        let mut umin = f64::INFINITY;
+        for i in 0..n {
+            let u = lu[(i, i)].abs();
+            umax = umax.max(u);
+            umin = umin.min(u);
+        }
+        let pivot_ratio = if umax > 0.0 && umax.is_finite() {
+            umin / umax
+        } else {
+            0.0
+        };
+        let out = CheckedLu {
+            lu,
+            perm,
+            perm_inv,
+            pivot_ratio,
+            what,
+        };
+        if pivot_ratio.is_nan() || pivot_ratio < PIVOT_RATIO_MIN {
+            return Err(out.singular(f64::NAN));
+        }
+        Ok(out)
+    }
+
+    /// The matrix's size `n`.
+    pub(crate) fn n(&self) -> usize {
+        self.lu.nrows()
+    }
+
+    fn singular(&self, residual: f64) -> KrigingError {
+        KrigingError::Singular {
+            what: self.what,
+            size: self.n(),
+            pivot_ratio: self.pivot_ratio,
+            residual,
+        }
+    }
+
+    /// Fails when `x`, the solution for the probe `v`, leaves a relative residual
+    /// `max |a x - v| / (||a||_inf max |x| + 2)` above 1e-8.
+    fn check_probe(
+        &self,
+        v: &[f64],
+        x: &[f64],
+        entry: &(dyn Fn(usize, usize) -> f64 + Sync),
+    ) -> Result<(), KrigingError> {
+        let mut rmax = 0.0f64;
+        let mut anorm = 0.0f64;
+        for (i, vi) in v.iter().enumerate() {
+            let mut r = -vi;
+            let mut row = 0.0;
+            for (j, xj) in x.iter().enumerate() {
+                let aij = entry(i, j);
+                r += aij * xj;
+                row += aij.abs();
+            }
+            rmax = rmax.max(r.abs());
+            anorm = anorm.max(row);
+        }
+        let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let residual = rmax / (anorm * xmax + 2.0);
+        if residual.is_nan() || residual > RESIDUAL_MAX {
+            return Err(self.singular(residual));
+        }
+        Ok(())
+    }
+
+    fn perm(&self) -> faer::perm::PermRef<'_, usize> {
+        faer::perm::PermRef::new_checked(&self.perm, &self.perm_inv, self.n())
+    }
+
+    /// The inverse (faer's inverse from the factors), symmetrised when `symmetric` (the mean of
+    /// each entry and its mirror).
+    pub(crate) fn inverse(&self, symmetric: bool) -> Mat<f64> {
+        let n = self.n();
+        let mut inv = Mat::zeros(n, n);
+        let mut mem = MemBuffer::new(inverse::inverse_scratch::<usize, f64>(n, Par::Seq));
+        inverse::inverse(
+            inv.as_mut(),
+            self.lu.as_ref(),
+            self.lu.as_ref(),
+            self.perm(),
+            Par::Seq,
+            MemStack::new(&mut mem),
+        );
+        if symmetric {
+            for j in 0..n {
+                for i in 0..j {
+                    let m = 0.5 * (inv[(i, j)] + inv[(j, i)]);
+                    inv[(i, j)] = m;
+                    inv[(j, i)] = m;
+                }
+            }
+        }
+        inv
+    }
+
+    /// `A^-1 rhs` (n x m): the columns of `rhs` in fixed blocks of [`SOLVE_BLOCK`] solved in
+    /// parallel (rayon), each block single-threaded: bit-identical for any pool size.
+    pub(crate) fn solve(&self, rhs: MatRef<'_, f64>) -> Mat<f64> {
+        use rayon::prelude::*;
+        let (n, m) = rhs.shape();
+        debug_assert_eq!(n, self.n());
+        let mut out = Mat::zeros(n, m);
+        let blocks: Vec<(usize, usize)> = (0..m.div_ceil(SOLVE_BLOCK))
+            .map(|k| (k * SOLVE_BLOCK, SOLVE_BLOCK.min(m - k * SOLVE_BLOCK)))
+            .collect();
+        let solved: Vec<Mat<f64>> = blocks
+            .par_iter()
+            .map(|&(start, w)| {
+                let mut blk = rhs.subcols(start, w).to_owned();
+                let mut mem =
+                    MemBuffer::new(solve::solve_in_place_scratch::<usize, f64>(n, w, Par::Seq));
+                solve::solve_in_place(
+                    self.lu.as_ref(),
+                    self.lu.as_ref(),
+                    self.perm(),
+                    blk.as_mut(),
+                    Par::Seq,
+                    MemStack::new(&mut mem),
+                );
+                blk
+            })
+            .collect();
+        for (&(start, w), blk) in blocks.iter().zip(&solved) {
+            out.as_mut().subcols_mut(start, w).copy_from(blk.as_ref());
+        }
+        out
+    }
 }
 
 /// Eigen-decomposition of a small symmetric matrix: (ascending eigenvalues, eigenvectors as columns).
@@ -225,4 +353,59 @@ pub(crate) fn matmul_par_cols(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64
             .copy_from(blk.as_ref());
     }
     out
+}
+
+/// `values` (S x D) in fewer columns for anything that depends on them only through sums of
+/// squares of linear combinations of rows (squared distances between samples, squared errors of
+/// predictions that blend the samples): `X V_k`, the values projected on their `k` leading right
+/// singular vectors, with `k` the fewest that keep all but `rel_energy` of `||X||_F^2`. Every such
+/// sum of squares is then kept to within `rel_energy` of `||X||_F^2` times the blend's squared
+/// norm; columns beyond `k` carry only the rest. The right singular vectors come from the smaller
+/// Gram matrix (`X X^t` or `X^t X`, single-threaded eigendecomposition: deterministic); their signs
+/// are the eigensolver's. Returns a copy when `k` would be `D`, and an S x 1 zero column for zero
+/// values.
+///
+/// ```
+/// use kriging::faer::Mat;
+/// // 6 samples of 4 values that lie in a 2-dimensional subspace.
+/// let x = Mat::from_fn(6, 4, |i, j| (i as f64) * [1.0, 2.0, 0.0, 1.0][j] + [0.0, 1.0, 1.0, 0.0][j]);
+/// let c = kriging::compress_columns(x.as_ref(), 1e-12);
+/// assert_eq!(c.ncols(), 2);
+/// let d = |m: &Mat<f64>, a: usize, b: usize| (0..m.ncols()).map(|j| (m[(a, j)] - m[(b, j)]).powi(2)).sum::<f64>();
+/// assert!((d(&x, 1, 4) - d(&c, 1, 4)).abs() < 1e-9);
+/// ```
+pub fn compress_columns(values: MatRef<'_, f64>, rel_energy: f64) -> Mat<f64> {
+    let (s, dv) = values.shape();
+    let gram_rows = s <= dv;
+    let gram = if gram_rows {
+        matmul_par_cols(values, values.transpose())
+    } else {
+        matmul_par_cols(values.transpose(), values)
+    };
+    let (vals, vecs) = sym_eigen(gram.as_ref());
+    let n = vals.len();
+    let total: f64 = vals.iter().map(|v| v.max(0.0)).sum();
+    if total <= 0.0 || !total.is_finite() {
+        return Mat::zeros(s, 1);
+    }
+    // Ascending eigenvalues: keep the leading ones until the rest is within `rel_energy`.
+    let mut rest = total;
+    let mut k = 0;
+    while k < n && rest > rel_energy * total {
+        rest -= vals[n - 1 - k].max(0.0);
+        k += 1;
+    }
+    let k = k.max(1);
+    if k >= dv {
+        return values.to_owned();
+    }
+    if gram_rows {
+        Mat::from_fn(s, k, |i, j| {
+            let col = n - 1 - j;
+            vecs[(i, col)] * vals[col].max(0.0).sqrt()
+        })
+    } else {
+        let v = Mat::from_fn(dv, k, |i, j| vecs[(i, n - 1 - j)]);
+        matmul_par_cols(values, v.as_ref())
+    }
 }

@@ -21,7 +21,8 @@
 //! principal columns (`X V_k`, exact when `X` has at most that rank), which keeps each candidate at
 //! about one inverse whatever the number of values; and on at most [`SEARCH_SAMPLES`] samples
 //! ([`search_rows`]), which keeps the search's cost the same beyond that many samples (the
-//! winner is installed on all of them: one inverse of the full system).
+//! winner is installed on all of them: one inverse of the full system). The empirical variogram
+//! that starts each candidate's fit is binned over the pairs of the same samples.
 //!
 //! ```
 //! use kriging::faer::Mat;

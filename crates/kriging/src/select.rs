@@ -461,21 +461,8 @@ pub fn select_dims_by_folds(
                     &cfg,
                 )
                 .ok()?;
-                let mut out = vec![0.0; values.ncols()];
-                let mut c = vec![0.0; params.ncols()];
-                let mut sq = 0.0;
-                for &i in &test {
-                    for (k, v) in c.iter_mut().enumerate() {
-                        *v = params[(i, k)];
-                    }
-                    k.predict(&c, &mut out).ok()?;
-                    sq += out
-                        .iter()
-                        .enumerate()
-                        .filter(|(j, _)| scored.is_none_or(|m| m[*j]))
-                        .map(|(j, v)| (v - values[(i, j)]).powi(2))
-                        .sum::<f64>();
-                }
+                let pred = k.predict_rows(rows(&test, params).as_ref()).ok()?;
+                let sq = held_out_squared_error(pred.as_ref(), values, &test, scored);
                 Some((sq, test.len()))
             })
             .collect();
@@ -552,4 +539,26 @@ pub fn select_dims_by_folds(
             .collect(),
         rmse: current,
     })
+}
+
+/// The squared error, summed over the held-out samples `test` and the value columns `scored`
+/// marks (all when `None`), of `pred` (one row per held-out sample, in `test`'s order) against
+/// `values` (S x D). Column by column, so that the column-major values are read in runs.
+pub fn held_out_squared_error(
+    pred: MatRef<'_, f64>,
+    values: MatRef<'_, f64>,
+    test: &[usize],
+    scored: Option<&[bool]>,
+) -> f64 {
+    debug_assert_eq!(pred.nrows(), test.len());
+    (0..values.ncols())
+        .filter(|&j| scored.is_none_or(|m| m[j]))
+        .map(|j| {
+            let (p, v) = (pred.col(j), values.col(j));
+            test.iter()
+                .enumerate()
+                .map(|(t, &i)| (p[t] - v[i]).powi(2))
+                .sum::<f64>()
+        })
+        .sum()
 }

@@ -5,6 +5,7 @@
 mod common;
 
 mod against_naive;
+mod batched;
 mod degenerate;
 mod geostat;
 mod measurement_error;

@@ -21,6 +21,16 @@
 //!    pass is kept; its dropped controls read [`DimDecision::Overruled`] and the report keeps the
 //!    level-0 quality that failed ([`crate::BuildReport::overruled_quality`]). Nothing of this runs
 //!    when level 0 passes.
+//!
+//! Large sets (issue 35: ten thousand cycles in under two minutes on two cores, under 4 GB). Above
+//! [`COMPRESS_VALUES_ABOVE`] samples the kriging stage works on the value columns compressed to
+//! their leading directions (each group, scored and not, centred; [`VALUES_REL_ENERGY`] of its
+//! squared norm left out), and above [`SELECT_MAX_SAMPLES`] the control selection and the quality
+//! guard's leave-one-out rule decide on whole takes holding at most that many samples; the kriging
+//! over the controls kept is fitted on every sample (its variogram search ranks on
+//! [`kriging::search::SEARCH_SAMPLES`] of them). Cross-validation predicts each held-out fold with
+//! one matrix product ([`kriging::Kriging::predict_rows`]). Up to those sizes nothing changes:
+//! the shared sets' models are the same bytes.
 
 use faer::Mat;
 use hosvd_als::{AlsOptions, AlsReport, KeyLevels, KeySearchConfig, Tucker, hybrid_levels};
@@ -35,8 +45,9 @@ use motion_io::PoseLayout;
 use tensor_ops::Tensor3;
 
 pub use crate::config::{
-    BuildConfig, CONTROL_DEFINED_ROWS, CONTROL_FOLDS, CONTROL_MARGIN, CONTROL_MIN_T, MIN_SAMPLES,
-    PAPER_DOF, RowWeights, STYLE_FOLDS, STYLE_WEIGHTS,
+    BuildConfig, COMPRESS_VALUES_ABOVE, CONTROL_DEFINED_ROWS, CONTROL_FOLDS, CONTROL_MARGIN,
+    CONTROL_MIN_T, MIN_SAMPLES, PAPER_DOF, RowWeights, SELECT_MAX_SAMPLES, STYLE_FOLDS,
+    STYLE_WEIGHTS, VALUES_REL_ENERGY,
 };
 pub use crate::dataset::TrainingSet;
 use crate::importance::{
@@ -239,6 +250,11 @@ impl ControlFit {
             .map(|j| !CONTROL_DEFINED_ROWS.contains(&(j % p)))
             .collect();
         let (kriging_config, dropped_for_samples) = fit_to_sample_count(&params, &config.kriging)?;
+        let (values, scored) = if s > COMPRESS_VALUES_ABOVE {
+            compressed_values(values.as_ref(), &scored)
+        } else {
+            (values, scored)
+        };
         Ok(ControlFit {
             params,
             values,
@@ -256,10 +272,37 @@ impl ControlFit {
         set: &TrainingSet,
         config: &BuildConfig,
     ) -> Result<(Kriging, Vec<DimDecision>), BuildError> {
+        let Some(rows) = selection_rows(&set.sources) else {
+            return self.select_on(&set.sources, config);
+        };
+        // Decided on whole takes, then the kriging over the controls kept fitted on every sample.
+        let sources: Vec<String> = rows.iter().map(|&i| set.sources[i].clone()).collect();
+        let (_, decisions) = self.rows(&rows).select_on(&sources, config)?;
+        Ok((self.fit_kept(&decisions)?, decisions))
+    }
+
+    /// This fit restricted to the samples `rows` (same settings and scored columns).
+    fn rows(&self, rows: &[usize]) -> ControlFit {
+        let pick = |m: &Mat<f64>| Mat::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
+        ControlFit {
+            params: pick(&self.params),
+            values: pick(&self.values),
+            scored: self.scored.clone(),
+            kriging_config: self.kriging_config.clone(),
+            dropped_for_samples: self.dropped_for_samples.clone(),
+        }
+    }
+
+    /// [`ControlFit::select`] on every sample of this fit (`sources` one per sample).
+    fn select_on(
+        &self,
+        sources: &[String],
+        config: &BuildConfig,
+    ) -> Result<(Kriging, Vec<DimDecision>), BuildError> {
         let s = self.params.nrows();
         // Leave-one-out needs a sample more than the fewest a model builds from.
         let select = config.select_controls && s > MIN_SAMPLES;
-        let (kriging, mut decisions) = match control_folds(&set.sources) {
+        let (kriging, mut decisions) = match control_folds(sources) {
             Some(fold) if select => {
                 let selection = select_dims_by_folds(
                     self.params.as_ref(),
@@ -301,6 +344,19 @@ impl ControlFit {
             decisions[k] = DimDecision::Constant;
         }
         Ok((kriging, decisions))
+    }
+
+    /// The leave-one-out rule's decisions ([`ControlFit::select_by_loo`]), on the whole takes of
+    /// [`selection_rows`] when there are more samples than [`SELECT_MAX_SAMPLES`].
+    fn loo_decisions(
+        &self,
+        sources: &[String],
+        config: &BuildConfig,
+    ) -> Result<Vec<DimDecision>, BuildError> {
+        Ok(match selection_rows(sources) {
+            Some(rows) => self.rows(&rows).select_by_loo(config)?.decisions,
+            None => self.select_by_loo(config)?.decisions,
+        })
     }
 
     /// The leave-one-out rule ([`kriging::select_dims`] over the scored columns).
@@ -372,6 +428,64 @@ pub fn control_folds(sources: &[String]) -> Option<Vec<usize>> {
         return None;
     }
     crate::folds::fold_of_samples(sources, CONTROL_FOLDS, crate::folds::FoldBy::Take).ok()
+}
+
+/// The values (S x D) with their scored and unscored columns each centred and compressed
+/// ([`kriging::compress_columns`] at [`VALUES_REL_ENERGY`]), and the mask of the compressed
+/// columns: the scored group first. Kriging is blind to a column's mean (its weights sum to one)
+/// and to an orthogonal change of columns within a group, so every variogram, leave-one-out and
+/// cross-validated error over either group is kept to that fraction of its squared norm.
+fn compressed_values(values: faer::MatRef<'_, f64>, scored: &[bool]) -> (Mat<f64>, Vec<bool>) {
+    let s = values.nrows();
+    let group = |want: bool| -> Option<Mat<f64>> {
+        let cols: Vec<usize> = (0..values.ncols()).filter(|&j| scored[j] == want).collect();
+        if cols.is_empty() {
+            return None;
+        }
+        let means: Vec<f64> = cols
+            .iter()
+            .map(|&j| values.col(j).iter().sum::<f64>() / s as f64)
+            .collect();
+        let centred = Mat::from_fn(s, cols.len(), |i, k| values[(i, cols[k])] - means[k]);
+        Some(kriging::compress_columns(
+            centred.as_ref(),
+            VALUES_REL_ENERGY,
+        ))
+    };
+    let (a, b) = (group(true), group(false));
+    let (ka, kb) = (
+        a.as_ref().map_or(0, |m| m.ncols()),
+        b.as_ref().map_or(0, |m| m.ncols()),
+    );
+    let out = Mat::from_fn(s, ka + kb, |i, j| match (&a, &b) {
+        (Some(a), _) if j < ka => a[(i, j)],
+        (_, Some(b)) => b[(i, j - ka)],
+        _ => 0.0,
+    });
+    let mask = (0..ka + kb).map(|j| j < ka).collect();
+    (out, mask)
+}
+
+/// The samples the control selection decides on when there are more than
+/// [`SELECT_MAX_SAMPLES`]: whole takes (in name order, every `k`-th, `k` the fewest that brings
+/// the count to at most [`SELECT_MAX_SAMPLES`]), so that its refits of every fold and trial cost
+/// what they cost for that many samples whatever the data's size; `None` (every sample) up to it.
+/// The kriging over the controls kept is then fitted on every sample.
+fn selection_rows(sources: &[String]) -> Option<Vec<usize>> {
+    if sources.len() <= SELECT_MAX_SAMPLES {
+        return None;
+    }
+    let takes = crate::folds::distinct_takes(sources);
+    let take_of = |i: usize| {
+        takes
+            .binary_search(&crate::folds::take_of(&sources[i]))
+            .unwrap_or(0)
+    };
+    let of: Vec<usize> = (0..sources.len()).map(take_of).collect();
+    (2..=takes.len()).find_map(|k| {
+        let rows: Vec<usize> = (0..sources.len()).filter(|&i| of[i] % k == 0).collect();
+        (rows.len() <= SELECT_MAX_SAMPLES).then_some(rows)
+    })
 }
 
 /// Controls as an `S x 4` matrix, one row per sample (the controls alone, without styles).
@@ -477,21 +591,8 @@ fn fold_squared_error(
         rows(&train, values).as_ref(),
         config,
     )?;
-    let mut out = vec![0.0; values.ncols()];
-    let mut c = vec![0.0; params.ncols()];
-    let mut sq = 0.0;
-    for &i in &test {
-        for (k, v) in c.iter_mut().enumerate() {
-            *v = params[(i, k)];
-        }
-        k.predict(&c, &mut out)?;
-        sq += out
-            .iter()
-            .enumerate()
-            .filter(|(j, _)| scored[*j])
-            .map(|(j, v)| (v - values[(i, j)]).powi(2))
-            .sum::<f64>();
-    }
+    let pred = k.predict_rows(rows(&test, params.as_ref()).as_ref())?;
+    let sq = kriging::held_out_squared_error(pred.as_ref(), values, &test, Some(scored));
     Ok((sq, test.len()))
 }
 
@@ -800,8 +901,6 @@ impl Analysis {
     ) -> Result<MotionModel, BuildError> {
         let [p, t, s] = self.tensor.dims();
         let krig = &self.kriging;
-        let kriging_rows = col_major(krig.system_inverse().subrows(0, s));
-        let scaled = col_major(krig.scaled_params());
         progress.stage("runtime model", self.keys.levels.len() as u64);
         let mut key_tensors = Vec::with_capacity(self.keys.levels.len());
         let mut key_reports = Vec::with_capacity(self.keys.levels.len());
@@ -818,7 +917,7 @@ impl Analysis {
                 u_t: &u_t,
                 u_s: &u_s,
             };
-            key_tensors.push(key_tensor(&factors, p, t, &kriging_rows, &scaled)?);
+            key_tensors.push(key_tensor(&factors, p, t, krig)?);
             key_reports.push(KeyReport {
                 ranks: key.ranks,
                 mse: key.mse,
@@ -842,7 +941,7 @@ impl Analysis {
             scaling.offset.iter().map(|&v| v as f32).collect(),
             scaling.scale.iter().map(|&v| v as f32).collect(),
         )?;
-        let controls = with_projection(controls, &kriging_rows, &scaled)?;
+        let controls = with_projection(controls, krig)?;
         let mean_pose = mean_rows(&self.tensor, &self.layout);
         let parts = ModelParts {
             p,
@@ -1118,7 +1217,7 @@ fn quality_guard(
         &weigh_rows(&analysis.tensor, &analysis.row_weights),
         config,
     )?;
-    let loo = fit.select_by_loo(config)?;
+    let loo_decisions = fit.loo_decisions(&set.sources, config)?;
     // What dropping a control costs the cross-validation.
     let cost = |k: usize| match analysis.control_decisions[k] {
         DimDecision::KeptByFolds {
@@ -1130,7 +1229,7 @@ fn quality_guard(
     };
     let candidates: Vec<usize> = cv_kept
         .into_iter()
-        .filter(|&k| loo.decisions[k].dropped())
+        .filter(|&k| loo_decisions[k].dropped())
         .collect();
     // Every non-empty subset: the fewest controls first, then the cheapest (ties: lowest indices).
     let mut subsets: Vec<Vec<usize>> = (1u32..1 << candidates.len())
@@ -1386,5 +1485,91 @@ mod tests {
             ..BuildConfig::default()
         };
         assert_eq!(as_given.rank_bounds(67), ([40, 40, 60], [7, 7, 9]));
+    }
+}
+
+#[cfg(test)]
+mod selection_tests {
+    use super::*;
+
+    /// Sources as the training set writes them: `take_k.bvh [a..=b]`, `per` cycles per take.
+    fn sources(takes: usize, per: usize) -> Vec<String> {
+        (0..takes * per)
+            .map(|i| {
+                format!(
+                    "take_{:04}.bvh [{}..={}]",
+                    i / per,
+                    i % per * 10,
+                    i % per * 10 + 9
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn selection_decides_on_whole_takes_above_its_limit() {
+        assert_eq!(
+            selection_rows(&sources(100, 12)),
+            None,
+            "1,200 samples: all"
+        );
+        let src = sources(500, 7); // 3,500 samples
+        let rows = selection_rows(&src).expect("a subsample above the limit");
+        assert!(rows.len() <= SELECT_MAX_SAMPLES && rows.len() > SELECT_MAX_SAMPLES / 2);
+        // Whole takes: every cycle of a picked take, none of the others.
+        let picked: std::collections::BTreeSet<&str> = rows
+            .iter()
+            .map(|&i| crate::folds::take_of(&src[i]))
+            .collect();
+        for (i, s) in src.iter().enumerate() {
+            assert_eq!(picked.contains(crate::folds::take_of(s)), rows.contains(&i));
+        }
+        assert!(
+            picked.len() >= 2 * CONTROL_FOLDS,
+            "enough takes for the folds"
+        );
+    }
+
+    /// The compressed values keep each group's leave-one-out squared error (kriging ignores a
+    /// column's mean and an orthogonal change of columns within a group), scored group first.
+    #[test]
+    fn compressed_values_keep_each_groups_errors() {
+        let s = 80;
+        let params = Mat::from_fn(s, 2, |i, k| {
+            ((i * (k + 3)) % 17) as f64 / 17.0 + 0.01 * i as f64
+        });
+        let values = Mat::from_fn(s, 40, |i, j| {
+            let (x, y) = (params[(i, 0)], params[(i, 1)]);
+            5.0 + (j as f64 * 0.3).sin() * (2.0 * x).sin() + (j as f64 * 0.7).cos() * y * y
+        });
+        let scored: Vec<bool> = (0..40).map(|j| j % 5 != 0).collect();
+        let (c, mask) = compressed_values(values.as_ref(), &scored);
+        assert!(c.ncols() < 40);
+        let k = mask.iter().filter(|&&m| m).count();
+        assert!(mask[..k].iter().all(|&m| m) && mask[k..].iter().all(|&m| !m));
+        let config = KrigingConfig {
+            model: kriging::ModelChoice::Given(
+                kriging::Variogram::new(kriging::VariogramModel::Gaussian, 1e-3, 1.0, 1.0, 1.0)
+                    .unwrap(),
+            ),
+            ..KrigingConfig::default()
+        };
+        let sq = |v: &Mat<f64>, m: &[bool]| {
+            let e = Kriging::fit(params.as_ref(), v.as_ref(), &config)
+                .unwrap()
+                .loo_errors()
+                .unwrap();
+            (0..e.ncols())
+                .filter(|&j| m[j])
+                .map(|j| e.col(j).iter().map(|x| x * x).sum::<f64>())
+                .sum::<f64>()
+        };
+        let not = |m: &[bool]| m.iter().map(|b| !b).collect::<Vec<_>>();
+        for (full, small) in [
+            (sq(&values, &scored), sq(&c, &mask)),
+            (sq(&values, &not(&scored)), sq(&c, &not(&mask))),
+        ] {
+            assert!((full - small).abs() <= 1e-4 * full, "{full} vs {small}");
+        }
     }
 }

@@ -67,6 +67,23 @@ pub const STYLE_WEIGHTS: [f64; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 /// fewer takes).
 pub const STYLE_FOLDS: usize = 5;
 
+/// Above this many samples the build's kriging stage (control selection, style weight, variogram
+/// search, quality guard) works on the value columns compressed to their leading directions
+/// ([`kriging::compress_columns`], keeping all but [`VALUES_REL_ENERGY`] of the centred values'
+/// squared norm): what it measures (squared distances between samples, squared prediction errors)
+/// is kept to that fraction, and its products shrink from `P T` columns to a few hundred. Up to
+/// it the values are used as they are (the models of the shared sets are unchanged).
+pub const COMPRESS_VALUES_ABOVE: usize = 1000;
+
+/// The share of the centred values' squared norm that [`COMPRESS_VALUES_ABOVE`]'s compression may
+/// leave out.
+pub const VALUES_REL_ENERGY: f64 = 1e-6;
+
+/// Above this many samples the build's control selection (and the quality guard's leave-one-out
+/// rule) decides on whole takes holding at most this many samples (`crate::build`'s
+/// `selection_rows`); the kriging over the controls kept is fitted on every sample.
+pub const SELECT_MAX_SAMPLES: usize = 1200;
+
 /// Folds of the build's control selection by cross-validation by take
 /// ([`BuildConfig::control_margin`]); it needs at least 2 takes per fold, else the build selects
 /// by leave-one-out.

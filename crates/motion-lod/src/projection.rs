@@ -101,21 +101,17 @@ fn pinv_symmetric(m: &[f64], n: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Builds a runtime key tensor from an f64 decomposition and the kriging system.
+/// Builds a runtime key tensor from an f64 decomposition and the kriging system `kriging` (fitted
+/// on the same `S` samples, its scaled controls `C`).
 ///
-/// - `kriging_rows`: the first `S` rows of `A^{-1}`, `A = [Gamma 1; 1^T 0]` (appendix A),
-///   as an `S x (S + 1)` column-major matrix, so that `b(c) = kriging_rows [gamma(c); 1]`;
-/// - `controls`: the scaled sample controls, `S x d` column-major (as in [`ControlSpace`]).
-///
-/// Computes `Q = U_S^T A^{-1}[:S, :]` and `V = U_S^T C^+` with
-/// `C^+ = C^T (C C^T)^+` (eq. 8's `F = K C^+` then equals `Z_(12) V`), and stores
-/// everything in f32.
+/// Computes `Q = U_S^T A^{-1}[:S, :]` ([`kriging::Kriging::project_rows`], `A = [Gamma 1; 1^T 0]`
+/// of appendix A) and `V = U_S^T C^+` with `C^+ = C^T (C C^T)^+` (eq. 8's `F = K C^+` then equals
+/// `Z_(12) V`), and stores everything in f32.
 pub fn key_tensor(
     f: &KeyFactors<'_>,
     p: usize,
     t: usize,
-    kriging_rows: &[f64],
-    controls: &[f64],
+    kriging: &kriging::Kriging,
 ) -> Result<KeyTensor, ModelError> {
     let r = f.ranks;
     if r.s == 0 {
@@ -129,29 +125,22 @@ pub fn key_tensor(
     len_check("core", f.core, r.core_len())?;
     len_check("u_p", f.u_p, p * r.p)?;
     len_check("u_t", f.u_t, t * r.t)?;
-    len_check("kriging_rows", kriging_rows, s * (s + 1))?;
-    if controls.len() % s != 0 || controls.is_empty() {
+    let scaled = kriging.scaled_params();
+    if kriging.n_samples() != s {
         return Err(ModelError::Length {
-            what: "controls (S x d)".into(),
-            expected: s * (controls.len() / s).max(1),
-            found: controls.len(),
+            what: "kriging samples (S)".into(),
+            expected: s,
+            found: kriging.n_samples(),
         });
     }
-    let d = controls.len() / s;
-    len_check("controls", controls, s * d)?;
+    let d = scaled.ncols();
     let dc = d + 1;
     // C[m, i] = c_i[m] (m < d), 1 (m = d).
-    let cmat = |m: usize, i: usize| if m < d { controls[i + s * m] } else { 1.0 };
-
-    let nq = r.s;
-    let mut q = vec![0.0f64; nq * (s + 1)];
-    for j in 0..=s {
-        let acol = &kriging_rows[s * j..][..s];
-        let qcol = &mut q[nq * j..][..nq];
-        for (ql, ucol) in qcol.iter_mut().zip(f.u_s.chunks_exact(s)) {
-            *ql = ucol.iter().zip(acol).map(|(u, a)| u * a).sum();
-        }
-    }
+    let cmat = |m: usize, i: usize| if m < d { scaled[(i, m)] } else { 1.0 };
+    let q = projection_rows(
+        kriging,
+        faer::MatRef::from_column_major_slice(f.u_s, s, r.s),
+    )?;
 
     // M = C C^T, B = C U_S ((d+1) x R_S); V = B^T M^+.
     let mut mm = vec![0.0f64; dc * dc];
@@ -178,7 +167,7 @@ pub fn key_tensor(
         core: to_f32(f.core),
         u_p: to_f32(f.u_p),
         u_t: to_f32(f.u_t),
-        projection: to_f32(&q),
+        projection: q,
         trend: to_f32(&v),
     })
 }
@@ -243,33 +232,50 @@ pub fn control_space(
     })
 }
 
-/// Sets [`ControlSpace::projection`] `= C A^{-1}[:S, :]` from the same inputs as
-/// [`key_tensor`]: `kriging_rows` (`S x (S + 1)` column-major, the first `S` rows of
-/// `A^{-1}`) and the scaled sample controls `controls` (`S x d` column-major, f64).
+/// Sets [`ControlSpace::projection`] `= C A^{-1}[:S, :]` from the kriging system over the same
+/// samples ([`kriging::Kriging::project_rows`] of `C^T`, `C` its scaled controls with a row of
+/// ones).
 pub fn with_projection(
     mut space: ControlSpace,
-    kriging_rows: &[f64],
-    controls: &[f64],
+    kriging: &kriging::Kriging,
 ) -> Result<ControlSpace, ModelError> {
     let d = space.offset.len();
     let s = space.samples.len() / d.max(1);
-    len_check("kriging_rows", kriging_rows, s * (s + 1))?;
-    len_check("controls", controls, s * d)?;
-    let dc = d + 1;
-    let mut out = vec![0.0f32; dc * (s + 1)];
-    for j in 0..=s {
-        let acol = &kriging_rows[s * j..][..s];
-        for m in 0..dc {
-            let v: f64 = if m < d {
-                (0..s).map(|i| controls[i + s * m] * acol[i]).sum()
-            } else {
-                acol.iter().sum()
-            };
-            out[m + dc * j] = v as f32;
-        }
+    let scaled = kriging.scaled_params();
+    if kriging.n_samples() != s || scaled.ncols() != d {
+        return Err(ModelError::Length {
+            what: "kriging samples x controls (S x d)".into(),
+            expected: s * d,
+            found: kriging.n_samples() * scaled.ncols(),
+        });
     }
-    space.projection = out;
+    let ct = faer::Mat::from_fn(s, d + 1, |i, m| if m < d { scaled[(i, m)] } else { 1.0 });
+    space.projection = projection_rows(kriging, ct.as_ref())?;
     Ok(space)
+}
+
+/// [`kriging::Kriging::project_rows`] of `u` in f32, column-major (`m x (S + 1)`).
+fn projection_rows(
+    kriging: &kriging::Kriging,
+    u: faer::MatRef<'_, f64>,
+) -> Result<Vec<f32>, ModelError> {
+    let q = kriging.project_rows(u).map_err(|e| ModelError::Length {
+        what: format!("kriging projection ({e})"),
+        expected: kriging.n_samples(),
+        found: u.nrows(),
+    })?;
+    let (m, n) = q.shape();
+    let out: Vec<f32> = (0..n)
+        .flat_map(|j| (0..m).map(move |l| (l, j)))
+        .map(|(l, j)| q[(l, j)] as f32)
+        .collect();
+    if let Some(index) = out.iter().position(|x| !x.is_finite()) {
+        return Err(ModelError::NonFinite {
+            what: "kriging projection".into(),
+            index,
+        });
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
