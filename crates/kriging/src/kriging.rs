@@ -7,7 +7,9 @@ use crate::config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoi
 use crate::empirical::{EmpiricalVariogram, PairDistances};
 use crate::error::KrigingError;
 use crate::fit::{FitOptions, fit_variogram};
-use crate::linalg::{CheckedLu, checked_inverse_of, matmul, matmul_par_cols, sym_pinv};
+use crate::linalg::{
+    CheckedLu, checked_inverse_of, from_fn_par, matmul, matmul_par_cols, sym_pinv,
+};
 use crate::scaling::ParamScaling;
 use crate::variogram::{Variogram, VariogramModel};
 use std::sync::OnceLock;
@@ -199,7 +201,7 @@ fn kriging_inverse(
     v: &Variogram,
 ) -> Result<Mat<f64>, KrigingError> {
     let entry = kriging_entries(dist, s, v)?;
-    checked_inverse_of(Mat::from_fn(s + 1, s + 1, &entry), &entry, true, "kriging")
+    checked_inverse_of(from_fn_par(s + 1, s + 1, &entry), &entry, true, "kriging")
 }
 
 /// The kriging matrix's factorisation for a system above [`EAGER_INVERSE_MAX_SAMPLES`] samples
@@ -210,7 +212,7 @@ fn kriging_factor(
     v: &Variogram,
 ) -> Result<CheckedLu, KrigingError> {
     let entry = kriging_entries(dist, s, v)?;
-    CheckedLu::factor(Mat::from_fn(s + 1, s + 1, &entry), &entry, "kriging")
+    CheckedLu::factor(from_fn_par(s + 1, s + 1, &entry), &entry, "kriging")
 }
 
 /// Up to this many samples a fit forms the inverse of its kriging system at once (leave-one-out,
