@@ -50,3 +50,53 @@ fn a_grown_set_is_the_data_then_taller_and_shorter_performers() {
         "growing to the data's own size is refused"
     );
 }
+
+/// A set past every large-set threshold of the build (compressed values, the control selection on
+/// whole takes, the kriging system kept as LU factors and factorised by panels on every thread)
+/// builds the same model file, byte for byte, on pools of one and two threads, and its level 0
+/// reproduces the training cycles about as well as the set it was grown from.
+#[test]
+fn a_large_grown_set_builds_the_same_model_on_any_pool() {
+    use motion_lod::build::{BuildConfig, COMPRESS_VALUES_ABOVE, SELECT_MAX_SAMPLES};
+    use motion_lod::model::MotionModel;
+    use motion_lod::progress::NoProgress;
+    let data = DataSpec::default()
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("fixtures load")
+        .training;
+    // Past the kriging crate's EAGER_INVERSE_MAX_SAMPLES (1,000) too.
+    let n = SELECT_MAX_SAMPLES.max(COMPRESS_VALUES_ABOVE).max(1000) + 60;
+    let set = grown(&data, n).expect("grows");
+    let build = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a pool");
+        let model = pool
+            .install(|| MotionModel::build(&set, &BuildConfig::default(), &NoProgress))
+            .expect("the large set builds");
+        let bytes = motion_lod::model_file::encode(&model, std::path::Path::new("large.mlod"))
+            .expect("encodes");
+        (model, bytes)
+    };
+    let (model, one) = build(1);
+    let (_, two) = build(2);
+    assert!(
+        one == two,
+        "one and two threads built different model files"
+    );
+    let small = MotionModel::build(&data, &BuildConfig::default(), &NoProgress).expect("builds");
+    let fit = |m: &MotionModel| m.report.keys[0].rel_error;
+    let (large, base) = (fit(&model), fit(&small));
+    assert!(
+        large.is_finite() && large < 2.0 * base + 0.01,
+        "key 0 of the grown set leaves {large} of the data, of the original {base}"
+    );
+    let kept = model
+        .report
+        .control_decisions
+        .iter()
+        .filter(|d| !d.dropped())
+        .count();
+    assert!(kept >= 1, "the selection on whole takes kept a control");
+}
