@@ -263,8 +263,32 @@ pub fn run(config: &ScalingConfig) -> Result<()> {
             rows.push((n, threads, Some(outcome)));
         }
     }
+    let figure = figure_path(&config.out);
+    let points: Vec<(usize, usize, f64, f64)> = rows
+        .iter()
+        .filter_map(|(n, t, o)| match o {
+            Some(Outcome::Done(m)) => Some((*n, *t, m.build_s, m.peak_bytes as f64 / 1e9)),
+            _ => None,
+        })
+        .collect();
+    if let Some(dir) = figure.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let name = config
+        .data
+        .file_name()
+        .map_or_else(|| "data".into(), |n| n.to_string_lossy().into_owned());
+    crate::tables::figures::scaling_figure(&figure, &points, &name)?;
     let doc = document(config, &rows);
     std::fs::write(&config.out, doc).with_context(|| format!("writing {}", config.out.display()))
+}
+
+/// The curve's SVG beside the document: `figures/scaling.svg` in its folder.
+fn figure_path(out: &Path) -> PathBuf {
+    out.parent()
+        .unwrap_or_else(|| Path::new("."))
+        .join("figures")
+        .join("scaling.svg")
 }
 
 fn document(config: &ScalingConfig, rows: &[(usize, usize, Option<Outcome>)]) -> String {
@@ -289,6 +313,10 @@ fn document(config: &ScalingConfig, rows: &[(usize, usize, Option<Outcome>)]) ->
         std::thread::available_parallelism().map_or(0, |n| n.get()),
         config.data.display(),
         config.limit.as_secs()
+    );
+    let _ = writeln!(
+        doc,
+        "![Build time and peak memory against the cycles, per thread count](figures/scaling.svg)\n"
     );
     let _ = writeln!(
         doc,

@@ -280,6 +280,56 @@ pub fn quality_figure(
     Ok(())
 }
 
+/// `cargo xtask scaling`'s curve: the build's wall time (s, log scale) and peak memory (GB) against
+/// the cycles, one line per thread count. `points` are `(cycles, threads, build s, peak GB)` of the
+/// builds that finished.
+pub fn scaling_figure(path: &Path, points: &[(usize, usize, f64, f64)], data: &str) -> Result<()> {
+    let root = SVGBackend::new(path, (1200, 480)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (left, right) = root.split_horizontally(600);
+    let mut threads: Vec<usize> = points.iter().map(|p| p.1).collect();
+    threads.sort_unstable();
+    threads.dedup();
+    let names: Vec<String> = threads
+        .iter()
+        .map(|t| format!("{t} thread{}", if *t == 1 { "" } else { "s" }))
+        .collect();
+    let series = |y: fn(&(usize, usize, f64, f64)) -> f64| -> Vec<Series<'_>> {
+        threads
+            .iter()
+            .zip(&names)
+            .enumerate()
+            .map(|(k, (&t, name))| Series {
+                name,
+                color: COLORS[k % COLORS.len()],
+                points: points
+                    .iter()
+                    .filter(|p| p.1 == t)
+                    .map(|p| (p.0 as f64, y(p)))
+                    .collect(),
+            })
+            .collect()
+    };
+    panel(
+        &left,
+        &format!("Build time ({data})"),
+        "cycles",
+        "s (log scale)",
+        &series(|p| p.2),
+        true,
+    )?;
+    panel(
+        &right,
+        "Peak resident memory",
+        "cycles",
+        "GB",
+        &series(|p| p.3),
+        false,
+    )?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
