@@ -1,5 +1,6 @@
-//! Small dense linear-algebra helpers on faer, all single-threaded (`Par::Seq`) so that results are
-//! bit-identical whatever the size of rayon's pool.
+//! Small dense linear-algebra helpers on faer. Every faer call is single-threaded (`Par::Seq`);
+//! the parallel ones split their work into fixed column blocks, each computed alone, so that results
+//! are bit-identical whatever the size of rayon's pool.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, inverse, solve};
@@ -512,27 +513,43 @@ pub(crate) fn matmul_par_cols(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64
 /// assert!((d(&x, 1, 4) - d(&c, 1, 4)).abs() < 1e-9);
 /// ```
 pub fn compress_columns(values: MatRef<'_, f64>, rel_energy: f64) -> Mat<f64> {
+    leading_columns(values, |vals| {
+        // Ascending eigenvalues: keep the leading ones until the rest is within `rel_energy`.
+        let n = vals.len();
+        let total: f64 = vals.iter().map(|v| v.max(0.0)).sum();
+        if total <= 0.0 || !total.is_finite() {
+            return 1;
+        }
+        let mut rest = total;
+        let mut k = 0;
+        while k < n && rest > rel_energy * total {
+            rest -= vals[n - 1 - k].max(0.0);
+            k += 1;
+        }
+        k
+    })
+}
+
+/// `X V_k`: the values (S x D) projected on their `k` leading right singular vectors, `k` chosen by
+/// `keep` from the Gram matrix's eigenvalues (ascending) and clamped to `1..=min(S, D)`; a copy of
+/// the values when `k` is `D`. From the smaller Gram matrix: `X X^t` (then `X V_k = Q_k
+/// Lambda_k^(1/2)`, single-threaded) or `X^t X` (then `V_k` itself, the products in fixed column
+/// blocks). The eigendecomposition is single-threaded: deterministic; the signs are the
+/// eigensolver's.
+pub(crate) fn leading_columns(
+    values: MatRef<'_, f64>,
+    keep: impl FnOnce(&[f64]) -> usize,
+) -> Mat<f64> {
     let (s, dv) = values.shape();
     let gram_rows = s <= dv;
     let gram = if gram_rows {
-        matmul_par_cols(values, values.transpose())
+        matmul(values, values.transpose())
     } else {
         matmul_par_cols(values.transpose(), values)
     };
     let (vals, vecs) = sym_eigen(gram.as_ref());
     let n = vals.len();
-    let total: f64 = vals.iter().map(|v| v.max(0.0)).sum();
-    if total <= 0.0 || !total.is_finite() {
-        return Mat::zeros(s, 1);
-    }
-    // Ascending eigenvalues: keep the leading ones until the rest is within `rel_energy`.
-    let mut rest = total;
-    let mut k = 0;
-    while k < n && rest > rel_energy * total {
-        rest -= vals[n - 1 - k].max(0.0);
-        k += 1;
-    }
-    let k = k.max(1);
+    let k = keep(&vals).clamp(1, n.max(1));
     if k >= dv {
         return values.to_owned();
     }
@@ -545,6 +562,11 @@ pub fn compress_columns(values: MatRef<'_, f64>, rel_energy: f64) -> Mat<f64> {
         let v = Mat::from_fn(dv, k, |i, j| vecs[(i, n - 1 - j)]);
         matmul_par_cols(values, v.as_ref())
     }
+}
+
+/// The rows `rows` of `m`, in that order.
+pub(crate) fn select_rows(m: MatRef<'_, f64>, rows: &[usize]) -> Mat<f64> {
+    Mat::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)])
 }
 
 #[cfg(test)]

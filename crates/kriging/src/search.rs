@@ -54,7 +54,6 @@ use crate::empirical::{EmpiricalVariogram, PairDistances};
 use crate::error::KrigingError;
 use crate::fit::{FitOptions, fit_variogram};
 use crate::kriging::Kriging;
-use crate::linalg::{matmul, sym_eigen};
 use crate::variogram::{Variogram, VariogramModel};
 
 /// Models of the grid (bounded ones: their range is the shape parameter searched).
@@ -88,21 +87,13 @@ pub fn search_rows(s: usize) -> Vec<usize> {
     }
 }
 
-/// `X V_k`: the values (S x D) projected on their `k` leading right singular vectors (from the
-/// eigenvectors of `X X^t`: `X V_k = Q_k Lambda_k^(1/2)`). Returned unchanged when `D <= k`.
+/// `X V_k`: the values (S x D) projected on their `k` leading right singular vectors
+/// ([`crate::linalg::leading_columns`]). Returned unchanged when `D <= k`.
 pub(crate) fn compress(values: MatRef<'_, f64>, k: usize) -> Mat<f64> {
     if values.ncols() <= k {
         return values.to_owned();
     }
-    let gram = matmul(values, values.transpose());
-    let (vals, vecs) = sym_eigen(gram.as_ref());
-    // Ascending eigenvalues: the last k are the leading ones.
-    let n = vals.len();
-    let k = k.min(n);
-    Mat::from_fn(values.nrows(), k, |i, j| {
-        let col = n - 1 - j;
-        vecs[(i, col)] * vals[col].max(0.0).sqrt()
-    })
+    crate::linalg::leading_columns(values, |_| k)
 }
 
 /// Mean distance between distinct samples.

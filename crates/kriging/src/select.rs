@@ -446,9 +446,7 @@ pub fn select_dims_by_folds(
         sc
     };
     // The held-out RMSE of the dimensions `on` (infinite when a fold's fit fails).
-    let rows = |idx: &[usize], m: MatRef<'_, f64>| {
-        faer::Mat::from_fn(idx.len(), m.ncols(), |i, j| m[(idx[i], j)])
-    };
+    let rows = |idx: &[usize], m: MatRef<'_, f64>| crate::linalg::select_rows(m, idx);
     let cv = |on: &[usize]| -> f64 {
         let cfg = with_scaling(&only(on), &trial_model);
         let per_fold: Vec<Option<(f64, usize)>> = (0..folds)

@@ -59,17 +59,14 @@ fn misuse_is_a_status_with_a_message() {
         assert_eq!(mlod_model_load(path.as_ptr(), &mut other), MlodStatus::Io);
         assert!(message().contains("/no/such/model.mlod"), "{}", message());
 
-        let (mut levels, mut joints, mut animated, mut pose_len) = (0, 0, 0, 0);
-        assert_eq!(
-            mlod_model_sizes(
-                model,
-                &mut levels,
-                &mut joints,
-                &mut animated,
-                &mut pose_len
-            ),
-            MlodStatus::Ok
-        );
+        let common::ModelFacts {
+            levels,
+            joints,
+            animated,
+            pose_len,
+            lo,
+            hi,
+        } = common::model_facts(model);
         assert_eq!(pose_len, 7 + 3 * animated);
         assert!(levels >= 3 && joints > animated && animated > 0);
 
@@ -95,12 +92,6 @@ fn misuse_is_a_status_with_a_message() {
         assert_eq!(
             mlod_walker_pose(walker, model, 0.0, pose.as_mut_ptr(), pose.len()),
             MlodStatus::NotPrepared
-        );
-        let mut lo = MlodControls::default();
-        let mut hi = MlodControls::default();
-        assert_eq!(
-            mlod_model_control_range(model, &mut lo, &mut hi),
-            MlodStatus::Ok
         );
         let nan = MlodControls {
             turn: f32::NAN,
@@ -194,34 +185,9 @@ fn misuse_is_a_status_with_a_message() {
     }
 }
 
-/// A model from `model_bytes`.
-fn load() -> *mut MlodModel {
-    let bytes = model_bytes();
-    let mut model: *mut MlodModel = null_mut();
-    // SAFETY: the bytes are readable and `model` writable.
-    let status = unsafe { mlod_model_from_bytes(bytes.as_ptr(), bytes.len(), &mut model) };
-    assert_eq!(status, MlodStatus::Ok);
-    model
-}
-
-/// The model's sizes: (levels, joints, animated joints).
-fn sizes(model: *const MlodModel) -> (usize, usize, usize) {
-    let (mut levels, mut joints, mut animated) = (0, 0, 0);
-    // SAFETY: live model, writable outputs.
-    let status =
-        unsafe { mlod_model_sizes(model, &mut levels, &mut joints, &mut animated, null_mut()) };
-    assert_eq!(status, MlodStatus::Ok);
-    (levels, joints, animated)
-}
-
-/// Mid-range controls of `model`.
-fn middle(model: *const MlodModel) -> MlodControls {
-    let (mut lo, mut hi) = (MlodControls::default(), MlodControls::default());
-    // SAFETY: live model, writable outputs.
-    assert_eq!(
-        unsafe { mlod_model_control_range(model, &mut lo, &mut hi) },
-        MlodStatus::Ok
-    );
+/// Mid-range controls of a model ([`common::model_facts`]).
+fn middle(facts: &common::ModelFacts) -> MlodControls {
+    let (lo, hi) = (facts.lo, facts.hi);
     MlodControls {
         dx: 0.5 * (lo.dx + hi.dx),
         dz: 0.5 * (lo.dz + hi.dz),
@@ -259,10 +225,11 @@ fn the_version_is_the_crate_s_and_the_abi_the_header_s() {
 
 #[test]
 fn walking_misuse_is_a_status_with_a_message() {
-    let model = load();
-    let second = load();
-    let (levels, joints, animated) = sizes(model);
-    let controls = middle(model);
+    let model = common::load_model();
+    let second = common::load_model();
+    let facts = common::model_facts(model);
+    let (levels, joints, animated) = (facts.levels, facts.joints, facts.animated);
+    let controls = middle(&facts);
     let full = MlodDetail {
         level: 0,
         joints: animated as u32,
@@ -684,9 +651,10 @@ fn walking_misuse_is_a_status_with_a_message() {
 /// `mlod_walker_advance` each do, bit for bit, and refuses a bad list before moving any walker.
 #[test]
 fn a_crowd_step_is_the_walkers_steps_and_checks_first() {
-    let model = load();
-    let (_, _, animated) = sizes(model);
-    let controls = middle(model);
+    let model = common::load_model();
+    let facts = common::model_facts(model);
+    let animated = facts.animated;
+    let controls = middle(&facts);
     let cam = camera();
     let detail = MlodDetail {
         level: 0,

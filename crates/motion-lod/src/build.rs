@@ -283,10 +283,9 @@ impl ControlFit {
 
     /// This fit restricted to the samples `rows` (same settings and scored columns).
     fn rows(&self, rows: &[usize]) -> ControlFit {
-        let pick = |m: &Mat<f64>| Mat::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
         ControlFit {
-            params: pick(&self.params),
-            values: pick(&self.values),
+            params: select_rows(self.params.as_ref(), rows),
+            values: select_rows(self.values.as_ref(), rows),
             scored: self.scored.clone(),
             kriging_config: self.kriging_config.clone(),
             dropped_for_samples: self.dropped_for_samples.clone(),
@@ -583,17 +582,19 @@ fn fold_squared_error(
     f: usize,
 ) -> Result<(f64, usize), BuildError> {
     let (test, train): (Vec<usize>, Vec<usize>) = (0..fold.len()).partition(|&i| fold[i] == f);
-    let rows = |idx: &[usize], m: faer::MatRef<'_, f64>| {
-        Mat::from_fn(idx.len(), m.ncols(), |i, j| m[(idx[i], j)])
-    };
     let k = Kriging::fit(
-        rows(&train, params.as_ref()).as_ref(),
-        rows(&train, values).as_ref(),
+        select_rows(params.as_ref(), &train).as_ref(),
+        select_rows(values, &train).as_ref(),
         config,
     )?;
-    let pred = k.predict_rows(rows(&test, params.as_ref()).as_ref())?;
+    let pred = k.predict_rows(select_rows(params.as_ref(), &test).as_ref())?;
     let sq = kriging::held_out_squared_error(pred.as_ref(), values, &test, Some(scored));
     Ok((sq, test.len()))
+}
+
+/// The rows `rows` of `m`, in that order.
+fn select_rows(m: faer::MatRef<'_, f64>, rows: &[usize]) -> Mat<f64> {
+    Mat::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)])
 }
 
 /// Column-major copy of a faer matrix.

@@ -125,7 +125,6 @@ pub fn key_tensor(
     len_check("core", f.core, r.core_len())?;
     len_check("u_p", f.u_p, p * r.p)?;
     len_check("u_t", f.u_t, t * r.t)?;
-    let scaled = kriging.scaled_params();
     if kriging.n_samples() != s {
         return Err(ModelError::Length {
             what: "kriging samples (S)".into(),
@@ -133,10 +132,10 @@ pub fn key_tensor(
             found: kriging.n_samples(),
         });
     }
-    let d = scaled.ncols();
-    let dc = d + 1;
-    // C[m, i] = c_i[m] (m < d), 1 (m = d).
-    let cmat = |m: usize, i: usize| if m < d { scaled[(i, m)] } else { 1.0 };
+    // C ((d + 1) x S): column i is [c_i; 1].
+    let c = kriging.augmented_params();
+    let dc = c.nrows();
+    let cmat = |m: usize, i: usize| c[(m, i)];
     let q = projection_rows(
         kriging,
         faer::MatRef::from_column_major_slice(f.u_s, s, r.s),
@@ -249,8 +248,7 @@ pub fn with_projection(
             found: kriging.n_samples() * scaled.ncols(),
         });
     }
-    let ct = faer::Mat::from_fn(s, d + 1, |i, m| if m < d { scaled[(i, m)] } else { 1.0 });
-    space.projection = projection_rows(kriging, ct.as_ref())?;
+    space.projection = projection_rows(kriging, kriging.augmented_params().transpose())?;
     Ok(space)
 }
 
