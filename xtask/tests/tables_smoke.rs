@@ -59,7 +59,10 @@ fn tables_pipeline_writes_every_section_and_figure() {
             "missing frame-time row {row:?} in:\n{doc}"
         );
     }
-    assert!(doc.contains("| worst / median | goal |"), "{doc}");
+    assert!(
+        doc.contains("| worst / median | goal | fixed work: worst / median |"),
+        "{doc}"
+    );
     for f in ["figure4.svg", "figure5.svg", "quality.svg"] {
         let svg = std::fs::read_to_string(figures.join(f)).expect("figure written");
         assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{f}");

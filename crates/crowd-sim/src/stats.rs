@@ -129,6 +129,25 @@ pub struct FrameTimes {
 }
 
 impl FrameTimes {
+    /// Median, 99th percentile and worst of `seconds` (frame times in seconds, any order;
+    /// nearest-rank percentiles: the value at rank `ceil(q n)` of the `n` sorted times); `None` when
+    /// `seconds` is empty. [`CrowdReport::frame_times`] takes its figures from here.
+    pub fn of_seconds(seconds: &[f64]) -> Option<FrameTimes> {
+        if seconds.is_empty() {
+            return None;
+        }
+        let mut v = seconds.to_vec();
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        let rank = |q: f64| v[((q * n as f64).ceil() as usize).clamp(1, n) - 1] * 1e3;
+        Some(FrameTimes {
+            frames: n,
+            p50_ms: rank(0.5),
+            p99_ms: rank(0.99),
+            worst_ms: v[n - 1] * 1e3,
+        })
+    }
+
     /// The slowest frame over the median (1 for perfectly even frames).
     pub fn worst_over_median(&self) -> f64 {
         self.worst_ms / self.p50_ms.max(1e-12)
@@ -183,19 +202,7 @@ impl CrowdReport {
     /// (nearest-rank percentiles: the value at rank `ceil(q n)` of the `n` sorted times); `None`
     /// when no frame is left.
     pub fn frame_times(&self, warmup: usize) -> Option<FrameTimes> {
-        let mut v: Vec<f64> = self.frame_s.get(warmup..)?.to_vec();
-        if v.is_empty() {
-            return None;
-        }
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        let rank = |q: f64| v[((q * n as f64).ceil() as usize).clamp(1, n) - 1] * 1e3;
-        Some(FrameTimes {
-            frames: n,
-            p50_ms: rank(0.5),
-            p99_ms: rank(0.99),
-            worst_ms: v[n - 1] * 1e3,
-        })
+        FrameTimes::of_seconds(self.frame_s.get(warmup..)?)
     }
 
     /// Mean stage timings per frame.

@@ -19,7 +19,8 @@
 //!
 //! Frame times ([`measure_frame_times`]): the model under its policy at 100,000 and 1,000,000 walkers
 //! on each thread count, the median, 99th percentile and slowest of 150 frames after the warm-up, and
-//! the clip builds per frame.
+//! the clip builds per frame, beside the same number of frames of fixed work of the same length on
+//! the same pool ([`fixed_work_times`]): the spread the machine gives any frame.
 
 use std::time::Instant;
 
@@ -104,6 +105,10 @@ pub struct FrameTimeRow {
     pub builds_median: usize,
     /// The most clip kernels one timed frame built.
     pub builds_max: usize,
+    /// The same number of frames of fixed work on the same pool, sized to this row's median
+    /// ([`fixed_work_times`]), run right after it: the spread the machine itself gives a frame of
+    /// that length.
+    pub fixed_work: FrameTimes,
 }
 
 /// Frame times of the model under the distance policy at each of `sizes`, in both scenes, on each of
@@ -135,6 +140,7 @@ pub fn measure_frame_times(
                         )
                     })?;
                 let times = run.report.frame_times(0).context("no timed frame")?;
+                let fixed_work = fixed_work_times(t, times.p50_ms, size.frames)?;
                 let mut builds = run.builds;
                 builds.sort_unstable();
                 rows.push(FrameTimeRow {
@@ -144,12 +150,70 @@ pub fn measure_frame_times(
                     times,
                     builds_median: builds[(builds.len() - 1) / 2],
                     builds_max: builds.last().copied().unwrap_or(0),
+                    fixed_work,
                 });
                 progress.inc(1);
             }
         }
     }
     Ok(rows)
+}
+
+/// Tasks of [`fixed_work_times`]'s calibration frame.
+const FIXED_WORK_TASKS: usize = 256;
+
+/// One task of fixed work: [`FIXED_WORK_ROUNDS`] rounds of multiply-adds over 64 doubles on the
+/// stack (in the first-level cache: no memory traffic, no allocation, no lock), about 20 µs.
+fn fixed_task(seed: usize) -> f64 {
+    let mut v = [0.0f64; 64];
+    for (i, x) in v.iter_mut().enumerate() {
+        *x = (seed * 64 + i) as f64 * 1e-6;
+    }
+    for round in 0..FIXED_WORK_ROUNDS {
+        let c = 1e-9 * round as f64;
+        for x in &mut v {
+            *x = *x * 0.999_999 + c;
+        }
+    }
+    v.iter().sum()
+}
+
+/// Rounds of one [`fixed_task`].
+const FIXED_WORK_ROUNDS: usize = 2_000;
+
+/// Times of one frame of `tasks` [`fixed_task`]s spread over the current pool the way the crowd
+/// spreads its chunks of walkers (rayon's work stealing), seconds.
+fn fixed_work_frame(tasks: usize) -> f64 {
+    use rayon::prelude::*;
+    let t0 = Instant::now();
+    let sum: f64 = (0..tasks).into_par_iter().map(fixed_task).sum();
+    std::hint::black_box(sum);
+    t0.elapsed().as_secs_f64()
+}
+
+/// The machine's own frame-time spread at a frame of `median_ms` on a pool of `threads`: `frames`
+/// frames of the same fixed work (equal tasks of arithmetic in the first-level cache, spread over
+/// the pool by work stealing as the crowd's chunks are), sized so that a frame takes about
+/// `median_ms`, after ten untimed frames. Every frame does the same operations, so a slow one is the
+/// machine (another process, the hypervisor, the clock), not the work: a crowd's slowest frame over
+/// its median can be read against this one's.
+pub fn fixed_work_times(threads: usize, median_ms: f64, frames: usize) -> Result<FrameTimes> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("thread pool")?
+        .install(|| {
+            // Calibration: the median of nine frames of FIXED_WORK_TASKS tasks.
+            let mut probe: Vec<f64> = (0..9).map(|_| fixed_work_frame(FIXED_WORK_TASKS)).collect();
+            probe.sort_by(f64::total_cmp);
+            let per_task_ms = probe[4] * 1e3 / FIXED_WORK_TASKS as f64;
+            let tasks = ((median_ms / per_task_ms).round() as usize).max(threads);
+            for _ in 0..10 {
+                fixed_work_frame(tasks);
+            }
+            let seconds: Vec<f64> = (0..frames).map(|_| fixed_work_frame(tasks)).collect();
+            FrameTimes::of_seconds(&seconds).context("no fixed-work frame")
+        })
 }
 
 /// Which detail policy a run used.
@@ -566,4 +630,20 @@ pub fn find<'a>(
 /// Mean frame-time of `a` over that of `b` inverted: `fps(a) / fps(b)`, when both ran.
 pub fn ratio(a: Option<&CrowdRow>, b: Option<&CrowdRow>) -> Option<f64> {
     Some(a?.fps()? / b?.fps()?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_work_frames_are_timed_on_the_pool_asked_for() {
+        for threads in [1, 2] {
+            let t = fixed_work_times(threads, 1.0, 7).unwrap();
+            assert_eq!(t.frames, 7);
+            assert!(t.p50_ms > 0.0 && t.p50_ms <= t.p99_ms && t.p99_ms <= t.worst_ms);
+        }
+        // The work is arithmetic that depends on its task: it cannot be folded away.
+        assert_ne!(fixed_task(0), fixed_task(1));
+    }
 }
