@@ -258,6 +258,84 @@ fn the_output_says_only_what_was_asked_or_must_be_known() {
     assert!(stderr.contains("loading /nonexistent/takes"), "{stderr}");
     assert!(!stderr.contains("dtw (band"), "{stderr}");
 
+    // An output that cannot be written is refused before the work, naming the flag and the path.
+    let nowhere = |name: &str| {
+        dir.join("no-such-folder")
+            .join(name)
+            .to_str()
+            .unwrap()
+            .to_string()
+    };
+    let m = model.to_str().unwrap();
+    for (args, flag) in [
+        (
+            vec![
+                "crowd",
+                m,
+                "--walkers",
+                "20",
+                "--seconds",
+                "1",
+                "--export",
+                &nowhere("c.glb"),
+            ],
+            "--export",
+        ),
+        (vec!["cycles", "--tensor", &nowhere("t.npy")], "--tensor"),
+        (
+            vec!["cycles", "--controls", &nowhere("c.csv")],
+            "--controls",
+        ),
+        (
+            vec![
+                "synth",
+                m,
+                "--dx",
+                "0",
+                "--dz",
+                "1",
+                "--turn",
+                "0",
+                "-o",
+                &nowhere("w.bvh"),
+            ],
+            "cannot write",
+        ),
+    ] {
+        let (ok, stdout, stderr) = run(&args);
+        assert!(!ok, "{args:?}");
+        assert!(
+            stderr.contains(flag) && stderr.contains("no-such-folder"),
+            "{args:?}: {stderr}"
+        );
+        assert!(stdout.is_empty(), "{args:?}: ran before refusing: {stdout}");
+    }
+
+    // Controls far outside the data's range are clamped, and the hull warning then names the
+    // clamped controls it measured, not the values given (it printed dx 1e30 beside "each control
+    // is in its range").
+    let (ok, _, stderr) = run(&[
+        "synth",
+        model.to_str().unwrap(),
+        "--dx",
+        "1e30",
+        "--dz",
+        "-1e30",
+        "--turn",
+        "0",
+        "-o",
+        dir.join("far.bvh").to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let hull = stderr
+        .lines()
+        .find(|l| l.contains("outside the data's hull"))
+        .unwrap_or_else(|| panic!("a hull warning for the clamped corner: {stderr}"));
+    assert!(
+        hull.contains("once clamped") && !hull.contains("e30") && !hull.contains("000000000"),
+        "{hull}"
+    );
+
     // `info m.mlod | head -1`, as a reader that goes away at once (`true` reads nothing): every
     // write of the report then meets a closed pipe.
     let out = Command::new("bash")

@@ -317,6 +317,8 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
                 path.display()
             );
         }
+        // Say now, not after the crowd has run, when the clip cannot be written where asked.
+        super::build::check_writable(path).context("--export")?;
     }
     if args.gpu {
         return super::gpu::run(&args);

@@ -96,6 +96,12 @@ struct Failure {
 
 /// Runs the subcommand.
 pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
+    // Say now, not after the data are read and aligned, when an output cannot be written.
+    for (flag, path) in [("--tensor", &args.tensor), ("--controls", &args.controls)] {
+        if let Some(path) = path {
+            super::build::check_writable(path).context(flag)?;
+        }
+    }
     let loaded = match load(
         &args.data.spec()?,
         args.data.style_spec().as_ref(),

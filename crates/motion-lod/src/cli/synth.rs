@@ -78,6 +78,7 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
         );
     }
     let glb = ext.as_deref() == Some("glb");
+    super::build::check_writable(&args.output)?;
     let model = MotionModel::load(&args.model)
         .with_context(|| format!("reading {}", args.model.display()))?;
     let range = model.control_range();
@@ -166,7 +167,8 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     // Each control in its range is not enough: the combination may lie beyond every take.
     let hull = motion_lod::hull::ControlHull::of(&model);
     let clamp = model.lod().controls();
-    let outside: Vec<(usize, f64)> = all
+    // The hull is measured, and the controls named, as the runtime uses them: clamped into range.
+    let outside: Vec<(usize, f64, Controls)> = all
         .iter()
         .enumerate()
         .map(|(i, c)| {
@@ -174,12 +176,13 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
             for (k, v) in a.iter_mut().enumerate() {
                 *v = v.clamp(clamp.min[k], clamp.max[k]);
             }
-            (i, hull.distance(&Controls::from_array(a)))
+            let clamped = Controls::from_array(a);
+            (i, hull.distance(&clamped), clamped)
         })
-        .filter(|&(_, dist)| dist > motion_lod::hull::HULL_TOLERANCE)
+        .filter(|&(_, dist, _)| dist > motion_lod::hull::HULL_TOLERANCE)
         .collect();
-    if let Some(&(i, dist)) = outside.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
-        let c = all[i];
+    if let Some(&(i, dist, c)) = outside.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
+        let was_clamped = c.to_array() != all[i].to_array();
         let which = if track.is_some() {
             format!(
                 "{} of the track's {} rows lie (the farthest, row {}: ",
@@ -191,13 +194,14 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
             "the controls lie (".to_string()
         };
         eprintln!(
-            "warning: {which}dx {:.3} m, dz {:.3} m, turn {:.1} deg) outside the data's hull, {dist:.2} \
-             standard deviations beyond any mix of the training controls: each control is in its \
-             range but no take walks like that, so the walk extrapolates and may pop or skate (see \
-             `motion-lod explain hull`)",
+            "warning: {which}dx {:.3} m, dz {:.3} m, turn {:.1} deg{}) outside the data's hull, \
+             {dist:.2} standard deviations beyond any mix of the training controls: each control is \
+             in its range but no take walks like that, so the walk extrapolates and may pop or skate \
+             (see `motion-lod explain hull`)",
             c.dx,
             c.dz,
-            c.turn.to_degrees()
+            c.turn.to_degrees(),
+            if was_clamped { ", once clamped" } else { "" }
         );
     }
     let req = WalkRequest {
