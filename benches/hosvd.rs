@@ -1,5 +1,8 @@
 //! HOSVD, HOOI and the key-level search at the paper's shape 94 x 100 x 186 (synthetic data with
-//! a decaying multilinear spectrum, `hosvd_als::synthetic::decaying_tucker`).
+//! a decaying multilinear spectrum, `hosvd_als::synthetic::decaying_tucker`), and ten HOOI sweeps
+//! at issue 35's Bandai shape (67 x 100 x 800, ranks 40, 40, 60) and at 10,000 samples (67 x 34 x
+//! 10,000, the key's ranks 29, 34, 60) on pools of one thread and of every core, for the speed-up
+//! the decomposition gets from more threads (its results are the same bits on any pool).
 //!
 //! Run: `cargo bench -p motion-lod-benches --bench hosvd`.
 
@@ -40,6 +43,42 @@ fn bench(c: &mut Criterion) {
         b.iter(|| key_levels(black_box(&x), &cfg).unwrap())
     });
     g.finish();
+    threads(c);
+}
+
+/// Ten HOOI sweeps at two larger shapes on one thread and on every core.
+fn threads(c: &mut Criterion) {
+    let ten = AlsOptions {
+        tol: 0.0,
+        max_iter: 10,
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut pools = vec![1];
+    if cores > 1 {
+        pools.push(cores);
+    }
+    for (dims, core, ranks) in [
+        ([67, 100, 800], [60, 60, 90], [40, 40, 60]),
+        ([67, 34, 10_000], [50, 34, 90], [29, 34, 60]),
+    ] {
+        let x = decaying_tucker(dims, core, 6.0, 0.01, 2).expect("synthetic tensor");
+        let mut g = c.benchmark_group(format!("hooi_{}x{}x{}", dims[0], dims[1], dims[2]));
+        g.sample_size(10);
+        for &t in &pools {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .expect("a thread pool");
+            g.bench_function(
+                format!(
+                    "10_sweeps_{}_{}_{}_{t}_threads",
+                    ranks[0], ranks[1], ranks[2]
+                ),
+                |b| b.iter(|| pool.install(|| hooi(black_box(&x), ranks, &ten).unwrap())),
+            );
+        }
+        g.finish();
+    }
 }
 
 criterion_group!(benches, bench);

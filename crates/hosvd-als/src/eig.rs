@@ -60,20 +60,13 @@ pub(crate) fn leading_mode2_vectors(
     dims: [usize; 3],
     r: usize,
 ) -> Result<Option<Mat<f64>>, HosvdError> {
-    use faer::linalg::matmul::matmul;
+    use tensor_ops::par::matmul_blocked;
     let (m, s) = (dims[0] * dims[1], dims[2]);
     debug_assert!(s > m && r <= m);
     // Columns of `y_mat` are the samples: Y_(2)^T.
     let y_mat = MatRef::from_column_major_slice(y, m, s);
     let mut h = Mat::<f64>::zeros(m, m);
-    matmul(
-        h.as_mut(),
-        faer::Accum::Replace,
-        y_mat,
-        y_mat.transpose(),
-        1.0,
-        Par::Seq,
-    );
+    matmul_blocked(h.as_mut(), y_mat, y_mat.transpose());
     let (values, v) = leading_eigen(h.as_ref(), r, 2)?;
     let top = values.first().copied().unwrap_or(0.0);
     // Also false for NaN: a leading value that is not clearly positive sends the caller back.
@@ -82,14 +75,7 @@ pub(crate) fn leading_mode2_vectors(
         return Ok(None);
     }
     let mut u = Mat::<f64>::zeros(s, r);
-    matmul(
-        u.as_mut(),
-        faer::Accum::Replace,
-        y_mat.transpose(),
-        v.as_ref(),
-        1.0,
-        Par::Seq,
-    );
+    matmul_blocked(u.as_mut(), y_mat.transpose(), v.as_ref());
     for c in 0..r {
         for k in 0..c {
             let dot: f64 = (0..s).map(|i| u[(i, k)] * u[(i, c)]).sum();

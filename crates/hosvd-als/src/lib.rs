@@ -9,8 +9,10 @@
 //! are `I_n x R_n` with orthonormal columns; every [`Tucker`] handed out has an *ordered* core
 //! (all-orthogonal, mode-n singular values decreasing), so leading truncation is the reduction.
 //! Errors: `mse = ||X - X~||^2 / (I_0 I_1 I_2)` (the paper's E) and `rel_error = ||X - X~|| / ||X||`,
-//! computed from norms (`||X||^2 - ||Z||^2`) without forming `X~`. All linear algebra runs
-//! single-threaded (`Par::Seq`), so results are identical for any thread count.
+//! computed from norms (`||X||^2 - ||Z||^2`) without forming `X~`. The large products (mode
+//! products, Gram matrices, the sample factor's projections) run in parallel on the current rayon
+//! pool with the bits of the single-threaded product ([`tensor_ops::par::matmul_blocked`]), and the
+//! eigendecompositions single-threaded, so results are identical for any thread count.
 //!
 //! ```
 //! use hosvd_als::{AlsOptions, KeySearchConfig, hooi, hosvd, hybrid_levels, key_levels};

@@ -230,3 +230,55 @@ fn bad_input_is_a_typed_error() {
     .unwrap();
     assert_eq!((rep.mse, rep.rel_error), (0.0, 0.0));
 }
+
+/// The decompositions spread their large products over the pool's threads in fixed blocks
+/// (`tensor_ops::par`): HOOI through the fibre Gram (more samples than fibres) and through the
+/// sample Gram, and the HOSVD, give the same bits on pools of one, two and three threads.
+#[test]
+fn decompositions_are_the_same_bits_on_any_pool() {
+    let bits = |t: &Tucker| -> Vec<u64> {
+        let mut v: Vec<u64> = t.core.as_slice().iter().map(|x| x.to_bits()).collect();
+        for f in &t.factors {
+            for j in 0..f.ncols() {
+                v.extend((0..f.nrows()).map(|i| f[(i, j)].to_bits()));
+            }
+        }
+        v
+    };
+    let opts = AlsOptions {
+        tol: 0.0,
+        max_iter: 3,
+    };
+    // 12 x 10 fibres under 1,500 samples (the fibre Gram), and 30 x 20 over 400 (the sample Gram):
+    // both large enough for the blocked products to split.
+    for (dims, ranks) in [
+        ([40, 30, 1500], [12, 10, 20]),
+        ([60, 40, 400], [30, 20, 25]),
+    ] {
+        let x = decaying_tucker(dims, [20, 20, 30], 4.0, 0.01, 5).unwrap();
+        let runs: Vec<(Vec<u64>, Vec<u64>)> = [1, 2, 3]
+            .iter()
+            .map(|&threads| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| {
+                    let (t, _) = hooi(&x, ranks, &opts).unwrap();
+                    (bits(&t), bits(&hosvd(&x, ranks).unwrap()))
+                })
+            })
+            .collect();
+        assert!(runs[0].0.iter().any(|&b| b != 0));
+        for (threads, run) in [2, 3].iter().zip(&runs[1..]) {
+            assert!(
+                run.0 == runs[0].0,
+                "{dims:?}: HOOI differs on {threads} threads"
+            );
+            assert!(
+                run.1 == runs[0].1,
+                "{dims:?}: HOSVD differs on {threads} threads"
+            );
+        }
+    }
+}

@@ -5,6 +5,9 @@
 //! sub-tensor truncation, Frobenius norms, Tucker reconstruction and NPY exchange with numpy.
 //! It is not for: decompositions (see `hosvd-als`), general N-mode tensors, or sparse data.
 //!
+//! Large products run in parallel on the current rayon pool with the bits of the single-threaded
+//! product ([`par::matmul_blocked`]), so every result is the same for any thread count.
+//!
 //! Layout: element `(i, j, k)` of an `I x J x K` [`Tensor3`] is stored at `i + I * (j + J * k)`
 //! (numpy's Fortran order), so each mode-2 slice ([`Tensor3::sample`]) is a contiguous
 //! column-major `I x J` block. Modes are numbered 0, 1, 2 (the paper's 1, 2, 3).
@@ -33,6 +36,7 @@
 
 mod error;
 pub mod npy;
+pub mod par;
 mod product;
 mod tensor;
 mod unfold;

@@ -6,10 +6,16 @@
 //! `Y(.., j, ..) = sum_{i_n} A(j, i_n) X(.., i_n, ..)`,  equivalently `Y_(n) = A X_(n)`.
 //!
 //! Every product here is one or a few faer matrix products on zero-copy views of the storage
-//! (no unfolding is materialised), run single-threaded (`Par::Seq`) so the result is the same
-//! for any thread count.
+//! (no unfolding is materialised). [`mode_product_into`] spreads a large product over the current
+//! rayon pool with the bits of the single-threaded product ([`crate::par::matmul_blocked`], or
+//! its slices in parallel for mode 1), so the result is the same for any thread count.
 
+use crate::par::{PARALLEL_MIN_FLOPS, matmul_blocked};
 use crate::tensor::{check_mode, checked_len};
+use rayon::prelude::*;
+
+/// Mode-1 slices one parallel task of [`mode_product_into`] takes at least.
+const SLICES_PER_TASK: usize = 16;
 use crate::{Tensor3, TensorError};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
@@ -71,23 +77,32 @@ pub fn mode_product_into(
             // Y as J x (I1 I2) = A (J x I0) * X as I0 x (I1 I2).
             let xm = MatRef::from_column_major_slice(x, i0, i1 * i2);
             let om = MatMut::from_column_major_slice_mut(out, od[0], i1 * i2);
-            matmul(om, Accum::Replace, a, xm, 1.0, Par::Seq);
+            matmul_blocked(om, a, xm);
         }
         1 => {
-            // Per slice k: Y_k (I0 x J) = X_k (I0 x I1) * A^T (I1 x J).
+            // Per slice k: Y_k (I0 x J) = X_k (I0 x I1) * A^T (I1 x J), each slice on its own
+            // (single-threaded), slices in parallel when the product is large.
             let ob = i0 * od[1];
-            for (k, oslice) in out.chunks_exact_mut(ob).enumerate() {
+            let slice = |(k, oslice): (usize, &mut [f64])| {
                 let xk =
                     MatRef::from_column_major_slice(&x[k * i0 * i1..(k + 1) * i0 * i1], i0, i1);
                 let om = MatMut::from_column_major_slice_mut(oslice, i0, od[1]);
                 matmul(om, Accum::Replace, xk, a.transpose(), 1.0, Par::Seq);
+            };
+            if olen * i1 < PARALLEL_MIN_FLOPS {
+                out.chunks_exact_mut(ob).enumerate().for_each(slice);
+            } else {
+                out.par_chunks_exact_mut(ob)
+                    .enumerate()
+                    .with_min_len(SLICES_PER_TASK)
+                    .for_each(slice);
             }
         }
         _ => {
             // Y as (I0 I1) x J = X as (I0 I1) x I2 * A^T.
             let xm = MatRef::from_column_major_slice(x, i0 * i1, i2);
             let om = MatMut::from_column_major_slice_mut(out, i0 * i1, od[2]);
-            matmul(om, Accum::Replace, xm, a.transpose(), 1.0, Par::Seq);
+            matmul_blocked(om, xm, a.transpose());
         }
     }
     Ok(())
