@@ -359,11 +359,19 @@ pub fn control_notes(r: &crate::BuildReport) -> Vec<String> {
         DimDecision::NoSignal { .. } => true,
         _ => false,
     });
+    // Controls kept with nothing to compare against: the selection's first (one), or every varying
+    // control when none could be fitted alone (`kriging::select_dims`).
+    let first_kept = r
+        .control_decisions
+        .iter()
+        .filter(|d| matches!(d, DimDecision::Kept { loo_without, .. } if loo_without.is_infinite()))
+        .count();
     if by_loo {
+        let takes = crate::folds::distinct_takes(&r.sources).len();
         lines.push(format!(
-            "control selection by leave-one-out: {} takes are fewer than 2 per fold of {}-fold \
+            "control selection by leave-one-out: {takes} {} fewer than 2 per fold of {}-fold \
              cross-validation by take",
-            crate::folds::distinct_takes(&r.sources).len(),
+            if takes == 1 { "take is" } else { "takes are" },
             crate::config::CONTROL_FOLDS
         ));
     }
@@ -378,6 +386,11 @@ pub fn control_notes(r: &crate::BuildReport) -> Vec<String> {
             Some(DimDecision::Constant) => {
                 lines.push(format!("control {name} ignored: constant over the data"));
             }
+            Some(DimDecision::NoSignal { loo_with, .. }) if !loo_with.is_finite() => {
+                lines.push(format!(
+                    "control {name} ignored: the kriging with it added could not be fitted"
+                ));
+            }
             Some(DimDecision::NoSignal {
                 loo_with,
                 loo_without,
@@ -391,6 +404,21 @@ pub fn control_notes(r: &crate::BuildReport) -> Vec<String> {
             Some(DimDecision::Kept { loo_with, .. }) if loo_with.is_nan() => {
                 lines.push(format!("control {name} used (no selection)"));
             }
+            Some(DimDecision::Kept {
+                loo_with,
+                loo_without,
+                ..
+            }) if loo_without.is_infinite() => lines.push(if first_kept > 1 {
+                format!(
+                    "control {name} used: no control could be fitted alone, so every varying one \
+                     is (leave-one-out RMSE {loo_with:.4})"
+                )
+            } else {
+                format!(
+                    "control {name} used: the first control kept, which the kriging needs \
+                     (leave-one-out RMSE {loo_with:.4})"
+                )
+            }),
             Some(DimDecision::Kept {
                 loo_with,
                 loo_without,

@@ -429,6 +429,9 @@ impl MotionModel {
             Some(DimDecision::Constant) if r.dropped_for_samples.contains(&k) => {
                 format!("too few samples ({}) for a trend over it too", r.samples)
             }
+            Some(DimDecision::NoSignal { loo_with, .. }) if !loo_with.is_finite() => {
+                "dropped at build: the kriging with it added could not be fitted".to_string()
+            }
             Some(DimDecision::NoSignal {
                 loo_with,
                 loo_without,

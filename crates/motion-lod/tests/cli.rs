@@ -748,3 +748,41 @@ fn the_selection_keeps_turn_by_cross_validation_and_the_guard_says_why_it_drops_
     assert_ne!(walk("20", "t20.bvh"), walk("0", "t0.bvh"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A set too small for the control selection's folds (one take, four cycles) says in words why a
+/// control is kept, never "inf without, t = inf", and counts its one take in the singular.
+#[test]
+fn a_one_take_model_says_why_it_keeps_its_control() {
+    let dir = std::env::temp_dir().join(format!("motion-lod-cli-one-take-{}", std::process::id()));
+    let takes = dir.join("takes");
+    std::fs::create_dir_all(&takes).unwrap();
+    let fixture =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/walk_p160_t01.bvh");
+    std::fs::copy(&fixture, takes.join("walk_p160_t01.bvh")).unwrap();
+    let model = dir.join("one.mlod");
+    let (ok, _, stderr) = run(&[
+        "build",
+        takes.to_str().unwrap(),
+        "-o",
+        model.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let (ok, stdout, stderr) = run(&["info", model.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let controls: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("control"))
+        .collect();
+    assert!(
+        controls
+            .iter()
+            .any(|l| l.contains("used: the first control kept")),
+        "{controls:#?}"
+    );
+    assert!(controls.iter().all(|l| !l.contains("inf")), "{controls:#?}");
+    assert!(
+        controls.iter().any(|l| l.contains("1 take is fewer")),
+        "{controls:#?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
