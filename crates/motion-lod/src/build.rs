@@ -42,6 +42,7 @@ use lod_policy::{
     AccuracyLevel, Controls, Detail, LevelError, LodModel, ModelParts, Ranks, RuntimeModel,
 };
 use motion_io::PoseLayout;
+use rayon::prelude::*;
 use tensor_ops::Tensor3;
 
 pub use crate::config::{
@@ -509,7 +510,6 @@ fn style_kriging(
     config: &BuildConfig,
     kriging_config: &KrigingConfig,
 ) -> Result<(Kriging, f64, Vec<WeightTrial>), BuildError> {
-    use rayon::prelude::*;
     let params = crate::dataset::control_matrix(&set.controls, Some(labels));
     let n = labels.len();
     let scaling = |w: f64| {
@@ -1122,8 +1122,10 @@ impl MotionModel {
             })
             .collect();
         let full = self.lod().full_detail();
+        // Every synthesis and measurement below is independent of the others: they run in
+        // parallel, each with its own arithmetic, collected in order (the same bits on any pool).
         let reference: Vec<Vec<f64>> = picked
-            .iter()
+            .par_iter()
             .map(|c| self.synthesize_aligned(c, full))
             .collect::<Result<_, _>>()?;
         // Foot slide needs the feet (the quality reference); without them it is 0. Measured over
@@ -1137,7 +1139,7 @@ impl MotionModel {
             .collect();
         let slides_full: Option<Vec<f64>> = match &self.report.quality {
             Some(_) => Some(
-                grid.iter()
+                grid.par_iter()
                     .map(|c| foot_slide_cm(self, c, full))
                     .collect::<Result<_, _>>()?,
             ),
@@ -1178,9 +1180,11 @@ impl MotionModel {
         };
         debug_assert!(p > 0 && t > 0);
         let levels = (0..lod.levels().len())
+            .into_par_iter()
             .map(|l| measure(Detail::new(l, lod.joints()), true))
             .collect::<Result<Vec<_>, _>>()?;
         let joints = (0..=lod.joints())
+            .into_par_iter()
             .map(|j| measure(Detail::new(0, j), false))
             .collect::<Result<Vec<_>, _>>()?;
         Ok((levels, joints))
