@@ -453,11 +453,17 @@ pub fn decode_section<T: DeserializeOwned>(
     path: &Path,
 ) -> Result<T, FileError> {
     let section = find_section(bytes, tag, version, what, path)?;
+    // The framing and both checksums held, and the version is this build's: the bytes were
+    // written by a build whose layout of this version differs (a format change without a version
+    // change), or made by hand. Either way the cure is a rebuild.
     decode_payload(section.bytes, path).map_err(|e| match e {
         FileError::Decode { path, message } => FileError::Decode {
             path,
             message: format!(
-                "section {} (offset {}..): {message}",
+                "section {} (offset {}..), {what} of version {version}, passed its checksum but \
+                 does not decode with this build's layout of that version (a file written by \
+                 another build of the same version); rebuild the model with `motion-lod build` \
+                 ({message})",
                 section.tag_name(),
                 section.offset
             ),

@@ -40,6 +40,9 @@ pub const REPORT_SECTION: [u8; 4] = *b"RPRT";
 /// pop and skate by step length, [`crate::quality::QualityReference::step_trends`]); 4 (control selection by
 /// cross-validation by take and its quality guard: the decisions `KeptByFolds`, `DroppedByFolds`
 /// and `Overruled` of [`kriging::DimDecision`], and [`BuildReport::overruled_quality`]).
+/// Version 4 files written between 08:35 and 09:08 on 2026-11-27 (commits b0a5bee to 5c54240)
+/// keep the quality reference's every take (`take_steps`) where later ones keep its two trends:
+/// they fail to decode, and the error asks for a rebuild ([`lod_policy::file::decode_section`]).
 pub const REPORT_VERSION: u32 = 4;
 
 /// The tag of the style report's section, written only for a model with styles (a model without
@@ -47,7 +50,8 @@ pub const REPORT_VERSION: u32 = 4;
 pub const STYLE_SECTION: [u8; 4] = *b"STYL";
 /// The format version of the style section. History: 1 (the first); 2 (each style's
 /// motion-quality reference by the meter of [`REPORT_VERSION`] 2); 3 (the references of
-/// [`REPORT_VERSION`] 3).
+/// [`REPORT_VERSION`] 3; its files from before 09:08 on 2026-11-27 hold the earlier quality
+/// reference and are refused with a request to rebuild, as the report's are).
 pub const STYLE_VERSION: u32 = 3;
 
 /// The runtime's payload decoder ([`lod_policy::file::decode_payload`]): the entry point for fuzzing

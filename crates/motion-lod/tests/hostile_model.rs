@@ -472,3 +472,36 @@ fn mutated_models_never_panic() {
         "the edits must reach validation and the consumers"
     );
 }
+
+/// A report section of the current version whose layout is another build's (a format change
+/// without a version change: the quality reference's `take_steps` of 2026-11-27 became
+/// `step_trends` under report version 4) passes every checksum and fails to decode: the error
+/// names the section and its version and asks for a rebuild, and the runtime, which skips the
+/// report, still reads the file.
+#[test]
+fn a_section_of_another_builds_layout_asks_for_a_rebuild() {
+    use motion_lod::MotionModel;
+    use motion_lod::lod_policy::RuntimeModel;
+    let Some(model) = small_model() else {
+        return;
+    };
+    let (runtime, report) = mutate_model::RawModel::new(&model).section_bytes();
+    // The report with one field's bytes replaced: an `Option` tag no build writes.
+    let mut other = report.clone();
+    let at = other.len() / 2;
+    other.splice(at..at, [168u8]);
+    let file = mutate_model::frame(&runtime, &other);
+    let e = MotionModel::from_bytes(&file, p()).unwrap_err();
+    let text = e.to_string();
+    assert!(
+        matches!(e, ModelFileError::Decode { .. })
+            && text.contains("section RPRT")
+            && text.contains("the build report of version")
+            && text.contains("rebuild the model with `motion-lod build`"),
+        "{text}"
+    );
+    assert_eq!(
+        RuntimeModel::from_bytes(&file).unwrap().section_bytes(),
+        runtime
+    );
+}
