@@ -40,8 +40,8 @@ pub const REPORT_SECTION: [u8; 4] = *b"RPRT";
 /// pop and skate by step length, [`crate::quality::QualityReference::step_trends`]); 4 (control selection by
 /// cross-validation by take and its quality guard: the decisions `KeptByFolds`, `DroppedByFolds`
 /// and `Overruled` of [`kriging::DimDecision`], and [`BuildReport::overruled_quality`]).
-/// Version 4 files written between 08:35 and 09:08 on 2026-11-27 (commits b0a5bee to 5c54240)
-/// keep the quality reference's every take (`take_steps`) where later ones keep its two trends:
+/// Version 4 files written before commit 5c54240 (09:08 on 2026-11-27; version 4 came with
+/// b0a5bee) keep the quality reference's every take (`take_steps`) where later ones keep its two trends:
 /// they fail to decode, and the error asks for a rebuild ([`lod_policy::file::decode_section`]).
 pub const REPORT_VERSION: u32 = 4;
 
