@@ -29,6 +29,7 @@
 use glam::{DQuat, DVec3};
 use motion_io::expmap::exp_to_quat;
 use motion_io::{FootNames, PoseLayout, find_feet, mirrored_names, side_of};
+use rayon::prelude::*;
 
 use crate::metrics::{ErrorMeter, SHELL_RADIUS_M, measured_joints};
 
@@ -56,12 +57,14 @@ pub fn joint_importance(
     let n = poses.len() / p;
     let stride = n.div_ceil(max_poses.max(1)).max(1);
     let rest = layout.rest_pose();
-    let mut edited = vec![0.0; p];
+    // Each joint is measured on its own (in parallel, each with its own buffer and meter), so the
+    // figures are the same on any pool.
     let mut out: Vec<JointImportance> = layout
         .joint_order()
-        .iter()
+        .par_iter()
         .map(|&j| {
             let rows = layout.joint_rows(j).expect("rotating joint has rows");
+            let mut edited = vec![0.0; p];
             let mut meter = ErrorMeter::new(layout);
             for pose in poses.chunks_exact(p).step_by(stride) {
                 edited.copy_from_slice(pose);
