@@ -43,6 +43,9 @@ pub const REPORT_SECTION: [u8; 4] = *b"RPRT";
 /// Version 4 files written before commit 5c54240 (09:08 on 2026-11-27; version 4 came with
 /// b0a5bee) keep the quality reference's every take (`take_steps`) where later ones keep its two trends:
 /// they fail to decode, and the error asks for a rebuild ([`lod_policy::file::decode_section`]).
+/// Since then `tests/section_layout.rs` records the fingerprint of the section's serialised shape
+/// with its version (and the style section's), and fails when the shape changes under the same
+/// version.
 pub const REPORT_VERSION: u32 = 4;
 
 /// The tag of the style report's section, written only for a model with styles (a model without

@@ -28,6 +28,7 @@ mod quality;
 mod quality_meter;
 mod readme_examples;
 mod runtime_model;
+mod section_layout;
 mod skeleton_variants;
 mod storage;
 mod style;

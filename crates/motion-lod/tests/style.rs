@@ -50,7 +50,7 @@ fn small() -> BuildConfig {
 }
 
 /// The embedded data built with the performers as styles, once per test binary.
-fn styled() -> &'static MotionModel {
+pub(crate) fn styled() -> &'static MotionModel {
     static MODEL: OnceLock<MotionModel> = OnceLock::new();
     MODEL.get_or_init(|| {
         let set = fixture_training()
