@@ -146,6 +146,9 @@ impl RuntimeModel {
     /// 2 (each accuracy level's error records its motion quality, `pop_x`, `skate_x` and `floor_cm`, and its
     /// foot slide is measured with the foot lock on); 3 (each accuracy level's error also records
     /// `facing_out_deg`, and its pop and skate are ratios to the data at each walk's step).
+    /// motion-lod's `tests/section_layout.rs` records the fingerprint of the section's serialised
+    /// shape ([`RuntimeModel::serialize_section`]) with this version and fails when the shape
+    /// changes under it.
     pub const SECTION_VERSION: u32 = 3;
 
     /// Decodes the runtime model from the bytes of a model file: the framing and checksums
@@ -184,21 +187,38 @@ impl RuntimeModel {
     /// multilinear model, the feet and the stature), what [`RuntimeModel::from_section_bytes`]
     /// reads back. The same model gives the same bytes.
     pub fn section_bytes(&self) -> Vec<u8> {
+        // Encoding plain data into a Vec cannot fail (no map keys, no I/O).
+        self.with_parts(|parts| {
+            bincode::serde::encode_to_vec(parts, bincode::config::standard())
+                .expect("a runtime model encodes")
+        })
+    }
+
+    /// The runtime section's parts, as [`RuntimeModel::section_bytes`] encodes them, handed to any
+    /// serde serializer: for tests that fingerprint the section's layout against its
+    /// [`RuntimeModel::SECTION_VERSION`] (motion-lod's `tests/section_layout.rs`).
+    #[doc(hidden)]
+    pub fn serialize_section<S: serde::Serializer>(
+        &self,
+        serializer: S,
+    ) -> Result<S::Ok, S::Error> {
+        self.with_parts(|parts| serde::Serialize::serialize(parts, serializer))
+    }
+
+    /// Runs `f` on the parts the section holds, borrowed from the model.
+    fn with_parts<R>(&self, f: impl FnOnce(&PartsRef<'_>) -> R) -> R {
         let control_names: Vec<String> = Controls::NAMES
             .iter()
             .map(|n| n.to_string())
             .chain(self.styles.iter().map(|s| format!("{STYLE_PREFIX}{s}")))
             .collect();
-        let parts = PartsRef {
+        f(&PartsRef {
             control_names: &control_names,
             joints: self.rig.joints(),
             lod: &self.lod,
             feet: &self.feet,
             stature_m: self.stature_m,
-        };
-        // Encoding plain data into a Vec cannot fail (no map keys, no I/O).
-        bincode::serde::encode_to_vec(&parts, bincode::config::standard())
-            .expect("a runtime model encodes")
+        })
     }
 
     /// The runtime's section of a model file, to frame with others ([`file::frame`]):

@@ -1,10 +1,10 @@
-//! The model file's offline sections keep their layout within a version: the serialised shape of the
-//! report section (pose layout and build report) and of the style section is fingerprinted and
-//! recorded with the section's version, so a change to what they hold fails here until the version
+//! The model file's sections keep their layout within a version: the serialised shape of the
+//! runtime section (the runtime's parts), the report section (pose layout and build report) and the
+//! style section is fingerprinted and recorded with the section's version, so a change to what they hold fails here until the version
 //! is raised (files of the old layout are then refused with a request to rebuild, instead of
 //! failing to decode). It happened once: the quality reference's `take_steps` became
-//! `step_trends` inside report version 4 (commit 5c54240), and this morning's files stopped
-//! loading with a bare bincode error.
+//! `step_trends` inside report version 4 (commit 5c54240), and the files written before it
+//! stopped loading with a bare bincode error.
 //!
 //! The shape is traced through serde (struct and field names, enum variants, element shapes of
 //! sequences and maps, primitive types), not the values: a new number leaves it alone, a new field
@@ -13,12 +13,15 @@
 use std::collections::BTreeSet;
 use std::fmt;
 
+use motion_lod::lod_policy::RuntimeModel;
 use motion_lod::model_file::{REPORT_VERSION, STYLE_VERSION};
 use serde::Serialize;
 use serde::ser::{self, Serializer};
 
 use crate::common;
 
+/// Runtime section: (version, fingerprint of the embedded model's runtime parts).
+const RUNTIME_LAYOUT: (u32, u64) = (3, 0xc523_66c7_1503_e847);
 /// Report section: (version, fingerprint of `(PoseLayout, BuildReport)` of the embedded model).
 const REPORT_LAYOUT: (u32, u64) = (4, 0x0604_3490_18e0_54be);
 /// Style section: (version, fingerprint of the style report of the embedded data with the
@@ -26,21 +29,46 @@ const REPORT_LAYOUT: (u32, u64) = (4, 0x0604_3490_18e0_54be);
 const STYLE_LAYOUT: (u32, u64) = (3, 0x2ed1_a4dd_2f75_d1c0);
 
 #[test]
-fn offline_sections_keep_their_layout_within_their_version() {
+fn sections_keep_their_layout_within_their_version() {
     let (model, _) = common::built();
+    let runtime = model
+        .runtime()
+        .serialize_section(Shape)
+        .expect("every value has a shape");
     let report = trace(&(&model.layout, &model.report));
     let styled = crate::style::styled();
     let style = trace(styled.style.as_ref().expect("a style report"));
-    for (what, version, recorded, shape) in [
-        ("report (RPRT)", REPORT_VERSION, REPORT_LAYOUT, &report),
-        ("style (STYL)", STYLE_VERSION, STYLE_LAYOUT, &style),
+    const RUNTIME_FILE: &str = "crates/lod-policy/src/runtime.rs, SECTION_VERSION";
+    const OFFLINE_FILE: &str = "crates/motion-lod/src/model_file.rs";
+    for (what, version, recorded, shape, file) in [
+        (
+            "runtime (RTIM)",
+            RuntimeModel::SECTION_VERSION,
+            RUNTIME_LAYOUT,
+            &runtime,
+            RUNTIME_FILE,
+        ),
+        (
+            "report (RPRT)",
+            REPORT_VERSION,
+            REPORT_LAYOUT,
+            &report,
+            OFFLINE_FILE,
+        ),
+        (
+            "style (STYL)",
+            STYLE_VERSION,
+            STYLE_LAYOUT,
+            &style,
+            OFFLINE_FILE,
+        ),
     ] {
         let found = fnv1a(shape);
         assert!(
             recorded == (version, found),
             "the {what} section's layout fingerprint is {found:#018x} at version {version}; \
              recorded: ({}, {:#018x}). When what the section holds changed, raise its version \
-             (crates/motion-lod/src/model_file.rs, with a line in its history) and record \
+             ({file}, with a line in its history) and record \
              ({version}, {found:#018x}) here; when only the version changed, record the new pair. \
              Shape: {shape}",
             recorded.0,
@@ -89,7 +117,7 @@ fn fnv1a(s: &str) -> u64 {
     })
 }
 
-/// The serialised shape of `value`.
+/// The serialised shape of `value` ([`Shape`]).
 fn trace<T: Serialize + ?Sized>(value: &T) -> String {
     value.serialize(Shape).expect("every value has a shape")
 }
