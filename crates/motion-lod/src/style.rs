@@ -381,6 +381,7 @@ pub fn parse_style_mix(styles: &[String], text: &str) -> Result<StyleMix, StyleE
         return Ok(StyleMix::one(find(trimmed)?));
     }
     let mut mix = StyleMix::DATA_MIX;
+    let mut given = vec![false; styles.len()];
     for part in trimmed.split(',') {
         let Some((name, w)) = part.split_once('=') else {
             return Err(err(format!(
@@ -401,7 +402,7 @@ pub fn parse_style_mix(styles: &[String], text: &str) -> Result<StyleMix, StyleE
                 styles[j]
             )));
         }
-        if mix.weights[j] != 0.0 {
+        if std::mem::replace(&mut given[j], true) {
             return Err(err(format!("{} is given twice", styles[j])));
         }
         mix.weights[j] = w;
@@ -585,6 +586,9 @@ mod tests {
             ("elderly=-1", ">= 0"),
             ("elderly=0", "every weight is 0"),
             ("elderly=1,elderly=1", "twice"),
+            // A first weight of 0 is given all the same, and a prefix names the same style.
+            ("elderly=0,elderly=0.5", "twice"),
+            ("eld=0.2,elderly=0.3", "twice"),
             ("elderly=1,normal", "NAME=WEIGHT"),
         ] {
             let e = parse_style_mix(&styles, bad).unwrap_err().to_string();

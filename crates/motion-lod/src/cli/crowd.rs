@@ -124,7 +124,8 @@ pub struct CrowdArgs {
     pub json: bool,
     /// The walkers' style, for a model built with style labels: by default each walker walks one
     /// of the model's styles, drawn with the data's shares (a crowd of the data's mix); a style
-    /// name (`elderly`) or a blend (`elderly=0.5,youthful=0.5`) gives every walker that style.
+    /// name (`elderly`) or a blend (`elderly=0.5,youthful=0.5`; weights are scaled to sum to 1)
+    /// gives every walker that style.
     #[arg(long, value_name = "STYLE")]
     pub style: Option<String>,
     /// Also write a short clip of this crowd as glTF 2.0 binary (`.glb`): one skinned character per

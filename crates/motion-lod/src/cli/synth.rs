@@ -30,7 +30,8 @@ pub struct SynthArgs {
     #[arg(long)]
     pub height: Option<f32>,
     /// The performer's style, for a model built with style labels: one style (`elderly`), a blend
-    /// (`elderly=0.5,youthful=0.5`), or `data` for the data's own mix (the default).
+    /// (`elderly=0.5,youthful=0.5`; weights are scaled to sum to 1), or `data` for the data's own
+    /// mix (the default).
     #[arg(long, value_name = "STYLE")]
     pub style: Option<String>,
     /// Controls over time from a CSV file (`time,dx,dz,turn[,height][,style]`, time in seconds,
