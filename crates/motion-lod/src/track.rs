@@ -33,6 +33,9 @@ pub struct TrackError {
 /// The columns a track may have, in any order.
 const COLUMNS: [&str; 6] = ["time", "dx", "dz", "turn", "height", "style"];
 
+/// The index of `style` in [`COLUMNS`].
+const STYLE_COLUMN: usize = 5;
+
 /// Parses a track (see the module documentation) for a model with `styles`, a missing or empty
 /// height reading `default_height`. Errors name the line: a missing required column, an unknown
 /// one, a cell that is not a finite number, times that do not increase from 0, a style the model
@@ -80,9 +83,16 @@ pub fn parse_track(
     for (line, text) in lines {
         let cells: Vec<&str> = text.split(',').map(str::trim).collect();
         if cells.len() != names.len() {
+            // More cells than columns in a track with styles: most likely a blend written with
+            // commas, which split it.
+            let hint = if cells.len() > names.len() && at[STYLE_COLUMN].is_some() {
+                " (a style blend separates its parts with `;`: elderly=0.5;youthful=0.5)"
+            } else {
+                ""
+            };
             return Err(err(
                 line,
-                format!("{} cells for {} columns", cells.len(), names.len()),
+                format!("{} cells for {} columns{hint}", cells.len(), names.len()),
             ));
         }
         let cell = |k: usize| at[k].map(|i| cells[i]).filter(|c| !c.is_empty());
@@ -104,7 +114,7 @@ pub fn parse_track(
         let time = required(0)?;
         let (dx, dz, turn) = (required(1)?, required(2)?, required(3)?);
         let height = number(4)?.map_or(default_height, |h| h as f32);
-        let style = match cell(5) {
+        let style = match cell(STYLE_COLUMN) {
             None => StyleMix::DATA_MIX,
             Some(s) => parse_style_mix(styles, &s.replace([';', '+'], ","))
                 .map_err(|e| err(line, e.to_string()))?,
@@ -169,6 +179,11 @@ mod tests {
             ("time,dx,dz,turn\n0,0,NaN,0\n", 2, "not a finite number"),
             ("time,dx,dz,turn\n0,0,1\n", 2, "3 cells for 4 columns"),
             ("time,dx,dz,turn,style\n0,0,1,0,old\n", 2, "no style"),
+            (
+                "time,dx,dz,turn,style\n0,0,1,0,elderly=0.5,normal=0.5\n",
+                2,
+                "6 cells for 5 columns (a style blend separates its parts with `;`",
+            ),
             ("time,dx,dz,turn\n", 1, "no rows"),
         ] {
             let e = parse_track(text, &styles(), 1.7).unwrap_err();
