@@ -361,7 +361,7 @@ pub fn control_notes(r: &crate::BuildReport) -> Vec<String> {
     });
     // Controls kept with nothing to compare against: the selection's first (one), or every varying
     // control when none could be fitted alone (`kriging::select_dims`).
-    let first_kept = r
+    let kept_unmeasured = r
         .control_decisions
         .iter()
         .filter(|d| matches!(d, DimDecision::Kept { loo_without, .. } if loo_without.is_infinite()))
@@ -408,7 +408,7 @@ pub fn control_notes(r: &crate::BuildReport) -> Vec<String> {
                 loo_with,
                 loo_without,
                 ..
-            }) if loo_without.is_infinite() => lines.push(if first_kept > 1 {
+            }) if loo_without.is_infinite() => lines.push(if kept_unmeasured > 1 {
                 format!(
                     "control {name} used: no control could be fitted alone, so every varying one \
                      is (leave-one-out RMSE {loo_with:.4})"

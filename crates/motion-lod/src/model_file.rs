@@ -41,8 +41,9 @@ pub const REPORT_SECTION: [u8; 4] = *b"RPRT";
 /// cross-validation by take and its quality guard: the decisions `KeptByFolds`, `DroppedByFolds`
 /// and `Overruled` of [`kriging::DimDecision`], and [`BuildReport::overruled_quality`]).
 /// Version 4 files written before commit 5c54240 (09:08 on 2026-11-27; version 4 came with
-/// b0a5bee) keep the quality reference's every take (`take_steps`) where later ones keep its two trends:
-/// they fail to decode, and the error asks for a rebuild ([`lod_policy::file::decode_section`]).
+/// b0a5bee) keep the quality reference's every take (`take_steps`) where later ones keep its two
+/// trends: they fail to decode, and the error asks for a rebuild
+/// ([`lod_policy::file::decode_section`]).
 /// Since then `tests/section_layout.rs` records the fingerprint of the section's serialised shape
 /// with its version (and the style section's), and fails when the shape changes under the same
 /// version.

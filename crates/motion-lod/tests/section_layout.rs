@@ -290,53 +290,52 @@ impl Serializer for Shape {
     }
 }
 
-impl ser::SerializeSeq for Parts {
-    type Ok = String;
-    type Error = ShapeError;
-    fn serialize_element<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), ShapeError> {
-        self.push(value.serialize(Shape)?);
-        Ok(())
-    }
-    fn end(self) -> Result<String, ShapeError> {
-        Ok(self.finish())
-    }
+/// The compound traits whose parts come in order or as a set, each pushing one shape per call of
+/// `$method` (an element or an unnamed field).
+macro_rules! unnamed_parts {
+    ($($trait:ident::$method:ident),* $(,)?) => {
+        $(impl ser::$trait for Parts {
+            type Ok = String;
+            type Error = ShapeError;
+            fn $method<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), ShapeError> {
+                self.push(value.serialize(Shape)?);
+                Ok(())
+            }
+            fn end(self) -> Result<String, ShapeError> {
+                Ok(self.finish())
+            }
+        })*
+    };
 }
 
-impl ser::SerializeTuple for Parts {
-    type Ok = String;
-    type Error = ShapeError;
-    fn serialize_element<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), ShapeError> {
-        self.push(value.serialize(Shape)?);
-        Ok(())
-    }
-    fn end(self) -> Result<String, ShapeError> {
-        Ok(self.finish())
-    }
+/// The compound traits whose parts are named fields, pushed as `field:shape`.
+macro_rules! named_parts {
+    ($($trait:ident),* $(,)?) => {
+        $(impl ser::$trait for Parts {
+            type Ok = String;
+            type Error = ShapeError;
+            fn serialize_field<T: Serialize + ?Sized>(
+                &mut self,
+                field: &'static str,
+                value: &T,
+            ) -> Result<(), ShapeError> {
+                self.push(format!("{field}:{}", value.serialize(Shape)?));
+                Ok(())
+            }
+            fn end(self) -> Result<String, ShapeError> {
+                Ok(self.finish())
+            }
+        })*
+    };
 }
 
-impl ser::SerializeTupleStruct for Parts {
-    type Ok = String;
-    type Error = ShapeError;
-    fn serialize_field<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), ShapeError> {
-        self.push(value.serialize(Shape)?);
-        Ok(())
-    }
-    fn end(self) -> Result<String, ShapeError> {
-        Ok(self.finish())
-    }
-}
-
-impl ser::SerializeTupleVariant for Parts {
-    type Ok = String;
-    type Error = ShapeError;
-    fn serialize_field<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), ShapeError> {
-        self.push(value.serialize(Shape)?);
-        Ok(())
-    }
-    fn end(self) -> Result<String, ShapeError> {
-        Ok(self.finish())
-    }
-}
+unnamed_parts!(
+    SerializeSeq::serialize_element,
+    SerializeTuple::serialize_element,
+    SerializeTupleStruct::serialize_field,
+    SerializeTupleVariant::serialize_field,
+);
+named_parts!(SerializeStruct, SerializeStructVariant);
 
 impl ser::SerializeMap for Parts {
     type Ok = String;
@@ -348,38 +347,6 @@ impl ser::SerializeMap for Parts {
     fn serialize_value<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), ShapeError> {
         let key = self.key.take().unwrap_or_default();
         self.push(format!("{key}:{}", value.serialize(Shape)?));
-        Ok(())
-    }
-    fn end(self) -> Result<String, ShapeError> {
-        Ok(self.finish())
-    }
-}
-
-impl ser::SerializeStruct for Parts {
-    type Ok = String;
-    type Error = ShapeError;
-    fn serialize_field<T: Serialize + ?Sized>(
-        &mut self,
-        field: &'static str,
-        value: &T,
-    ) -> Result<(), ShapeError> {
-        self.push(format!("{field}:{}", value.serialize(Shape)?));
-        Ok(())
-    }
-    fn end(self) -> Result<String, ShapeError> {
-        Ok(self.finish())
-    }
-}
-
-impl ser::SerializeStructVariant for Parts {
-    type Ok = String;
-    type Error = ShapeError;
-    fn serialize_field<T: Serialize + ?Sized>(
-        &mut self,
-        field: &'static str,
-        value: &T,
-    ) -> Result<(), ShapeError> {
-        self.push(format!("{field}:{}", value.serialize(Shape)?));
         Ok(())
     }
     fn end(self) -> Result<String, ShapeError> {

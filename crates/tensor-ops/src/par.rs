@@ -3,8 +3,8 @@
 //!
 //! [`matmul_blocked`] splits the output into fixed blocks of [`BLOCK`] or [`MIN_BLOCK`] columns
 //! (or rows, when the output has too few columns; the last block takes the remainder, so no
-//! block is a matrix-vector product, which faer sums in another order) and computes each block as its own single-threaded
-//! faer product. The blocks depend only on the shapes, never on the pool, and every output entry
+//! block is a matrix-vector product, which faer sums in another order) and computes each block
+//! as its own single-threaded faer product. The blocks depend only on the shapes, never on the pool, and every output entry
 //! is the same single-threaded sum over the shared dimension as in the one-call product: faer's
 //! loop over that dimension does not depend on the output's extent, which the tests check bit
 //! for bit on the shapes the decompositions use. So the result is the same on a pool of any size,
@@ -86,25 +86,12 @@ pub fn matmul_blocked(out: MatMut<'_, f64>, lhs: MatRef<'_, f64>, rhs: MatRef<'_
         start += len;
     }
     parts.into_par_iter().for_each(|(start, len, block)| {
-        if by_columns {
-            matmul(
-                block,
-                Accum::Replace,
-                lhs,
-                rhs.subcols(start, len),
-                1.0,
-                Par::Seq,
-            );
+        let (l, r) = if by_columns {
+            (lhs, rhs.subcols(start, len))
         } else {
-            matmul(
-                block,
-                Accum::Replace,
-                lhs.subrows(start, len),
-                rhs,
-                1.0,
-                Par::Seq,
-            );
-        }
+            (lhs.subrows(start, len), rhs)
+        };
+        matmul(block, Accum::Replace, l, r, 1.0, Par::Seq);
     });
 }
 

@@ -12,13 +12,13 @@
 
 use crate::par::{PARALLEL_MIN_FLOPS, matmul_blocked};
 use crate::tensor::{check_mode, checked_len};
+use crate::{Tensor3, TensorError};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
 /// Mode-1 slices one parallel task of [`mode_product_into`] takes at least.
 const SLICES_PER_TASK: usize = 16;
-use crate::{Tensor3, TensorError};
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 /// Shape of `X x_mode A` for a tensor of shape `dims` and a matrix with `rows` rows.
 pub fn product_dims(dims: [usize; 3], mode: usize, rows: usize) -> [usize; 3] {

@@ -58,8 +58,8 @@ pub struct QualityArgs {
     #[arg(long)]
     pub json: bool,
     /// For a model with styles: the grid's walks in this style (a name, a blend
-    /// `elderly=0.5,youthful=0.5`, weights scaled to sum to 1, or `data`, the default), measured against that style's own
-    /// takes, with each walk's posture (knee extension, head pitch) and the style whose cycles it
+    /// `elderly=0.5,youthful=0.5`, weights scaled to sum to 1, or `data`, the default), measured
+    /// against that style's own takes, with each walk's posture (knee extension, head pitch) and the style whose cycles it
     /// resembles most.
     #[arg(long, value_name = "STYLE")]
     pub style: Option<String>,
