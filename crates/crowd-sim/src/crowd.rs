@@ -7,6 +7,7 @@ use crate::levels::{LevelTable, check_control_range};
 use crate::path::{EllipsePath, PathPlan, WalkerStart, path_controls};
 use crate::source::ClipSource;
 use crate::stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
+use crate::stock::{Lender, Stock};
 use crate::walker::{StageParams, Walker, WalkerFault, heading_sin_cos, valid_duration};
 use glam::Vec3;
 use lod_policy::SeamScratch;
@@ -246,12 +247,14 @@ fn walker_bounds<C>(w: &Walker<C>, m: f32) -> Bounds {
 
 /// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
 ///
-/// All per-frame buffers are allocated by `new`; `step_into` allocates only when the culling tree
-/// ([`Culling::Tree`]) is rebuilt (every `tree_rebuild_interval` frames), when a walker starts its
-/// first inertialized seam (its seam transition, `3 P` floats, is allocated then, so far and culled
-/// walkers never hold one),
-/// and when a source sizes a clip for its level (the model's source does, see
-/// `lod_policy::ClipKernel::compact`).
+/// All per-frame buffers are allocated by `new`. What a walker needs only while near (a clip sized
+/// for joints, when the source sizes clips by detail: [`ClipSource::sizes_clips_by_detail`]; a
+/// foot lock) or inside a seam (a seam transition, `3 P` floats) is lent to it by the stock of its
+/// chunk of walkers and given back when it goes far or the seam ends. A stock grows only when more
+/// of its walkers need a buffer at once than ever before, so `step_into` allocates only then
+/// (counted in [`FrameStats::allocations`]: while the crowd warms up, and at a new peak of near
+/// walkers in a chunk) and when the culling tree ([`Culling::Tree`]) is rebuilt (every
+/// `tree_rebuild_interval` frames).
 pub struct Crowd<C> {
     config: CrowdConfig,
     params: StageParams,
@@ -261,6 +264,8 @@ pub struct Crowd<C> {
     bins: Vec<u32>,
     /// Scratch of the seam transitions started in the kernel stage, one per `CHUNK` walkers.
     seam_scratch: Vec<SeamScratch>,
+    /// The buffers lent to near walkers and seams ([`Stock`]).
+    stock: Stock<C>,
     joints: Vec<Vec3>,
     bounds: Vec<Bounds>,
     /// The boxes the FK stage writes as it places each walker: the next step's `bounds` (swapped in).
@@ -399,6 +404,7 @@ impl<C: Send> Crowd<C> {
             seam_scratch: (0..n.div_ceil(CHUNK))
                 .map(|_| SeamScratch::new(levels.pose_len))
                 .collect(),
+            stock: Stock::new(n),
             joints: vec![Vec3::ZERO; n * npos],
             bounds: Vec::new(),
             placed_bounds: vec![
@@ -470,8 +476,10 @@ impl<C: Send> Crowd<C> {
             .par_chunks_mut(CHUNK)
             .zip(self.placed_bounds.par_chunks_mut(CHUNK))
             .zip(self.poses.par_chunks_mut(CHUNK * pl))
+            .zip(self.seam_scratch.par_iter_mut())
             .enumerate()
-            .map(|(c, ((walkers, boxes), poses))| {
+            .map(|(c, (((walkers, boxes), poses), seams))| {
+                let stock = &self.stock;
                 let mut out = (0usize, ClipFaults::default(), None);
                 // The first step writes every walker's pose slot before reading it: a scratch here.
                 let scratch = &mut poses[..pl];
@@ -479,7 +487,11 @@ impl<C: Send> Crowd<C> {
                     w.place_root(source, scratch);
                     *b = walker_bounds(w, margin);
                     let d = policy.detail(w.root.distance(eye), frustum.intersects(b), &view);
-                    match w.prime(source, &params, d) {
+                    let mut lend = Lender {
+                        scratch: &mut *seams,
+                        stock,
+                    };
+                    match w.prime(source, &params, d, &mut lend) {
                         Ok(a) => {
                             out.0 += a.built;
                             if let Some(e) = a.fault {
@@ -499,6 +511,8 @@ impl<C: Send> Crowd<C> {
                 || (0, ClipFaults::default(), None),
                 |a, b| (a.0 + b.0, ClipFaults::merge(a.1, b.1), a.2.or(b.2)),
             );
+        // What priming stocked is loading's, not the first frame's.
+        self.stock.take_allocations();
         self.update_bounds();
         if let Some((walker, e)) = fault {
             return Err(walker_error(walker, e, &params));
@@ -585,7 +599,9 @@ impl<C: Send> Crowd<C> {
         let view = camera.view();
         let pl = params.levels.pose_len;
         let npos = params.levels.joints + 1;
-        // One seam scratch per chunk of walkers, allocated by `new`: nothing is allocated here.
+        // One seam scratch per chunk of walkers, made by `new`; the shared stock allocates only
+        // at a new peak of near walkers (counted).
+        let stock = &self.stock;
         let pass = self
             .walkers
             .par_chunks_mut(CHUNK)
@@ -604,6 +620,7 @@ impl<C: Send> Crowd<C> {
                 )| {
                     lod_policy::offline::clear_avx_upper_state();
                     let mut out = ChunkOutcome::default();
+                    let mut lend = Lender { scratch, stock };
                     let t_scan = Instant::now();
                     if scan {
                         for (v, b) in visible.iter_mut().zip(boxes) {
@@ -619,7 +636,7 @@ impl<C: Send> Crowd<C> {
                         let (w, vis) = (&mut walkers[k], visible[k]);
                         let d = policy.detail(w.root.distance(eye), vis, &view);
                         let i = c * CHUNK + k;
-                        match w.advance(source, &params, d, dt, scratch) {
+                        match w.advance(source, &params, d, dt, &mut lend) {
                             Ok(a) => {
                                 out.built += a.built;
                                 if let Some(e) = a.fault {
@@ -651,7 +668,7 @@ impl<C: Send> Crowd<C> {
                                 );
                             }
                             let pose = &mut poses[k * pl..(k + 1) * pl];
-                            walkers[k].pose(source, &params, dt, visible[k], pose);
+                            walkers[k].pose(source, &params, dt, visible[k], pose, &mut lend);
                         }
                     }
                     let tc = Instant::now();
@@ -708,6 +725,7 @@ impl<C: Send> Crowd<C> {
         stats.in_transition = pass.in_transition;
         stats.visible = if scan { pass.visible } else { tree_visible };
         stats.kernels_built = pass.built;
+        stats.allocations = self.stock.take_allocations();
         stats.clip_faults = pass.clip_faults;
         self.frame += 1;
         self.time_s += f64::from(dt);

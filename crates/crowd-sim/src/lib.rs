@@ -54,6 +54,7 @@ pub mod path;
 pub mod render;
 pub mod source;
 pub mod stats;
+mod stock;
 pub mod testing;
 mod walker;
 

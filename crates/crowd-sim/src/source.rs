@@ -43,6 +43,24 @@ pub trait ClipSource: Sync {
     /// A fresh clip buffer (its content is unspecified until `build_clip`).
     fn new_clip(&self) -> Self::Clip;
 
+    /// Whether the source sizes its clips by detail: `new_clip` is then a small clip for root-only
+    /// details (building a detail with joints into it allocates), and
+    /// [`ClipSource::new_clip_with_joints`] a clip that holds any detail without allocating. The
+    /// crowd then keeps the two sizes apart: a walker that comes near exchanges its clip for a
+    /// large one from its chunk's stock, and gives it back when it goes far, so that the frame
+    /// loop allocates nothing once the stock has as many as are near at once. `false` (the
+    /// default): every clip holds every detail.
+    fn sizes_clips_by_detail(&self) -> bool {
+        false
+    }
+
+    /// A fresh clip buffer that holds a build at any detail without allocating (its content is
+    /// unspecified until `build_clip`): what the crowd lends its walkers with joints when
+    /// [`ClipSource::sizes_clips_by_detail`]. `new_clip` by default.
+    fn new_clip_with_joints(&self) -> Self::Clip {
+        self.new_clip()
+    }
+
     /// Synthesises the clip for `controls` at `detail` into `clip` (the per-cycle kernel).
     /// `detail` is checked ([`LevelTable::check`]): `detail.accuracy < levels().accuracy_levels`
     /// and `detail.active_joints <= levels().joints`.

@@ -81,6 +81,11 @@ pub struct FrameStats {
     pub in_transition: usize,
     /// Clips the source failed to build (those walkers kept their previous clips).
     pub clip_faults: ClipFaults,
+    /// Buffers the frame allocated for its walkers: clips, seam transitions and foot locks that a
+    /// chunk's stock made because it had none to lend, and stock lists grown. Zero once every
+    /// chunk's stock holds as many as its walkers ever needed at once (the frame loop allocates
+    /// nothing else, but for a culling tree's rebuild).
+    pub allocations: usize,
 }
 
 /// Aggregate of many frames: frames per second worst/mean/best and summed histograms.
@@ -112,6 +117,8 @@ pub struct CrowdReport {
     /// Every frame's time (simulation, synthesis, forward kinematics), seconds, in frame order:
     /// what [`CrowdReport::frame_times`] takes its percentiles from.
     pub frame_s: Vec<f64>,
+    /// Every frame's [`FrameStats::allocations`], in frame order.
+    pub frame_allocations: Vec<usize>,
 }
 
 /// Percentiles of frame times after a warm-up ([`CrowdReport::frame_times`]), milliseconds:
@@ -165,6 +172,7 @@ impl CrowdReport {
     pub fn with_frames(frames: usize) -> Self {
         Self {
             frame_s: Vec::with_capacity(frames),
+            frame_allocations: Vec::with_capacity(frames),
             ..Self::default()
         }
     }
@@ -196,6 +204,14 @@ impl CrowdReport {
         self.visible_sum += f.visible as u64;
         self.kernels_built += f.kernels_built as u64;
         self.frame_s.push(secs);
+        self.frame_allocations.push(f.allocations);
+    }
+
+    /// Buffers allocated by the frames after the first `warmup` ([`FrameStats::allocations`]),
+    /// and how many of those frames allocated.
+    pub fn allocations(&self, warmup: usize) -> (usize, usize) {
+        let after = self.frame_allocations.get(warmup..).unwrap_or(&[]);
+        (after.iter().sum(), after.iter().filter(|&&a| a > 0).count())
     }
 
     /// Median, 99th percentile and worst frame time of the frames after the first `warmup`

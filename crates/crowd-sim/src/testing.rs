@@ -302,6 +302,14 @@ impl<S: ClipSource> ClipSource for FailingSource<S> {
         self.inner.new_clip()
     }
 
+    fn sizes_clips_by_detail(&self) -> bool {
+        self.inner.sizes_clips_by_detail()
+    }
+
+    fn new_clip_with_joints(&self) -> S::Clip {
+        self.inner.new_clip_with_joints()
+    }
+
     fn build_clip(
         &self,
         c: &Controls,

@@ -6,9 +6,10 @@ use crate::error::ClipError;
 use crate::levels::LevelTable;
 use crate::path::{EllipsePath, path_controls};
 use crate::source::ClipSource;
+use crate::stock::Lender;
 use glam::{Vec2, Vec3};
+use lod_policy::SeamTransition;
 use lod_policy::{ControlRange, Controls, CycleFrame, Detail, FootLock, RootMotion};
-use lod_policy::{SeamScratch, SeamTransition};
 
 /// Settings the stages need, copied out of the crowd config.
 #[derive(Debug, Clone, Copy)]
@@ -16,7 +17,7 @@ pub(crate) struct StageParams {
     pub levels: LevelTable,
     pub bounds: ControlRange,
     pub seam_levels: usize,
-    /// Half-life of a seam's offset (s), for transitions allocated on a walker's first seam.
+    /// Half-life of a seam's offset (s), for the transitions the chunks' stocks make.
     pub seam_halflife_s: f32,
     /// Walkers at accuracy levels below this have their feet planted.
     pub foot_lock_levels: usize,
@@ -51,13 +52,13 @@ pub(crate) struct Walker<C> {
     pub rows: usize,
     /// Joint positions written this frame.
     pub n_joints: usize,
-    /// The walker's foot lock (`lod_policy::FootLock`, 240 bytes), allocated when it first comes
-    /// near enough to plant its feet and kept (released) when it leaves, so walkers never near
-    /// hold no lock state and the frame loop never allocates for one that returns.
+    /// The walker's foot lock (`lod_policy::FootLock`, 240 bytes), lent by the crowd's stock
+    /// ([`Lender`]) while it is near enough to plant its feet and given back (released) when
+    /// it leaves: far and culled walkers hold no lock state.
     pub lock: Option<Box<FootLock>>,
-    /// The inertialized seam into the current clip (`lod_policy::SeamTransition`), inactive when none runs.
-    /// `None` until the walker's first inertialized seam: far and culled walkers never need its
-    /// `3 P` floats.
+    /// The inertialized seam into the current clip (`lod_policy::SeamTransition`), lent by the
+    /// crowd's stock while a seam runs and given back when it ends: far and culled walkers never
+    /// hold its `3 P` floats.
     pub seam: Option<Box<SeamTransition>>,
     pub cur_detail: Detail,
     pub cur: C,
@@ -76,6 +77,13 @@ pub(crate) struct Walker<C> {
 pub(crate) fn heading_sin_cos(frame: &CycleFrame) -> (f32, f32) {
     let (sin, cos) = frame.heading.sin_cos();
     (sin as f32, cos as f32)
+}
+
+/// `slot.take()`, without writing to `slot` when it holds nothing: most walkers hold no seam or
+/// lock, and asking every frame must not dirty their memory.
+#[inline]
+fn take_held<T>(slot: &mut Option<T>) -> Option<T> {
+    if slot.is_some() { slot.take() } else { None }
 }
 
 /// Duration check: finite and at least 1 ms.
@@ -131,10 +139,10 @@ impl<C> Walker<C> {
         rows
     }
 
-    /// Ends the running seam, if any (the transition's buffers are kept for the next one).
-    fn clear_seam(&mut self) {
-        if let Some(seam) = self.seam.as_deref_mut() {
-            seam.clear();
+    /// Ends the running seam, if any (its transition goes back to the stock).
+    fn clear_seam(&mut self, stock: &mut Lender<'_, C>) {
+        if let Some(seam) = take_held(&mut self.seam) {
+            stock.give_seam(seam);
         }
         self.seam_start = 0.0;
     }
@@ -145,14 +153,28 @@ impl<C> Walker<C> {
     }
 
     /// Rebuilds `cur` for `self.controls` at `d` (in place: the outgoing clip's state has been
-    /// captured before when a seam follows). `Ok(Some(error))` when the source could not build it:
-    /// `cur` is then the previous clip, unchanged.
+    /// captured before when a seam follows). When the source sizes clips by detail and `d` has
+    /// joints where the clip held has none (or the other way round), the clip is built into one of
+    /// the other size from `stock` instead and exchanged for the one held, which goes back to the
+    /// stock. `Ok(Some(error))` when the source could not build it: `cur` is then the previous
+    /// clip, unchanged.
     fn rebuild<S: ClipSource<Clip = C>>(
         &mut self,
         src: &S,
         d: Detail,
+        stock: &mut Lender<'_, C>,
     ) -> Result<Option<ClipError>, WalkerFault> {
-        if let Err(e) = src.build_clip(&self.controls, d, &mut self.cur) {
+        let with_joints = d.active_joints > 0;
+        if src.sizes_clips_by_detail() && with_joints != (self.cur_detail.active_joints > 0) {
+            // `held` is a spare of the stock now holding the walker's clip.
+            let mut held = stock.clip(src, &mut self.cur, with_joints);
+            if let Err(e) = src.build_clip(&self.controls, d, &mut self.cur) {
+                std::mem::swap(&mut self.cur, &mut *held);
+                stock.give_clip(held, with_joints);
+                return Ok(Some(e));
+            }
+            stock.give_clip(held, !with_joints);
+        } else if let Err(e) = src.build_clip(&self.controls, d, &mut self.cur) {
             return Ok(Some(e));
         }
         let dur = src.clip_duration(&self.cur);
@@ -177,31 +199,32 @@ impl<C> Walker<C> {
         &mut self,
         src: &S,
         d: Detail,
-        seam: Option<(&mut SeamScratch, &StageParams)>,
+        stock: &mut Lender<'_, C>,
+        seam: Option<&StageParams>,
         t_out: f32,
         motion: Option<&RootMotion>,
         phase: f32,
     ) -> Result<Option<ClipError>, WalkerFault> {
         let failed = match seam {
-            Some((scratch, p)) => {
+            Some(p) => {
                 let (dur_out, this) = (self.cur_dur, &*self);
-                let captured = scratch.capture(t_out, dur_out, motion, |t, out| {
+                let captured = stock.scratch.capture(t_out, dur_out, motion, |t, out| {
                     Ok::<usize, std::convert::Infallible>(this.displayed(src, t, out))
                 });
                 let Ok(()) = captured;
-                if let Some(e) = self.rebuild(src, d)? {
+                if let Some(e) = self.rebuild(src, d, stock)? {
                     if motion.is_some() {
-                        self.clear_seam();
+                        self.clear_seam(stock);
                     }
                     return Ok(Some(e));
                 }
                 let t_in = phase * self.cur_dur;
                 let cur = &self.cur;
-                // The walker's first inertialized seam allocates its transition.
-                let transition = self.seam.get_or_insert_with(|| {
-                    Box::new(SeamTransition::new(p.levels.pose_len, p.seam_halflife_s))
-                });
-                let started = scratch.start_from_rest(
+                // A walker without a running seam borrows a transition from the stock.
+                let transition = self
+                    .seam
+                    .get_or_insert_with(|| stock.seam(p.levels.pose_len, p.seam_halflife_s));
+                let started = stock.scratch.start_from_rest(
                     t_in,
                     self.cur_dur,
                     |t, out| Ok::<usize, std::convert::Infallible>(src.pose(cur, t, out)),
@@ -213,9 +236,9 @@ impl<C> Walker<C> {
                 None
             }
             None => {
-                let failed = self.rebuild(src, d)?;
+                let failed = self.rebuild(src, d, stock)?;
                 if failed.is_none() || motion.is_some() {
-                    self.clear_seam();
+                    self.clear_seam(stock);
                 }
                 failed
             }
@@ -232,13 +255,14 @@ impl<C> Walker<C> {
         src: &S,
         p: &StageParams,
         d: Detail,
+        stock: &mut Lender<'_, C>,
     ) -> Result<Advance, WalkerFault> {
         let d = p.levels.check(&d).ok_or(WalkerFault::Level(d.accuracy))?;
         let mut done = Advance::default();
         self.hold_s = 0.0;
         if d.is_finer_than(&self.cur_detail) {
             let u = self.t / self.cur_dur;
-            let failed = self.switch(src, d, None, self.t, None, u)?;
+            let failed = self.switch(src, d, stock, None, self.t, None, u)?;
             if failed.is_none() {
                 self.t = (u * self.cur_dur).min(self.cur_dur * 0.999_999);
             }
@@ -282,6 +306,7 @@ impl<C> Walker<C> {
     /// finer than the clip held (inertialized likewise), except while `hold_s` (a new crowd's
     /// spread of first builds) runs. `scratch` is the thread's seam scratch. `d` is the policy's
     /// answer, checked here against the source's level table ([`LevelTable::check`]).
+    /// `stock` lends clips and seam transitions ([`Lender`], with the chunk's seam scratch).
     /// Returns the kernels built and the builds that failed.
     pub fn advance<S: ClipSource<Clip = C>>(
         &mut self,
@@ -289,7 +314,7 @@ impl<C> Walker<C> {
         p: &StageParams,
         d: Detail,
         dt: f32,
-        scratch: &mut SeamScratch,
+        stock: &mut Lender<'_, C>,
     ) -> Result<Advance, WalkerFault> {
         let d = p.levels.check(&d).ok_or(WalkerFault::Level(d.accuracy))?;
         let mut done = Advance::default();
@@ -313,8 +338,8 @@ impl<C> Walker<C> {
                 &p.bounds,
             )
             .with_style(held.style);
-            let seam = Self::seams(p, &d, &self.cur_detail).then_some((&mut *scratch, p));
-            let failed = self.switch(src, d, seam, end, Some(&m), 0.0)?;
+            let seam = Self::seams(p, &d, &self.cur_detail).then_some(p);
+            let failed = self.switch(src, d, stock, seam, end, Some(&m), 0.0)?;
             if failed.is_some() {
                 // The previous clip plays on: its controls stay the walker's.
                 self.controls = held;
@@ -329,9 +354,9 @@ impl<C> Walker<C> {
         {
             self.hold_s = 0.0;
             let u = self.t / self.cur_dur;
-            let seam = Self::seams(p, &d, &self.cur_detail).then_some((&mut *scratch, p));
+            let seam = Self::seams(p, &d, &self.cur_detail).then_some(p);
             let t_out = self.t;
-            let failed = self.switch(src, d, seam, t_out, None, u)?;
+            let failed = self.switch(src, d, stock, seam, t_out, None, u)?;
             if failed.is_none() {
                 self.t = (u * self.cur_dur).min(self.cur_dur * 0.999_999);
             }
@@ -344,7 +369,8 @@ impl<C> Walker<C> {
     /// once its offset has decayed); then, for a `visible` walker at one of the first
     /// `foot_lock_levels` accuracy levels with joints, planted feet ([`ClipSource::plant_feet`];
     /// `dt` is the frame step). A walker that leaves those levels or the view releases its lock: its
-    /// feet are let go at once (nobody sees it, or its clip switches without a seam there).
+    /// feet are let go at once (nobody sees it, or its clip switches without a seam there). A seam
+    /// that ends and a lock released go back to `stock`; a lock is borrowed from it.
     pub fn pose<S: ClipSource<Clip = C>>(
         &mut self,
         src: &S,
@@ -352,22 +378,28 @@ impl<C> Walker<C> {
         dt: f32,
         visible: bool,
         out: &mut [f32],
+        stock: &mut Lender<'_, C>,
     ) {
         self.rows = self.displayed(src, self.t, out);
-        if let Some(seam) = self.seam.as_deref_mut() {
-            seam.finish_after(self.t - self.seam_start);
+        let clock = self.t - self.seam_start;
+        if self
+            .seam
+            .as_deref_mut()
+            .is_some_and(|seam| !seam.finish_after(clock))
+        {
+            self.clear_seam(stock);
         }
         let near = visible
             && self.cur_detail.accuracy < p.foot_lock_levels
             && self.cur_detail.active_joints > 0;
         if !near {
-            if let Some(lock) = self.lock.as_deref_mut() {
-                lock.release();
+            if let Some(lock) = take_held(&mut self.lock) {
+                stock.give_lock(lock);
             }
             return;
         }
         let frame = self.frame;
-        let lock = self.lock.get_or_insert_with(Box::default);
+        let lock = self.lock.get_or_insert_with(|| stock.lock());
         let rows = self.rows;
         src.plant_feet(&self.cur, &frame, dt, lock, &mut out[..rows]);
     }

@@ -635,3 +635,155 @@ fn failing_clip_builds_are_counted_and_walkers_keep_their_clips() {
         assert_eq!(s.clip_faults.count, 0);
     }
 }
+
+/// The procedural source with clips of two sizes, as the model's compact source has: a small clip
+/// for root-only details and a large one for details with joints. Counts the builds into a clip of
+/// the wrong size (a crowd that lends clips from its stock never does one).
+struct SizedSource {
+    inner: ProceduralSource,
+    wrong_size: std::sync::atomic::AtomicUsize,
+    made: std::sync::atomic::AtomicUsize,
+}
+
+/// A procedural clip and whether it is the large size.
+struct SizedClip(ProceduralClip, bool);
+
+impl SizedSource {
+    fn new() -> SizedSource {
+        SizedSource {
+            inner: ProceduralSource::new(),
+            wrong_size: 0.into(),
+            made: 0.into(),
+        }
+    }
+}
+
+impl ClipSource for SizedSource {
+    type Clip = SizedClip;
+    fn levels(&self) -> LevelTable {
+        self.inner.levels()
+    }
+    fn control_range(&self) -> ControlRange {
+        self.inner.control_range()
+    }
+    fn new_clip(&self) -> SizedClip {
+        self.made.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        SizedClip(self.inner.new_clip(), false)
+    }
+    fn sizes_clips_by_detail(&self) -> bool {
+        true
+    }
+    fn new_clip_with_joints(&self) -> SizedClip {
+        self.made.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        SizedClip(self.inner.new_clip(), true)
+    }
+    fn build_clip(&self, c: &Controls, d: Detail, clip: &mut SizedClip) -> Result<(), ClipError> {
+        if (d.active_joints > 0) != clip.1 {
+            self.wrong_size
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
+        self.inner.build_clip(c, d, &mut clip.0)
+    }
+    fn clip_duration(&self, clip: &SizedClip) -> f32 {
+        self.inner.clip_duration(&clip.0)
+    }
+    fn clip_root_motion(&self, clip: &SizedClip) -> RootMotion {
+        self.inner.clip_root_motion(&clip.0)
+    }
+    fn pose(&self, clip: &SizedClip, t: f32, out: &mut [f32]) -> usize {
+        self.inner.pose(&clip.0, t, out)
+    }
+    fn joints(&self, clip: &SizedClip, pose: &[f32], out: &mut [Vec3]) -> usize {
+        self.inner.joints(&clip.0, pose, out)
+    }
+    fn bones(&self) -> &[(usize, usize)] {
+        self.inner.bones()
+    }
+}
+
+/// Every walker's joint positions after each of `frames` frames around the orbit.
+fn joint_trace<S: ClipSource>(
+    source: &S,
+    walkers: usize,
+    frames: usize,
+    threads: usize,
+) -> (Vec<Vec3>, crowd_sim::CrowdReport) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let policy = paper_distance_policy(source.levels());
+        let mut crowd = Crowd::new(source, config(walkers, 60.0)).unwrap();
+        let lens = Camera::default();
+        let mut report = crowd_sim::CrowdReport::new();
+        let mut trace = Vec::new();
+        for f in 0..frames {
+            let cam = orbit().camera_at(f as f32 * DT, &lens);
+            report.add(&crowd.step(source, &policy, &cam, DT).unwrap());
+            for i in 0..crowd.len() {
+                trace.extend_from_slice(crowd.joint_positions(i));
+            }
+        }
+        (trace, report)
+    })
+}
+
+#[test]
+fn clips_of_two_sizes_are_lent_from_the_stock_and_change_no_frame() {
+    let plain = ProceduralSource::new();
+    let (want, plain_report) = joint_trace(&plain, 400, 600, 2);
+    // A source whose clips are all one size never exchanges clips: only seam transitions and foot
+    // locks come from the stock.
+    assert!(plain_report.allocations(0).0 > 0);
+    for threads in [1, 2, 3] {
+        let sized = SizedSource::new();
+        let (got, report) = joint_trace(&sized, 400, 600, threads);
+        assert!(got == want, "{threads} threads: the frames differ");
+        let wrong = sized.wrong_size.load(std::sync::atomic::Ordering::Relaxed);
+        assert_eq!(
+            wrong, 0,
+            "{threads} threads: {wrong} builds into a clip of the wrong size"
+        );
+        // The stock grows while walkers first come near, then lends what it holds: the last
+        // third of the run allocates less than a tenth of what the first third did.
+        let (first, _) = report.allocations(0);
+        let (last, _) = report.allocations(400);
+        assert!(
+            first > 0 && last * 10 < first,
+            "{threads} threads: {first} then {last}"
+        );
+        // Clips made: one per walker, and the stock's, no more than the walkers ever near at once
+        // in each size, which is at most every walker twice.
+        let made = sized.made.load(std::sync::atomic::Ordering::Relaxed);
+        assert!(
+            made > 400 && made <= 3 * 400,
+            "{threads} threads: {made} clips made"
+        );
+    }
+}
+
+#[test]
+fn a_failed_build_into_a_lent_clip_keeps_the_walkers_own() {
+    use crowd_sim::testing::FailingSource;
+    let plain = FailingSource {
+        inner: ProceduralSource::new(),
+        every: 5,
+    };
+    let sized = FailingSource {
+        inner: SizedSource::new(),
+        every: 5,
+    };
+    let (want, want_report) = joint_trace(&plain, 300, 300, 2);
+    let (got, report) = joint_trace(&sized, 300, 300, 2);
+    assert!(want_report.clip_faults > 10, "{}", want_report.clip_faults);
+    assert_eq!(report.clip_faults, want_report.clip_faults);
+    assert!(got == want, "the frames differ");
+    assert_eq!(
+        sized
+            .inner
+            .wrong_size
+            .load(std::sync::atomic::Ordering::Relaxed),
+        0
+    );
+}

@@ -354,8 +354,12 @@ fn compact_kernels_hold_their_level_and_give_the_same_bits() {
     let mut scratch = KernelScratch::new(&model);
     let mut full = ClipKernel::new(&model);
     let mut compact = ClipKernel::compact(&model);
-    assert!(compact.is_compact() && !full.is_compact());
+    // Sized for joints: holds every level from the start and never resizes.
+    let mut joints = ClipKernel::compact_for_joints(&model);
+    assert!(compact.is_compact() && !full.is_compact() && joints.is_compact());
     assert!(compact.heap_bytes() < full.heap_bytes());
+    assert_eq!(joints.heap_bytes(), full.heap_bytes());
+    let joints_buffer = joints.g().as_ptr();
     let mut rng = Rng::new(77);
     let levels = model.levels().len();
     // Coarse to fine and back: the compact buffer grows and shrinks.
@@ -376,7 +380,15 @@ fn compact_kernels_hold_their_level_and_give_the_same_bits() {
         model
             .build_kernel_values(&c, detail, &mut scratch, &mut compact)
             .unwrap();
+        model
+            .build_kernel_values(&c, detail, &mut scratch, &mut joints)
+            .unwrap();
         assert_eq!(compact.g(), full.g(), "step {i}");
+        assert_eq!(joints.g(), full.g(), "step {i}");
+        assert_eq!(joints.time_table(), full.time_table());
+        assert_eq!(joints.root_motion(), full.root_motion());
+        assert_eq!(joints.heap_bytes(), full.heap_bytes(), "step {i}");
+        assert_eq!(joints.g().as_ptr(), joints_buffer, "step {i}: reallocated");
         assert_eq!(compact.time_table(), full.time_table());
         assert_eq!(compact.root_motion(), full.root_motion());
         let r = compact.ranks();

@@ -31,6 +31,8 @@ use crate::source::{bones_of, write_joints};
 #[derive(Debug, Clone)]
 pub struct NaiveClip {
     /// `rows x T` blended values, row-major (row `r`'s frames at `r T`; time row in seconds).
+    /// A buffer of `P x T` entries or more (a clip for joints, [`ClipSource::new_clip_with_joints`])
+    /// is kept whatever the clip holds, so that building into it never allocates.
     values: Vec<f32>,
     /// Pose rows held (`P'`).
     rows: usize,
@@ -142,6 +144,20 @@ impl ClipSource for NaiveSource<'_> {
         }
     }
 
+    /// Clips come in two sizes: root-only (`7 x T` values) and with joints (`P x T`).
+    fn sizes_clips_by_detail(&self) -> bool {
+        true
+    }
+
+    fn new_clip_with_joints(&self) -> NaiveClip {
+        let (p, t) = self.dims();
+        let mut clip = self.new_clip();
+        let mut values = Vec::with_capacity(p * t);
+        values.resize(clip.values.len(), 0.0);
+        clip.values = values;
+        clip
+    }
+
     fn build_clip(
         &self,
         controls: &Controls,
@@ -152,9 +168,11 @@ impl ClipSource for NaiveSource<'_> {
         let lod = self.model.lod();
         clip.active_joints = detail.active_joints.min(lod.joints());
         clip.rows = lod.active_rows(clip.active_joints).min(p);
-        // Sized for the clip's rows (a root-only clip holds 7 T values).
+        // Sized for the clip's rows (a root-only clip holds 7 T values); a buffer of all `P T`
+        // values (a clip for joints) is kept.
         let need = clip.rows * t;
-        if clip.values.capacity() < need || clip.values.capacity() > 2 * need {
+        let cap = clip.values.capacity();
+        if cap < need || (cap > 2 * need && cap < p * t) {
             clip.values = Vec::with_capacity(need);
         }
         clip.values.resize(need, 0.0);

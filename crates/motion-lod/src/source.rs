@@ -228,6 +228,20 @@ impl ClipSource for LodSource<'_> {
         }
     }
 
+    /// Compact clips (the crowd's, [`LodSource::new`]) come in two sizes: [`ClipKernel::compact`] for
+    /// root-only walkers and [`ClipKernel::compact_for_joints`] for walkers with joints.
+    fn sizes_clips_by_detail(&self) -> bool {
+        self.compact
+    }
+
+    fn new_clip_with_joints(&self) -> LodClip {
+        let mut clip = self.new_clip();
+        if self.compact {
+            clip.kernel = ClipKernel::compact_for_joints(self.model.lod());
+        }
+        clip
+    }
+
     /// Builds the kernel at `detail` evaluated as [`lod_policy::LodModel::evaluated`] (a root-only clip at the
     /// smallest level). The kernel checks controls, level and buffers before it writes, so a
     /// refused build leaves the clip as it was.

@@ -211,6 +211,11 @@ struct FrameMs {
     p50: f64,
     p99: f64,
     worst: f64,
+    /// Buffers the frame loop allocated over those frames (`crowd_sim::FrameStats::allocations`:
+    /// clips, seam transitions and foot locks made when a chunk's stock of them reached a new peak).
+    allocations: usize,
+    /// Frames among those that allocated.
+    allocating_frames: usize,
 }
 
 /// Simulated seconds a run's first frames are left out of its frame-time percentiles: the first
@@ -220,12 +225,15 @@ const WARMUP_S: f64 = 1.0;
 /// The frame-time percentiles of `report` after [`WARMUP_S`] at `fps`.
 fn frame_ms(report: &CrowdReport, fps: f32) -> Option<FrameMs> {
     let warmup = (WARMUP_S * f64::from(fps)).round() as usize;
+    let (allocations, allocating_frames) = report.allocations(warmup);
     report.frame_times(warmup).map(|t| FrameMs {
         after_s: WARMUP_S,
         frames: t.frames,
         p50: t.p50_ms,
         p99: t.p99_ms,
         worst: t.worst_ms,
+        allocations,
+        allocating_frames,
     })
 }
 
@@ -447,12 +455,14 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     if let Some(t) = frame_ms(&main.report, args.fps) {
         println!(
             "frame times after the first {WARMUP_S} s ({} frames): median {:.2} ms, p99 {:.2} ms, \
-             worst {:.2} ms ({:.2}x the median)",
+             worst {:.2} ms ({:.2}x the median); buffers allocated: {} in {} frames",
             t.frames,
             t.p50,
             t.p99,
             t.worst,
-            t.worst / t.p50.max(1e-12)
+            t.worst / t.p50.max(1e-12),
+            t.allocations,
+            t.allocating_frames
         );
     }
     println!(
