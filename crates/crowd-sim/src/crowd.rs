@@ -253,8 +253,8 @@ fn walker_bounds<C>(w: &Walker<C>, m: f32) -> Bounds {
 /// chunk of walkers and given back when it goes far or the seam ends. A stock grows only when more
 /// of its walkers need a buffer at once than ever before, so `step_into` allocates only then
 /// (counted in [`FrameStats::allocations`]: while the crowd warms up, and at a new peak of near
-/// walkers in a chunk) and when the culling tree ([`Culling::Tree`]) is rebuilt (every
-/// `tree_rebuild_interval` frames).
+/// walkers; [`Crowd::reserve`] stocks it beforehand) and when the culling tree
+/// ([`Culling::Tree`]) is rebuilt (every `tree_rebuild_interval` frames).
 pub struct Crowd<C> {
     config: CrowdConfig,
     params: StageParams,
@@ -439,6 +439,24 @@ impl<C: Send> Crowd<C> {
             .zip(self.walkers.par_iter_mut())
             .with_min_len(4 * CHUNK)
             .for_each(|(b, w)| *b = walker_bounds(w, m));
+    }
+
+    /// Stocks the crowd while loading so that its frame loop allocates nothing while at most
+    /// `near` walkers at once hold joints, plant their feet or run a seam: makes the spare clips
+    /// sized for joints (when the source sizes clips by detail), foot locks and seam transitions
+    /// that the walkers holding them now leave missing. The stock otherwise grows at each new peak
+    /// of near walkers ([`FrameStats::allocations`]); it holds at most one spare of a kind per
+    /// walker up to 4,096 walkers, one per eight beyond. Call it after [`Crowd::prime`] (which
+    /// gives the walkers in view their clips) and before the first step. Returns the buffers made.
+    pub fn reserve<S: ClipSource<Clip = C>>(&mut self, source: &S, near: usize) -> usize {
+        let mut lent = [0usize; 3];
+        for w in &self.walkers {
+            lent[0] += usize::from(w.cur_detail.active_joints > 0);
+            lent[1] += usize::from(w.lock.is_some());
+            lent[2] += usize::from(w.seam.is_some());
+        }
+        let seam = (self.params.levels.pose_len, self.params.seam_halflife_s);
+        self.stock.reserve(source, near, lent, seam)
     }
 
     /// Starts every walker mid-stride at the detail `policy` gives it seen from `camera`, before

@@ -67,6 +67,38 @@ impl<C> Stock<C> {
         }
     }
 
+    /// Makes spares so that `near` walkers at once can hold a clip sized for joints (when the
+    /// source sizes clips by detail), a foot lock and a seam transition, `lent` (those kinds, in
+    /// that order) being held by walkers now; at most what the queues hold. Returns the buffers
+    /// made (not counted as the frame loop's).
+    pub fn reserve<S: ClipSource<Clip = C>>(
+        &self,
+        source: &S,
+        near: usize,
+        lent: [usize; 3],
+        seam: (usize, f32),
+    ) -> usize {
+        fn fill<T>(queue: &ArrayQueue<T>, want: usize, make: impl Fn() -> T) -> usize {
+            let mut made = 0;
+            while queue.len() < want && queue.push(make()).is_ok() {
+                made += 1;
+            }
+            made
+        }
+        let clips = if source.sizes_clips_by_detail() {
+            fill(&self.joint_clips, near.saturating_sub(lent[0]), || {
+                Box::new(source.new_clip_with_joints())
+            })
+        } else {
+            0
+        };
+        clips
+            + fill(&self.locks, near.saturating_sub(lent[1]), Box::default)
+            + fill(&self.seams, near.saturating_sub(lent[2]), || {
+                Box::new(SeamTransition::new(seam.0, seam.1))
+            })
+    }
+
     /// The allocator calls counted since the last call, and the count reset.
     pub fn take_allocations(&self) -> usize {
         self.allocations.swap(0, Ordering::Relaxed)

@@ -2,7 +2,8 @@
 //! stock of lent buffers counts ([`FrameStats::allocations`]: a clip sized for joints, a seam
 //! transition or a foot lock made when more walkers need one at once than ever before), and that
 //! stops once the crowd has warmed up. Counted by a global allocator (every allocation, reallocation
-//! and release of the process; this binary runs this one test).
+//! and release of the process; this binary runs this one test). A crowd stocked while loading
+//! ([`Crowd::reserve`]) for the most walkers near at once allocates nothing from its first frame.
 //!
 //! Before the stock, a walker's compact clip was resized whenever it gained or lost its joints and
 //! its seam transition and foot lock were allocated on first use and kept: 2.5 to 4 allocations a
@@ -68,15 +69,19 @@ fn the_frame_loop_allocates_only_while_the_stock_grows() {
         .num_threads(2)
         .build()
         .unwrap();
-    // Per frame: allocator calls, the stock's count and the walkers with joints.
-    let frames: Vec<(usize, usize, u32)> = pool.install(|| {
+    // Per frame: allocator calls, the stock's count and the walkers with joints; with the stock
+    // filled for `reserve` walkers near at once first when given.
+    let run = |frames_run: usize, reserve: Option<usize>| -> Vec<(usize, usize, u32)> {
         let mut crowd = Crowd::new(&source, config).unwrap();
         crowd
             .prime(&source, &policy, &path.camera_at(0.0, &lens))
             .unwrap();
+        if let Some(near) = reserve {
+            assert!(crowd.reserve(&source, near) > 0);
+        }
         let mut stats = FrameStats::default();
-        let mut frames = Vec::with_capacity(FRAMES);
-        for f in 0..FRAMES {
+        let mut frames = Vec::with_capacity(frames_run);
+        for f in 0..frames_run {
             let cam = path.camera_at(f as f32 * DT, &lens);
             let before = CALLS.load(Ordering::Relaxed);
             crowd
@@ -87,7 +92,8 @@ fn the_frame_loop_allocates_only_while_the_stock_grows() {
             frames.push((calls, stats.allocations, crowd.len() as u32 - root_only));
         }
         frames
-    });
+    };
+    let frames = pool.install(|| run(FRAMES, None));
     // The first frame sizes the statistics' histogram.
     for (f, &(calls, counted, _)) in frames.iter().enumerate().skip(1) {
         assert!(
@@ -107,4 +113,16 @@ fn the_frame_loop_allocates_only_while_the_stock_grows() {
          during it)",
         FRAMES - WARMUP
     );
+
+    // The same crowd stocked for twice the most walkers with joints seen above (a frame may lend a
+    // clip to a walker coming near before one going far gives its back): nothing after the first
+    // frame allocates.
+    let peak = frames.iter().map(|f| f.2).max().unwrap() as usize;
+    let reserved = pool.install(|| run(WARMUP, Some(2 * peak)));
+    for (f, &(calls, counted, _)) in reserved.iter().enumerate().skip(1) {
+        assert!(
+            calls == 0 && counted == 0,
+            "frame {f} of the stocked crowd: {calls} allocator calls, {counted} counted"
+        );
+    }
 }

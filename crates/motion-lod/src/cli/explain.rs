@@ -270,6 +270,11 @@ pub const GLOSSARY: &[Entry] = &[
         text: "What `crowd` timed per frame: culling, clip kernels, poses and forward kinematics of every walker (not rendering). `fps worst / mean / best` count every frame from the first (the first cycle's clip builds included); `frame times after the first 1 s` (JSON `frame_ms`) are the median, the 99th percentile (nearest rank) and the slowest frame of the frames after the first simulated second, in milliseconds, and the slowest over the median: a game drops frames where the worst is far above the median.",
     },
     Entry {
+        term: "buffers allocated",
+        aliases: &["allocations", "allocating_frames", "stock"],
+        text: "What `crowd`'s frame loop allocated over the frames after the first second (JSON `frame_ms.allocations`, `frame_ms.allocating_frames`): a walker that comes near or starts a seam borrows a clip sized for joints, a foot lock or a seam transition from the crowd's stock and gives it back when it goes far or the seam ends; the stock makes one only when more walkers need one at once than ever before. Nonzero while the crowd warms up (its first cycles, and new peaks of near walkers), zero after: nothing else in the frame loop allocates.",
+    },
+    Entry {
         term: "files",
         aliases: &[
             "found", "read", "skipped", "kept", "dropped", "stop", "too long", "no cycle",
