@@ -7,7 +7,7 @@ use crate::levels::{LevelTable, check_control_range};
 use crate::path::{EllipsePath, PathPlan, WalkerStart, path_controls};
 use crate::source::ClipSource;
 use crate::stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
-use crate::stock::{Lender, Stock};
+use crate::stock::{Lender, Lent, Stock};
 use crate::walker::{StageParams, Walker, WalkerFault, heading_sin_cos, valid_duration};
 use glam::Vec3;
 use lod_policy::SeamScratch;
@@ -247,14 +247,15 @@ fn walker_bounds<C>(w: &Walker<C>, m: f32) -> Bounds {
 
 /// A crowd of walkers driven by clips of a [`ClipSource`] whose clip type is `C`.
 ///
-/// All per-frame buffers are allocated by `new`. What a walker needs only while near (a clip sized
-/// for joints, when the source sizes clips by detail: [`ClipSource::sizes_clips_by_detail`]; a
-/// foot lock) or inside a seam (a seam transition, `3 P` floats) is lent to it by the stock of its
-/// chunk of walkers and given back when it goes far or the seam ends. A stock grows only when more
-/// of its walkers need a buffer at once than ever before, so `step_into` allocates only then
-/// (counted in [`FrameStats::allocations`]: while the crowd warms up, and at a new peak of near
-/// walkers; [`Crowd::reserve`] stocks it beforehand) and when the culling tree
-/// ([`Culling::Tree`]) is rebuilt (every `tree_rebuild_interval` frames).
+/// All per-frame buffers are allocated by `new`. What a walker needs only for some details or
+/// some time is lent to it by the crowd's stock and given back when it no longer needs it: a clip
+/// of the size class its detail needs (when the source has several:
+/// [`ClipSource::clip_classes`]; a walker whose detail changes class exchanges its clip), a foot
+/// lock while near, a seam transition (`3 P` floats) while a seam runs. The stock grows only when
+/// more walkers need a buffer of a kind at once than ever before, so `step_into` allocates only
+/// then (counted in [`FrameStats::allocations`]: while the crowd warms up, and at a new peak;
+/// [`Crowd::reserve`] stocks it beforehand) and when the culling tree ([`Culling::Tree`]) is
+/// rebuilt (every `tree_rebuild_interval` frames).
 pub struct Crowd<C> {
     config: CrowdConfig,
     params: StageParams,
@@ -302,6 +303,10 @@ impl<C: Send> Crowd<C> {
         }
         let bounds = source.control_range();
         check_control_range(&bounds)?;
+        let classes = source.clip_classes();
+        if !(1..=crate::source::MAX_CLIP_CLASSES).contains(&classes) {
+            return Err(CrowdError::ClipClasses { classes });
+        }
         let params = StageParams {
             levels,
             bounds,
@@ -404,7 +409,7 @@ impl<C: Send> Crowd<C> {
             seam_scratch: (0..n.div_ceil(CHUNK))
                 .map(|_| SeamScratch::new(levels.pose_len))
                 .collect(),
-            stock: Stock::new(n),
+            stock: Stock::new(n, classes),
             joints: vec![Vec3::ZERO; n * npos],
             bounds: Vec::new(),
             placed_bounds: vec![
@@ -442,21 +447,26 @@ impl<C: Send> Crowd<C> {
     }
 
     /// Stocks the crowd while loading so that its frame loop allocates nothing while at most
-    /// `near` walkers at once hold joints, plant their feet or run a seam: makes the spare clips
-    /// sized for joints (when the source sizes clips by detail), foot locks and seam transitions
-    /// that the walkers holding them now leave missing. The stock otherwise grows at each new peak
+    /// `near` walkers at once hold a clip of any one size class other than root-only clips'
+    /// ([`ClipSource::clip_classes`]), plant their feet or run a seam: makes the spare clips of
+    /// each such class, foot locks and seam transitions that the walkers holding them now leave
+    /// missing. The stock otherwise grows at each new peak
     /// of near walkers ([`FrameStats::allocations`]); it holds at most one spare of a kind per
     /// walker up to 4,096 walkers, one per eight beyond. Call it after [`Crowd::prime`] (which
     /// gives the walkers in view their clips) and before the first step. Returns the buffers made.
     pub fn reserve<S: ClipSource<Clip = C>>(&mut self, source: &S, near: usize) -> usize {
-        let mut lent = [0usize; 3];
+        let mut lent = Lent::default();
         for w in &self.walkers {
-            lent[0] += usize::from(w.cur_detail.active_joints > 0);
-            lent[1] += usize::from(w.lock.is_some());
-            lent[2] += usize::from(w.seam.is_some());
+            let class = source.clip_class(&w.cur_detail);
+            lent.clips[class.min(crate::source::MAX_CLIP_CLASSES - 1)] += 1;
+            lent.locks += usize::from(w.lock.is_some());
+            lent.seams += usize::from(w.seam.is_some());
         }
-        let seam = (self.params.levels.pose_len, self.params.seam_halflife_s);
-        self.stock.reserve(source, near, lent, seam)
+        let levels = self.params.levels;
+        let root = levels.root_only().map(|d| source.clip_class(&d));
+        let classes = (0..source.clip_classes()).filter(|&c| Some(c) != root);
+        let seam = (levels.pose_len, self.params.seam_halflife_s);
+        self.stock.reserve(source, near, classes, &lent, seam)
     }
 
     /// Starts every walker mid-stride at the detail `policy` gives it seen from `camera`, before

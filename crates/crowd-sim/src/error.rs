@@ -18,6 +18,15 @@ pub enum CrowdError {
         /// Pose vector length reported by the source.
         pose_len: usize,
     },
+    /// The clip source reports no clip size class, or more than the crowd keeps.
+    #[error(
+        "clip source reports {classes} clip size classes (1 to {} allowed)",
+        crate::source::MAX_CLIP_CLASSES
+    )]
+    ClipClasses {
+        /// What `ClipSource::clip_classes` returned.
+        classes: usize,
+    },
     /// The control range of the source is not finite, inverted, or allows no forward motion/turn.
     #[error("clip source control range is unusable: {what}")]
     BadControlRange {

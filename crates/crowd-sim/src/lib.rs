@@ -62,5 +62,5 @@ pub use camera::{Bounds, Camera, CameraPath, Frustum, Scene};
 pub use crowd::{Crowd, CrowdConfig, CrowdStyle, Culling};
 pub use error::{ClipError, CrowdError, RenderError};
 pub use levels::{LevelTable, check_control_range};
-pub use source::ClipSource;
+pub use source::{ClipSource, MAX_CLIP_CLASSES};
 pub use stats::{ClipFaults, CrowdReport, FrameStats, FrameTimes, StageTimings};

@@ -5,6 +5,9 @@ use crate::levels::LevelTable;
 use glam::Vec3;
 use lod_policy::{ControlRange, Controls, CycleFrame, Detail, FootLock, RootMotion};
 
+/// Most size classes of clips a source may have ([`ClipSource::clip_classes`]).
+pub const MAX_CLIP_CLASSES: usize = 8;
+
 /// A provider of gait clips at (controls, detail), implemented by the facade for the multilinear
 /// model and for a naive baseline, and by [`testing::ProceduralSource`](crate::testing::ProceduralSource).
 ///
@@ -43,21 +46,28 @@ pub trait ClipSource: Sync {
     /// A fresh clip buffer (its content is unspecified until `build_clip`).
     fn new_clip(&self) -> Self::Clip;
 
-    /// Whether the source sizes its clips by detail: `new_clip` is then a small clip for root-only
-    /// details (building a detail with joints into it allocates), and
-    /// [`ClipSource::new_clip_with_joints`] a clip that holds any detail without allocating. The
-    /// crowd then keeps the two sizes apart: a walker that comes near exchanges its clip for a
-    /// large one from its chunk's stock, and gives it back when it goes far, so that the frame
-    /// loop allocates nothing once the stock has as many as are near at once. `false` (the
-    /// default): every clip holds every detail.
-    fn sizes_clips_by_detail(&self) -> bool {
-        false
+    /// Size classes of the source's clips (at least 1; 1 by default: every clip holds every
+    /// detail). With more, a clip of class `k` ([`ClipSource::new_clip_of_class`]) holds a build
+    /// at any detail of that class ([`ClipSource::clip_class`]) without allocating, and the crowd
+    /// keeps the classes apart: a walker whose detail changes class exchanges its clip for one of
+    /// the new class from the crowd's stock and gives its own back, so that the frame loop
+    /// allocates nothing once the stock holds as many of each class as walkers need at once, and
+    /// memory follows what each walker's detail needs. At most [`MAX_CLIP_CLASSES`].
+    fn clip_classes(&self) -> usize {
+        1
     }
 
-    /// A fresh clip buffer that holds a build at any detail without allocating (its content is
-    /// unspecified until `build_clip`): what the crowd lends its walkers with joints when
-    /// [`ClipSource::sizes_clips_by_detail`]. `new_clip` by default.
-    fn new_clip_with_joints(&self) -> Self::Clip {
+    /// The class of clip a build at `detail` needs (`< clip_classes()`; root-only details take
+    /// the class of `new_clip`'s clips). 0 by default.
+    fn clip_class(&self, detail: &Detail) -> usize {
+        let _ = detail;
+        0
+    }
+
+    /// A fresh clip of `class` (`< clip_classes()`; its content is unspecified until
+    /// `build_clip`). `new_clip` by default.
+    fn new_clip_of_class(&self, class: usize) -> Self::Clip {
+        let _ = class;
         self.new_clip()
     }
 

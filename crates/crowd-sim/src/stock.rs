@@ -1,6 +1,7 @@
-//! The crowd's stock of the buffers a walker needs only while it is near (a clip sized for joints,
-//! a foot lock) or inside a seam (a seam transition): lent to a walker when it needs one and given
-//! back when it goes far or the seam ends.
+//! The crowd's stock of the buffers a walker needs only for some details or some time: a clip of
+//! the size class its detail needs (when the source has several, [`ClipSource::clip_classes`]), a
+//! foot lock while it is near, a seam transition while a seam runs. Lent to a walker when it needs
+//! one and given back when its detail changes class, it goes far or the seam ends.
 //!
 //! The stock starts empty and grows only when more walkers need a buffer at once than ever before,
 //! so the frame loop allocates only while the crowd warms up or reaches a new peak of near walkers,
@@ -32,10 +33,8 @@ pub(crate) fn spares(walkers: usize) -> usize {
 /// The crowd's stock (see the module documentation).
 #[derive(Debug)]
 pub(crate) struct Stock<C> {
-    /// Clips sized for any detail ([`ClipSource::new_clip_with_joints`]), not lent.
-    joint_clips: ArrayQueue<Box<C>>,
-    /// Small clips ([`ClipSource::new_clip`]) left by walkers that hold a large one.
-    root_clips: ArrayQueue<Box<C>>,
+    /// Spare clips of each size class ([`ClipSource::new_clip_of_class`]), not lent.
+    clips: Vec<ArrayQueue<Box<C>>>,
     seams: ArrayQueue<Box<SeamTransition>>,
     locks: ArrayQueue<Box<FootLock>>,
     /// Allocator calls since the last [`Stock::take_allocations`]: buffers made because the stock
@@ -44,16 +43,26 @@ pub(crate) struct Stock<C> {
 }
 
 impl<C> Stock<C> {
-    /// An empty stock for a crowd of `walkers`.
-    pub fn new(walkers: usize) -> Stock<C> {
+    /// An empty stock for a crowd of `walkers` whose source has `classes` clip size classes.
+    pub fn new(walkers: usize, classes: usize) -> Stock<C> {
         let n = spares(walkers);
         Stock {
-            joint_clips: ArrayQueue::new(n),
-            root_clips: ArrayQueue::new(n),
+            clips: (0..classes).map(|_| ArrayQueue::new(n)).collect(),
             seams: ArrayQueue::new(n),
             locks: ArrayQueue::new(n),
             allocations: AtomicUsize::new(0),
         }
+    }
+
+    /// `class`, or the last class for one the source should not have given (checked in debug
+    /// builds).
+    fn class(&self, class: usize) -> usize {
+        debug_assert!(
+            class < self.clips.len(),
+            "clip class {class} of {}",
+            self.clips.len()
+        );
+        class.min(self.clips.len() - 1)
     }
 
     fn count(&self) {
@@ -67,15 +76,16 @@ impl<C> Stock<C> {
         }
     }
 
-    /// Makes spares so that `near` walkers at once can hold a clip sized for joints (when the
-    /// source sizes clips by detail), a foot lock and a seam transition, `lent` (those kinds, in
-    /// that order) being held by walkers now; at most what the queues hold. Returns the buffers
-    /// made (not counted as the frame loop's).
+    /// Makes spares so that `near` walkers at once can hold a clip of each class in `classes`, a
+    /// foot lock and a seam transition, `lent` being what walkers hold now (clips of each class,
+    /// then locks and seams); at most what the queues hold. Returns the buffers made (not counted
+    /// as the frame loop's).
     pub fn reserve<S: ClipSource<Clip = C>>(
         &self,
         source: &S,
         near: usize,
-        lent: [usize; 3],
+        classes: impl Iterator<Item = usize>,
+        lent: &Lent,
         seam: (usize, f32),
     ) -> usize {
         fn fill<T>(queue: &ArrayQueue<T>, want: usize, make: impl Fn() -> T) -> usize {
@@ -85,16 +95,16 @@ impl<C> Stock<C> {
             }
             made
         }
-        let clips = if source.sizes_clips_by_detail() {
-            fill(&self.joint_clips, near.saturating_sub(lent[0]), || {
-                Box::new(source.new_clip_with_joints())
-            })
-        } else {
-            0
-        };
-        clips
-            + fill(&self.locks, near.saturating_sub(lent[1]), Box::default)
-            + fill(&self.seams, near.saturating_sub(lent[2]), || {
+        let mut made = 0;
+        for class in classes.map(|c| self.class(c)) {
+            made += fill(
+                &self.clips[class],
+                near.saturating_sub(lent.clips[class]),
+                || Box::new(source.new_clip_of_class(class)),
+            );
+        }
+        made + fill(&self.locks, near.saturating_sub(lent.locks), Box::default)
+            + fill(&self.seams, near.saturating_sub(lent.seams), || {
                 Box::new(SeamTransition::new(seam.0, seam.1))
             })
     }
@@ -103,6 +113,15 @@ impl<C> Stock<C> {
     pub fn take_allocations(&self) -> usize {
         self.allocations.swap(0, Ordering::Relaxed)
     }
+}
+
+/// What a crowd's walkers hold now of each kind the stock lends ([`Stock::reserve`]).
+#[derive(Debug, Default)]
+pub(crate) struct Lent {
+    /// Clips of each size class.
+    pub clips: [usize; crate::source::MAX_CLIP_CLASSES],
+    pub locks: usize,
+    pub seams: usize,
 }
 
 /// One chunk's access to the crowd's stock, with the seam scratch the chunk's kernel stage starts
@@ -114,46 +133,33 @@ pub(crate) struct Lender<'a, C> {
 }
 
 impl<C> Lender<'_, C> {
-    /// Exchanges `clip` for a spare of the stock sized for joints when `with_joints`, else a
-    /// small one (one the stock lacks is made by the source), and returns the spare holding what
-    /// `clip` held: give it back with [`Lender::give_clip`].
+    /// Exchanges `clip` for a spare of the stock of `class` (one the stock lacks is made by the
+    /// source), and returns the spare holding what `clip` held: give it back with
+    /// [`Lender::give_clip`] under its class.
     #[cold]
     #[inline(never)]
     pub fn clip<S: ClipSource<Clip = C>>(
         &mut self,
         source: &S,
         clip: &mut C,
-        with_joints: bool,
+        class: usize,
     ) -> Box<C> {
         let stock = self.stock;
-        let queue = if with_joints {
-            &stock.joint_clips
-        } else {
-            &stock.root_clips
-        };
-        let mut spare = queue.pop().unwrap_or_else(|| {
+        let class = stock.class(class);
+        let mut spare = stock.clips[class].pop().unwrap_or_else(|| {
             stock.count();
-            Box::new(if with_joints {
-                source.new_clip_with_joints()
-            } else {
-                source.new_clip()
-            })
+            Box::new(source.new_clip_of_class(class))
         });
         std::mem::swap(clip, &mut *spare);
         spare
     }
 
-    /// Takes back a spare clip of the size [`Lender::clip`] gives for `with_joints`.
+    /// Takes back a spare clip of `class`.
     #[cold]
     #[inline(never)]
-    pub fn give_clip(&mut self, clip: Box<C>, with_joints: bool) {
+    pub fn give_clip(&mut self, clip: Box<C>, class: usize) {
         let stock = self.stock;
-        let queue = if with_joints {
-            &stock.joint_clips
-        } else {
-            &stock.root_clips
-        };
-        stock.keep(queue, clip);
+        stock.keep(&stock.clips[stock.class(class)], clip);
     }
 
     /// A cleared seam transition over `pose_len` rows with the crowd's half-life (all of a crowd's

@@ -302,12 +302,16 @@ impl<S: ClipSource> ClipSource for FailingSource<S> {
         self.inner.new_clip()
     }
 
-    fn sizes_clips_by_detail(&self) -> bool {
-        self.inner.sizes_clips_by_detail()
+    fn clip_classes(&self) -> usize {
+        self.inner.clip_classes()
     }
 
-    fn new_clip_with_joints(&self) -> S::Clip {
-        self.inner.new_clip_with_joints()
+    fn clip_class(&self, detail: &Detail) -> usize {
+        self.inner.clip_class(detail)
+    }
+
+    fn new_clip_of_class(&self, class: usize) -> S::Clip {
+        self.inner.new_clip_of_class(class)
     }
 
     fn build_clip(

@@ -153,27 +153,26 @@ impl<C> Walker<C> {
     }
 
     /// Rebuilds `cur` for `self.controls` at `d` (in place: the outgoing clip's state has been
-    /// captured before when a seam follows). When the source sizes clips by detail and `d` has
-    /// joints where the clip held has none (or the other way round), the clip is built into one of
-    /// the other size from `stock` instead and exchanged for the one held, which goes back to the
-    /// stock. `Ok(Some(error))` when the source could not build it: `cur` is then the previous
-    /// clip, unchanged.
+    /// captured before when a seam follows). When `d` needs another size class of clip than the
+    /// one held ([`ClipSource::clip_class`]), the clip is exchanged for one of that class from
+    /// `stock` and built there; the walker's goes back to the stock. `Ok(Some(error))` when the
+    /// source could not build it: `cur` is then the previous clip, unchanged.
     fn rebuild<S: ClipSource<Clip = C>>(
         &mut self,
         src: &S,
         d: Detail,
         stock: &mut Lender<'_, C>,
     ) -> Result<Option<ClipError>, WalkerFault> {
-        let with_joints = d.active_joints > 0;
-        if src.sizes_clips_by_detail() && with_joints != (self.cur_detail.active_joints > 0) {
+        let (class, held_class) = (src.clip_class(&d), src.clip_class(&self.cur_detail));
+        if class != held_class {
             // `held` is a spare of the stock now holding the walker's clip.
-            let mut held = stock.clip(src, &mut self.cur, with_joints);
+            let mut held = stock.clip(src, &mut self.cur, class);
             if let Err(e) = src.build_clip(&self.controls, d, &mut self.cur) {
                 std::mem::swap(&mut self.cur, &mut *held);
-                stock.give_clip(held, with_joints);
+                stock.give_clip(held, class);
                 return Ok(Some(e));
             }
-            stock.give_clip(held, !with_joints);
+            stock.give_clip(held, held_class);
         } else if let Err(e) = src.build_clip(&self.controls, d, &mut self.cur) {
             return Ok(Some(e));
         }

@@ -636,17 +636,18 @@ fn failing_clip_builds_are_counted_and_walkers_keep_their_clips() {
     }
 }
 
-/// The procedural source with clips of two sizes, as the model's compact source has: a small clip
-/// for root-only details and a large one for details with joints. Counts the builds into a clip of
-/// the wrong size (a crowd that lends clips from its stock never does one).
+/// The procedural source with clips of three size classes (the model's compact source has four):
+/// root-only details, details with joints at the finest accuracy level, and coarser ones. Counts the builds of each class and
+/// those into a clip of the wrong class (a crowd that lends clips from its stock never does one).
 struct SizedSource {
     inner: ProceduralSource,
     wrong_size: std::sync::atomic::AtomicUsize,
     made: std::sync::atomic::AtomicUsize,
+    built: [std::sync::atomic::AtomicUsize; 3],
 }
 
-/// A procedural clip and whether it is the large size.
-struct SizedClip(ProceduralClip, bool);
+/// A procedural clip and its size class.
+struct SizedClip(ProceduralClip, usize);
 
 impl SizedSource {
     fn new() -> SizedSource {
@@ -654,6 +655,7 @@ impl SizedSource {
             inner: ProceduralSource::new(),
             wrong_size: 0.into(),
             made: 0.into(),
+            built: Default::default(),
         }
     }
 }
@@ -668,17 +670,25 @@ impl ClipSource for SizedSource {
     }
     fn new_clip(&self) -> SizedClip {
         self.made.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        SizedClip(self.inner.new_clip(), false)
+        SizedClip(self.inner.new_clip(), 0)
     }
-    fn sizes_clips_by_detail(&self) -> bool {
-        true
+    fn clip_classes(&self) -> usize {
+        3
     }
-    fn new_clip_with_joints(&self) -> SizedClip {
+    fn clip_class(&self, d: &Detail) -> usize {
+        match (d.active_joints, d.accuracy) {
+            (0, _) => 0,
+            (_, 0) => 1,
+            _ => 2,
+        }
+    }
+    fn new_clip_of_class(&self, class: usize) -> SizedClip {
         self.made.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        SizedClip(self.inner.new_clip(), true)
+        SizedClip(self.inner.new_clip(), class)
     }
     fn build_clip(&self, c: &Controls, d: Detail, clip: &mut SizedClip) -> Result<(), ClipError> {
-        if (d.active_joints > 0) != clip.1 {
+        self.built[self.clip_class(&d)].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if self.clip_class(&d) != clip.1 {
             self.wrong_size
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         }
@@ -714,7 +724,7 @@ fn joint_trace<S: ClipSource>(
         .unwrap();
     pool.install(|| {
         let policy = paper_distance_policy(source.levels());
-        let mut crowd = Crowd::new(source, config(walkers, 60.0)).unwrap();
+        let mut crowd = Crowd::new(source, config(walkers, 150.0)).unwrap();
         let lens = Camera::default();
         let mut report = crowd_sim::CrowdReport::new();
         let mut trace = Vec::new();
@@ -730,7 +740,7 @@ fn joint_trace<S: ClipSource>(
 }
 
 #[test]
-fn clips_of_two_sizes_are_lent_from_the_stock_and_change_no_frame() {
+fn clips_of_three_sizes_are_lent_from_the_stock_and_change_no_frame() {
     let plain = ProceduralSource::new();
     let (want, plain_report) = joint_trace(&plain, 400, 600, 2);
     // A source whose clips are all one size never exchanges clips: only seam transitions and foot
@@ -743,7 +753,16 @@ fn clips_of_two_sizes_are_lent_from_the_stock_and_change_no_frame() {
         let wrong = sized.wrong_size.load(std::sync::atomic::Ordering::Relaxed);
         assert_eq!(
             wrong, 0,
-            "{threads} threads: {wrong} builds into a clip of the wrong size"
+            "{threads} threads: {wrong} builds into a clip of the wrong class"
+        );
+        let built = sized
+            .built
+            .each_ref()
+            .map(|b| b.load(std::sync::atomic::Ordering::Relaxed));
+        assert!(
+            built.iter().all(|&b| b > 0),
+            "builds per class: {built:?} {:?}",
+            report.level_histogram
         );
         // The stock grows while walkers first come near, then lends what it holds: the last
         // third of the run allocates less than a tenth of what the first third did.
@@ -753,8 +772,8 @@ fn clips_of_two_sizes_are_lent_from_the_stock_and_change_no_frame() {
             first > 0 && last * 10 < first,
             "{threads} threads: {first} then {last}"
         );
-        // Clips made: one per walker, and the stock's, no more than the walkers ever near at once
-        // in each size, which is at most every walker twice.
+        // Clips made: one per walker, and the stock's, no more than the walkers ever holding a
+        // class at once, for each of the two classes with joints.
         let made = sized.made.load(std::sync::atomic::Ordering::Relaxed);
         assert!(
             made > 400 && made <= 3 * 400,

@@ -149,11 +149,11 @@ pub struct ClipKernel {
     clamped: bool,
     /// Sized for the clip's own level ([`ClipKernel::compact`]) rather than the largest.
     compact: bool,
-    /// A compact kernel that holds `P x max R_T` entries from the start and keeps them
-    /// ([`ClipKernel::compact_for_joints`]). A flag rather than a size, so that it fits beside the
-    /// other flags: a crowd holds a kernel in every walker, and 8 bytes more per kernel made its
-    /// pose stage 10 % slower.
-    keeps_all: bool,
+    /// A compact kernel that keeps its buffer: it is never released for a smaller build, only
+    /// grown for a larger one ([`ClipKernel::compact_holding`]). A flag rather than a size, so
+    /// that it fits beside the other flags: a crowd holds a kernel in every walker, and 8 bytes
+    /// more per kernel made its pose stage 10 % slower.
+    keeps: bool,
     /// `G(c)`, `rows x r_T` column-major (capacity `P x max R_T`, or exactly `rows x r_T` when
     /// compact).
     g: Vec<f32>,
@@ -177,7 +177,7 @@ impl ClipKernel {
             rows: model.always_rows(),
             clamped: false,
             compact: false,
-            keeps_all: false,
+            keeps: false,
             g: vec![0.0; model.p() * r.t],
             times: TimeTable::with_capacity(model.t()),
             root_motion: RootMotion::default(),
@@ -196,7 +196,7 @@ impl ClipKernel {
         let rows = model.always_rows();
         ClipKernel {
             compact: true,
-            keeps_all: false,
+            keeps: false,
             g: vec![0.0; rows * ranks.t],
             times: TimeTable::with_capacity(model.t()),
             p: model.p(),
@@ -209,17 +209,18 @@ impl ClipKernel {
         }
     }
 
-    /// A compact kernel ([`ClipKernel::compact`]) whose buffer holds a build at any detail from the
-    /// start (`P x max R_T` entries) and keeps it: building into it never allocates or frees. A
-    /// crowd lends such kernels to its walkers with joints and [`ClipKernel::compact`] ones to the
-    /// others, so that a walker that comes near or goes far exchanges kernels instead of resizing
-    /// one. Until it is built it reads as [`ClipKernel::new`]'s does.
-    pub fn compact_for_joints(model: &LodModel) -> ClipKernel {
+    /// A compact kernel ([`ClipKernel::compact`]) whose buffer holds `entries` floats from the
+    /// start and keeps them: a build that needs at most `entries` ([`LodModel::kernel_entries`])
+    /// never allocates or frees (a larger one grows the buffer, which is then kept). A crowd keeps
+    /// such kernels in a few sizes and lends each walker one of the size its detail needs, so that
+    /// a walker that comes near or goes far exchanges kernels instead of resizing one. Until it is
+    /// built it reads as [`ClipKernel::new`]'s does.
+    pub fn compact_holding(model: &LodModel, entries: usize) -> ClipKernel {
         let mut kernel = ClipKernel::compact(model);
-        let mut g = Vec::with_capacity(model.p() * model.max_ranks().t);
+        let mut g = Vec::with_capacity(entries.max(kernel.g.len()));
         g.resize(kernel.g.len(), 0.0);
         kernel.g = g;
-        kernel.keeps_all = true;
+        kernel.keeps = true;
         kernel
     }
 
@@ -898,7 +899,8 @@ impl LodModel {
         if out.compact {
             let need = rows * r.t;
             // One that keeps all holds `P x max R_T >= need` entries: never reallocated.
-            if !out.keeps_all && (out.g.capacity() < need || out.g.capacity() > 2 * need) {
+            let cap = out.g.capacity();
+            if cap < need || (!out.keeps && cap > 2 * need) {
                 out.g = Vec::with_capacity(need);
             }
             out.g.resize(need, 0.0);

@@ -949,6 +949,17 @@ impl LodModel {
     pub fn active_rows(&self, active_joints: usize) -> usize {
         self.parts.always_rows + self.parts.rows_per_joint * active_joints.min(self.joints())
     }
+    /// `G(c)` entries a kernel built at `detail` holds: `P' x r_T` of the detail it evaluates
+    /// ([`LodModel::evaluated`]; `P'` the rows of its joints), or `P x max R_T` for an accuracy
+    /// level the model does not have. What a [`crate::ClipKernel::compact_holding`] kernel must
+    /// hold for that build not to allocate.
+    pub fn kernel_entries(&self, detail: Detail) -> usize {
+        let d = self.evaluated(detail);
+        match self.levels().get(d.accuracy) {
+            Some(level) => self.active_rows(d.active_joints) * level.ranks.t,
+            None => self.p() * self.max_ranks().t,
+        }
+    }
     /// Key tensors, largest first.
     pub fn keys(&self) -> &[KeyTensor] {
         &self.parts.keys

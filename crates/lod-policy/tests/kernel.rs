@@ -354,8 +354,9 @@ fn compact_kernels_hold_their_level_and_give_the_same_bits() {
     let mut scratch = KernelScratch::new(&model);
     let mut full = ClipKernel::new(&model);
     let mut compact = ClipKernel::compact(&model);
-    // Sized for joints: holds every level from the start and never resizes.
-    let mut joints = ClipKernel::compact_for_joints(&model);
+    // Holding every level from the start: never resizes.
+    let all = model.p() * model.max_ranks().t;
+    let mut joints = ClipKernel::compact_holding(&model, all);
     assert!(compact.is_compact() && !full.is_compact() && joints.is_compact());
     assert!(compact.heap_bytes() < full.heap_bytes());
     assert_eq!(joints.heap_bytes(), full.heap_bytes());
@@ -384,6 +385,11 @@ fn compact_kernels_hold_their_level_and_give_the_same_bits() {
             .build_kernel_values(&c, detail, &mut scratch, &mut joints)
             .unwrap();
         assert_eq!(compact.g(), full.g(), "step {i}");
+        assert_eq!(
+            model.kernel_entries(detail),
+            compact.rows() * compact.ranks().t,
+            "step {i}"
+        );
         assert_eq!(joints.g(), full.g(), "step {i}");
         assert_eq!(joints.time_table(), full.time_table());
         assert_eq!(joints.root_motion(), full.root_motion());
@@ -405,6 +411,35 @@ fn compact_kernels_hold_their_level_and_give_the_same_bits() {
             model.pose_rows(&full, phase, &mut b).unwrap();
             assert_eq!(a, b);
         }
+    }
+}
+
+/// A kernel holding fewer entries than a build needs grows once and then keeps its buffer for
+/// every smaller build.
+#[test]
+fn a_holding_kernel_grows_for_a_larger_build_and_keeps_its_buffer() {
+    let truth = random_truth(22, 0.03);
+    let model = build_model(&truth);
+    let mut scratch = KernelScratch::new(&model);
+    let c: Vec<f32> = (0..truth.d)
+        .map(|k| 0.5 * (truth.min[k] + truth.max[k]) as f32)
+        .collect();
+    let small = model.kernel_entries(model.root_only());
+    let mut kernel = ClipKernel::compact_holding(&model, small);
+    let mut full = ClipKernel::new(&model);
+    model
+        .build_kernel_values(&c, model.full_detail(), &mut scratch, &mut kernel)
+        .unwrap();
+    let buffer = kernel.g().as_ptr();
+    for detail in [model.root_only(), Detail::new(1, 2), model.full_detail()] {
+        model
+            .build_kernel_values(&c, detail, &mut scratch, &mut kernel)
+            .unwrap();
+        model
+            .build_kernel_values(&c, detail, &mut scratch, &mut full)
+            .unwrap();
+        assert_eq!(kernel.g(), full.g(), "{detail:?}");
+        assert_eq!(kernel.g().as_ptr(), buffer, "{detail:?}: reallocated");
     }
 }
 

@@ -31,8 +31,8 @@ use crate::source::{bones_of, write_joints};
 #[derive(Debug, Clone)]
 pub struct NaiveClip {
     /// `rows x T` blended values, row-major (row `r`'s frames at `r T`; time row in seconds).
-    /// A buffer of `P x T` entries or more (a clip for joints, [`ClipSource::new_clip_with_joints`])
-    /// is kept whatever the clip holds, so that building into it never allocates.
+    /// A buffer of `P x T` entries or more (a clip with joints, [`ClipSource::new_clip_of_class`]
+    /// 1) is kept whatever the clip holds, so that building into it never allocates.
     values: Vec<f32>,
     /// Pose rows held (`P'`).
     rows: usize,
@@ -144,14 +144,21 @@ impl ClipSource for NaiveSource<'_> {
         }
     }
 
-    /// Clips come in two sizes: root-only (`7 x T` values) and with joints (`P x T`).
-    fn sizes_clips_by_detail(&self) -> bool {
-        true
+    /// Clips come in two size classes: root-only (`7 x T` values) and with joints (`P x T`).
+    fn clip_classes(&self) -> usize {
+        2
     }
 
-    fn new_clip_with_joints(&self) -> NaiveClip {
-        let (p, t) = self.dims();
+    fn clip_class(&self, detail: &Detail) -> usize {
+        usize::from(detail.active_joints > 0)
+    }
+
+    fn new_clip_of_class(&self, class: usize) -> NaiveClip {
         let mut clip = self.new_clip();
+        if class == 0 {
+            return clip;
+        }
+        let (p, t) = self.dims();
         let mut values = Vec::with_capacity(p * t);
         values.resize(clip.values.len(), 0.0);
         clip.values = values;

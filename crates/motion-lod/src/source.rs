@@ -71,6 +71,15 @@ pub struct LodSource<'m> {
     compact: bool,
 }
 
+/// Size classes of [`LodSource::new`]'s clips with joints ([`ClipSource::clip_classes`]).
+const JOINT_CLASSES: usize = 3;
+
+/// `G(c)` entries a clip of class `class` (`1..=JOINT_CLASSES`) holds: `P x max R_T` halved for
+/// each class below the last.
+fn class_entries(lod: &lod_policy::LodModel, class: usize) -> usize {
+    (lod.p() * lod.max_ranks().t) >> (JOINT_CLASSES - class.min(JOINT_CLASSES))
+}
+
 thread_local! {
     /// Kernel-build scratch of this thread (kernels are built inside the crowd's parallel pass).
     static SCRATCH: std::cell::RefCell<Option<KernelScratch>> = const { std::cell::RefCell::new(None) };
@@ -228,16 +237,30 @@ impl ClipSource for LodSource<'_> {
         }
     }
 
-    /// Compact clips (the crowd's, [`LodSource::new`]) come in two sizes: [`ClipKernel::compact`] for
-    /// root-only walkers and [`ClipKernel::compact_for_joints`] for walkers with joints.
-    fn sizes_clips_by_detail(&self) -> bool {
-        self.compact
+    /// Compact clips (the crowd's, [`LodSource::new`]) come in four size classes: class 0 the
+    /// root-only clips of [`ClipKernel::compact`], then kernels holding a quarter, a half and all
+    /// of `P x max R_T` ([`ClipKernel::compact_holding`]), so that a walker with joints holds at
+    /// most twice what its detail needs (or a quarter of the largest kernel) and none reallocates.
+    fn clip_classes(&self) -> usize {
+        if self.compact { 1 + JOINT_CLASSES } else { 1 }
     }
 
-    fn new_clip_with_joints(&self) -> LodClip {
+    fn clip_class(&self, detail: &Detail) -> usize {
+        if !self.compact || detail.is_root_only() {
+            return 0;
+        }
+        let lod = self.model.lod();
+        let need = lod.kernel_entries(*detail);
+        (1..JOINT_CLASSES)
+            .find(|&k| need <= class_entries(lod, k))
+            .unwrap_or(JOINT_CLASSES)
+    }
+
+    fn new_clip_of_class(&self, class: usize) -> LodClip {
         let mut clip = self.new_clip();
-        if self.compact {
-            clip.kernel = ClipKernel::compact_for_joints(self.model.lod());
+        if self.compact && class > 0 {
+            let lod = self.model.lod();
+            clip.kernel = ClipKernel::compact_holding(lod, class_entries(lod, class));
         }
         clip
     }

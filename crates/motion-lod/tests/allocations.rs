@@ -1,5 +1,5 @@
 //! Issue 35, item 1: the frame loop of a crowd animated by the model allocates nothing but what its
-//! stock of lent buffers counts ([`FrameStats::allocations`]: a clip sized for joints, a seam
+//! stock of lent buffers counts ([`FrameStats::allocations`]: a clip of a size class, a seam
 //! transition or a foot lock made when more walkers need one at once than ever before), and that
 //! stops once the crowd has warmed up. Counted by a global allocator (every allocation, reallocation
 //! and release of the process; this binary runs this one test). A crowd stocked while loading

@@ -272,7 +272,7 @@ pub const GLOSSARY: &[Entry] = &[
     Entry {
         term: "buffers allocated",
         aliases: &["allocations", "allocating_frames", "stock"],
-        text: "What `crowd`'s frame loop allocated over the frames after the first second (JSON `frame_ms.allocations`, `frame_ms.allocating_frames`): a walker that comes near or starts a seam borrows a clip sized for joints, a foot lock or a seam transition from the crowd's stock and gives it back when it goes far or the seam ends; the stock makes one only when more walkers need one at once than ever before. Nonzero while the crowd warms up (its first cycles, and new peaks of near walkers), zero after: nothing else in the frame loop allocates.",
+        text: "What `crowd`'s frame loop allocated over the frames after the first second (JSON `frame_ms.allocations`, `frame_ms.allocating_frames`): a walker whose detail needs another size class of clip, that comes near or that starts a seam borrows a clip of that class, a foot lock or a seam transition from the crowd's stock and gives it back when it no longer needs it; the stock makes one only when more walkers need one at once than ever before. Nonzero while the crowd warms up (its first cycles, and new peaks of near walkers), zero after: nothing else in the frame loop allocates.",
     },
     Entry {
         term: "files",
