@@ -17,7 +17,7 @@ pub(crate) struct StageParams {
     pub levels: LevelTable,
     pub bounds: ControlRange,
     pub seam_levels: usize,
-    /// Half-life of a seam's offset (s), for the transitions the chunks' stocks make.
+    /// Half-life of a seam's offset (s), for the transitions the crowd's stock makes.
     pub seam_halflife_s: f32,
     /// Walkers at accuracy levels below this have their feet planted.
     pub foot_lock_levels: usize,
