@@ -450,10 +450,10 @@ impl<C: Send> Crowd<C> {
     /// `near` walkers at once hold a clip of any one size class other than root-only clips'
     /// ([`ClipSource::clip_classes`]), plant their feet or run a seam: makes the spare clips of
     /// each such class, foot locks and seam transitions that the walkers holding them now leave
-    /// missing. The stock otherwise grows at each new peak
-    /// of near walkers ([`FrameStats::allocations`]); it holds at most one spare of a kind per
-    /// walker up to 4,096 walkers, one per eight beyond. Call it after [`Crowd::prime`] (which
-    /// gives the walkers in view their clips) and before the first step. Returns the buffers made.
+    /// missing. The stock otherwise grows at each new peak of near walkers
+    /// ([`FrameStats::allocations`]); it holds at most one spare of a kind per walker up to 4,096
+    /// walkers, one per eight beyond. Call it after [`Crowd::prime`] (which gives the walkers in
+    /// view their clips) and before the first step. Returns the buffers made.
     pub fn reserve<S: ClipSource<Clip = C>>(&mut self, source: &S, near: usize) -> usize {
         let mut lent = Lent::default();
         for w in &self.walkers {
@@ -499,6 +499,7 @@ impl<C: Send> Crowd<C> {
         let margin = self.config.cull_margin_m;
         let pl = params.levels.pose_len;
         let (eye, view) = (camera.position, camera.view());
+        let stock = &self.stock;
         let (built, faults, fault) = self
             .walkers
             .par_chunks_mut(CHUNK)
@@ -507,7 +508,6 @@ impl<C: Send> Crowd<C> {
             .zip(self.seam_scratch.par_iter_mut())
             .enumerate()
             .map(|(c, (((walkers, boxes), poses), seams))| {
-                let stock = &self.stock;
                 let mut out = (0usize, ClipFaults::default(), None);
                 // The first step writes every walker's pose slot before reading it: a scratch here.
                 let scratch = &mut poses[..pl];

@@ -81,10 +81,10 @@ pub struct FrameStats {
     pub in_transition: usize,
     /// Clips the source failed to build (those walkers kept their previous clips).
     pub clip_faults: ClipFaults,
-    /// Buffers the frame allocated for its walkers: clips, seam transitions and foot locks that a
-    /// chunk's stock made because it had none to lend, and stock lists grown. Zero once every
-    /// chunk's stock holds as many as its walkers ever needed at once (the frame loop allocates
-    /// nothing else, but for a culling tree's rebuild).
+    /// Buffers the frame allocated or freed for its walkers: clips, seam transitions and foot locks
+    /// the crowd's stock made because it had none to lend, or freed because its queue was full.
+    /// Zero once the stock holds as many of each as its walkers ever needed at once (the frame
+    /// loop allocates nothing else, but for a culling tree's rebuild).
     pub allocations: usize,
 }
 

@@ -26,7 +26,7 @@ use lod_policy::{FootLock, SeamScratch, SeamTransition};
 /// joints to a few thousand walkers at most, so a larger crowd frees buffers only after more than an
 /// eighth of it was near at once. (A slot per walker would cost 16 bytes a walker per queue, 96
 /// with the model's six queues: 7 % of a million-walker crowd's memory.)
-pub(crate) fn spares(walkers: usize) -> usize {
+fn spares(walkers: usize) -> usize {
     walkers.min(4096).max(walkers / 8).max(1)
 }
 

@@ -303,9 +303,9 @@ impl<C> Walker<C> {
     /// root motion, pick controls from the path ahead and build the next clip at `d`, with an
     /// inertialized seam at the first `seam_levels` levels; mid-cycle, rebuild at once when `d` is
     /// finer than the clip held (inertialized likewise), except while `hold_s` (a new crowd's
-    /// spread of first builds) runs. `scratch` is the thread's seam scratch. `d` is the policy's
-    /// answer, checked here against the source's level table ([`LevelTable::check`]).
-    /// `stock` lends clips and seam transitions ([`Lender`], with the chunk's seam scratch).
+    /// spread of first builds) runs. `d` is the policy's answer, checked here against the source's
+    /// level table ([`LevelTable::check`]). `stock` lends clips and seam transitions ([`Lender`],
+    /// with the chunk's seam scratch).
     /// Returns the kernels built and the builds that failed.
     pub fn advance<S: ClipSource<Clip = C>>(
         &mut self,

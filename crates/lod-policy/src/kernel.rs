@@ -217,9 +217,9 @@ impl ClipKernel {
     /// built it reads as [`ClipKernel::new`]'s does.
     pub fn compact_holding(model: &LodModel, entries: usize) -> ClipKernel {
         let mut kernel = ClipKernel::compact(model);
-        let mut g = Vec::with_capacity(entries.max(kernel.g.len()));
-        g.resize(kernel.g.len(), 0.0);
-        kernel.g = g;
+        kernel
+            .g
+            .reserve_exact(entries.saturating_sub(kernel.g.len()));
         kernel.keeps = true;
         kernel
     }
@@ -898,7 +898,7 @@ impl LodModel {
         //    in order from 0).
         if out.compact {
             let need = rows * r.t;
-            // One that keeps all holds `P x max R_T >= need` entries: never reallocated.
+            // A kernel that keeps its buffer is reallocated only to grow.
             let cap = out.g.capacity();
             if cap < need || (!out.keeps && cap > 2 * need) {
                 out.g = Vec::with_capacity(need);

@@ -31,8 +31,9 @@ use crate::source::{bones_of, write_joints};
 #[derive(Debug, Clone)]
 pub struct NaiveClip {
     /// `rows x T` blended values, row-major (row `r`'s frames at `r T`; time row in seconds).
-    /// A buffer of `P x T` entries or more (a clip with joints, [`ClipSource::new_clip_of_class`]
-    /// 1) is kept whatever the clip holds, so that building into it never allocates.
+    /// A buffer of `P x T` entries or more (a clip of class 1, with joints:
+    /// [`ClipSource::new_clip_of_class`]) is kept whatever the clip holds, so that building into
+    /// it never allocates.
     values: Vec<f32>,
     /// Pose rows held (`P'`).
     rows: usize,
@@ -159,9 +160,7 @@ impl ClipSource for NaiveSource<'_> {
             return clip;
         }
         let (p, t) = self.dims();
-        let mut values = Vec::with_capacity(p * t);
-        values.resize(clip.values.len(), 0.0);
-        clip.values = values;
+        clip.values.reserve_exact(p * t - clip.values.len());
         clip
     }
 

@@ -212,7 +212,7 @@ struct FrameMs {
     p99: f64,
     worst: f64,
     /// Buffers the frame loop allocated over those frames (`crowd_sim::FrameStats::allocations`:
-    /// clips, seam transitions and foot locks made when a chunk's stock of them reached a new peak).
+    /// clips, seam transitions and foot locks the crowd's stock made at a new peak of need).
     allocations: usize,
     /// Frames among those that allocated.
     allocating_frames: usize,
