@@ -8,7 +8,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use xtask::{fixtures, imports, readme, scaling, tables, web};
 
@@ -38,6 +38,10 @@ enum Command {
     /// grown from a folder of takes by performers of other heights) and the threads, and write
     /// `docs/scaling.md`.
     Scaling(ScalingArgs),
+    /// Time crowd frames of a model file under its distance policy in both scenes on each thread
+    /// count: median, 99th percentile and worst frame, with the fixed-work control beside each row
+    /// (the frame-time rows of `tables`, alone, for a machine with more cores), as Markdown.
+    Frames(FramesArgs),
     /// Produce every deterministic figure README.md quotes with the command registered for it in
     /// `docs/readme-figures.toml` and rewrite README's values (`--check`: fail on any difference,
     /// and on a timing that names no date).
@@ -55,6 +59,29 @@ struct ReadmeArgs {
     #[arg(long, value_name = "PATH")]
     bin: Option<PathBuf>,
     /// Do not print each command with its time.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Options of `xtask frames`.
+#[derive(Debug, Args)]
+struct FramesArgs {
+    /// The model file (`motion-lod build ... -o FILE.mlod`).
+    #[arg(value_name = "MODEL")]
+    model: PathBuf,
+    /// Crowd sizes, comma-separated.
+    #[arg(long, value_name = "N,N,...", value_delimiter = ',', default_value = "100000", value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    walkers: Vec<u32>,
+    /// Thread counts, comma-separated (default: 1, 2, 4, 8 and 16 up to this machine's cores).
+    #[arg(long, value_name = "N,N,...", value_delimiter = ',', value_parser = clap::value_parser!(u16).range(1..=1024))]
+    threads: Vec<u16>,
+    /// Timed frames of each row, after the 1.5 s warm-up.
+    #[arg(long, default_value_t = tables::crowd::FRAME_TIME_FRAMES as u32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: u32,
+    /// The Markdown file to write (default: standard output).
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// No progress display.
     #[arg(long)]
     quiet: bool,
 }
@@ -164,6 +191,7 @@ fn main() -> Result<()> {
             )
         }
         Command::Scaling(args) => run_scaling(&args),
+        Command::Frames(args) => run_frames(&args),
         Command::Web(args) => {
             let root = tables::workspace_root();
             let root = root.canonicalize().unwrap_or(root);
@@ -182,10 +210,7 @@ fn run_scaling(args: &ScalingArgs) -> Result<()> {
         return Ok(());
     }
     let threads = if args.threads.is_empty() {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let mut t = vec![1];
-        t.extend([2, 4, 8, 16].into_iter().filter(|&k| k <= cores));
-        t
+        default_threads(std::thread::available_parallelism().map_or(1, |n| n.get()))
     } else {
         args.threads.clone()
     };
@@ -209,6 +234,54 @@ fn run_scaling(args: &ScalingArgs) -> Result<()> {
         out: args.out.clone(),
         command,
     })
+}
+
+/// 1, 2, 4, 8 and 16, those up to `cores`.
+fn default_threads(cores: usize) -> Vec<usize> {
+    let mut t = vec![1];
+    t.extend([2, 4, 8, 16].into_iter().filter(|&k| k <= cores));
+    t
+}
+
+fn run_frames(args: &FramesArgs) -> Result<()> {
+    let threads: Vec<usize> = if args.threads.is_empty() {
+        default_threads(std::thread::available_parallelism().map_or(1, |n| n.get()))
+    } else {
+        args.threads.iter().map(|&t| usize::from(t)).collect()
+    };
+    let list = |v: &[usize]| v.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
+    let walkers: Vec<usize> = args.walkers.iter().map(|&w| w as usize).collect();
+    let command = format!(
+        "cargo xtask frames {} --walkers {} --threads {} --frames {}",
+        args.model.display(),
+        list(&walkers),
+        list(&threads),
+        args.frames
+    );
+    let frames = args.frames as usize;
+    // The folder of the document, checked before minutes of measuring.
+    if let Some(out) = &args.out
+        && let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        bail!("--out {}: no folder {}", out.display(), dir.display());
+    }
+    let doc = tables::frames(&tables::FramesConfig {
+        model: args.model.clone(),
+        walkers,
+        threads,
+        frames,
+        show_progress: !args.quiet,
+        command,
+    })?;
+    match &args.out {
+        Some(out) => {
+            std::fs::write(out, &doc).with_context(|| format!("writing {}", out.display()))?;
+            eprintln!("wrote {}", out.display());
+        }
+        None => print!("{doc}"),
+    }
+    Ok(())
 }
 
 fn run_imports(args: &ImportsArgs) -> Result<()> {

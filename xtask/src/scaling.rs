@@ -296,7 +296,7 @@ fn document(config: &ScalingConfig, rows: &[(usize, usize, Option<Outcome>)]) ->
     let _ = writeln!(
         doc,
         "# How the offline build scales\n\n\
-         Written by `{}` on {} ({} cores). Each row is one `MotionModel::build` with the default \
+         Written by `{}` on {} ({}; commit {}). Each row is one `MotionModel::build` with the default \
          settings in a process of its own (`RAYON_NUM_THREADS` threads): *build* is the build's wall \
          time, *load* reading, aligning and growing the data before it, *peak* the process's \
          largest resident memory (load and build). The data: `{}`; sets beyond its cycles are grown \
@@ -310,7 +310,8 @@ fn document(config: &ScalingConfig, rows: &[(usize, usize, Option<Outcome>)]) ->
          1,200 cycles (`crates/motion-lod/src/build.rs`, module documentation).\n",
         config.command,
         today(),
-        std::thread::available_parallelism().map_or(0, |n| n.get()),
+        crate::tables::machine(),
+        crate::tables::commit(),
         config.data.display(),
         config.limit.as_secs()
     );
@@ -360,7 +361,7 @@ fn document(config: &ScalingConfig, rows: &[(usize, usize, Option<Outcome>)]) ->
 }
 
 /// Today's date (UTC) as `YYYY-MM-DD`.
-fn today() -> String {
+pub fn today() -> String {
     let days = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs() / 86_400) as i64;

@@ -127,3 +127,60 @@ fn online_truncation_matches_the_runtime_kernel_on_truncations_of_key_0() {
         }
     }
 }
+
+/// `cargo xtask frames` alone: a model file's frame-time rows in both scenes on each thread count,
+/// in a document that names the machine (with its vector extensions) and the command.
+#[test]
+fn frames_writes_a_row_per_scene_and_thread_count() {
+    use motion_lod::MotionModel;
+    use xtask::tables::{FramesConfig, frames};
+
+    let dir = std::env::temp_dir().join(format!("xtask-frames-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let loaded = motion_lod::dataset::DataSpec::default()
+        .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
+        .expect("the embedded data loads");
+    let build = TablesConfig::quick(dir.join("t.md"), dir.join("f")).build;
+    let model = MotionModel::build(&loaded.training, &build, &motion_lod::progress::NoProgress)
+        .expect("the quick model builds");
+    let path = dir.join("quick.mlod");
+    model.save(&path).unwrap();
+    let doc = frames(&FramesConfig {
+        model: path.clone(),
+        walkers: vec![300],
+        threads: vec![1, 2],
+        frames: 4,
+        show_progress: false,
+        command: "cargo xtask frames quick.mlod".into(),
+    })
+    .expect("frame times measured");
+    for line in [
+        "# Frame times: ",
+        "Written by `cargo xtask frames quick.mlod` on ",
+        "- Machine: ",
+        "4 timed frames after the 1.5 s warm-up",
+        "| ground | 300 | 1 |",
+        "| ground | 300 | 2 |",
+        "| overview | 300 | 1 |",
+        "| overview | 300 | 2 |",
+    ] {
+        assert!(doc.contains(line), "missing {line:?} in:\n{doc}");
+    }
+    assert!(!doc.contains("NaN"), "{doc}");
+    // A model that is not there is named.
+    let missing = dir.join("missing.mlod");
+    let e = frames(&FramesConfig {
+        model: missing,
+        ..FramesConfig {
+            model: path,
+            walkers: vec![300],
+            threads: vec![1],
+            frames: 1,
+            show_progress: false,
+            command: String::new(),
+        }
+    })
+    .unwrap_err();
+    assert!(format!("{e:#}").contains("missing.mlod"), "{e:#}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# The device kit, made here for a session lent a GPU machine (an H100 with 16 CPU cores, reached
+# through the workplace's `device` tool): that machine has no Rust toolchain and reaches no network,
+# so everything `run.sh` needs is built and gathered here into `.device-kit/` (git-ignored; about
+# 30 MB), which the tool carries beside the working tree.
+#
+#   bash xtask/device/prepare.sh [DATA_DIR]   # default ../shared/mocap/bandai-namco-2-walk
+#
+# Then one device call, from the repository root (the tool's `run`, carry [".device-kit"]):
+#
+#   bash xtask/device/run.sh
+#
+# It holds: stripped release builds of `xtask` and `gpu-crowd`'s example `h100`
+# (plain x86-64, no `-C target-cpu`: they run on any x86-64 machine with glibc 2.36 or newer), the
+# model built from DATA_DIR, DATA_DIR itself as `data.tar.xz` (for `xtask scaling`), the Vulkan loader
+# as Debian packages (`gl/`, unpacked on the device when it has none) and the commit it was made from.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+data=${1:-../shared/mocap/bandai-namco-2-walk}
+kit=.device-kit
+[ -d "$data" ] || { echo "prepare.sh: no data folder $data" >&2; exit 1; }
+rm -rf "$kit"
+mkdir -p "$kit/bin" "$kit/gl"
+echo "== release builds (motion-lod, xtask, gpu-crowd's example h100)"
+cargo build --release -q -p motion-lod -p xtask
+cargo build --release -q -p gpu-crowd --example h100
+cp target/release/xtask target/release/examples/h100 "$kit/bin/"
+strip "$kit/bin/"*
+echo "== the model of $data"
+target/release/motion-lod build "$data" -o "$kit/model.mlod" 2>&1 | tail -1
+echo "== the data for xtask scaling"
+tar -C "$(dirname "$data")" -cJf "$kit/data.tar.xz" "$(basename "$data")"
+echo "== the Vulkan loader (Debian packages, unpacked on the device only where it has none)"
+lists=$(mktemp -d)
+mkdir -p "$lists/partial"
+apt_opts=(-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 "-oDir::State::Lists=$lists")
+apt-get "${apt_opts[@]}" update -qq >/dev/null 2>&1
+(cd "$kit/gl" && apt-get "${apt_opts[@]}" download -qq libvulkan1 >/dev/null 2>&1)
+rm -rf "$lists"
+commit=$(git rev-parse --short HEAD)
+if [ -n "$(git status --porcelain --untracked-files=no -- . ':(exclude)docs')" ]; then
+  commit="$commit with uncommitted changes"
+fi
+echo "$commit" >"$kit/COMMIT"
+echo "$(basename "$data")" >"$kit/DATA"
+du -sh "$kit"; ls -l "$kit" "$kit/bin"
+echo "kit ready: carry .device-kit and run: bash xtask/device/run.sh (about 9 minutes on the device)"
