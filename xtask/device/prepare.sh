@@ -1,19 +1,22 @@
 #!/usr/bin/env bash
 # The device kit, made here for a session lent a GPU machine (an H100 with 16 CPU cores, reached
 # through the workplace's `device` tool): that machine has no Rust toolchain and reaches no network,
-# so everything `run.sh` needs is built and gathered here into `.device-kit/` (git-ignored; about
-# 30 MB), which the tool carries beside the working tree.
+# so everything `run.sh` needs is built and gathered here into `.device-kit/` (git-ignored, about
+# 32 MB), which the tool carries beside the working tree.
 #
 #   bash xtask/device/prepare.sh [DATA_DIR]   # default ../shared/mocap/bandai-namco-2-walk
 #
-# Then one device call, from the repository root (the tool's `run`, carry [".device-kit"]):
+# Then one device call, from the repository root (the tool's `run`, carry [".device-kit"],
+# timeout_s 600):
 #
 #   bash xtask/device/run.sh
 #
-# It holds: stripped release builds of `xtask` and `gpu-crowd`'s example `h100`
-# (plain x86-64, no `-C target-cpu`: they run on any x86-64 machine with glibc 2.36 or newer), the
-# model built from DATA_DIR, DATA_DIR itself as `data.tar.xz` (for `xtask scaling`), the Vulkan loader
-# as Debian packages (`gl/`, unpacked on the device when it has none) and the commit it was made from.
+# The kit holds:
+# - stripped release builds of `xtask` and `gpu-crowd`'s example `h100`: plain x86-64 (no
+#   `-C target-cpu`), dynamically linked to glibc 2.35 or newer only (`objdump -T`);
+# - the model built from DATA_DIR, and DATA_DIR itself as `data.tar.gz` (for `xtask scaling`);
+# - the Vulkan loader as Debian packages (`gl/`, unpacked on the device where it has none);
+# - the commit it was made from (`COMMIT`) and the data's name (`DATA`).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 data=${1:-../shared/mocap/bandai-namco-2-walk}
@@ -29,7 +32,7 @@ strip "$kit/bin/"*
 echo "== the model of $data"
 target/release/motion-lod build "$data" -o "$kit/model.mlod" 2>&1 | tail -1
 echo "== the data for xtask scaling"
-tar -C "$(dirname "$data")" -cJf "$kit/data.tar.xz" "$(basename "$data")"
+tar -C "$(dirname "$data")" -czf "$kit/data.tar.gz" "$(basename "$data")"
 echo "== the Vulkan loader (Debian packages, unpacked on the device only where it has none)"
 lists=$(mktemp -d)
 mkdir -p "$lists/partial"

@@ -73,7 +73,7 @@ echo "exit status $?"
 
 step "3. build scaling (issue 35, item 3)"
 data=$(mktemp -d)
-tar -xJf "$kit/data.tar.xz" -C "$data"
+tar -xzf "$kit/data.tar.gz" -C "$data"
 timeout "$(limit 240)" "$kit/bin/xtask" scaling --data "$data/$(cat "$kit/DATA")" "${scaling_args[@]}" \
   --limit-s 120 --out "$out/scaling.md"
 echo "exit status $?"

@@ -129,21 +129,39 @@ impl StageClock {
     }
 }
 
-/// The process's peak resident memory (`VmHWM` of `/proc/self/status`), bytes.
+/// The process's peak resident memory, bytes: `VmHWM` of `/proc/self/status`, or where that file
+/// has none (gVisor's, on the machines the device kit runs on, lists only `VmSize`, `VmRSS` and
+/// `VmData`) `getrusage`'s `ru_maxrss`.
 pub fn peak_resident_bytes() -> Result<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").context("/proc/self/status")?;
-    let line = status
-        .lines()
-        .find(|l| l.starts_with("VmHWM:"))
-        .context("no VmHWM in /proc/self/status")?;
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    match status.lines().find(|l| l.starts_with("VmHWM:")) {
+        Some(line) => parse_kb(line, "VmHWM:"),
+        None => max_rss_bytes().context("no VmHWM in /proc/self/status, and no ru_maxrss"),
+    }
+}
+
+/// A `/proc/self/status` line `PREFIX   123 kB` in bytes.
+pub fn parse_kb(line: &str, prefix: &str) -> Result<u64> {
     let kb: u64 = line
-        .trim_start_matches("VmHWM:")
+        .trim_start_matches(prefix)
         .trim()
         .trim_end_matches("kB")
         .trim()
         .parse()
         .with_context(|| format!("reading {line:?}"))?;
     Ok(kb * 1024)
+}
+
+/// `getrusage(RUSAGE_SELF)`'s `ru_maxrss` (kilobytes on Linux) in bytes; `None` when the call
+/// fails or reports 0.
+pub fn max_rss_bytes() -> Option<u64> {
+    // SAFETY: `getrusage` writes one `rusage` into the zeroed value it is given and reads nothing.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let rc = unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) };
+    let kb = u64::try_from(usage.ru_maxrss)
+        .ok()
+        .filter(|&kb| rc == 0 && kb > 0)?;
+    Some(kb * 1024)
 }
 
 /// One build of `n` cycles grown from the takes in `data`, in this process, with the default

@@ -100,3 +100,27 @@ fn a_large_grown_set_builds_the_same_model_on_any_pool() {
         .count();
     assert!(kept >= 1, "the selection on whole takes kept a control");
 }
+
+/// The peak resident memory a build row reports comes from `VmHWM`, and where `/proc/self/status`
+/// lacks it (gVisor) from `getrusage`: the two agree on this process.
+#[test]
+fn peak_memory_has_a_fallback_that_agrees() {
+    // Touch 64 MB so that the peak is well above the binary's own.
+    let big = vec![1u8; 64 << 20];
+    std::hint::black_box(&big);
+    // Peaks only grow, and other tests of this binary may raise this process's meanwhile: read
+    // ru_maxrss before and after VmHWM.
+    let before = xtask::scaling::max_rss_bytes().expect("getrusage's ru_maxrss");
+    let hwm = xtask::scaling::peak_resident_bytes().expect("a peak");
+    let after = xtask::scaling::max_rss_bytes().expect("getrusage's ru_maxrss");
+    assert!(before >= 64 << 20, "ru_maxrss {before}");
+    assert!(
+        before as f64 <= 1.1 * hwm as f64 && hwm as f64 <= 1.1 * after as f64,
+        "VmHWM {hwm} against ru_maxrss {before} before and {after} after"
+    );
+    assert_eq!(
+        xtask::scaling::parse_kb("VmHWM:\t  2048 kB", "VmHWM:").unwrap(),
+        2 << 20
+    );
+    assert!(xtask::scaling::parse_kb("VmHWM: lots", "VmHWM:").is_err());
+}
