@@ -2,7 +2,7 @@
 # The device kit, made here for a session lent a GPU machine (an H100 with 16 CPU cores, reached
 # through the workplace's `device` tool): that machine has no Rust toolchain and reaches no network,
 # so everything `run.sh` needs is built and gathered here into `.device-kit/` (git-ignored, about
-# 32 MB), which the tool carries beside the working tree.
+# 42 MB), which the tool carries beside the working tree (64 MiB at most with the tracked files).
 #
 #   bash xtask/device/prepare.sh [DATA_DIR]   # default ../shared/mocap/bandai-namco-2-walk
 #
@@ -12,11 +12,13 @@
 #   bash xtask/device/run.sh
 #
 # The kit holds:
-# - stripped release builds of `xtask` and `gpu-crowd`'s example `h100`: plain x86-64 (no
-#   `-C target-cpu`), dynamically linked to glibc 2.35 or newer only (`objdump -T`);
+# - stripped release builds of `xtask`, `gpu-crowd`'s example `h100` and its test `cpu_match`:
+#   plain x86-64 (no `-C target-cpu`), dynamically linked to glibc 2.35 or newer only
+#   (`objdump -T`);
 # - the model built from DATA_DIR, and DATA_DIR itself as `data.tar.gz` (for `xtask scaling`);
 # - the Vulkan loader as Debian packages (`gl/`, unpacked on the device where it has none);
-# - the commit it was made from (`COMMIT`) and the data's name (`DATA`).
+# - the commit it was made from (`COMMIT`), the data's name (`DATA`) and the folder it was built in
+#   (`SOURCE_ROOT`: `cpu_match` finds `fixtures/` there).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 data=${1:-../shared/mocap/bandai-namco-2-walk}
@@ -24,10 +26,14 @@ kit=.device-kit
 [ -d "$data" ] || { echo "prepare.sh: no data folder $data" >&2; exit 1; }
 rm -rf "$kit"
 mkdir -p "$kit/bin" "$kit/gl"
-echo "== release builds (motion-lod, xtask, gpu-crowd's example h100)"
+echo "== release builds (motion-lod, xtask, gpu-crowd's example h100 and its test cpu_match)"
 cargo build --release -q -p motion-lod -p xtask
 cargo build --release -q -p gpu-crowd --example h100
+cargo test -q -p gpu-crowd --release --no-run 2>/dev/null
+match=$(cargo test -p gpu-crowd --release --no-run 2>&1 | sed -n 's|.*Executable tests/cpu_match.rs (\(.*\))|\1|p')
+[ -x "$match" ] || { echo "prepare.sh: no test binary of gpu-crowd's cpu_match" >&2; exit 1; }
 cp target/release/xtask target/release/examples/h100 "$kit/bin/"
+cp "$match" "$kit/bin/cpu_match"
 strip "$kit/bin/"*
 echo "== the model of $data"
 target/release/motion-lod build "$data" -o "$kit/model.mlod" 2>&1 | tail -1
@@ -46,5 +52,7 @@ if [ -n "$(git status --porcelain --untracked-files=no -- . ':(exclude)docs')" ]
 fi
 echo "$commit" >"$kit/COMMIT"
 echo "$(basename "$data")" >"$kit/DATA"
+# cpu_match reads fixtures/ through the path it was compiled at: run.sh links it to the device's copy.
+pwd >"$kit/SOURCE_ROOT"
 du -sh "$kit"; ls -l "$kit" "$kit/bin"
 echo "kit ready: carry .device-kit and run: bash xtask/device/run.sh (about 9 minutes on the device)"

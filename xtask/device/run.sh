@@ -6,9 +6,11 @@
 # 1. issue 32: `h100` times the GPU crowd at 1,000,000 walkers at full detail and 10,000,000
 #    under the distance policy, with GPU memory a walker, and the CPU crowd at 1,000,000, full
 #    detail, on every core beside it (`gpu.txt`);
-# 2. issue 35 item 1: `xtask frames`, the tables' frame-time rows with their fixed-work control, at
+# 2. issue 32 item 3 on real hardware: gpu-crowd's test `cpu_match` (1,000 walkers, 300 frames,
+#    both scenes, every joint against the CPU crowd's), run on this GPU (`cpu-match.txt`);
+# 3. issue 35 item 1: `xtask frames`, the tables' frame-time rows with their fixed-work control, at
 #    100,000 walkers on 1, 2, 4, 8 and 16 threads and 1,000,000 on 8 and 16 (`frames-*.md`);
-# 3. issue 35 item 3: `xtask scaling`, the build's time, stages and peak memory at 800 and 10,000
+# 4. issue 35 item 3: `xtask scaling`, the build's time, stages and peak memory at 800 and 10,000
 #    cycles on 1, 2, 4, 8 and 16 threads (`scaling.md`, `figures/scaling.svg`).
 #
 # Everything goes to $OUT (the device tool's folder that comes back; `out/device` elsewhere), with
@@ -65,13 +67,21 @@ step "1. GPU crowd (issue 32)"
 timeout "$(limit 240)" "$kit/bin/h100" "$model" "${gpu_args[@]}" | tee "$out/gpu.txt"
 echo "h100 exit status ${PIPESTATUS[0]}"
 
-step "2. frame times (issue 35, item 1)"
+step "2. the GPU crowd against the CPU crowd on this GPU (issue 32, item 3)"
+src=$(cat "$kit/SOURCE_ROOT")
+if [ "$src" != "$PWD" ] && [ ! -e "$src" ]; then
+  mkdir -p "$(dirname "$src")" && ln -s "$PWD" "$src" && echo "linked $src to $PWD (fixtures/)"
+fi
+MOTION_LOD_REQUIRE_GPU=1 timeout "$(limit 90)" "$kit/bin/cpu_match" --nocapture 2>&1 | tee "$out/cpu-match.txt"
+echo "cpu_match exit status ${PIPESTATUS[0]}"
+
+step "3. frame times (issue 35, item 1)"
 timeout "$(limit 100)" "$kit/bin/xtask" frames "$model" "${frames_small[@]}" --quiet --out "$out/frames-small.md"
 echo "exit status $?"
 timeout "$(limit 120)" "$kit/bin/xtask" frames "$model" "${frames_large[@]}" --quiet --out "$out/frames-large.md"
 echo "exit status $?"
 
-step "3. build scaling (issue 35, item 3)"
+step "4. build scaling (issue 35, item 3)"
 data=$(mktemp -d)
 tar -xzf "$kit/data.tar.gz" -C "$data"
 timeout "$(limit 240)" "$kit/bin/xtask" scaling --data "$data/$(cat "$kit/DATA")" "${scaling_args[@]}" \
