@@ -55,4 +55,4 @@ echo "$(basename "$data")" >"$kit/DATA"
 # cpu_match reads fixtures/ through the path it was compiled at: run.sh links it to the device's copy.
 pwd >"$kit/SOURCE_ROOT"
 du -sh "$kit"; ls -l "$kit" "$kit/bin"
-echo "kit ready: carry .device-kit and run: bash xtask/device/run.sh (about 9 minutes on the device)"
+echo "kit ready: carry .device-kit and run: bash xtask/device/run.sh (capped at 560 s on the device)"

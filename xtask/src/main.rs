@@ -214,17 +214,9 @@ fn run_scaling(args: &ScalingArgs) -> Result<()> {
     } else {
         args.threads.clone()
     };
-    let mut command = format!(
-        "cargo xtask scaling --sizes {}",
-        args.sizes
-            .iter()
-            .map(usize::to_string)
-            .collect::<Vec<_>>()
-            .join(",")
-    );
+    let mut command = format!("cargo xtask scaling --sizes {}", comma_list(&args.sizes));
     if !args.threads.is_empty() {
-        let list: Vec<String> = threads.iter().map(usize::to_string).collect();
-        command.push_str(&format!(" --threads {}", list.join(",")));
+        command.push_str(&format!(" --threads {}", comma_list(&threads)));
     }
     scaling::run(&scaling::ScalingConfig {
         data: args.data.clone(),
@@ -234,6 +226,11 @@ fn run_scaling(args: &ScalingArgs) -> Result<()> {
         out: args.out.clone(),
         command,
     })
+}
+
+/// `v` as a command line writes it: `1,2,4`.
+fn comma_list<T: ToString>(v: &[T]) -> String {
+    v.iter().map(T::to_string).collect::<Vec<_>>().join(",")
 }
 
 /// 1, 2, 4, 8 and 16, those up to `cores`.
@@ -249,13 +246,12 @@ fn run_frames(args: &FramesArgs) -> Result<()> {
     } else {
         args.threads.iter().map(|&t| usize::from(t)).collect()
     };
-    let list = |v: &[usize]| v.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
     let walkers: Vec<usize> = args.walkers.iter().map(|&w| w as usize).collect();
     let command = format!(
         "cargo xtask frames {} --walkers {} --threads {} --frames {}",
         args.model.display(),
-        list(&walkers),
-        list(&threads),
+        comma_list(&walkers),
+        comma_list(&threads),
         args.frames
     );
     let frames = args.frames as usize;
@@ -351,8 +347,10 @@ fn run_tables(args: &TablesArgs) -> Result<()> {
         command.push_str(&format!(" --figures {}", f.display()));
     }
     if !args.crowd_threads.is_empty() {
-        let list: Vec<String> = args.crowd_threads.iter().map(u16::to_string).collect();
-        command.push_str(&format!(" --crowd-threads {}", list.join(",")));
+        command.push_str(&format!(
+            " --crowd-threads {}",
+            comma_list(&args.crowd_threads)
+        ));
     }
     if let Some(p) = &args.style_from_name {
         command.push_str(&format!(" --style-from-name '{p}'"));
