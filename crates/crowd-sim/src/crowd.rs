@@ -4,7 +4,7 @@ use crate::camera::{Bounds, Camera, CameraPath, Frustum};
 use crate::culling::WalkerAabbTree;
 use crate::error::CrowdError;
 use crate::levels::{LevelTable, check_control_range};
-use crate::path::{EllipsePath, PathPlan, WalkerStart, path_controls};
+use crate::path::{EllipsePath, PathPlan, WalkerStart};
 use crate::source::ClipSource;
 use crate::stats::{ClipFaults, CrowdReport, FrameStats, StageTimings};
 use crate::stock::{Lender, Lent, Stock};
@@ -323,7 +323,7 @@ impl<C: Send> Crowd<C> {
         })?;
         let make = |i: usize| -> Result<Walker<C>, CrowdError> {
             let mut g = SplitMix64::for_walker(config.seed, i);
-            let WalkerStart {
+            let start @ WalkerStart {
                 path,
                 s,
                 base,
@@ -345,8 +345,7 @@ impl<C: Send> Crowd<C> {
             } else {
                 config.style.for_walker(mix, g.next_f32())
             };
-            let controls =
-                path_controls(&path, s, base, heading, stride, height, &bounds).with_style(style);
+            let controls = start.first_controls(&bounds).with_style(style);
             let mut cur = source.new_clip();
             source
                 .build_clip(&controls, root_only, &mut cur)
@@ -372,7 +371,7 @@ impl<C: Send> Crowd<C> {
             };
             Ok(Walker {
                 path,
-                s,
+                s: f64::from(s),
                 stride,
                 height,
                 frame,

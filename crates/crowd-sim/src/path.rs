@@ -4,9 +4,9 @@
 //! Ground coordinates are `(x, z)` as a `Vec2`; a heading `h` faces `(sin h, cos h)` and its left
 //! is `(cos h, -sin h)` (positive heading change = turn left, as in `docs/architecture.md`).
 
-use glam::Vec2;
+use glam::{DVec2, Vec2};
 use lod_policy::SplitMix64;
-use lod_policy::{ControlRange, Controls, wrap_angle};
+use lod_policy::{ControlRange, Controls, wrap_angle_f64};
 use std::f32::consts::{PI, TAU};
 
 /// Unit forward direction `(sin h, cos h)` of heading `h`.
@@ -78,24 +78,64 @@ impl EllipsePath {
         self.axes.y * self.axes.y / self.axes.x
     }
 
+    /// The rotation's `(sin, cos)` in double precision.
+    fn rotation_f64(&self) -> (f64, f64) {
+        f64::from(self.rot).sin_cos()
+    }
+
+    /// [`EllipsePath::point`] in double precision: `p(s) = c + R(rot) (a cos s, b sin s)` with
+    /// the path's single-precision centre, axes and rotation widened. What the path controller
+    /// reads ([`path_controls`]), so that its answer is the exact one rounded once (and the same
+    /// on the GPU, which evaluates it in double-float arithmetic: `gpu-crowd`).
+    pub fn point_f64(&self, s: f64) -> DVec2 {
+        self.point_rotated_f64(self.rotation_f64(), s)
+    }
+
+    /// [`EllipsePath::point_f64`] with the rotation's `(sin, cos)` given (a search or the
+    /// controller, evaluating several points, computes it once).
+    fn point_rotated_f64(&self, (sr, cr): (f64, f64), s: f64) -> DVec2 {
+        let (ss, cs) = s.sin_cos();
+        let (x, y) = (f64::from(self.axes.x) * cs, f64::from(self.axes.y) * ss);
+        DVec2::new(
+            f64::from(self.centre.x) + (cr * x - sr * y),
+            f64::from(self.centre.y) + (sr * x + cr * y),
+        )
+    }
+
+    /// [`EllipsePath::velocity`] in double precision: `dir R(rot) (-a sin s, b cos s)`.
+    pub fn velocity_f64(&self, s: f64) -> DVec2 {
+        self.velocity_rotated_f64(self.rotation_f64(), s)
+    }
+
+    /// [`EllipsePath::velocity_f64`] with the rotation's `(sin, cos)` given.
+    fn velocity_rotated_f64(&self, (sr, cr): (f64, f64), s: f64) -> DVec2 {
+        let (ss, cs) = s.sin_cos();
+        let (x, y) = (-f64::from(self.axes.x) * ss, f64::from(self.axes.y) * cs);
+        let dir = f64::from(self.dir);
+        DVec2::new(dir * (cr * x - sr * y), dir * (sr * x + cr * y))
+    }
+
     /// Parameter of the point closest to `p` near `s_guess` (walkers stay close to their path, so
-    /// a local answer suffices): `s_guess + wrap(theta - s_guess)` with `theta` the closest
-    /// point's angle in `(-pi, pi]`, found by Newton's method in the ellipse's own frame.
+    /// a local answer suffices), in double precision: `s_guess + wrap(theta - s_guess)` with
+    /// `theta` the closest point's angle in `(-pi, pi]`, found by Newton's method in the ellipse's
+    /// own frame.
     ///
     /// With `(x, y) = R(-rot) (p - centre)`, the squared distance to `(a cos s, b sin s)` is
     /// stationary where `g(s) = (b^2 - a^2) sin s cos s + a x sin s - b y cos s = 0`, a minimum
     /// where `g'(s) = (b^2 - a^2) cos 2s + a x cos s + b y sin s > 0`. Newton's iteration
-    /// `s <- s - g / g'` in f64 starts at `atan2(a y, b x)`, exact on a circle and close for points
-    /// near the ellipse, and converges in a few steps (a few `sin_cos` where a sampled search takes
-    /// fifty). Where it cannot (`g' <= 0` on the way, no convergence, or an answer more than
-    /// 0.9 rad from `s_guess`), the sampled search runs instead: 17 samples within `+-0.8` rad of
-    /// `s_guess`, then golden-section refinement (to about `1e-4` rad).
-    pub fn closest_param_near(&self, p: Vec2, s_guess: f32) -> f32 {
+    /// `s <- s - g / g'` starts at `atan2(a y, b x)`, exact on a circle and close for points near
+    /// the ellipse, and converges in a few steps (a few `sin_cos` where a sampled search takes
+    /// fifty), to a step of at most 1e-9 rad. Where it cannot (`g' <= 0` on the way, no convergence
+    /// in 8 steps, or an answer more than 0.9 rad from `s_guess`), the sampled search runs instead:
+    /// 17 samples within `+-0.8` rad of `s_guess`, then golden-section refinement (to about `1e-4`
+    /// rad).
+    pub fn closest_param_near(&self, p: DVec2, s_guess: f64) -> f64 {
         let (a, b) = (f64::from(self.axes.x), f64::from(self.axes.y));
-        let (sr, cr) = f64::from(self.rot).sin_cos();
+        let rot = self.rotation_f64();
+        let (sr, cr) = rot;
         let (vx, vy) = (
-            f64::from(p.x) - f64::from(self.centre.x),
-            f64::from(p.y) - f64::from(self.centre.y),
+            p.x - f64::from(self.centre.x),
+            p.y - f64::from(self.centre.y),
         );
         let (x, y) = (cr * vx + sr * vy, -sr * vx + cr * vy);
         let k = b * b - a * a;
@@ -115,23 +155,23 @@ impl EllipsePath {
                 break;
             }
         }
-        let delta = wrap_angle((theta - f64::from(s_guess)) as f32);
+        let delta = wrap_angle_f64(theta - s_guess);
         if converged && delta.abs() <= 0.9 {
             s_guess + delta
         } else {
-            self.closest_param_sampled(p, s_guess)
+            self.closest_param_sampled(rot, p, s_guess)
         }
     }
 
-    /// The sampled search [`EllipsePath::closest_param_near`] falls back on.
-    fn closest_param_sampled(&self, p: Vec2, s_guess: f32) -> f32 {
-        let rot_sc = self.rot.sin_cos();
-        let d2 = |s: f32| self.point_rotated(rot_sc, s).distance_squared(p);
+    /// The sampled search [`EllipsePath::closest_param_near`] falls back on (`rot`: the
+    /// rotation's `(sin, cos)`).
+    fn closest_param_sampled(&self, rot: (f64, f64), p: DVec2, s_guess: f64) -> f64 {
+        let d2 = |s: f64| self.point_rotated_f64(rot, s).distance_squared(p);
         let step = 0.1;
         let mut best = s_guess;
         let mut best_d = d2(s_guess);
         for k in -8..=8 {
-            let s = s_guess + k as f32 * step;
+            let s = s_guess + f64::from(k) * step;
             let d = d2(s);
             if d < best_d {
                 best_d = d;
@@ -139,7 +179,7 @@ impl EllipsePath {
             }
         }
         let (mut lo, mut hi) = (best - step, best + step);
-        let g = 0.618_034_f32;
+        let g = 0.618_034;
         for _ in 0..16 {
             let m1 = hi - g * (hi - lo);
             let m2 = lo + g * (hi - lo);
@@ -160,8 +200,9 @@ impl EllipsePath {
                 best = s;
             }
         }
-        let s = self.closest_param_near(p, best);
-        self.point(s).distance(p)
+        let p = p.as_dvec2();
+        let s = self.closest_param_near(p, f64::from(best));
+        self.point_f64(s).distance(p) as f32
     }
 
     /// Draws a path that fits in the square field `[-field/2, field/2]^2` with `margin` to spare
@@ -191,31 +232,41 @@ impl EllipsePath {
     }
 }
 
-/// Controls for the next cycle of a walker at `pos` with heading `heading`, following `path` from
-/// parameter `s` with a preferred stride `stride` (m per cycle), then clamped into `bounds`.
+/// Controls for the next cycle of a walker at `pos` with heading `heading` (its cycle frame's
+/// origin and heading, `lod_policy::CycleFrame`), following `path` from parameter `s` with a
+/// preferred stride `stride` (m per cycle), then clamped into `bounds`.
 ///
 /// Pure pursuit one stride ahead: the target `T = p(s + dir L / |p'(s)|)` is expressed in the
 /// walker's heading frame, `dx = (T - pos) . left(h)`, `dz = (T - pos) . forward(h)`, and
 /// `turn = wrap(heading(p'(s_T)) - h)`. Lateral and heading errors are corrected within a few
 /// cycles; the clamp keeps every request inside what the model covers.
+///
+/// Computed in double precision and rounded once: in single precision, points of a path tens of
+/// metres from the origin carry 2e-6 m of rounding (and the platform's single-precision sine
+/// misrounds about 1 value in 80), which the controller feeds back into the next cycles, so
+/// that two implementations of it (this crate and the GPU crowd's shaders) would drift apart by
+/// 1e-4 m within ten seconds.
 pub fn path_controls(
     path: &EllipsePath,
-    s: f32,
-    pos: Vec2,
-    heading: f32,
+    s: f64,
+    pos: DVec2,
+    heading: f64,
     stride: f32,
     height: f32,
     bounds: &ControlRange,
 ) -> Controls {
-    let speed = path.velocity(s).length().max(1e-3);
-    let s_t = s + path.dir * stride / speed;
-    let target = path.point(s_t);
-    let d = target - pos;
-    let turn = wrap_angle(heading_of(path.velocity(s_t)) - heading);
+    let rot = path.rotation_f64();
+    let speed = path.velocity_rotated_f64(rot, s).length().max(1e-3);
+    let s_t = s + f64::from(path.dir) * f64::from(stride) / speed;
+    let d = path.point_rotated_f64(rot, s_t) - pos;
+    let vt = path.velocity_rotated_f64(rot, s_t);
+    let turn = wrap_angle_f64(vt.x.atan2(vt.y) - heading);
+    // d . left(h) and d . forward(h), with left = (cos h, -sin h) and forward = (sin h, cos h).
+    let (sh, ch) = heading.sin_cos();
     bounds.clamp(&Controls::from_array([
-        d.dot(left(heading)),
-        d.dot(forward(heading)),
-        turn,
+        (d.x * ch - d.y * sh) as f32,
+        (d.x * sh + d.y * ch) as f32,
+        turn as f32,
         height,
     ]))
 }
@@ -321,6 +372,22 @@ pub struct WalkerStart {
     pub phase: f32,
 }
 
+impl WalkerStart {
+    /// The controls of the walker's first clip: [`path_controls`] from its start, the parameter,
+    /// place and heading widened to double precision as its cycle frame holds them.
+    pub fn first_controls(&self, bounds: &ControlRange) -> Controls {
+        path_controls(
+            &self.path,
+            f64::from(self.s),
+            self.base.as_dvec2(),
+            f64::from(self.heading),
+            self.stride,
+            self.height,
+            bounds,
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -362,11 +429,12 @@ mod tests {
                 let off = Vec2::new(g.range(-1.5, 1.5), g.range(-1.5, 1.5));
                 let q = path.point(s) + off;
                 let guess = s - g.range(0.0, 0.4);
-                let sampled = path.closest_param_sampled(q, guess);
+                let (q, guess) = (q.as_dvec2(), f64::from(guess));
+                let sampled = path.closest_param_sampled(path.rotation_f64(), q, guess);
                 let newton = path.closest_param_near(q, guess);
                 let (dn, ds) = (
-                    path.point(newton).distance(q),
-                    path.point(sampled).distance(q),
+                    path.point_f64(newton).distance(q),
+                    path.point_f64(sampled).distance(q),
                 );
                 assert!(dn <= ds + 1e-4, "newton {dn} sampled {ds}");
                 assert!((newton - sampled).abs() < 0.01, "{newton} vs {sampled}");
@@ -374,6 +442,25 @@ mod tests {
             }
         }
         assert!(newton_used > 5000, "Newton answered {newton_used} of 6000");
+    }
+
+    #[test]
+    fn double_precision_points_and_velocities_are_the_single_precision_ones_unrounded() {
+        let mut g = SplitMix64::new(17);
+        for _ in 0..200 {
+            let min_radius = g.range(2.0, 12.0);
+            let path = EllipsePath::random(&mut g, 200.0, 2.0, min_radius).unwrap();
+            let s = g.range(-40.0, 40.0);
+            // Points up to 100 m from the origin: f32 rounding of a few 1e-6 m, and its sine
+            // within an ulp.
+            assert!(
+                path.point_f64(f64::from(s))
+                    .distance(path.point(s).as_dvec2())
+                    < 2e-5
+            );
+            let (v, v32) = (path.velocity_f64(f64::from(s)), path.velocity(s).as_dvec2());
+            assert!(v.distance(v32) < 2e-5 * v.length().max(1.0));
+        }
     }
 
     #[test]
@@ -386,8 +473,8 @@ mod tests {
         };
         for k in 0..20 {
             let s = k as f32 * 0.3;
-            let got = p.closest_param_near(p.point(s), s + 0.3);
-            assert!(p.point(got).distance(p.point(s)) < 1e-3);
+            let got = p.closest_param_near(p.point(s).as_dvec2(), f64::from(s) + 0.3);
+            assert!(p.point_f64(got).distance(p.point(s).as_dvec2()) < 1e-3);
             assert!(p.distance_to(p.point(s)) < 1e-3);
         }
     }

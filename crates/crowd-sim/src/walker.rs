@@ -7,7 +7,7 @@ use crate::levels::LevelTable;
 use crate::path::{EllipsePath, path_controls};
 use crate::source::ClipSource;
 use crate::stock::Lender;
-use glam::{Vec2, Vec3};
+use glam::{DVec2, Vec3};
 use lod_policy::SeamTransition;
 use lod_policy::{ControlRange, Controls, CycleFrame, Detail, FootLock, RootMotion};
 
@@ -64,8 +64,9 @@ pub(crate) struct Walker<C> {
     pub cur: C,
     // Read at cycle ends only.
     pub path: EllipsePath,
-    /// Path parameter closest to the current cycle frame's origin.
-    pub s: f32,
+    /// Path parameter closest to the current cycle frame's origin (double precision, as the
+    /// frame: [`path_controls`]).
+    pub s: f64,
     /// Preferred forward displacement per cycle (m).
     pub stride: f32,
     pub controls: Controls,
@@ -294,11 +295,6 @@ impl<C> Walker<C> {
         )
     }
 
-    /// The frame's origin on the ground in single precision, for steering along the path.
-    fn base(&self) -> Vec2 {
-        Vec2::new(self.frame.x as f32, self.frame.z as f32)
-    }
-
     /// Kernel stage: advance time by `dt`; at each cycle end move the cycle frame by the clip's
     /// root motion, pick controls from the path ahead and build the next clip at `d`, with an
     /// inertialized seam at the first `seam_levels` levels; mid-cycle, rebuild at once when `d` is
@@ -324,14 +320,14 @@ impl<C> Walker<C> {
             self.t -= end;
             self.frame = self.frame.next(&m);
             self.heading_sc = heading_sin_cos(&self.frame);
-            let base = self.base();
-            self.s = self.path.closest_param_near(base, self.s);
+            let origin = DVec2::new(self.frame.x, self.frame.z);
+            self.s = self.path.closest_param_near(origin, self.s);
             let held = self.controls;
             self.controls = path_controls(
                 &self.path,
                 self.s,
-                base,
-                self.frame.heading as f32,
+                origin,
+                self.frame.heading,
                 self.stride,
                 self.height,
                 &p.bounds,

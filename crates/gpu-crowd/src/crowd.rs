@@ -3,7 +3,7 @@
 use std::time::{Duration, Instant};
 
 use bytemuck::{Pod, Zeroable};
-use crowd_sim::path::{PathPlan, WalkerStart, path_controls};
+use crowd_sim::path::{PathPlan, WalkerStart};
 use crowd_sim::{Camera, CrowdConfig, CrowdStyle, Frustum, check_control_range};
 use glam::Vec3;
 use lod_policy::{Detail, LevelPolicy, RuntimeModel, SplitMix64, StyleMix, ViewParams};
@@ -52,7 +52,13 @@ struct GpuWalker {
     motion: [f32; 3],
     init_phase: f32,
     init_hold: f32,
-    pad0: f32,
+    /// The cycle frame's origin and heading are double-floats (`df.wgsl`): `base + base_lo`,
+    /// `heading + heading_lo`, as the CPU crowd's f64 `lod_policy::CycleFrame`.
+    base_lo: [f32; 2],
+    heading_lo: f32,
+    /// The path parameter is a double-float too: `s + s_lo` (the CPU's f64 `s`).
+    s_lo: f32,
+    pad: f32,
     cur_acc: u32,
     cur_joints: u32,
     pend_acc: u32,
@@ -75,7 +81,10 @@ struct FrameUniform {
     n_slots: u32,
     vis_entries: u32,
     hid_entries: u32,
-    pad: [u32; 2],
+    /// 0: the double-float library's `df_zero()`, bits the shader compiler cannot see through
+    /// (`df.wgsl`).
+    df_zero: u32,
+    pad: u32,
     policy: [[u32; 4]; POLICY_MAX],
 }
 
@@ -284,7 +293,7 @@ impl GpuCrowd {
         let mut walkers = Vec::with_capacity(config.walkers);
         for i in 0..config.walkers {
             let mut g = SplitMix64::for_walker(config.seed, i);
-            let WalkerStart {
+            let start @ WalkerStart {
                 path,
                 s,
                 base,
@@ -310,14 +319,15 @@ impl GpuCrowd {
                 };
                 (st, id as u32)
             };
-            let c =
-                path_controls(&path, s, base, heading, stride, height, &bounds).with_style(style);
+            let c = start.first_controls(&bounds).with_style(style);
             let hold = if config.spread_first_builds {
                 g.next_f32()
             } else {
                 0.0
             };
-            let (sh, ch) = heading.sin_cos();
+            // As the CPU crowd's walker: the f64 frame's sine and cosine, rounded.
+            let (sh, ch) = f64::from(heading).sin_cos();
+            let (sh, ch) = (sh as f32, ch as f32);
             walkers.push(GpuWalker {
                 t: 0.0,
                 cur_dur: 1.0,
@@ -340,7 +350,10 @@ impl GpuCrowd {
                 motion: [0.0; 3],
                 init_phase: phase,
                 init_hold: hold,
-                pad0: 0.0,
+                base_lo: [0.0; 2],
+                heading_lo: 0.0,
+                s_lo: 0.0,
+                pad: 0.0,
                 cur_acc: last as u32,
                 cur_joints: 0,
                 pend_acc: last as u32,

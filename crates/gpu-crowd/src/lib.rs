@@ -7,7 +7,10 @@
 //! `LodModel::build_kernel`), per frame the pose at the clip's phase (`LodModel::pose_rows`) and
 //! the forward kinematics of the active joints (`Rig::joint_positions_scaled`), from the same model
 //! file. Walker state lives on the GPU; per frame the host uploads the camera, the time step and
-//! the policy (tabulated over distance, [`PolicyTable`]) and reads back a few counters. It runs on
+//! the policy (tabulated over distance, [`PolicyTable`]) and reads back a few counters. What the
+//! CPU runtime computes in f64 (the kriging weights, the time table, the walkers' cycle frames and
+//! their steering along their paths) the shaders compute in double-float arithmetic (two f32 a
+//! value, `shaders/df.wgsl`), so that both crowds walk the same walks. It runs on
 //! Vulkan (default feature `vulkan`), Metal (`metal`) and DirectX 12 (`dx12`) through wgpu, and on
 //! Mesa's software Vulkan (lavapipe) where there is no GPU, which is how CI checks it against the
 //! CPU crowd. It is not for: rendering (it computes joint positions; drawing them is the engine's),
@@ -39,6 +42,7 @@
 
 mod crowd;
 mod device;
+mod df;
 mod error;
 mod policy;
 mod tables;

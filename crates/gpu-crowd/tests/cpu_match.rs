@@ -14,16 +14,14 @@ use motion_lod::dataset::DataSpec;
 use motion_lod::progress::NoProgress;
 use motion_lod::{BuildConfig, LodSource, MotionModel};
 
-/// Largest distance (m) allowed between a GPU joint and the CPU's: 1e-3 m, not the 1e-4 m issue 32
-/// asks for. Measured on lavapipe: 2.4e-4 m at worst over the 600 frames, growing slowly with time,
-/// until the embedded model's coarse levels 7 and 9 came into use (2026-11-27, issue 34: a walker's
-/// pop and skate judged against the data at its step): 7.9e-4 m (an overview walker's root height at
-/// frame 243; 5e-4 m was the bound until then).
-/// The clip build, pose and forward kinematics agree to a few 1e-6 m for the same inputs (frame 0);
-/// the gap comes from the walkers' path following in f32 world coordinates, where the GPU's fused
-/// multiply-adds and its sin, cos and atan2 round differently from the CPU's in the last bit, and
-/// the controller carries those differences into the next cycles' controls.
-const TOLERANCE_M: f32 = 1e-3;
+/// Largest distance (m) allowed between a GPU joint and the CPU's: 1e-4 m, as issue 32 asks.
+/// Measured on lavapipe: 3.8e-6 m at worst over the 600 frames (2026-11-28), not growing with time:
+/// the walkers' cycle frames, path parameters and path controller are computed in double-float
+/// arithmetic (`df.wgsl`) as the CPU's in f64 and rounded once, so both crowds steer by the same
+/// controls, clip durations and clocks; what remains is the f32 sums of the clip and the pose in
+/// another order. (Before, the controller in f32 drifted the two apart by 2.5e-4 m in ten seconds,
+/// the shader compiler having also folded every double-float error term to zero.)
+const TOLERANCE_M: f32 = 1e-4;
 
 /// The GPU, or `None` after printing why the test is skipped; panics when CI requires one.
 fn gpu_or_skip() -> Option<Gpu> {
@@ -74,14 +72,13 @@ fn config() -> CrowdConfig {
     }
 }
 
-/// At a walker's cycle seam the two crowds may show the two sides of it for one frame: its clock
-/// lies within the last bit of the cycle's end, and the f32 clocks and path following (above) round
-/// it to either side. Seams are not inertialized in this test, so the two sides differ by the seam's
-/// own jump; such a frame is allowed this far (m), at a frame where the CPU walker starts or ends a
-/// cycle, and at most once in [`SEAM_FRAMES_PER`] walker-frames with joints. (Measured on lavapipe
-/// after the embedded model's levels changed on 2026-11-27: one walker-frame of about 245,000, an
-/// overview walker at level 2 with 13 joints, 2.3 cm at its farthest joint, back within 2e-4 m the
-/// next frame; the seam's own jump is of that size.)
+/// At a walker's cycle seam the two crowds could show the two sides of it for one frame, when
+/// their clocks differ in the last bit there (the seam's own jump, up to a few centimetres, since
+/// seams are not inertialized in this test). On a software adapter (lavapipe, CI) the clocks are
+/// the same and no such frame is allowed. A hardware GPU may fuse multiplies and adds in the clip's
+/// f32 sums, which moves a clip's duration by an ulp: there such a frame is allowed, at most
+/// [`SEAM_SIDE_M`] apart, at a frame where the CPU walker starts or ends a cycle, and at most once
+/// in [`SEAM_FRAMES_PER`] walker-frames with joints.
 const SEAM_SIDE_M: f32 = 0.05;
 
 /// See [`SEAM_SIDE_M`].
@@ -89,7 +86,7 @@ const SEAM_FRAMES_PER: usize = 10_000;
 
 /// Runs both crowds for `frames` frames in `scene`; checks every frame that both have the same
 /// walkers in view, the same detail for every walker and the same level histogram, and every joint
-/// within [`TOLERANCE_M`] (or [`SEAM_SIDE_M`] at a seam). Returns the largest joint distance, the
+/// within [`TOLERANCE_M`] (or [`SEAM_SIDE_M`] at a seam, on a hardware adapter). Returns the largest joint distance, the
 /// largest root distance and the walker-frames with joints (the seam frames left out of both).
 fn compare(gpu: &Gpu, model: &MotionModel, scene: Scene, frames: usize) -> (f32, f32, usize) {
     let config = config();
@@ -103,6 +100,7 @@ fn compare(gpu: &Gpu, model: &MotionModel, scene: Scene, frames: usize) -> (f32,
     let path = scene.path(field);
     let lens = scene.lens(Camera::default(), field);
     let dt = 1.0 / config.fps;
+    let seam_sides_allowed = !gpu.is_software();
     let (mut worst, mut worst_root, mut with_joints) = (0.0f32, 0.0f32, 0usize);
     // The CPU walkers' cycle frames at the frame before, and the walker-frames beyond the
     // tolerance, judged once the next frame shows whether they were at a seam: (frame, walker,
@@ -119,8 +117,9 @@ fn compare(gpu: &Gpu, model: &MotionModel, scene: Scene, frames: usize) -> (f32,
         for (pf, i, d, began) in pending.drain(..) {
             let at_seam = began || cpu.cycle_frame(i) != before[i];
             assert!(
-                at_seam && d <= SEAM_SIDE_M,
-                "{scene:?} frame {pf} walker {i}: {d} m apart (at a seam: {at_seam}; allowed there: {SEAM_SIDE_M} m)"
+                seam_sides_allowed && at_seam && d <= SEAM_SIDE_M,
+                "{scene:?} frame {pf} walker {i}: {d} m apart, more than {TOLERANCE_M} m (at a \
+                 seam: {at_seam}; allowed there on a hardware adapter: {SEAM_SIDE_M} m)"
             );
             seam_sides += 1;
         }
@@ -170,8 +169,8 @@ fn compare(gpu: &Gpu, model: &MotionModel, scene: Scene, frames: usize) -> (f32,
         );
     }
     assert!(
-        pending.iter().all(|p| p.3),
-        "{scene:?}: walkers over the tolerance at the last frame, not at a seam: {pending:?}"
+        pending.iter().all(|p| seam_sides_allowed && p.3),
+        "{scene:?}: walkers over the tolerance at the last frame: {pending:?}"
     );
     seam_sides += pending.len();
     assert!(

@@ -1,5 +1,6 @@
 // The GPU crowd's compute shaders (crate `gpu-crowd`). The host prepends the model's sizes as
-// constants (see `shader.rs`); every array index below is bounded by them.
+// constants (see `tables.rs`) and the double-float library (`df.wgsl`); every array index below is
+// bounded by those constants.
 //
 // Passes per frame: `advance` (cull, detail from the tabulated policy, clock, cycle ends with the
 // path controller, clip builds scheduled), `build_args` (indirect dispatch size), `build` (one
@@ -15,7 +16,8 @@ struct Walker {
     path_cx: f32, path_cz: f32, path_a: f32, path_b: f32,
     path_rot: f32, path_dir: f32, c_dx: f32, c_dz: f32,
     c_turn: f32, c_height: f32, m_dx: f32, m_dz: f32,
-    m_turn: f32, init_phase: f32, init_hold: f32, pad0: f32,
+    m_turn: f32, init_phase: f32, init_hold: f32, base_lo_x: f32,
+    base_lo_z: f32, heading_lo: f32, s_lo: f32, pad1: f32,
     cur_acc: u32, cur_joints: u32, pend_acc: u32, pend_joints: u32,
     style: u32, slot: u32, mode: u32, flags: u32,
 }
@@ -24,7 +26,7 @@ struct Frame {
     planes: array<vec4<f32>, 6>,
     eye: vec4<f32>,
     dt: f32, margin: f32, n: u32, n_slots: u32,
-    vis_entries: u32, hid_entries: u32, pad1: u32, pad2: u32,
+    vis_entries: u32, hid_entries: u32, df_zero: u32, pad1: u32,
     // Policy table: (start distance bits, accuracy, joints, 0); visible entries first.
     policy: array<vec4<u32>, POLICY_MAX>,
 }
@@ -41,8 +43,6 @@ const NONE: u32 = 0xffffffffu;
 const MODE_CYCLE: u32 = 0u;
 const MODE_REFINE: u32 = 1u;
 const MODE_INIT: u32 = 2u;
-const PI: f32 = 3.14159265358979323846;
-const TAU: f32 = 6.28318530717958647692;
 const WG: u32 = 64u;
 const MAX_X: u32 = 65535u;
 
@@ -57,110 +57,163 @@ const MAX_X: u32 = 65535u;
 @group(0) @binding(8) var<storage, read_write> big_clips: array<f32>;
 @group(0) @binding(9) var<storage, read_write> joints_out: array<f32>;
 
+// 0, read from the frame: bits the double-float library's `keep` XORs in (df.wgsl).
+fn df_zero() -> u32 {
+    return frame.df_zero;
+}
+
 fn mi(k: u32) -> u32 {
     return mtab[k / 4u][k % 4u];
 }
 
-// Rust's f32::round (half away from zero).
-fn round_away(x: f32) -> f32 {
-    let r = trunc(x);
-    if (abs(x - r) >= 0.5) {
-        return r + sign(x);
-    }
-    return r;
-}
-
-fn wrap_angle(a: f32) -> f32 {
-    let w = a - TAU * round_away(a / TAU);
-    if (w <= -PI) {
-        return w + TAU;
-    }
-    return w;
-}
-
 // ---------------------------------------------------------------------------------------------
-// Paths (crowd_sim::path).
+// Paths (crowd_sim::path) and the path controller, in double-float: the CPU crowd evaluates them
+// in f64 (EllipsePath::point_f64, closest_param_near, path_controls) and rounds their answers
+// once, so both crowds round the same values.
 
-fn rotate_by(sr: f32, cr: f32, v: vec2<f32>) -> vec2<f32> {
-    return vec2<f32>(cr * v.x - sr * v.y, sr * v.x + cr * v.y);
+// A point or direction on the ground, each coordinate a double-float.
+struct DfVec2 {
+    x: vec2<f32>,
+    y: vec2<f32>,
 }
 
-fn path_point(w: Walker, s: f32) -> vec2<f32> {
-    return vec2<f32>(w.path_cx, w.path_cz)
-        + rotate_by(sin(w.path_rot), cos(w.path_rot), vec2<f32>(w.path_a * cos(s), w.path_b * sin(s)));
+// The path's rotation: (sin hi, sin lo, cos hi, cos lo) of f64::from(rot).
+fn path_rotation(w: Walker) -> vec4<f32> {
+    return df_sincos(vec2<f32>(w.path_rot, 0.0));
 }
 
-fn path_velocity(w: Walker, s: f32) -> vec2<f32> {
-    return w.path_dir
-        * rotate_by(sin(w.path_rot), cos(w.path_rot), vec2<f32>(-w.path_a * sin(s), w.path_b * cos(s)));
+// R(rot) (x, y).
+fn df_rotate(rot: vec4<f32>, x: vec2<f32>, y: vec2<f32>) -> DfVec2 {
+    let sr = rot.xy;
+    let cr = rot.zw;
+    return DfVec2(df_add(df_mul(cr, x), -df_mul(sr, y)), df_add(df_mul(sr, x), df_mul(cr, y)));
 }
 
-fn dist2(a: vec2<f32>, b: vec2<f32>) -> f32 {
-    let d = a - b;
-    return d.x * d.x + d.y * d.y;
+// EllipsePath::point_f64: c + R(rot) (a cos s, b sin s).
+fn path_point(w: Walker, rot: vec4<f32>, s: vec2<f32>) -> DfVec2 {
+    let sc = df_sincos(s);
+    let v = df_rotate(rot, df_mul_f(sc.zw, w.path_a), df_mul_f(sc.xy, w.path_b));
+    return DfVec2(df_add(vec2<f32>(w.path_cx, 0.0), v.x), df_add(vec2<f32>(w.path_cz, 0.0), v.y));
 }
 
-fn closest_param_sampled(w: Walker, p: vec2<f32>, s_guess: f32) -> f32 {
-    let stp = 0.1;
+// EllipsePath::velocity_f64: dir R(rot) (-a sin s, b cos s).
+fn path_velocity(w: Walker, rot: vec4<f32>, s: vec2<f32>) -> DfVec2 {
+    let sc = df_sincos(s);
+    let v = df_rotate(rot, df_mul_f(sc.xy, -w.path_a), df_mul_f(sc.zw, w.path_b));
+    return DfVec2(df_mul_f(v.x, w.path_dir), df_mul_f(v.y, w.path_dir));
+}
+
+fn df_dist2(a: DfVec2, b: DfVec2) -> vec2<f32> {
+    let dx = df_add(a.x, -b.x);
+    let dy = df_add(a.y, -b.y);
+    return df_add(df_mul(dx, dx), df_mul(dy, dy));
+}
+
+fn df_less(a: vec2<f32>, b: vec2<f32>) -> bool {
+    return a.x < b.x || (a.x == b.x && a.y < b.y);
+}
+
+// atan2(y, x) (f64's): WGSL's f32 atan2, then one step of theta + atan((y cos - x sin) /
+// (x cos + y sin)) with the step's atan taken as its argument (the neglected cube is below
+// 1e-15 for any f32 start within 1e-5 rad).
+fn df_atan2(y: vec2<f32>, x: vec2<f32>) -> vec2<f32> {
+    let t0 = atan2(y.x, x.x);
+    let sc = df_sincos(vec2<f32>(t0, 0.0));
+    let num = df_add(df_mul(y, sc.zw), -df_mul(x, sc.xy));
+    let den = df_add(df_mul(x, sc.zw), df_mul(y, sc.xy));
+    return df_add(vec2<f32>(t0, 0.0), df_div(num, den));
+}
+
+const DF_TENTH: vec2<f32> = vec2<f32>(0.10000000149011612, -1.4901161415892261e-09);
+const DF_GOLDEN: vec2<f32> = vec2<f32>(0.6180340051651001, -5.165099903337023e-09);
+
+// EllipsePath::closest_param_sampled.
+fn closest_param_sampled(w: Walker, rot: vec4<f32>, p: DfVec2, s_guess: vec2<f32>) -> vec2<f32> {
     var best = s_guess;
-    var best_d = dist2(path_point(w, s_guess), p);
+    var best_d = df_dist2(path_point(w, rot, s_guess), p);
     for (var k = -8; k <= 8; k++) {
-        let s = s_guess + f32(k) * stp;
-        let d = dist2(path_point(w, s), p);
-        if (d < best_d) {
+        let s = df_add(s_guess, df_mul_f(DF_TENTH, f32(k)));
+        let d = df_dist2(path_point(w, rot, s), p);
+        if (df_less(d, best_d)) {
             best_d = d;
             best = s;
         }
     }
-    var lo = best - stp;
-    var hi = best + stp;
-    let g = 0.618034;
+    var lo = df_add(best, -DF_TENTH);
+    var hi = df_add(best, DF_TENTH);
     for (var k = 0; k < 16; k++) {
-        let m1 = hi - g * (hi - lo);
-        let m2 = lo + g * (hi - lo);
-        if (dist2(path_point(w, m1), p) < dist2(path_point(w, m2), p)) {
+        let m1 = df_add(hi, -df_mul(DF_GOLDEN, df_add(hi, -lo)));
+        let m2 = df_add(lo, df_mul(DF_GOLDEN, df_add(hi, -lo)));
+        if (df_less(df_dist2(path_point(w, rot, m1), p), df_dist2(path_point(w, rot, m2), p))) {
             hi = m2;
         } else {
             lo = m1;
         }
     }
-    return 0.5 * (lo + hi);
+    return df_mul_f(df_add(lo, hi), 0.5);
 }
 
-// EllipsePath::closest_param_near, Newton's iteration in f32 (the CPU runs it in f64; its answer
-// agrees to about 1e-7 rad).
-fn closest_param_near(w: Walker, p: vec2<f32>, s_guess: f32) -> f32 {
+// EllipsePath::closest_param_near: Newton's iteration in f32 from atan2(a y, b x) to about
+// 1e-5 rad (WGSL's sin and cos), then in double-float to the CPU's step of 1e-9 rad.
+fn closest_param_near(w: Walker, rot: vec4<f32>, p: DfVec2, s_guess: vec2<f32>) -> vec2<f32> {
     let a = w.path_a;
     let b = w.path_b;
-    let sr = sin(w.path_rot);
-    let cr = cos(w.path_rot);
-    let vx = p.x - w.path_cx;
-    let vy = p.y - w.path_cz;
-    let x = cr * vx + sr * vy;
-    let y = -sr * vx + cr * vy;
-    let k = b * b - a * a;
-    var theta = atan2(a * y, b * x);
-    var converged = false;
-    for (var it = 0; it < 8; it++) {
+    let sr = rot.xy;
+    let cr = rot.zw;
+    let vx = df_add(p.x, vec2<f32>(-w.path_cx, 0.0));
+    let vy = df_add(p.y, vec2<f32>(-w.path_cz, 0.0));
+    let x = df_add(df_mul(cr, vx), df_mul(sr, vy));
+    let y = df_add(-df_mul(sr, vx), df_mul(cr, vy));
+    let k = df_add(two_prod(b, b), -two_prod(a, a));
+    let ax = df_mul_f(x, a);
+    let by = df_mul_f(y, b);
+    var theta = atan2(a * y.x, b * x.x);
+    for (var it = 0; it < 6; it++) {
         let s = sin(theta);
         let c = cos(theta);
-        let g = k * s * c + a * x * s - b * y * c;
-        let dg = k * (c * c - s * s) + a * x * c + b * y * s;
+        let g = k.x * s * c + ax.x * s - by.x * c;
+        let dg = k.x * (c * c - s * s) + ax.x * c + by.x * s;
         if (!(dg > 0.0)) {
             break;
         }
         let stp = g / dg;
         theta -= stp;
-        if (abs(stp) <= 2e-6) {
+        if (abs(stp) <= 1e-5) {
+            break;
+        }
+    }
+    var th = vec2<f32>(theta, 0.0);
+    var converged = false;
+    for (var it = 0; it < 4; it++) {
+        let sc = df_sincos(th);
+        let s = sc.xy;
+        let c = sc.zw;
+        let g = df_add(df_add(df_mul(df_mul(k, s), c), df_mul(ax, s)), -df_mul(by, c));
+        let dg = df_add(
+            df_add(df_mul(k, df_add(df_mul(c, c), -df_mul(s, s))), df_mul(ax, c)),
+            df_mul(by, s));
+        if (!(dg.x > 0.0)) {
+            break;
+        }
+        let stp = df_div(g, dg);
+        th = df_add(th, -stp);
+        if (abs(stp.x) <= 1e-9) {
             converged = true;
             break;
         }
     }
-    let delta = wrap_angle(theta - s_guess);
-    if (converged && abs(delta) <= 0.9) {
-        return s_guess + delta;
+    let delta = df_wrap_angle(df_add(th, -s_guess));
+    if (converged && abs(delta.x) <= 0.9) {
+        return df_add(s_guess, delta);
     }
-    return closest_param_sampled(w, p, s_guess);
+    return closest_param_sampled(w, rot, p, s_guess);
+}
+
+// The world coordinate origin + v of a double-float origin and an f32 offset, rounded to f32 as
+// the CPU's `(frame.x + f64::from(v)) as f32` (CycleFrame::to_world).
+fn place(origin: vec2<f32>, v: f32) -> f32 {
+    let s = two_sum(origin.x, v);
+    return s.x + (s.y + origin.y);
 }
 
 fn clamp_control(v: f32, lo: f32, hi: f32) -> f32 {
@@ -235,26 +288,48 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
         if (w.t >= w.cur_dur) {
             let end = w.cur_dur;
             w.t -= end;
-            let h = w.heading;
-            w.base_x += cos(h) * w.m_dx + sin(h) * w.m_dz;
-            w.base_z += -sin(h) * w.m_dx + cos(h) * w.m_dz;
-            w.heading = wrap_angle(h + w.m_turn);
-            w.sin_h = sin(w.heading);
-            w.cos_h = cos(w.heading);
-            let base = vec2<f32>(w.base_x, w.base_z);
-            w.s = closest_param_near(w, base, w.s);
+            // CycleFrame::next in double-float: the origin moves by the clip's displacement
+            // rotated by the heading, the heading turns by the clip's turn.
+            let h = vec2<f32>(w.heading, w.heading_lo);
+            let hsc = df_sincos(h);
+            let bx = df_add(df_add(vec2<f32>(w.base_x, w.base_lo_x), df_mul_f(hsc.zw, w.m_dx)),
+                df_mul_f(hsc.xy, w.m_dz));
+            let bz = df_add(df_add(vec2<f32>(w.base_z, w.base_lo_z), -df_mul_f(hsc.xy, w.m_dx)),
+                df_mul_f(hsc.zw, w.m_dz));
+            let nh = df_wrap_angle(df_add(h, vec2<f32>(w.m_turn, 0.0)));
+            w.base_x = bx.x;
+            w.base_lo_x = bx.y;
+            w.base_z = bz.x;
+            w.base_lo_z = bz.y;
+            w.heading = nh.x;
+            w.heading_lo = nh.y;
+            let nsc = df_sincos(nh);
+            w.sin_h = nsc.x;
+            w.cos_h = nsc.z;
             // path_controls: pure pursuit one stride ahead, clamped into the model's range.
-            let speed = max(length(path_velocity(w, w.s)), 1e-3);
-            let s_t = w.s + w.path_dir * w.stride / speed;
-            let tgt = path_point(w, s_t);
-            let dd = tgt - base;
-            let vt = path_velocity(w, s_t);
-            let turn = wrap_angle(atan2(vt.x, vt.y) - w.heading);
-            let hh = w.heading;
-            let lft = vec2<f32>(cos(hh), -sin(hh));
-            let fwd = vec2<f32>(sin(hh), cos(hh));
-            w.c_dx = clamp_control(dot(dd, lft), md[RANGE_OFF + 0u], md[RANGE_OFF + 4u]);
-            w.c_dz = clamp_control(dot(dd, fwd), md[RANGE_OFF + 1u], md[RANGE_OFF + 5u]);
+            let base = DfVec2(bx, bz);
+            let rot = path_rotation(w);
+            let s = closest_param_near(w, rot, base, vec2<f32>(w.s, w.s_lo));
+            w.s = s.x;
+            w.s_lo = s.y;
+            let v0 = path_velocity(w, rot, s);
+            var speed = df_sqrt(df_add(df_mul(v0.x, v0.x), df_mul(v0.y, v0.y)));
+            if (speed.x < 1e-3) {
+                speed = vec2<f32>(1e-3, 0.0);
+            }
+            let s_t = df_add(s, df_div(vec2<f32>(w.path_dir * w.stride, 0.0), speed));
+            let tgt = path_point(w, rot, s_t);
+            let ddx = df_add(tgt.x, -bx);
+            let ddz = df_add(tgt.y, -bz);
+            let vt = path_velocity(w, rot, s_t);
+            let turn = df_wrap_angle(df_add(df_atan2(vt.x, vt.y), -nh)).x;
+            // d . left(h) and d . forward(h): left = (cos h, -sin h), forward = (sin h, cos h).
+            let sh = nsc.xy;
+            let ch = nsc.zw;
+            let dx = df_add(df_mul(ddx, ch), -df_mul(ddz, sh)).x;
+            let dz = df_add(df_mul(ddx, sh), df_mul(ddz, ch)).x;
+            w.c_dx = clamp_control(dx, md[RANGE_OFF + 0u], md[RANGE_OFF + 4u]);
+            w.c_dz = clamp_control(dz, md[RANGE_OFF + 1u], md[RANGE_OFF + 5u]);
             w.c_turn = clamp_control(turn, md[RANGE_OFF + 2u], md[RANGE_OFF + 6u]);
             w.c_height = clamp_control(w.height, md[RANGE_OFF + 3u], md[RANGE_OFF + 7u]);
             w.mode = MODE_CYCLE;
@@ -314,101 +389,6 @@ fn fix_free() {
     }
 }
 
-
-// ---------------------------------------------------------------------------------------------
-// Double-float arithmetic (a value is hi + lo, two f32): the kriging weights and the time table,
-// which the CPU runtime computes in f64 and whose sums cancel. Products are exact through a split
-// of each factor into 12-bit halves by masking (no reliance on fused multiply-add).
-
-fn two_sum(a: f32, b: f32) -> vec2<f32> {
-    let s = a + b;
-    let bb = s - a;
-    return vec2<f32>(s, (a - (s - bb)) + (b - bb));
-}
-
-fn quick_two_sum(a: f32, b: f32) -> vec2<f32> {
-    let s = a + b;
-    return vec2<f32>(s, b - (s - a));
-}
-
-fn split(a: f32) -> vec2<f32> {
-    let hi = bitcast<f32>(bitcast<u32>(a) & 0xfffff000u);
-    return vec2<f32>(hi, a - hi);
-}
-
-fn two_prod(a: f32, b: f32) -> vec2<f32> {
-    let p = a * b;
-    let sa = split(a);
-    let sb = split(b);
-    let err = ((sa.x * sb.x - p) + sa.x * sb.y + sa.y * sb.x) + sa.y * sb.y;
-    return vec2<f32>(p, err);
-}
-
-fn df_add(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
-    var s = two_sum(a.x, b.x);
-    let t = two_sum(a.y, b.y);
-    s.y += t.x;
-    s = quick_two_sum(s.x, s.y);
-    s.y += t.y;
-    return quick_two_sum(s.x, s.y);
-}
-
-fn df_mul(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
-    var p = two_prod(a.x, b.x);
-    p.y += a.x * b.y + a.y * b.x;
-    return quick_two_sum(p.x, p.y);
-}
-
-fn df_mul_f(a: vec2<f32>, b: f32) -> vec2<f32> {
-    var p = two_prod(a.x, b);
-    p.y += a.y * b;
-    return quick_two_sum(p.x, p.y);
-}
-
-fn df_div(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
-    let q1 = a.x / b.x;
-    var r = df_add(a, -df_mul(b, vec2<f32>(q1, 0.0)));
-    let q2 = r.x / b.x;
-    r = df_add(r, -df_mul(b, vec2<f32>(q2, 0.0)));
-    let q3 = r.x / b.x;
-    return df_add(quick_two_sum(q1, q2), vec2<f32>(q3, 0.0));
-}
-
-fn df_sqrt(a: vec2<f32>) -> vec2<f32> {
-    if (!(a.x > 0.0)) {
-        return vec2<f32>(0.0, 0.0);
-    }
-    let s = sqrt(a.x);
-    let r = df_add(a, -two_prod(s, s));
-    return two_sum(s, r.x / (2.0 * s));
-}
-
-const LN2: vec2<f32> = vec2<f32>(0.6931472, -1.9046542e-9);
-
-fn df_exp(a: vec2<f32>) -> vec2<f32> {
-    if (a.x < -87.0) {
-        return vec2<f32>(0.0, 0.0);
-    }
-    let k = round(a.x / LN2.x);
-    // r = (a - k ln 2) / 512, |r| < 7e-4: eight Taylor terms, then squared nine times.
-    let r = df_mul_f(df_add(a, -df_mul_f(LN2, k)), 1.0 / 512.0);
-    var p = vec2<f32>(1.0, 0.0);
-    for (var n = 9; n >= 1; n--) {
-        p = df_add(vec2<f32>(1.0, 0.0), df_div(df_mul(r, p), vec2<f32>(f32(n), 0.0)));
-    }
-    for (var q = 0; q < 9; q++) {
-        p = df_mul(p, p);
-    }
-    let e = i32(k);
-    return vec2<f32>(ldexp(p.x, e), ldexp(p.y, e));
-}
-
-fn df_log(a: vec2<f32>) -> vec2<f32> {
-    // One Newton step on exp(y) = a from the f32 logarithm.
-    let y = vec2<f32>(log(a.x), 0.0);
-    let t = df_mul(a, df_exp(-y));
-    return df_add(y, df_add(t, vec2<f32>(-1.0, 0.0)));
-}
 
 // The variogram at the squared distance h2 (Variogram::eval_squared, in double-float).
 fn variogram_df(h2: vec2<f32>) -> vec2<f32> {
@@ -809,6 +789,8 @@ fn pose_one(i: u32) {
     }
     let sh = w.sin_h;
     let ch = w.cos_h;
+    let bx = vec2<f32>(w.base_x, w.base_lo_x);
+    let bz = vec2<f32>(w.base_z, w.base_lo_z);
     var root = vec3<f32>(pose[0], pose[1], pose[2]);
     if (joints > 0u) {
         // Forward kinematics over the rig (Rig::joint_positions_scaled).
@@ -843,15 +825,15 @@ fn pose_one(i: u32) {
         root = pos[ROOT_JOINT];
         for (var k = 0u; k < joints; k++) {
             let q = pos[mi(ROTATING + k)];
-            let world = vec3<f32>(w.base_x + q.x * ch + q.z * sh, q.y, w.base_z - q.x * sh + q.z * ch);
+            let world = vec3<f32>(place(bx, q.x * ch + q.z * sh), q.y, place(bz, -q.x * sh + q.z * ch));
             joints_out[(3u * k) * ns + slot] = world.x;
             joints_out[(3u * k + 1u) * ns + slot] = world.y;
             joints_out[(3u * k + 2u) * ns + slot] = world.z;
         }
     }
-    w.root_x = w.base_x + root.x * ch + root.z * sh;
+    w.root_x = place(bx, root.x * ch + root.z * sh);
     w.root_y = root.y;
-    w.root_z = w.base_z - root.x * sh + root.z * ch;
+    w.root_z = place(bz, -root.x * sh + root.z * ch);
     walkers[i] = w;
     var bin = LEVEL_COUNT;
     if (joints > 0u) {
