@@ -66,6 +66,27 @@ impl Gpu {
         describe(&self.info)
     }
 
+    /// For tests: [`Gpu::new`], or `None` after printing `skipped: no GPU adapter (...)` when there
+    /// is none, so that a test can return early. Panics when there is none and
+    /// [`crate::REQUIRE_GPU_ENV`] is `1` (CI, where lavapipe is installed), and when an adapter
+    /// exists but refuses a device.
+    pub fn open_or_skip() -> Option<Gpu> {
+        match Gpu::new() {
+            Ok(gpu) => {
+                eprintln!("adapter: {}", gpu.adapter_name());
+                Some(gpu)
+            }
+            Err(e @ GpuError::NoAdapter { .. }) => {
+                if std::env::var(crate::REQUIRE_GPU_ENV).is_ok_and(|v| v == "1") {
+                    panic!("{}=1 but {e}", crate::REQUIRE_GPU_ENV);
+                }
+                println!("skipped: no GPU adapter ({e})");
+                None
+            }
+            Err(e) => panic!("{e}"),
+        }
+    }
+
     /// Whether the adapter is a software rasterizer running on the CPU (Mesa's lavapipe,
     /// SwiftShader): correct, but its timings say nothing about a GPU.
     pub fn is_software(&self) -> bool {

@@ -7,7 +7,7 @@ pub(crate) const DF_WGSL: &str = include_str!("shaders/df.wgsl");
 #[cfg(test)]
 mod tests {
     use super::DF_WGSL;
-    use crate::{Gpu, GpuError, REQUIRE_GPU_ENV};
+    use crate::Gpu;
     use lod_policy::{SplitMix64, wrap_angle_f64};
     use wgpu::util::DeviceExt;
 
@@ -36,20 +36,6 @@ fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
     out[4u * i + 3u] = vec4<f32>(df_mul(a, b), df_div(a, b));
 }
 "#;
-
-    fn gpu_or_skip() -> Option<Gpu> {
-        match Gpu::new() {
-            Ok(gpu) => Some(gpu),
-            Err(e @ GpuError::NoAdapter { .. }) => {
-                if std::env::var(REQUIRE_GPU_ENV).is_ok_and(|v| v == "1") {
-                    panic!("{REQUIRE_GPU_ENV}=1 but {e}");
-                }
-                println!("skipped: no GPU adapter ({e})");
-                None
-            }
-            Err(e) => panic!("{e}"),
-        }
-    }
 
     /// Runs the kernel over `args` (hi, lo) and returns, per argument, its 16 floats: sin, cos,
     /// wrap, sqrt(|a|), exp(a / 4), log(|a|), a b, a / b (b the argument the kernel pairs with it).
@@ -163,7 +149,9 @@ fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
     /// 1e-13 of the size of its terms (f32 gives 1e-7).
     #[test]
     fn composed_double_float_expressions_keep_their_error_terms() {
-        let Some(gpu) = gpu_or_skip() else { return };
+        let Some(gpu) = Gpu::open_or_skip() else {
+            return;
+        };
         let header = &KERNEL[..KERNEL.find("@compute").expect("entry point")];
         let kernel = format!("{header}{G_KERNEL}");
         let dfv = |v: f64| {
@@ -230,7 +218,9 @@ fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
     /// 1e-11 of f64's (relative; the logarithm absolute).
     #[test]
     fn double_float_sine_cosine_and_wrap_match_the_cpu() {
-        let Some(gpu) = gpu_or_skip() else { return };
+        let Some(gpu) = Gpu::open_or_skip() else {
+            return;
+        };
         let mut g = SplitMix64::new(11);
         let mut args: Vec<[f32; 2]> = Vec::new();
         for _ in 0..100_000 {

@@ -8,7 +8,7 @@
 //! `skipped: no GPU adapter (...)`, or fails when `MOTION_LOD_REQUIRE_GPU=1` (CI).
 
 use crowd_sim::{Camera, Crowd, CrowdConfig, CrowdStyle, Culling, Scene};
-use gpu_crowd::{Gpu, GpuCrowd, GpuError, GpuOptions, REQUIRE_GPU_ENV};
+use gpu_crowd::{Gpu, GpuCrowd, GpuOptions};
 use lod_policy::DistancePolicy;
 use motion_lod::dataset::DataSpec;
 use motion_lod::progress::NoProgress;
@@ -22,24 +22,6 @@ use motion_lod::{BuildConfig, LodSource, MotionModel};
 /// another order. (Before, the controller in f32 drifted the two apart by 2.5e-4 m in ten seconds,
 /// the shader compiler having also folded every double-float error term to zero.)
 const TOLERANCE_M: f32 = 1e-4;
-
-/// The GPU, or `None` after printing why the test is skipped; panics when CI requires one.
-fn gpu_or_skip() -> Option<Gpu> {
-    match Gpu::new() {
-        Ok(gpu) => {
-            eprintln!("adapter: {}", gpu.adapter_name());
-            Some(gpu)
-        }
-        Err(e @ GpuError::NoAdapter { .. }) => {
-            if std::env::var(REQUIRE_GPU_ENV).is_ok_and(|v| v == "1") {
-                panic!("{REQUIRE_GPU_ENV}=1 but {e}");
-            }
-            println!("skipped: no GPU adapter ({e})");
-            None
-        }
-        Err(e) => panic!("{e}"),
-    }
-}
 
 fn fixture_model() -> MotionModel {
     let loaded = DataSpec::default()
@@ -185,7 +167,9 @@ fn compare(gpu: &Gpu, model: &MotionModel, scene: Scene, frames: usize) -> (f32,
 
 #[test]
 fn gpu_crowd_matches_the_cpu_crowd_in_both_scenes() {
-    let Some(gpu) = gpu_or_skip() else { return };
+    let Some(gpu) = Gpu::open_or_skip() else {
+        return;
+    };
     let model = fixture_model();
     for scene in Scene::ALL {
         let (worst, worst_root, with_joints) = compare(&gpu, &model, scene, 300);

@@ -91,14 +91,17 @@ fn df_rotate(rot: vec4<f32>, x: vec2<f32>, y: vec2<f32>) -> DfVec2 {
 
 // EllipsePath::point_f64: c + R(rot) (a cos s, b sin s).
 fn path_point(w: Walker, rot: vec4<f32>, s: vec2<f32>) -> DfVec2 {
-    let sc = df_sincos(s);
+    return path_point_sc(w, rot, df_sincos(s));
+}
+
+// path_point with df_sincos(s) given (the controller reads the point and the velocity at one s).
+fn path_point_sc(w: Walker, rot: vec4<f32>, sc: vec4<f32>) -> DfVec2 {
     let v = df_rotate(rot, df_mul_f(sc.zw, w.path_a), df_mul_f(sc.xy, w.path_b));
     return DfVec2(df_add(vec2<f32>(w.path_cx, 0.0), v.x), df_add(vec2<f32>(w.path_cz, 0.0), v.y));
 }
 
-// EllipsePath::velocity_f64: dir R(rot) (-a sin s, b cos s).
-fn path_velocity(w: Walker, rot: vec4<f32>, s: vec2<f32>) -> DfVec2 {
-    let sc = df_sincos(s);
+// EllipsePath::velocity_f64: dir R(rot) (-a sin s, b cos s), with df_sincos(s) given.
+fn path_velocity_sc(w: Walker, rot: vec4<f32>, sc: vec4<f32>) -> DfVec2 {
     let v = df_rotate(rot, df_mul_f(sc.xy, -w.path_a), df_mul_f(sc.zw, w.path_b));
     return DfVec2(df_mul_f(v.x, w.path_dir), df_mul_f(v.y, w.path_dir));
 }
@@ -312,16 +315,17 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
             let s = closest_param_near(w, rot, base, vec2<f32>(w.s, w.s_lo));
             w.s = s.x;
             w.s_lo = s.y;
-            let v0 = path_velocity(w, rot, s);
+            let v0 = path_velocity_sc(w, rot, df_sincos(s));
             var speed = df_sqrt(df_add(df_mul(v0.x, v0.x), df_mul(v0.y, v0.y)));
             if (speed.x < 1e-3) {
                 speed = vec2<f32>(1e-3, 0.0);
             }
             let s_t = df_add(s, df_div(vec2<f32>(w.path_dir * w.stride, 0.0), speed));
-            let tgt = path_point(w, rot, s_t);
+            let sc_t = df_sincos(s_t);
+            let tgt = path_point_sc(w, rot, sc_t);
             let ddx = df_add(tgt.x, -bx);
             let ddz = df_add(tgt.y, -bz);
-            let vt = path_velocity(w, rot, s_t);
+            let vt = path_velocity_sc(w, rot, sc_t);
             let turn = df_wrap_angle(df_add(df_atan2(vt.x, vt.y), -nh)).x;
             // d . left(h) and d . forward(h): left = (cos h, -sin h), forward = (sin h, cos h).
             let sh = nsc.xy;
