@@ -9,16 +9,6 @@ use lod_policy::SplitMix64;
 use lod_policy::{ControlRange, Controls, wrap_angle_f64};
 use std::f32::consts::{PI, TAU};
 
-/// Unit forward direction `(sin h, cos h)` of heading `h`.
-pub fn forward(h: f32) -> Vec2 {
-    Vec2::new(h.sin(), h.cos())
-}
-
-/// Unit left direction `(cos h, -sin h)` of heading `h`.
-pub fn left(h: f32) -> Vec2 {
-    Vec2::new(h.cos(), -h.sin())
-}
-
 /// Newton steps [`EllipsePath::closest_param_near`] takes at most.
 const NEWTON_STEPS: usize = 8;
 /// Newton step (rad) below which the closest-point search has converged.
@@ -391,14 +381,39 @@ impl WalkerStart {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI as PI_F64;
 
     #[test]
-    fn heading_helpers_agree_with_conventions() {
-        // Heading 0 faces +z, its left is +x; a positive turn moves forward towards +x.
-        assert!(forward(0.0).distance(Vec2::new(0.0, 1.0)) < 1e-6);
-        assert!(left(0.0).distance(Vec2::new(1.0, 0.0)) < 1e-6);
-        assert!(forward(0.1).x > 0.0);
-        assert!((heading_of(forward(1.2)) - 1.2).abs() < 1e-5);
+    fn headings_and_controls_follow_the_conventions() {
+        // Heading 0 faces +z; a positive heading faces towards +x, the left of heading 0.
+        assert_eq!(heading_of(Vec2::new(0.0, 1.0)), 0.0);
+        let h = 1.2f32;
+        assert!((heading_of(Vec2::new(h.sin(), h.cos())) - h).abs() < 1e-5);
+        // A walker at (10, 0) facing +z on a circle of radius 10: around the origin it bends to
+        // the right (the target at -x: dx < 0, a negative turn), around (20, 0) to the left.
+        let bounds = ControlRange {
+            min: Controls::from_array([-5.0, -5.0, -PI, 0.0]),
+            max: Controls::from_array([5.0, 5.0, PI, 3.0]),
+        };
+        let circle = |cx: f32, dir: f32| EllipsePath {
+            centre: Vec2::new(cx, 0.0),
+            axes: Vec2::new(10.0, 10.0),
+            rot: 0.0,
+            dir,
+        };
+        let pos = DVec2::new(10.0, 0.0);
+        let right = path_controls(&circle(0.0, 1.0), 0.0, pos, 0.0, 1.0, 1.7, &bounds);
+        let left = path_controls(&circle(20.0, -1.0), PI_F64, pos, 0.0, 1.0, 1.7, &bounds);
+        for (c, side) in [(right, -1.0f32), (left, 1.0)] {
+            // One stride (1 m) along the arc: 10 sin 0.1 ahead, 10 (1 - cos 0.1) aside, 0.1 rad.
+            assert!((c.dz - 10.0 * 0.1f32.sin()).abs() < 1e-5, "{c:?}");
+            assert!(
+                (c.dx - side * 10.0 * (1.0 - 0.1f32.cos())).abs() < 1e-5,
+                "{c:?}"
+            );
+            assert!((c.turn - side * 0.1).abs() < 1e-5, "{c:?}");
+            assert_eq!(c.height, 1.7);
+        }
     }
 
     #[test]

@@ -11,8 +11,9 @@ mod tests {
     use lod_policy::{SplitMix64, wrap_angle_f64};
     use wgpu::util::DeviceExt;
 
-    /// The kernel under test: for each double-float argument, `df_sincos` and `df_wrap_angle`.
-    const KERNEL: &str = r#"
+    /// What every test kernel binds: double-float arguments, four `vec4` of results per argument,
+    /// and the zero `df_zero()` reads.
+    const BINDINGS: &str = r#"
 @group(0) @binding(0) var<storage, read> args: array<vec2<f32>>;
 @group(0) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
 @group(0) @binding(2) var<uniform> zero: vec4<u32>;
@@ -20,7 +21,11 @@ mod tests {
 fn df_zero() -> u32 {
     return zero.x;
 }
+"#;
 
+    /// For each argument `a` (and `b`, another argument): `df_sincos(a)`, `df_wrap_angle(a)`,
+    /// `df_sqrt(|a|)`, `df_exp(a / 4)`, `df_log(|a|)`, `df_mul(a, b)` and `df_div(a, b)`.
+    const KERNEL: &str = r#"
 @compute @workgroup_size(64)
 fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
@@ -37,15 +42,11 @@ fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 "#;
 
-    /// Runs the kernel over `args` (hi, lo) and returns, per argument, its 16 floats: sin, cos,
-    /// wrap, sqrt(|a|), exp(a / 4), log(|a|), a b, a / b (b the argument the kernel pairs with it).
-    fn run(gpu: &Gpu, args: &[[f32; 2]]) -> Vec<[f32; 16]> {
-        run_kernel(gpu, KERNEL, args)
-    }
-
+    /// Runs `kernel` (entry point `check`, after the library and [`BINDINGS`]) over `args`
+    /// (hi, lo) and returns its 16 floats for each argument.
     fn run_kernel(gpu: &Gpu, kernel: &str, args: &[[f32; 2]]) -> Vec<[f32; 16]> {
         let device = &gpu.device;
-        let source = format!("{DF_WGSL}\n{kernel}");
+        let source = format!("{DF_WGSL}\n{BINDINGS}\n{kernel}");
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("df check"),
             source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -152,8 +153,6 @@ fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
         let Some(gpu) = Gpu::open_or_skip() else {
             return;
         };
-        let header = &KERNEL[..KERNEL.find("@compute").expect("entry point")];
-        let kernel = format!("{header}{G_KERNEL}");
         let dfv = |v: f64| {
             let h = v as f32;
             [h, (v - f64::from(h)) as f32]
@@ -179,7 +178,7 @@ fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
             args.extend([[a, b], dfv(x), dfv(y), dfv(theta)]);
             cases.push((af, bf, x, y, theta));
         }
-        let out = run_kernel(&gpu, &kernel, &args);
+        let out = run_kernel(&gpu, G_KERNEL, &args);
         let mut worst = 0.0f64;
         for (o, &(a, b, x, y, theta)) in out.iter().zip(&cases) {
             let (sn, cs) = theta.sin_cos();
@@ -244,7 +243,7 @@ fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
             let hi = x as f32;
             args.push([hi, (x - f64::from(hi)) as f32]);
         }
-        let out = run(&gpu, &args);
+        let out = run_kernel(&gpu, KERNEL, &args);
         let (mut worst, mut worst_wrap) = (0.0f64, 0.0f64);
         let (mut misrounded, mut off_cpu) = (0usize, 0usize);
         let n = args.len();

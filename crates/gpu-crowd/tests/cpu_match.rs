@@ -68,8 +68,9 @@ const SEAM_FRAMES_PER: usize = 10_000;
 
 /// Runs both crowds for `frames` frames in `scene`; checks every frame that both have the same
 /// walkers in view, the same detail for every walker and the same level histogram, and every joint
-/// within [`TOLERANCE_M`] (or [`SEAM_SIDE_M`] at a seam, on a hardware adapter). Returns the largest joint distance, the
-/// largest root distance and the walker-frames with joints (the seam frames left out of both).
+/// within [`TOLERANCE_M`] (or [`SEAM_SIDE_M`] at a seam, on a hardware adapter). Returns the
+/// largest joint distance, the largest root distance and the walker-frames with joints (the seam
+/// frames left out of both).
 fn compare(gpu: &Gpu, model: &MotionModel, scene: Scene, frames: usize) -> (f32, f32, usize) {
     let config = config();
     let source = LodSource::new(model);

@@ -1,9 +1,8 @@
 // Double-float arithmetic for the crowd shaders (crate `gpu-crowd`, `df.rs`): a value is hi + lo,
 // two f32 with |lo| <= ulp(hi) / 2, about 48 bits. The CPU runtime computes these quantities in
 // f64 where their sums cancel or grow: the kriging weights and the time table of a clip build,
-// and the walkers' cycle frames (origin and heading, `lod_policy::CycleFrame`), the path
-// controller's closest-point search, and the sines and cosines the controller needs rounded
-// exactly as the CPU's. Products are exact through a split of each factor into 12-bit halves by
+// and what steers a walker (its cycle frame's origin and heading, `lod_policy::CycleFrame`, and
+// `crowd_sim::path`'s points, closest-point search and controller). Products are exact through a split of each factor into 12-bit halves by
 // masking (no reliance on fused multiply-add, which the CPU does not use either).
 //
 // Shader compilers may simplify float expressions as if they were real numbers (Mesa's NIR turns
@@ -108,7 +107,7 @@ fn df_log(a: vec2<f32>) -> vec2<f32> {
     return df_add(y, df_add(t, vec2<f32>(-1.0, 0.0)));
 }
 
-// pi, 2 pi and pi / 2 as double-floats.
+// pi and 2 pi as double-floats.
 const DF_PI: vec2<f32> = vec2<f32>(3.1415927410125732, -8.742277657347586e-08);
 const DF_TAU: vec2<f32> = vec2<f32>(6.2831854820251465, -1.7484555314695172e-07);
 // pi / 2 = PIO2_1 + PIO2_2 + PIO2_3 + PIO2_4 (+ 8e-20): the first three have 12 significant
@@ -135,10 +134,9 @@ const INV_F14: f32 = 1.147074536050896e-11;
 const INV_F15: f32 = 7.647163609812713e-13;
 const INV_F16: f32 = 4.7794772561329454e-14;
 
-// a - k pi / 2 for a whole number k (|k| < 2^12) with a - k pi / 2 within a factor of two of
-// a.x - k PIO2_1 or smaller, to about 1e-15 absolute: a.x - k PIO2_1 is exact (Sterbenz: the two
-// are within a factor of two, or k = 0), the other parts' products too but PIO2_4's, taken exactly
-// by two_prod.
+// a - k pi / 2 for a whole number k (|k| < 2^12) near a.x / (pi / 2) (within a factor of two, or
+// 0), to about 1e-15 absolute: a.x - k PIO2_1 is then exact (Sterbenz), so are the products
+// k PIO2_2 and k PIO2_3, and two_prod takes k PIO2_4 exactly.
 fn df_minus_pio2s(a: vec2<f32>, k: f32) -> vec2<f32> {
     var r = two_sum(a.x - k * PIO2_1, -(k * PIO2_2));
     r = df_add(r, vec2<f32>(-(k * PIO2_3), 0.0));
