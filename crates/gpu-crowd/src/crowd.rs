@@ -649,7 +649,7 @@ impl GpuCrowd {
         }
         let (_, entries, vis, hid) = self.policy_cache.as_ref().expect("tabulated");
         let mut uniform = FrameUniform::zeroed();
-        for (dst, src) in uniform.planes.iter_mut().zip(frustum.planes) {
+        for (dst, src) in uniform.planes.iter_mut().zip(frustum.planes()) {
             *dst = src.to_array();
         }
         uniform.eye = camera.position.extend(0.0).to_array();

@@ -141,8 +141,10 @@ impl KernelScratch {
 /// [`LodModel::build_kernel`] without allocation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClipKernel {
-    p: usize,
-    t: usize,
+    /// The model's `P` and `T` (checked against the model that evaluates it; `u32` so that
+    /// [`ClipKernel::frames_per_second`] fits in the kernel's 128 bytes).
+    p: u32,
+    t: u32,
     detail: Detail,
     ranks: Ranks,
     rows: usize,
@@ -154,6 +156,9 @@ pub struct ClipKernel {
     /// that it fits beside the other flags: a crowd holds a kernel in every walker, and 8 bytes
     /// more per kernel made its pose stage 10 % slower.
     keeps: bool,
+    /// `(T - 1) / duration`, aligned frames per second of playback (0 until built): where
+    /// [`ClipKernel::phase_at`] starts its search.
+    frames_per_second: f32,
     /// `G(c)`, `rows x r_T` column-major (capacity `P x max R_T`, or exactly `rows x r_T` when
     /// compact).
     g: Vec<f32>,
@@ -163,6 +168,12 @@ pub struct ClipKernel {
     root_motion: RootMotion,
 }
 
+/// A model dimension as stored in a kernel (`P`, `T`: far below `u32::MAX`; a larger one, which
+/// no model has, saturates and then matches no model's).
+fn dim_u32(n: usize) -> u32 {
+    u32::try_from(n).unwrap_or(u32::MAX)
+}
+
 impl ClipKernel {
     /// Preallocates a kernel for the largest level of `model`. Until it is built it holds the
     /// smallest level with `G = 0` (every row then reads as zero; the time table is flat).
@@ -170,14 +181,15 @@ impl ClipKernel {
         let r = model.max_ranks();
         let last = model.levels().len() - 1;
         ClipKernel {
-            p: model.p(),
-            t: model.t(),
+            p: dim_u32(model.p()),
+            t: dim_u32(model.t()),
             detail: model.root_only(),
             ranks: model.levels()[last].ranks,
             rows: model.always_rows(),
             clamped: false,
             compact: false,
             keeps: false,
+            frames_per_second: 0.0,
             g: vec![0.0; model.p() * r.t],
             times: TimeTable::with_capacity(model.t()),
             root_motion: RootMotion::default(),
@@ -197,10 +209,11 @@ impl ClipKernel {
         ClipKernel {
             compact: true,
             keeps: false,
+            frames_per_second: 0.0,
             g: vec![0.0; rows * ranks.t],
             times: TimeTable::with_capacity(model.t()),
-            p: model.p(),
-            t: model.t(),
+            p: dim_u32(model.p()),
+            t: dim_u32(model.t()),
             detail: model.root_only(),
             ranks,
             rows,
@@ -283,6 +296,7 @@ impl ClipKernel {
     /// (the time table and the evaluated `G(c)`, at most `PREFETCH_G_BYTES` (1 KiB) of it) without waiting
     /// for it ([`crate::math::prefetch_bytes`]), so that a caller can start those cache misses a few
     /// walkers ahead. No effect on any result.
+    #[inline]
     pub fn prefetch(&self) {
         crate::math::prefetch_slice(self.times.times());
         let g = &self.g[..(self.rows * self.ranks.t).min(self.g.len())];
@@ -293,6 +307,7 @@ impl ClipKernel {
     /// Phase (fractional aligned frame in `[0, T - 1]`) at playback time `seconds` (clamped to
     /// `[0, duration]`, NaN gives 0), by inverting the piecewise linear time table: with
     /// `t_j <= seconds < t_{j+1}`, `phase = j + (seconds - t_j) / (t_{j+1} - t_j)`.
+    #[inline]
     pub fn phase_at(&self, seconds: f64) -> f32 {
         // `TimeTable::phase_at`'s result (the same interval and arithmetic), with the interval
         // found from a guess by uniform spacing and a short walk instead of a binary search: one
@@ -304,9 +319,16 @@ impl ClipKernel {
         }
         let duration = times[n - 1];
         let t = seconds.max(0.0).min(duration);
-        let guess = (t / duration * (n - 1) as f64) as usize;
-        // The last k <= n - 2 with times[k] <= t (or 0), as the binary search finds it.
+        // A table's length is a frame count, far below 2^32: conversions through `u32` are exact
+        // (single instructions, where `usize` needs an unsigned fix-up). The guess needs no
+        // precision (the walk corrects it) and no division.
+        let guess = (t as f32 * self.frames_per_second) as u32 as usize;
+        // The last k <= n - 2 with times[k] <= t (or 0), as the binary search finds it. The guess
+        // is most often right or one off: one step down or up without a branch (both tests read
+        // within the table), then the walk for what is left (rarely a step).
         let mut k = guess.min(n - 2);
+        k -= usize::from((k > 0) & (times[k] > t));
+        k += usize::from((k + 2 < n) & (times[k + 1] <= t));
         while k > 0 && times[k] > t {
             k -= 1;
         }
@@ -315,7 +337,7 @@ impl ClipKernel {
         }
         let (t0, t1) = (times[k], times[k + 1]);
         let f = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
-        (k as f64 + f) as f32
+        (k as u32 as f64 + f) as f32
     }
 }
 
@@ -420,16 +442,10 @@ const POSE_COLUMNS: usize = 128;
 /// previous sum.
 const COMBINE_BLOCK: usize = 64;
 
-/// `out[start..start + B] = sum_j coef[j] col_j[start..start + B]` over the columns
-/// `col_j = cols[stride j..]` in order from `0.0`, the `B` sums held in registers over all columns.
+/// `sum_j coef[j] col_j[start..start + B]` over the columns `col_j = cols[stride j..]` in order
+/// from `0.0`, the `B` sums held in registers over all columns.
 #[inline(always)]
-fn combine_block<const B: usize>(
-    out: &mut [f32],
-    start: usize,
-    coef: &[f32],
-    cols: &[f32],
-    stride: usize,
-) {
+fn block_sums<const B: usize>(start: usize, coef: &[f32], cols: &[f32], stride: usize) -> [f32; B] {
     let mut acc = [0.0f32; B];
     let cols = &cols[start..];
     for (j, &c) in coef.iter().enumerate() {
@@ -440,7 +456,19 @@ fn combine_block<const B: usize>(
             acc[i] += c * v[i];
         }
     }
-    out[start..start + B].copy_from_slice(&acc);
+    acc
+}
+
+/// `out[start..start + B] = `[`block_sums`]`::<B>(start, ..)`.
+#[inline(always)]
+fn combine_block<const B: usize>(
+    out: &mut [f32],
+    start: usize,
+    coef: &[f32],
+    cols: &[f32],
+    stride: usize,
+) {
+    out[start..start + B].copy_from_slice(&block_sums::<B>(start, coef, cols, stride));
 }
 
 /// `out[i] = sum_j coef[j] cols[stride j + i]` for `j = 0..coef.len()` in order, starting from
@@ -448,8 +476,9 @@ fn combine_block<const B: usize>(
 /// col_j[i] }`, `col_j = cols[stride j..]`). Blocks of [`COMBINE_BLOCK`] outputs (then 32, then 8)
 /// stay in registers over all columns instead of being loaded and stored once per column. The last
 /// few outputs are the last eight recomputed as one block: the outputs it shares with the blocks
-/// before get the same sums, so the same bits (only an output shorter than eight is summed one
-/// entry at a time). Every column has at least `out.len()` entries.
+/// before get the same sums, so the same bits. An output shorter than eight is one block of eight
+/// when every column has eight entries to read, else summed one entry at a time. Every column has
+/// at least `out.len()` entries.
 #[inline(always)]
 fn combine_columns(out: &mut [f32], coef: &[f32], cols: &[f32], stride: usize) {
     let len = out.len();
@@ -472,6 +501,15 @@ fn combine_columns(out: &mut [f32], coef: &[f32], cols: &[f32], stride: usize) {
     }
     if len >= 8 {
         combine_block::<8>(out, len - 8, coef, cols, stride);
+    } else if coef
+        .len()
+        .checked_sub(1)
+        .is_none_or(|last| stride * last + 8 <= cols.len())
+    {
+        // An output shorter than eight whose columns have eight entries to read (the rows of
+        // `U_P` a root-only clip combines): one block of eight sums, of which the first `len`
+        // are kept (each the same sum in the same order; the others read whatever follows).
+        out.copy_from_slice(&block_sums::<8>(0, coef, cols, stride)[..len]);
     } else {
         // One entry at a time (a partial vector held across columns would be spilled with masked
         // stores, which stall the loads after them), each stored as it is summed.
@@ -517,10 +555,72 @@ fn accumulate_columns(y: &mut [f64], m: &[f32], stride: usize, x: &[f64]) {
     }
 }
 
+/// The seven root rows of a pose, `sum_b w_b G[r, b]` for `r < 7` over the `r_T` columns of `G`
+/// (column stride `rows`), each summed in column order from `0.0` with `w_b = wb(b)`: entries
+/// `0..7` of the result (the eighth is scratch). On x86-64 the seven sums run as eight lanes of two
+/// SSE registers (a column read eight entries wide, the eighth summed and dropped; the last column
+/// from a copy when `G` ends with it): the same operations per lane, so the same bits as the plain
+/// loop used elsewhere.
+#[inline(always)]
+fn root_sums(g: &[f32], rows: usize, rt: usize, wb: impl Fn(usize) -> f32) -> [f32; 8] {
+    // What the loads below rely on (`check_kernel` has made sure of it).
+    assert!(
+        rows >= ALWAYS_ROWS && g.len() >= rows * rt,
+        "G holds rows x r_T"
+    );
+    let mut acc = [0.0f32; 8];
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{
+            _mm_add_ps, _mm_loadu_ps, _mm_mul_ps, _mm_set1_ps, _mm_setzero_ps, _mm_storeu_ps,
+        };
+        // Columns `0..wide` are read eight entries wide from `G` itself; a last column that `G`
+        // ends with, from a copy.
+        let wide = if rt > 0 && rows * (rt - 1) + 8 <= g.len() {
+            rt
+        } else {
+            rt.saturating_sub(1)
+        };
+        let mut last = [0.0f32; 8];
+        if wide < rt {
+            last[..ALWAYS_ROWS].copy_from_slice(&g[rows * wide..][..ALWAYS_ROWS]);
+        }
+        // SAFETY: SSE is part of x86-64's baseline. Column `b < wide` starts at `rows b` with
+        // `rows b + 8 <= g.len()` (when `wide = r_T` by its test; else `b <= r_T - 2` and
+        // `rows (r_T - 2) + 8 <= rows r_T` as `rows >= 7`, asserted above), so
+        // both four-float loads are within `g`; the last column's are within `last`; the stores
+        // write `acc[0..4]` and `acc[4..8]`.
+        unsafe {
+            let (mut lo, mut hi) = (_mm_setzero_ps(), _mm_setzero_ps());
+            for b in 0..rt {
+                let col = if b < wide {
+                    g.as_ptr().add(rows * b)
+                } else {
+                    last.as_ptr()
+                };
+                let w = _mm_set1_ps(wb(b));
+                lo = _mm_add_ps(lo, _mm_mul_ps(w, _mm_loadu_ps(col)));
+                hi = _mm_add_ps(hi, _mm_mul_ps(w, _mm_loadu_ps(col.add(4))));
+            }
+            _mm_storeu_ps(acc.as_mut_ptr(), lo);
+            _mm_storeu_ps(acc[4..].as_mut_ptr(), hi);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    for b in 0..rt {
+        let w = wb(b);
+        let col = &g[rows * b..][..ALWAYS_ROWS];
+        for r in 0..ALWAYS_ROWS {
+            acc[r] += w * col[r];
+        }
+    }
+    acc
+}
+
 impl LodModel {
     fn check_kernel(&self, kernel: &ClipKernel) -> Result<(), KernelError> {
-        if kernel.p != self.p()
-            || kernel.t != self.t()
+        if kernel.p != dim_u32(self.p())
+            || kernel.t != dim_u32(self.t())
             || (!kernel.compact && kernel.g.len() < self.p() * self.max_ranks().t)
             || kernel.g.len() < kernel.rows * kernel.ranks.t
             || kernel.detail.accuracy >= self.levels().len()
@@ -749,7 +849,6 @@ impl LodModel {
         //    same order as summing per sample), then the variogram is applied.
         //    A control with scale 0 (constant over the data) adds exactly +0 and is skipped.
         let x = &mut scratch.x[..s];
-        x.fill(0.0);
         let mut used = [0usize; 4];
         let mut n_used = 0;
         for k in (0..d).filter(|&k| cs.scale[k] != 0.0) {
@@ -769,7 +868,8 @@ impl LodModel {
                 for (h2, (((&sa, &sb), &se), &sf)) in x.iter_mut().zip(it) {
                     let (da, db) = (ca - f64::from(sa), cb - f64::from(sb));
                     let (de, df) = (ce - f64::from(se), cf - f64::from(sf));
-                    *h2 = (((*h2 + da * da) + db * db) + de * de) + df * df;
+                    // `0 + da^2` is `da^2` (a square is never -0): the sums start at `da^2`.
+                    *h2 = ((da * da + db * db) + de * de) + df * df;
                 }
             }
             3 => {
@@ -779,10 +879,11 @@ impl LodModel {
                 for (h2, ((&sa, &sb), &se)) in x.iter_mut().zip(it) {
                     let (da, db) = (ca - f64::from(sa), cb - f64::from(sb));
                     let de = ce - f64::from(se);
-                    *h2 = ((*h2 + da * da) + db * db) + de * de;
+                    *h2 = (da * da + db * db) + de * de;
                 }
             }
             _ => {
+                x.fill(0.0);
                 for k in (0..d).filter(|&k| cs.scale[k] != 0.0) {
                     add_squared_differences(x, cv(k), col(k));
                 }
@@ -926,6 +1027,7 @@ impl LodModel {
             }
         }
         out.times.fill_from_iter(dt.iter().map(|&d| inv_scale * d));
+        out.frames_per_second = ((t - 1) as f64 / out.times.duration()) as f32;
 
         out.detail = detail;
         out.ranks = r;
@@ -970,6 +1072,7 @@ impl LodModel {
     /// With `out.len() = 7` it evaluates only the root and the time increment, `O(7 r_T)`.
     ///
     /// Runs an AVX2 build of the same operations where the CPU has AVX2 (the same bits).
+    #[inline]
     pub fn pose_rows(
         &self,
         kernel: &ClipKernel,
@@ -992,6 +1095,7 @@ impl LodModel {
     }
 
     /// [`LodModel::pose_rows`] with the instruction-set build chosen by the caller.
+    #[inline]
     fn pose_rows_isa(
         &self,
         isa: Isa,
@@ -1037,10 +1141,13 @@ impl LodModel {
         let rows = kernel.rows;
         let used = rows.min(out.len());
         let rt = kernel.ranks.t;
-        let ph = phase.clamp(0.0, (t - 1) as f32);
-        let i = (ph.floor() as usize).min(t.saturating_sub(2));
+        // `T` is a frame count, far below 2^24: its conversions through `u32` are exact (single
+        // instructions, where `usize` to `f32` needs an unsigned fix-up), and for `ph >= 0`
+        // truncation is `floor`.
+        let ph = phase.clamp(0.0, (t - 1) as u32 as f32);
+        let i = (ph as u32 as usize).min(t.saturating_sub(2));
         let i1 = (i + 1).min(t - 1);
-        let a = ph - i as f32;
+        let a = ph - i as u32 as f32;
         let (head, tail) = out.split_at_mut(used);
         // Rows i and i1 of U_T, contiguous (row-major copy).
         let big_t = key.ranks.t;
@@ -1057,17 +1164,8 @@ impl LodModel {
         } else if used == ALWAYS_ROWS {
             // Root only: the seven sums held in registers over the columns (the same sums in the
             // same order as the column loop below).
-            let mut acc = [0.0f32; ALWAYS_ROWS];
-            for b in 0..rt {
-                let w = wb(b);
-                let gcol: &[f32; ALWAYS_ROWS] = kernel.g[rows * b..][..ALWAYS_ROWS]
-                    .try_into()
-                    .expect("seven rows");
-                for r in 0..ALWAYS_ROWS {
-                    acc[r] += w * gcol[r];
-                }
-            }
-            head.copy_from_slice(&acc);
+            let acc = root_sums(&kernel.g, rows, rt, wb);
+            head.copy_from_slice(&acc[..ALWAYS_ROWS]);
         } else {
             // A few rows: one pass per column (the same sums in the same order).
             head.fill(0.0);
@@ -1080,7 +1178,9 @@ impl LodModel {
             }
         }
         let n = tail.len();
-        tail.copy_from_slice(&self.mean_pose()[used..used + n]);
+        if n > 0 {
+            tail.copy_from_slice(&self.mean_pose()[used..used + n]);
+        }
         Ok(())
     }
 }
@@ -1143,6 +1243,39 @@ mod tests {
     }
 
     #[test]
+    fn root_sums_equal_the_plain_column_loop_bitwise() {
+        // Root-only clips (stride 7, `G` exactly `7 r_T` long: the last column from a copy) and
+        // clips with joints asked for the root rows (stride above 7, or `G` longer than needed).
+        for (rows, rt, extra) in [
+            (7, 1, 0),
+            (7, 7, 0),
+            (7, 7, 1),
+            (7, 34, 0),
+            (8, 5, 0),
+            (67, 29, 0),
+        ] {
+            let g: Vec<f32> = (0..rows * rt + extra)
+                .map(|i| ((i * 7919) % 1000) as f32 / 300.0 - 1.6)
+                .collect();
+            let wb = |b: usize| ((b * 31) % 97) as f32 / 13.0 - 3.0;
+            let got = root_sums(&g, rows, rt, wb);
+            let mut want = [0.0f32; ALWAYS_ROWS];
+            for b in 0..rt {
+                for r in 0..ALWAYS_ROWS {
+                    want[r] += wb(b) * g[rows * b + r];
+                }
+            }
+            for r in 0..ALWAYS_ROWS {
+                assert_eq!(
+                    got[r].to_bits(),
+                    want[r].to_bits(),
+                    "rows {rows} r_T {rt} row {r}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn rows_dotted_in_groups_equal_single_row_dots_bitwise() {
         // Every row count from 1 to 20 (passes of one to eight rows), lengths with and without a
         // tail.
@@ -1173,5 +1306,14 @@ mod tests {
                 );
             }
         }
+    }
+}
+#[cfg(test)]
+mod size {
+    /// A crowd holds a kernel in every walker: it stays within two cache lines (8 bytes more made
+    /// the crowd's pose stage 10 % slower once).
+    #[test]
+    fn a_kernel_fits_in_two_cache_lines() {
+        assert!(std::mem::size_of::<super::ClipKernel>() <= 128);
     }
 }

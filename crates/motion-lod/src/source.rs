@@ -133,6 +133,7 @@ pub(crate) fn rest_rows_of(model: &MotionModel) -> Vec<f32> {
 /// joints in row order (more when `pose` holds more joint rows: joints a seam fades out) (cycle-frame positions in metres) of a body `scale` times the skeleton's size
 /// ([`lod_policy::Rig::joint_positions_scaled`]); returns how many were written (the root alone when
 /// the rig refuses the pose). Allocation-free for skeletons up to 128 joints.
+#[inline]
 pub(crate) fn write_joints(
     layout: &PoseLayout,
     pose: &[f32],
@@ -143,9 +144,21 @@ pub(crate) fn write_joints(
     let shown = pose.len().saturating_sub(lod_policy::ALWAYS_ROWS) / lod_policy::ROWS_PER_JOINT;
     let active = active.max(shown).min(layout.joint_count());
     if active == 0 {
+        // Root only (most of a crowd): no call, no joint buffer.
         out[0] = Vec3::new(pose[0], pose[1], pose[2]);
         return 1;
     }
+    joints_by_fk(layout, pose, active, scale, out)
+}
+
+/// [`write_joints`] for `active > 0` joints.
+fn joints_by_fk(
+    layout: &PoseLayout,
+    pose: &[f32],
+    active: usize,
+    scale: f32,
+    out: &mut [Vec3],
+) -> usize {
     let nj = layout.skeleton().joints.len();
     let mut stack = [Vec3::ZERO; MAX_JOINTS];
     let mut heap = Vec::new();
