@@ -142,7 +142,7 @@ impl KernelScratch {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClipKernel {
     /// The model's `P` and `T` (checked against the model that evaluates it; `u32` so that
-    /// [`ClipKernel::frames_per_second`] fits in the kernel's 128 bytes).
+    /// `frames_per_second` fits in the kernel's 128 bytes).
     p: u32,
     t: u32,
     detail: Detail,
