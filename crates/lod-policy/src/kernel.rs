@@ -57,15 +57,17 @@ impl Isa {
     }
 }
 
-/// Defines the method `$avx2`, the AVX2 build of the `#[inline(always)]` method `$body` with the same
-/// arguments: the body is compiled again with AVX2 enabled (no FMA: the same operations in the same
-/// order, so the same bits; see [`Isa`]). Callers check [`Isa::current`] before calling it.
+/// Defines the method `$avx2`, the AVX2 build of the `#[inline(always)]` method `$body::<AVX2>`
+/// with the same arguments: the body is compiled again with AVX2 enabled and its const parameter
+/// `AVX2` true (no FMA: the same operations in the same order, so the same bits; see [`Isa`]; the
+/// parameter lets the body hold more sums in the wider registers). Callers check
+/// [`Isa::current`] before calling it.
 macro_rules! avx2_build {
     (fn $avx2:ident = $body:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty) => {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
         fn $avx2(&self, $($arg: $ty),*) -> $ret {
-            self.$body($($arg),*)
+            self.$body::<true>($($arg),*)
         }
     };
 }
@@ -372,8 +374,14 @@ fn dot_row(a: &[f64], x: &[f64]) -> f64 {
     (acc[0] + acc[2]) + (acc[1] + acc[3])
 }
 
-/// Most rows [`dot_rows`] sums in one pass (their `LANES`-wide sums stay in registers).
+/// Most rows [`dot_rows`] sums in one pass in the baseline build: their `LANES`-wide sums take
+/// two SSE registers each, eight rows all sixteen.
 const MAX_ROW_GROUP: usize = 8;
+
+/// Most rows [`dot_rows`] sums in one pass in the AVX2 build: a 256-bit register per row's sums,
+/// twelve of the sixteen, so that a root-only clip's nine rows are one pass over `x` (nine
+/// chains of additions in flight, where two passes of five and four each waited on theirs).
+const MAX_ROW_GROUP_AVX2: usize = 12;
 
 /// `out[r] = a_r . x` for `R` consecutive rows `a_r = a[(l + r) n..(l + r + 1) n]` in one pass
 /// over `x` (each element of `x` loaded once for `R` rows), each row summed exactly as [`dot_row`]
@@ -381,40 +389,48 @@ const MAX_ROW_GROUP: usize = 8;
 #[inline(always)]
 fn dot_row_group<const R: usize>(a: &[f64], x: &[f64], l: usize, out: &mut [f64]) {
     let n = x.len();
-    debug_assert!(out.len() == R && a.len() >= (l + R) * n);
-    let rows: [&[f64]; R] = std::array::from_fn(|r| &a[(l + r) * n..(l + r + 1) * n]);
+    assert!(
+        out.len() == R && a.len() >= (l + R) * n,
+        "R rows of x.len() from row l"
+    );
+    let rows = a[l * n..(l + R) * n].as_ptr();
     let mut acc = [[0.0f64; LANES]; R];
     let full = n - n % LANES;
     let mut j = 0;
     while j < full {
-        let q = &x[j..j + LANES];
-        for r in 0..R {
-            let p = &rows[r][j..j + LANES];
+        // SAFETY: `j + LANES <= full <= n`, so `x[j..j + LANES]` and, for `r < R`, row `r`'s
+        // entries `rows[r n + j..r n + j + LANES]` lie within `x` and the `R n` entries of `rows`
+        // (asserted above). Unchecked reads: a bounds check per row and step cost as much as the
+        // multiply-adds and held the row slices in memory instead of registers.
+        let q = unsafe { x.as_ptr().add(j).cast::<[f64; LANES]>().read_unaligned() };
+        for (r, acc) in acc.iter_mut().enumerate() {
+            let p = unsafe { rows.add(r * n + j).cast::<[f64; LANES]>().read_unaligned() };
             for i in 0..LANES {
-                acc[r][i] += p[i] * q[i];
+                acc[i] += p[i] * q[i];
             }
         }
         j += LANES;
     }
-    for r in 0..R {
+    for (r, (acc, o)) in acc.iter_mut().zip(out.iter_mut()).enumerate() {
+        let row = &a[(l + r) * n..(l + r + 1) * n];
         for i in 0..n - full {
-            acc[r][i] += rows[r][full + i] * x[full + i];
+            acc[i] += row[full + i] * x[full + i];
         }
-        out[r] = (acc[r][0] + acc[r][2]) + (acc[r][1] + acc[r][3]);
+        *o = (acc[0] + acc[2]) + (acc[1] + acc[3]);
     }
 }
 
 /// `out[l] = a_l . x` for the rows `a_l = a[l n..(l + 1) n]`, `n = x.len()`, each row summed
 /// exactly as [`dot_row`] sums it, so a row's result does not depend on the rows beside it.
-/// The rows are taken in passes of between four and [`MAX_ROW_GROUP`] (fewer only when there are
-/// fewer rows): one pass loads `x` once for all its rows, and keeps at least four independent sums
-/// in flight, so that no pass waits on a single chain of additions (nine rows: five and four,
-/// not four, four and one).
+/// The rows are taken in balanced passes of at most `MAX` rows ([`MAX_ROW_GROUP`] in the
+/// baseline build, [`MAX_ROW_GROUP_AVX2`] in the AVX2 build): one pass loads `x` once for all its
+/// rows, and keeps as many independent sums in flight as the registers hold, so that no pass waits
+/// on a single chain of additions (with eight: nine rows are five and four, not eight and one).
 #[inline(always)]
-fn dot_rows(a: &[f64], x: &[f64], out: &mut [f64]) {
+fn dot_rows<const MAX: usize>(a: &[f64], x: &[f64], out: &mut [f64]) {
     let rows = out.len();
-    debug_assert!(a.len() >= x.len() * rows);
-    let passes = rows.div_ceil(MAX_ROW_GROUP);
+    debug_assert!(a.len() >= x.len() * rows && (1..=12).contains(&MAX));
+    let passes = rows.div_ceil(MAX);
     let mut l = 0;
     for pass in 0..passes {
         // Balanced sizes: the first `rows % passes` passes take one row more.
@@ -428,7 +444,13 @@ fn dot_rows(a: &[f64], x: &[f64], out: &mut [f64]) {
             5 => dot_row_group::<5>(a, x, l, o),
             6 => dot_row_group::<6>(a, x, l, o),
             7 => dot_row_group::<7>(a, x, l, o),
-            _ => dot_row_group::<MAX_ROW_GROUP>(a, x, l, o),
+            8 => dot_row_group::<8>(a, x, l, o),
+            // (Guarded by `MAX`, so that a build with fewer rows a pass keeps no code for more.)
+            9 if MAX >= 9 => dot_row_group::<9>(a, x, l, o),
+            10 if MAX >= 10 => dot_row_group::<10>(a, x, l, o),
+            11 if MAX >= 11 => dot_row_group::<11>(a, x, l, o),
+            12 if MAX >= 12 => dot_row_group::<12>(a, x, l, o),
+            _ => unreachable!("a pass holds at most MAX <= 12 rows"),
         }
         l += size;
     }
@@ -557,10 +579,10 @@ fn accumulate_columns(y: &mut [f64], m: &[f32], stride: usize, x: &[f64]) {
 
 /// The seven root rows of a pose, `sum_b w_b G[r, b]` for `r < 7` over the `r_T` columns of `G`
 /// (column stride `rows`), each summed in column order from `0.0` with `w_b = wb(b)`: entries
-/// `0..7` of the result (the eighth is scratch). On x86-64 the seven sums run as eight lanes of two
-/// SSE registers (a column read eight entries wide, the eighth summed and dropped; the last column
-/// from a copy when `G` ends with it): the same operations per lane, so the same bits as the plain
-/// loop used elsewhere.
+/// `0..7` of the result (the eighth is scratch). The seven sums run as eight lanes (a column read
+/// eight entries wide, the eighth summed and dropped; the last column from a copy when `G` ends
+/// with it): the same operations per lane, so the same bits as the plain loop used elsewhere. The
+/// AVX2 build runs [`root_sums_avx2`] instead.
 #[inline(always)]
 fn root_sums(g: &[f32], rows: usize, rt: usize, wb: impl Fn(usize) -> f32) -> [f32; 8] {
     // What the loads below rely on (`check_kernel` has made sure of it).
@@ -568,51 +590,78 @@ fn root_sums(g: &[f32], rows: usize, rt: usize, wb: impl Fn(usize) -> f32) -> [f
         rows >= ALWAYS_ROWS && g.len() >= rows * rt,
         "G holds rows x r_T"
     );
+    // Columns `0..wide` are read eight entries wide from `G` itself; a last column that `G`
+    // ends with, from a copy.
+    let wide = if rt > 0 && rows * (rt - 1) + 8 <= g.len() {
+        rt
+    } else {
+        rt.saturating_sub(1)
+    };
     let mut acc = [0.0f32; 8];
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{
-            _mm_add_ps, _mm_loadu_ps, _mm_mul_ps, _mm_set1_ps, _mm_setzero_ps, _mm_storeu_ps,
-        };
-        // Columns `0..wide` are read eight entries wide from `G` itself; a last column that `G`
-        // ends with, from a copy.
-        let wide = if rt > 0 && rows * (rt - 1) + 8 <= g.len() {
-            rt
-        } else {
-            rt.saturating_sub(1)
-        };
-        let mut last = [0.0f32; 8];
-        if wide < rt {
-            last[..ALWAYS_ROWS].copy_from_slice(&g[rows * wide..][..ALWAYS_ROWS]);
-        }
-        // SAFETY: SSE is part of x86-64's baseline. Column `b < wide` starts at `rows b` with
-        // `rows b + 8 <= g.len()` (when `wide = r_T` by its test; else `b <= r_T - 2` and
-        // `rows (r_T - 2) + 8 <= rows r_T` as `rows >= 7`, asserted above), so
-        // both four-float loads are within `g`; the last column's are within `last`; the stores
-        // write `acc[0..4]` and `acc[4..8]`.
-        unsafe {
-            let (mut lo, mut hi) = (_mm_setzero_ps(), _mm_setzero_ps());
-            for b in 0..rt {
-                let col = if b < wide {
-                    g.as_ptr().add(rows * b)
-                } else {
-                    last.as_ptr()
-                };
-                let w = _mm_set1_ps(wb(b));
-                lo = _mm_add_ps(lo, _mm_mul_ps(w, _mm_loadu_ps(col)));
-                hi = _mm_add_ps(hi, _mm_mul_ps(w, _mm_loadu_ps(col.add(4))));
-            }
-            _mm_storeu_ps(acc.as_mut_ptr(), lo);
-            _mm_storeu_ps(acc[4..].as_mut_ptr(), hi);
+    for b in 0..wide {
+        // SAFETY: column `b < wide` starts at `rows b` with `rows b + 8 <= g.len()` (when
+        // `wide = r_T` by its test; else `b <= r_T - 2` and `rows (r_T - 2) + 8 <= rows r_T` as
+        // `rows >= 7`, asserted above). Unchecked: the check per column cost as much as its sums.
+        let col = unsafe { g.as_ptr().add(rows * b).cast::<[f32; 8]>().read_unaligned() };
+        let w = wb(b);
+        for (a, &v) in acc.iter_mut().zip(&col) {
+            *a += w * v;
         }
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    for b in 0..rt {
-        let w = wb(b);
-        let col = &g[rows * b..][..ALWAYS_ROWS];
-        for r in 0..ALWAYS_ROWS {
-            acc[r] += w * col[r];
+    if wide < rt {
+        let mut col = [0.0f32; 8];
+        col[..ALWAYS_ROWS].copy_from_slice(&g[rows * wide..][..ALWAYS_ROWS]);
+        let w = wb(wide);
+        for (a, &v) in acc.iter_mut().zip(&col) {
+            *a += w * v;
         }
+    }
+    acc
+}
+
+/// [`root_sums`] in one 256-bit register: each column read eight entries wide (the eighth summed
+/// and dropped; the last column from a copy when `G` ends with it), the same multiply and add per
+/// lane in the same order, so the same bits. Kept apart from `root_sums` because the compiler
+/// narrows a portable eight-lane loop whose eighth lane is dropped to four, two and one lanes.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn root_sums_avx2(g: &[f32], rows: usize, rt: usize, wb: impl Fn(usize) -> f32) -> [f32; 8] {
+    use std::arch::x86_64::{
+        _mm256_add_ps, _mm256_loadu_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps,
+        _mm256_storeu_ps,
+    };
+    assert!(
+        rows >= ALWAYS_ROWS && g.len() >= rows * rt,
+        "G holds rows x r_T"
+    );
+    let wide = if rt > 0 && rows * (rt - 1) + 8 <= g.len() {
+        rt
+    } else {
+        rt.saturating_sub(1)
+    };
+    let mut last = [0.0f32; 8];
+    if wide < rt {
+        last[..ALWAYS_ROWS].copy_from_slice(&g[rows * wide..][..ALWAYS_ROWS]);
+    }
+    let mut acc = [0.0f32; 8];
+    // SAFETY: column `b < wide` starts at `rows b` with `rows b + 8 <= g.len()` (as in
+    // `root_sums`); the last column's eight floats are `last`; the store writes `acc`.
+    unsafe {
+        let mut sum = _mm256_setzero_ps();
+        for b in 0..wide {
+            let w = _mm256_set1_ps(wb(b));
+            let col = _mm256_loadu_ps(g.as_ptr().add(rows * b));
+            sum = _mm256_add_ps(sum, _mm256_mul_ps(w, col));
+        }
+        if wide < rt {
+            let w = _mm256_set1_ps(wb(wide));
+            sum = _mm256_add_ps(sum, _mm256_mul_ps(w, _mm256_loadu_ps(last.as_ptr())));
+        }
+        _mm256_storeu_ps(acc.as_mut_ptr(), sum);
     }
     acc
 }
@@ -809,7 +858,7 @@ impl LodModel {
             // SAFETY: the CPU has AVX2 (`Isa::current`).
             return unsafe { self.weights_avx2(controls, key_index, r_s, scratch, column_order) };
         }
-        self.weights_body(controls, key_index, r_s, scratch, column_order)
+        self.weights_body::<false>(controls, key_index, r_s, scratch, column_order)
     }
 
     avx2_build!(fn weights_avx2 = weights_body(
@@ -820,9 +869,10 @@ impl LodModel {
         column_order: bool
     ) -> bool);
 
-    /// Steps 1-4 (see [`LodModel::weights_in`]), inlined into each instruction-set build.
+    /// Steps 1-4 (see [`LodModel::weights_in`]), inlined into each instruction-set build (`AVX2`
+    /// true only in the AVX2 build, which runs only where the CPU has AVX2).
     #[inline(always)]
-    fn weights_body(
+    fn weights_body<const AVX2: bool>(
         &self,
         controls: &[f32],
         key_index: usize,
@@ -913,7 +963,11 @@ impl LodModel {
             //    ([`crate::model::FoldedProjections`]).
             let a = &self.folded().a[key_index];
             let y = &mut scratch.y[..r_s];
-            dot_rows(a, &scratch.x[..=s], y);
+            if AVX2 {
+                dot_rows::<MAX_ROW_GROUP_AVX2>(a, &scratch.x[..=s], y);
+            } else {
+                dot_rows::<MAX_ROW_GROUP>(a, &scratch.x[..=s], y);
+            }
             for (l, (&yl, wl)) in y.iter().zip(&mut scratch.w[..r_s]).enumerate() {
                 let mut acc = yl;
                 for m in 0..=d {
@@ -943,7 +997,7 @@ impl LodModel {
             return unsafe { self.build_kernel_avx2(controls, detail, scratch, out, column_order) };
         }
         let _ = isa;
-        self.build_kernel_body(controls, detail, scratch, out, column_order)
+        self.build_kernel_body::<false>(controls, detail, scratch, out, column_order)
     }
 
     avx2_build!(fn build_kernel_avx2 = build_kernel_body(
@@ -954,9 +1008,10 @@ impl LodModel {
         column_order: bool
     ) -> Result<(), KernelError>);
 
-    /// Steps 1-8 of the module documentation, inlined into each instruction-set build.
+    /// Steps 1-8 of the module documentation, inlined into each instruction-set build (`AVX2` as
+    /// in [`LodModel::weights_body`]).
     #[inline(always)]
-    fn build_kernel_body(
+    fn build_kernel_body<const AVX2: bool>(
         &self,
         controls: &[f32],
         detail: Detail,
@@ -978,7 +1033,7 @@ impl LodModel {
         debug_assert!(rows <= p && r.fits_in(&big));
 
         // 1-4. The sample-mode kriging weights w (first r_S) into scratch.w.
-        let clamped = self.weights_body(controls, lv.key, r.s, scratch, column_order);
+        let clamped = self.weights_body::<AVX2>(controls, lv.key, r.s, scratch, column_order);
 
         // 5. K(c) = Z[:r_P, :r_T, :r_S] x_3 w, stored r_P x r_T column-major: each entry sums its
         //    `r_S` terms in order from 0. When the level keeps the key's whole `r_P x r_T` slab (a
@@ -1039,9 +1094,11 @@ impl LodModel {
         //    imply for the other controls, `ControlSpace::implied`; the pelvis's yaw change for a model
         //    without a turn dimension).
         // The seven root rows (the register path of `pose_rows`; root motion reads the first six).
+        // (`::<false>`: the portable sums, the same bits, so that `root_sums_avx2` stays inlined
+        // in the one build that runs it every frame.)
         let mut ends = [[0.0f32; ALWAYS_ROWS]; 2];
         for (e, phase) in ends.iter_mut().zip([0.0, (t - 1) as f32]) {
-            self.pose_rows_body(out, phase, e)?;
+            self.pose_rows_body::<false>(out, phase, e)?;
         }
         let [start, end] = ends;
         out.root_motion = self.controls().root_motion_of(controls, &start, &end);
@@ -1109,7 +1166,7 @@ impl LodModel {
             return unsafe { self.pose_rows_avx2(kernel, phase, out) };
         }
         let _ = isa;
-        self.pose_rows_body(kernel, phase, out)
+        self.pose_rows_body::<false>(kernel, phase, out)
     }
 
     avx2_build!(fn pose_rows_avx2 = pose_rows_body(
@@ -1118,8 +1175,10 @@ impl LodModel {
         out: &mut [f32]
     ) -> Result<(), KernelError>);
 
+    /// The pose rows, inlined into each instruction-set build (`AVX2` as in
+    /// [`LodModel::weights_body`]: the root-only sums then run in one 256-bit register).
     #[inline(always)]
-    fn pose_rows_body(
+    fn pose_rows_body<const AVX2: bool>(
         &self,
         kernel: &ClipKernel,
         phase: f32,
@@ -1164,6 +1223,14 @@ impl LodModel {
         } else if used == ALWAYS_ROWS {
             // Root only: the seven sums held in registers over the columns (the same sums in the
             // same order as the column loop below).
+            #[cfg(target_arch = "x86_64")]
+            let acc = if AVX2 {
+                // SAFETY: `AVX2` is true only in the AVX2 build, which runs where the CPU has it.
+                unsafe { root_sums_avx2(&kernel.g, rows, rt, wb) }
+            } else {
+                root_sums(&kernel.g, rows, rt, wb)
+            };
+            #[cfg(not(target_arch = "x86_64"))]
             let acc = root_sums(&kernel.g, rows, rt, wb);
             head.copy_from_slice(&acc[..ALWAYS_ROWS]);
         } else {
@@ -1258,19 +1325,26 @@ mod tests {
                 .map(|i| ((i * 7919) % 1000) as f32 / 300.0 - 1.6)
                 .collect();
             let wb = |b: usize| ((b * 31) % 97) as f32 / 13.0 - 3.0;
-            let got = root_sums(&g, rows, rt, wb);
             let mut want = [0.0f32; ALWAYS_ROWS];
             for b in 0..rt {
                 for r in 0..ALWAYS_ROWS {
                     want[r] += wb(b) * g[rows * b + r];
                 }
             }
-            for r in 0..ALWAYS_ROWS {
-                assert_eq!(
-                    got[r].to_bits(),
-                    want[r].to_bits(),
-                    "rows {rows} r_T {rt} row {r}"
-                );
+            let mut builds = vec![("portable", root_sums(&g, rows, rt, wb))];
+            #[cfg(target_arch = "x86_64")]
+            if Isa::current() == Isa::Avx2 {
+                // SAFETY: the CPU has AVX2.
+                builds.push(("avx2", unsafe { root_sums_avx2(&g, rows, rt, wb) }));
+            }
+            for (build, got) in builds {
+                for r in 0..ALWAYS_ROWS {
+                    assert_eq!(
+                        got[r].to_bits(),
+                        want[r].to_bits(),
+                        "{build}: rows {rows} r_T {rt} row {r}"
+                    );
+                }
             }
         }
     }
@@ -1290,8 +1364,15 @@ mod tests {
                 .map(|j| ((j * 31) % 97) as f64 / 13.0 - 3.0)
                 .collect();
             let mut grouped = vec![0.0; rows];
-            dot_rows(&a, &x, &mut grouped);
+            let mut grouped_avx2 = vec![0.0; rows];
+            dot_rows::<MAX_ROW_GROUP>(&a, &x, &mut grouped);
+            dot_rows::<MAX_ROW_GROUP_AVX2>(&a, &x, &mut grouped_avx2);
             for l in 0..rows {
+                assert_eq!(
+                    grouped[l].to_bits(),
+                    grouped_avx2[l].to_bits(),
+                    "n {n} row {l}"
+                );
                 let row = &a[l * n..(l + 1) * n];
                 assert_eq!(
                     grouped[l].to_bits(),
