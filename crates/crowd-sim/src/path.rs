@@ -69,7 +69,7 @@ impl EllipsePath {
     }
 
     /// The rotation's `(sin, cos)` in double precision.
-    fn rotation_f64(&self) -> (f64, f64) {
+    pub(crate) fn rotation_f64(&self) -> (f64, f64) {
         f64::from(self.rot).sin_cos()
     }
 
@@ -83,8 +83,13 @@ impl EllipsePath {
 
     /// [`EllipsePath::point_f64`] with the rotation's `(sin, cos)` given (a search or the
     /// controller, evaluating several points, computes it once).
-    fn point_rotated_f64(&self, (sr, cr): (f64, f64), s: f64) -> DVec2 {
-        let (ss, cs) = s.sin_cos();
+    fn point_rotated_f64(&self, rot: (f64, f64), s: f64) -> DVec2 {
+        self.point_rotated_sc_f64(rot, s.sin_cos())
+    }
+
+    /// [`EllipsePath::point_rotated_f64`] with the parameter's `(sin, cos)` given as well (the
+    /// controller reads the point and the velocity at one parameter).
+    fn point_rotated_sc_f64(&self, (sr, cr): (f64, f64), (ss, cs): (f64, f64)) -> DVec2 {
         let (x, y) = (f64::from(self.axes.x) * cs, f64::from(self.axes.y) * ss);
         DVec2::new(
             f64::from(self.centre.x) + (cr * x - sr * y),
@@ -98,8 +103,12 @@ impl EllipsePath {
     }
 
     /// [`EllipsePath::velocity_f64`] with the rotation's `(sin, cos)` given.
-    fn velocity_rotated_f64(&self, (sr, cr): (f64, f64), s: f64) -> DVec2 {
-        let (ss, cs) = s.sin_cos();
+    fn velocity_rotated_f64(&self, rot: (f64, f64), s: f64) -> DVec2 {
+        self.velocity_rotated_sc_f64(rot, s.sin_cos())
+    }
+
+    /// [`EllipsePath::velocity_rotated_f64`] with the parameter's `(sin, cos)` given as well.
+    fn velocity_rotated_sc_f64(&self, (sr, cr): (f64, f64), (ss, cs): (f64, f64)) -> DVec2 {
         let (x, y) = (-f64::from(self.axes.x) * ss, f64::from(self.axes.y) * cs);
         let dir = f64::from(self.dir);
         DVec2::new(dir * (cr * x - sr * y), dir * (sr * x + cr * y))
@@ -120,8 +129,18 @@ impl EllipsePath {
     /// 17 samples within `+-0.8` rad of `s_guess`, then golden-section refinement (to about `1e-4`
     /// rad).
     pub fn closest_param_near(&self, p: DVec2, s_guess: f64) -> f64 {
+        self.closest_param_near_rotated(self.rotation_f64(), p, s_guess)
+    }
+
+    /// [`EllipsePath::closest_param_near`] with the rotation's `(sin, cos)` given (a walker at a
+    /// cycle end computes it once for this and [`path_controls`]).
+    pub(crate) fn closest_param_near_rotated(
+        &self,
+        rot: (f64, f64),
+        p: DVec2,
+        s_guess: f64,
+    ) -> f64 {
         let (a, b) = (f64::from(self.axes.x), f64::from(self.axes.y));
-        let rot = self.rotation_f64();
         let (sr, cr) = rot;
         let (vx, vy) = (
             p.x - f64::from(self.centre.x),
@@ -245,14 +264,39 @@ pub fn path_controls(
     height: f32,
     bounds: &ControlRange,
 ) -> Controls {
-    let rot = path.rotation_f64();
+    let heading_sc = heading.sin_cos();
+    path_controls_rotated(
+        path,
+        path.rotation_f64(),
+        s,
+        pos,
+        (heading, heading_sc),
+        stride,
+        height,
+        bounds,
+    )
+}
+
+/// [`path_controls`] with the path's rotation `(sin, cos)` and the heading's given with the
+/// heading (`(h, (sin h, cos h))`): the same bits, each sine computed once at a cycle end.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn path_controls_rotated(
+    path: &EllipsePath,
+    rot: (f64, f64),
+    s: f64,
+    pos: DVec2,
+    (heading, (sh, ch)): (f64, (f64, f64)),
+    stride: f32,
+    height: f32,
+    bounds: &ControlRange,
+) -> Controls {
     let speed = path.velocity_rotated_f64(rot, s).length().max(1e-3);
     let s_t = s + f64::from(path.dir) * f64::from(stride) / speed;
-    let d = path.point_rotated_f64(rot, s_t) - pos;
-    let vt = path.velocity_rotated_f64(rot, s_t);
+    let sc_t = s_t.sin_cos();
+    let d = path.point_rotated_sc_f64(rot, sc_t) - pos;
+    let vt = path.velocity_rotated_sc_f64(rot, sc_t);
     let turn = wrap_angle_f64(vt.x.atan2(vt.y) - heading);
     // d . left(h) and d . forward(h), with left = (cos h, -sin h) and forward = (sin h, cos h).
-    let (sh, ch) = heading.sin_cos();
     bounds.clamp(&Controls::from_array([
         (d.x * ch - d.y * sh) as f32,
         (d.x * sh + d.y * ch) as f32,

@@ -4,7 +4,7 @@
 
 use crate::error::ClipError;
 use crate::levels::LevelTable;
-use crate::path::{EllipsePath, path_controls};
+use crate::path::{EllipsePath, path_controls_rotated};
 use crate::source::ClipSource;
 use crate::stock::Lender;
 use glam::{DVec2, Vec3};
@@ -65,7 +65,7 @@ pub(crate) struct Walker<C> {
     // Read at cycle ends only.
     pub path: EllipsePath,
     /// Path parameter closest to the current cycle frame's origin (double precision, as the
-    /// frame: [`path_controls`]).
+    /// frame: [`crate::path::path_controls`]).
     pub s: f64,
     /// Preferred forward displacement per cycle (m).
     pub stride: f32,
@@ -319,15 +319,20 @@ impl<C> Walker<C> {
             let end = self.cur_dur;
             self.t -= end;
             self.frame = self.frame.next(&m);
-            self.heading_sc = heading_sin_cos(&self.frame);
+            // The heading's and the path's sines once for the cycle frame, the closest point and
+            // the controller (the same values each computed before).
+            let heading_sc = self.frame.heading.sin_cos();
+            self.heading_sc = (heading_sc.0 as f32, heading_sc.1 as f32);
+            let rot = self.path.rotation_f64();
             let origin = DVec2::new(self.frame.x, self.frame.z);
-            self.s = self.path.closest_param_near(origin, self.s);
+            self.s = self.path.closest_param_near_rotated(rot, origin, self.s);
             let held = self.controls;
-            self.controls = path_controls(
+            self.controls = path_controls_rotated(
                 &self.path,
+                rot,
                 self.s,
                 origin,
-                self.frame.heading,
+                (self.frame.heading, heading_sc),
                 self.stride,
                 self.height,
                 &p.bounds,

@@ -16,6 +16,7 @@
 
 use crate::error::KernelError;
 use crate::time_table::TimeTable;
+use crate::variogram::{SquaredForm, linear_of_squared, spherical_of_squared};
 
 use crate::chain::{RootMotion, exp_map_to_quat};
 use crate::controls::Controls;
@@ -351,6 +352,43 @@ fn add_squared_differences(h2: &mut [f64], c: f64, samples: &[f32]) {
     }
 }
 
+/// `x_i = gamma(h2_i)` with `h2_i = sum_k (c_k - samples_k,i)^2` over the three or four controls
+/// `used` (in that order, from the first square: `0 + a^2` is `a^2`, so the sums are those of
+/// [`add_squared_differences`] from zero), in one pass over the samples; returns false without
+/// writing when `used` holds another number of controls.
+#[inline(always)]
+fn squared_distances<'a>(
+    x: &mut [f64],
+    used: &[usize],
+    col: impl Fn(usize) -> &'a [f32],
+    cv: impl Fn(usize) -> f64,
+    gamma: impl Fn(f64) -> f64,
+) -> bool {
+    match *used {
+        [a, b, e, f] => {
+            let (ca, cb, ce, cf) = (cv(a), cv(b), cv(e), cv(f));
+            let it = col(a).iter().zip(col(b)).zip(col(e)).zip(col(f));
+            for (g, (((&sa, &sb), &se), &sf)) in x.iter_mut().zip(it) {
+                let (da, db) = (ca - f64::from(sa), cb - f64::from(sb));
+                let (de, df) = (ce - f64::from(se), cf - f64::from(sf));
+                *g = gamma(((da * da + db * db) + de * de) + df * df);
+            }
+            true
+        }
+        [a, b, e] => {
+            let (ca, cb, ce) = (cv(a), cv(b), cv(e));
+            let it = col(a).iter().zip(col(b)).zip(col(e));
+            for (g, ((&sa, &sb), &se)) in x.iter_mut().zip(it) {
+                let (da, db) = (ca - f64::from(sa), cb - f64::from(sb));
+                let de = ce - f64::from(se);
+                *g = gamma((da * da + db * db) + de * de);
+            }
+            true
+        }
+        _ => false,
+    }
+}
+
 /// Partial sums per row of [`dot_rows`]: element `i` goes to sum `i % LANES`.
 const LANES: usize = 4;
 
@@ -585,23 +623,11 @@ fn accumulate_columns(y: &mut [f64], m: &[f32], stride: usize, x: &[f64]) {
 /// AVX2 build runs [`root_sums_avx2`] instead.
 #[inline(always)]
 fn root_sums(g: &[f32], rows: usize, rt: usize, wb: impl Fn(usize) -> f32) -> [f32; 8] {
-    // What the loads below rely on (`check_kernel` has made sure of it).
-    assert!(
-        rows >= ALWAYS_ROWS && g.len() >= rows * rt,
-        "G holds rows x r_T"
-    );
-    // Columns `0..wide` are read eight entries wide from `G` itself; a last column that `G`
-    // ends with, from a copy.
-    let wide = if rt > 0 && rows * (rt - 1) + 8 <= g.len() {
-        rt
-    } else {
-        rt.saturating_sub(1)
-    };
+    let (wide, last) = root_columns(g, rows, rt);
     let mut acc = [0.0f32; 8];
     for b in 0..wide {
-        // SAFETY: column `b < wide` starts at `rows b` with `rows b + 8 <= g.len()` (when
-        // `wide = r_T` by its test; else `b <= r_T - 2` and `rows (r_T - 2) + 8 <= rows r_T` as
-        // `rows >= 7`, asserted above). Unchecked: the check per column cost as much as its sums.
+        // SAFETY: `b < wide` ([`root_columns`]). Unchecked: the check per column cost as much as
+        // its sums.
         let col = unsafe { g.as_ptr().add(rows * b).cast::<[f32; 8]>().read_unaligned() };
         let w = wb(b);
         for (a, &v) in acc.iter_mut().zip(&col) {
@@ -609,14 +635,35 @@ fn root_sums(g: &[f32], rows: usize, rt: usize, wb: impl Fn(usize) -> f32) -> [f
         }
     }
     if wide < rt {
-        let mut col = [0.0f32; 8];
-        col[..ALWAYS_ROWS].copy_from_slice(&g[rows * wide..][..ALWAYS_ROWS]);
         let w = wb(wide);
-        for (a, &v) in acc.iter_mut().zip(&col) {
+        for (a, &v) in acc.iter_mut().zip(&last) {
             *a += w * v;
         }
     }
     acc
+}
+
+/// The columns [`root_sums`] reads eight entries wide from `G` itself, `0..wide`, and a copy of
+/// the last column padded to eight when `G` ends with it (`wide = r_T - 1`). Column `b < wide`
+/// starts at `rows b` with `rows b + 8 <= g.len()`: when `wide = r_T` by its test; else
+/// `b <= r_T - 2` and `rows (r_T - 2) + 8 <= rows r_T` as `rows >= 7`, asserted here.
+#[inline(always)]
+fn root_columns(g: &[f32], rows: usize, rt: usize) -> (usize, [f32; 8]) {
+    // What the unchecked loads rely on (`check_kernel` has made sure of it).
+    assert!(
+        rows >= ALWAYS_ROWS && g.len() >= rows * rt,
+        "G holds rows x r_T"
+    );
+    let wide = if rt > 0 && rows * (rt - 1) + 8 <= g.len() {
+        rt
+    } else {
+        rt.saturating_sub(1)
+    };
+    let mut last = [0.0f32; 8];
+    if wide < rt {
+        last[..ALWAYS_ROWS].copy_from_slice(&g[rows * wide..][..ALWAYS_ROWS]);
+    }
+    (wide, last)
 }
 
 /// [`root_sums`] in one 256-bit register: each column read eight entries wide (the eighth summed
@@ -634,22 +681,10 @@ unsafe fn root_sums_avx2(g: &[f32], rows: usize, rt: usize, wb: impl Fn(usize) -
         _mm256_add_ps, _mm256_loadu_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps,
         _mm256_storeu_ps,
     };
-    assert!(
-        rows >= ALWAYS_ROWS && g.len() >= rows * rt,
-        "G holds rows x r_T"
-    );
-    let wide = if rt > 0 && rows * (rt - 1) + 8 <= g.len() {
-        rt
-    } else {
-        rt.saturating_sub(1)
-    };
-    let mut last = [0.0f32; 8];
-    if wide < rt {
-        last[..ALWAYS_ROWS].copy_from_slice(&g[rows * wide..][..ALWAYS_ROWS]);
-    }
+    let (wide, last) = root_columns(g, rows, rt);
     let mut acc = [0.0f32; 8];
-    // SAFETY: column `b < wide` starts at `rows b` with `rows b + 8 <= g.len()` (as in
-    // `root_sums`); the last column's eight floats are `last`; the store writes `acc`.
+    // SAFETY: column `b < wide` has eight floats in `g` ([`root_columns`]); the last column's
+    // eight are `last`; the store writes `acc`.
     unsafe {
         let mut sum = _mm256_setzero_ps();
         for b in 0..wide {
@@ -896,7 +931,8 @@ impl LodModel {
 
         // 2. x = [gamma(c) ; 1], gamma_i = variogram(|c' - c_i|). The squared distances are summed
         //    one control at a time over contiguous samples (vectorised; the same additions in the
-        //    same order as summing per sample), then the variogram is applied.
+        //    same order as summing per sample), and the variogram is applied to each (in the same
+        //    pass where it has a branch-free form and three or four controls are used).
         //    A control with scale 0 (constant over the data) adds exactly +0 and is skipped.
         let x = &mut scratch.x[..s];
         let mut used = [0usize; 4];
@@ -907,39 +943,38 @@ impl LodModel {
             }
             n_used += 1;
         }
-        // Three or four used controls in one pass (in control order, so the sums are the same).
+        // Three or four used controls in one pass (in control order, so the sums are the same),
+        // with the variogram applied to each squared distance as it is summed where the variogram
+        // has a branch-free form (the same operations as applying it after, one pass less).
         let col = |k: usize| &cs.samples[s * k..s * (k + 1)];
         let cv = |k: usize| scratch.c[k];
-        match n_used {
-            4 => {
-                let [a, b, e, f] = used;
-                let (ca, cb, ce, cf) = (cv(a), cv(b), cv(e), cv(f));
-                let it = col(a).iter().zip(col(b)).zip(col(e)).zip(col(f));
-                for (h2, (((&sa, &sb), &se), &sf)) in x.iter_mut().zip(it) {
-                    let (da, db) = (ca - f64::from(sa), cb - f64::from(sb));
-                    let (de, df) = (ce - f64::from(se), cf - f64::from(sf));
-                    // `0 + da^2` is `da^2` (a square is never -0): the sums start at `da^2`.
-                    *h2 = ((da * da + db * db) + de * de) + df * df;
-                }
+        // (More than four: none here, the general path below.)
+        let few = &used[..if n_used <= used.len() { n_used } else { 0 }];
+        let fused = match cs.variogram.squared_form() {
+            Some(SquaredForm::Spherical {
+                nugget,
+                sill,
+                inv_range,
+            }) => squared_distances(x, few, col, cv, |h2| {
+                spherical_of_squared(h2, nugget, sill, inv_range)
+            }),
+            Some(SquaredForm::Linear { nugget, sill }) => {
+                squared_distances(x, few, col, cv, |h2| linear_of_squared(h2, nugget, sill))
             }
-            3 => {
-                let [a, b, e, _] = used;
-                let (ca, cb, ce) = (cv(a), cv(b), cv(e));
-                let it = col(a).iter().zip(col(b)).zip(col(e));
-                for (h2, ((&sa, &sb), &se)) in x.iter_mut().zip(it) {
-                    let (da, db) = (ca - f64::from(sa), cb - f64::from(sb));
-                    let de = ce - f64::from(se);
-                    *h2 = (da * da + db * db) + de * de;
-                }
+            None => {
+                squared_distances(x, few, col, cv, |h2| h2);
+                false
             }
-            _ => {
+        };
+        if !fused {
+            if !(3..=4).contains(&n_used) {
                 x.fill(0.0);
                 for k in (0..d).filter(|&k| cs.scale[k] != 0.0) {
                     add_squared_differences(x, cv(k), col(k));
                 }
             }
+            cs.variogram.eval_squared(x);
         }
-        cs.variogram.eval_squared(x);
         scratch.x[s] = 1.0;
 
         if column_order {

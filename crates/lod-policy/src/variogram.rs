@@ -164,31 +164,87 @@ impl Variogram {
     /// branch-free loop that vectorises; the others call `eval`.
     #[inline(always)]
     pub fn eval_squared(&self, x: &mut [f64]) {
-        let (nugget, sill, range) = (self.nugget, self.sill, self.range);
-        match self.model {
-            VariogramModel::Spherical if range > 0.0 => {
-                let inv_range = 1.0 / range;
+        match self.squared_form() {
+            Some(SquaredForm::Spherical {
+                nugget,
+                sill,
+                inv_range,
+            }) => {
                 for g in x.iter_mut() {
-                    let h = g.sqrt();
-                    let t = (h * inv_range).min(1.0);
-                    let y = nugget + sill * (1.5 * t - 0.5 * t * t * t);
-                    *g = if h > 0.0 { y } else { 0.0 };
+                    *g = spherical_of_squared(*g, nugget, sill, inv_range);
                 }
             }
-            VariogramModel::Linear => {
+            Some(SquaredForm::Linear { nugget, sill }) => {
                 for g in x.iter_mut() {
-                    let h = g.sqrt();
-                    let y = nugget + sill * h;
-                    *g = if h > 0.0 { y } else { 0.0 };
+                    *g = linear_of_squared(*g, nugget, sill);
                 }
             }
-            _ => {
+            None => {
                 for g in x.iter_mut() {
                     *g = self.eval(g.sqrt());
                 }
             }
         }
     }
+
+    /// The branch-free form of this variogram of a squared distance, where it has one (spherical
+    /// with a positive range, linear): what [`Variogram::eval_squared`] runs, and what a caller
+    /// that computes the squared distances can apply to each as it goes.
+    #[inline(always)]
+    pub(crate) fn squared_form(&self) -> Option<SquaredForm> {
+        let (nugget, sill, range) = (self.nugget, self.sill, self.range);
+        match self.model {
+            VariogramModel::Spherical if range > 0.0 => Some(SquaredForm::Spherical {
+                nugget,
+                sill,
+                inv_range: 1.0 / range,
+            }),
+            VariogramModel::Linear => Some(SquaredForm::Linear { nugget, sill }),
+            _ => None,
+        }
+    }
+}
+
+/// A variogram's branch-free form over squared distances ([`Variogram::squared_form`]):
+/// [`spherical_of_squared`] or [`linear_of_squared`] with these parameters equals
+/// [`Variogram::eval`] of the distance bit for bit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum SquaredForm {
+    /// The spherical model, `1 / range` taken once.
+    Spherical {
+        /// The nugget.
+        nugget: f64,
+        /// The partial sill.
+        sill: f64,
+        /// `1 / range`.
+        inv_range: f64,
+    },
+    /// The linear model.
+    Linear {
+        /// The nugget.
+        nugget: f64,
+        /// The slope.
+        sill: f64,
+    },
+}
+
+/// The spherical variogram of the squared distance `h2`: with `h = sqrt(h2)` and
+/// `t = min(h / range, 1)`, `nugget + sill (1.5 t - 0.5 t^3)` for `h > 0`, and 0 at `h = 0`.
+#[inline(always)]
+pub(crate) fn spherical_of_squared(h2: f64, nugget: f64, sill: f64, inv_range: f64) -> f64 {
+    let h = h2.sqrt();
+    let t = (h * inv_range).min(1.0);
+    let y = nugget + sill * (1.5 * t - 0.5 * t * t * t);
+    if h > 0.0 { y } else { 0.0 }
+}
+
+/// The linear variogram of the squared distance `h2`: `nugget + sill sqrt(h2)` for `h2 > 0`,
+/// and 0 at 0.
+#[inline(always)]
+pub(crate) fn linear_of_squared(h2: f64, nugget: f64, sill: f64) -> f64 {
+    let h = h2.sqrt();
+    let y = nugget + sill * h;
+    if h > 0.0 { y } else { 0.0 }
 }
 
 #[cfg(test)]

@@ -572,6 +572,33 @@ fn kriging_weights_are_the_per_sample_formula_bitwise() {
 }
 
 #[test]
+fn kriging_weights_are_the_per_sample_formula_bitwise_for_each_variogram_and_control_count() {
+    // The step that sums squared distances and applies the variogram in one pass (three or four
+    // controls, spherical or linear) and the ones that apply it after (other models, other
+    // control counts) against the per-sample formula, bit for bit.
+    for d in 1..=5 {
+        for model in lod_policy::VariogramModel::ALL {
+            let truth = random_truth_with(11 + d as u64, 0.02, d, model);
+            let lod = build_model(&truth);
+            let mut scratch = KernelScratch::new(&lod);
+            let mut rng = Rng::new(70 + d as u64);
+            let big = lod.keys()[0].ranks.s;
+            for _ in 0..4 {
+                let c: Vec<f32> = (0..d)
+                    .map(|k| rng.uniform(truth.min[k] - 0.2, truth.max[k] + 0.2) as f32)
+                    .collect();
+                let want = per_sample_weights(&lod, &c, 0, big);
+                let got = lod
+                    .kriging_weights_reference(&c, 0, big, &mut scratch)
+                    .unwrap();
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(got), bits(&want), "d {d} {model:?} at {c:?}");
+            }
+        }
+    }
+}
+
+#[test]
 fn kriging_weights_refuse_a_missing_key_or_rank() {
     let truth = random_truth(9, 0.0);
     let model = build_model(&truth);

@@ -131,8 +131,19 @@ pub fn kriging_matrix(truth: &Truth) -> Vec<f64> {
 
 /// Random truth with two keys and four accuracy levels.
 pub fn random_truth(seed: u64, nugget: f64) -> Truth {
+    random_truth_with(seed, nugget, D, lod_policy::VariogramModel::Exponential)
+}
+
+/// [`random_truth`] with `d` controls and a variogram of the given model (sill 1, range 0.7,
+/// exponent 1).
+pub fn random_truth_with(
+    seed: u64,
+    nugget: f64,
+    d: usize,
+    model: lod_policy::VariogramModel,
+) -> Truth {
     let mut rng = Rng::new(seed);
-    let (p, t, s, d) = (P, T, S, D);
+    let (p, t, s) = (P, T, S);
     let key_ranks = [Ranks::new(6, 5, 8), Ranks::new(4, 4, 5)];
     let keys = key_ranks
         .iter()
@@ -193,14 +204,7 @@ pub fn random_truth(seed: u64, nugget: f64) -> Truth {
         })
         .map(|v| v as f32 as f64)
         .collect();
-    let variogram = Variogram::new(
-        lod_policy::VariogramModel::Exponential,
-        nugget,
-        1.0,
-        0.7,
-        1.0,
-    )
-    .unwrap();
+    let variogram = Variogram::new(model, nugget, 1.0, 0.7, 1.0).unwrap();
     let mean_pose = (0..p).map(|_| rng.uniform(-1.0, 1.0)).collect();
     Truth {
         p,
