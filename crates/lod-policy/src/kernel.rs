@@ -949,7 +949,7 @@ impl LodModel {
         let col = |k: usize| &cs.samples[s * k..s * (k + 1)];
         let cv = |k: usize| scratch.c[k];
         // (More than four: none here, the general path below.)
-        let few = &used[..if n_used <= used.len() { n_used } else { 0 }];
+        let few = used.get(..n_used).unwrap_or(&[]);
         let fused = match cs.variogram.squared_form() {
             Some(SquaredForm::Spherical {
                 nugget,
@@ -961,13 +961,12 @@ impl LodModel {
             Some(SquaredForm::Linear { nugget, sill }) => {
                 squared_distances(x, few, col, cv, |h2| linear_of_squared(h2, nugget, sill))
             }
-            None => {
-                squared_distances(x, few, col, cv, |h2| h2);
-                false
-            }
+            None => false,
         };
         if !fused {
-            if !(3..=4).contains(&n_used) {
+            // The distances first (three or four controls in one pass, else one control at a
+            // time), then the variogram.
+            if !squared_distances(x, few, col, cv, |h2| h2) {
                 x.fill(0.0);
                 for k in (0..d).filter(|&k| cs.scale[k] != 0.0) {
                     add_squared_differences(x, cv(k), col(k));
@@ -1384,10 +1383,17 @@ mod tests {
         }
     }
 
+    /// A crowd holds a kernel in every walker: it stays within two cache lines (8 bytes more made
+    /// the crowd's pose stage 10 % slower once).
+    #[test]
+    fn a_kernel_fits_in_two_cache_lines() {
+        assert!(std::mem::size_of::<ClipKernel>() <= 128);
+    }
+
     #[test]
     fn rows_dotted_in_groups_equal_single_row_dots_bitwise() {
-        // Every row count from 1 to 20 (passes of one to eight rows), lengths with and without a
-        // tail.
+        // Every row count from 1 to 20 (passes of one to eight rows, or to twelve in the AVX2
+        // build's grouping), lengths with and without a tail.
         for (n, rows) in [801usize, 800, 3, 4]
             .into_iter()
             .flat_map(|n| (1..=20).map(move |r| (n, r)))
@@ -1422,14 +1428,5 @@ mod tests {
                 );
             }
         }
-    }
-}
-#[cfg(test)]
-mod size {
-    /// A crowd holds a kernel in every walker: it stays within two cache lines (8 bytes more made
-    /// the crowd's pose stage 10 % slower once).
-    #[test]
-    fn a_kernel_fits_in_two_cache_lines() {
-        assert!(std::mem::size_of::<super::ClipKernel>() <= 128);
     }
 }
