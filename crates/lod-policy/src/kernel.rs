@@ -666,39 +666,93 @@ fn root_columns(g: &[f32], rows: usize, rt: usize) -> (usize, [f32; 8]) {
     (wide, last)
 }
 
-/// [`root_sums`] in one 256-bit register: each column read eight entries wide (the eighth summed
-/// and dropped; the last column from a copy when `G` ends with it), the same multiply and add per
-/// lane in the same order, so the same bits. Kept apart from `root_sums` because the compiler
-/// narrows a portable eight-lane loop whose eighth lane is dropped to four, two and one lanes.
+/// [`root_sums`] for `r_T <= 8` columns in one 256-bit register, with the time weights `w` (lane
+/// `b` for column `b`) in another: each column read eight entries wide (the eighth summed and
+/// dropped; the last column from a copy when `G` ends with it), its weight broadcast from its
+/// lane, the same multiply and add per lane in the same order, so the same bits. Kept apart from
+/// `root_sums` because the compiler narrows a portable eight-lane loop whose eighth lane is
+/// dropped to four, two and one lanes.
 ///
 /// # Safety
 /// The CPU must have AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn root_sums_avx2(g: &[f32], rows: usize, rt: usize, wb: impl Fn(usize) -> f32) -> [f32; 8] {
+unsafe fn root_sums_avx2(g: &[f32], rows: usize, rt: usize, w: &[f32; 8]) -> [f32; 8] {
     use std::arch::x86_64::{
-        _mm256_add_ps, _mm256_loadu_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps,
-        _mm256_storeu_ps,
+        _mm256_add_ps, _mm256_loadu_ps, _mm256_mul_ps, _mm256_permutevar8x32_ps, _mm256_set1_epi32,
+        _mm256_setzero_ps, _mm256_storeu_ps,
     };
+    assert!(rt <= 8, "at most eight columns");
     let (wide, last) = root_columns(g, rows, rt);
     let mut acc = [0.0f32; 8];
     // SAFETY: column `b < wide` has eight floats in `g` ([`root_columns`]); the last column's
-    // eight are `last`; the store writes `acc`.
+    // eight are `last`; the loads of `w` and the store read and write arrays of eight.
     unsafe {
+        let lanes = _mm256_loadu_ps(w.as_ptr());
+        // The weight of column `b` in every lane (`b < 8`: a lane index).
+        let weight = |b: usize| _mm256_permutevar8x32_ps(lanes, _mm256_set1_epi32(b as i32));
         let mut sum = _mm256_setzero_ps();
         for b in 0..wide {
-            let w = _mm256_set1_ps(wb(b));
             let col = _mm256_loadu_ps(g.as_ptr().add(rows * b));
-            sum = _mm256_add_ps(sum, _mm256_mul_ps(w, col));
+            sum = _mm256_add_ps(sum, _mm256_mul_ps(weight(b), col));
         }
         if wide < rt {
-            let w = _mm256_set1_ps(wb(wide));
-            sum = _mm256_add_ps(sum, _mm256_mul_ps(w, _mm256_loadu_ps(last.as_ptr())));
+            let col = _mm256_loadu_ps(last.as_ptr());
+            sum = _mm256_add_ps(sum, _mm256_mul_ps(weight(wide), col));
         }
         _mm256_storeu_ps(acc.as_mut_ptr(), sum);
     }
     acc
+}
+
+/// The two aligned frames `i`, `i1` a pose at finite `phase` blends and the blend `a`:
+/// `phase` clamped to `[0, T - 1]`, `i = floor(phase)` (at most `T - 2`), `i1 = min(i + 1, T - 1)`,
+/// `a = phase - i` (eq. 4).
+#[inline(always)]
+fn blend_at(phase: f32, t: usize) -> (usize, usize, f32) {
+    // `T` is a frame count, far below 2^24: its conversions through `u32` are exact (single
+    // instructions, where `usize` to `f32` needs an unsigned fix-up), and for `ph >= 0`
+    // truncation is `floor`.
+    let ph = phase.clamp(0.0, (t - 1) as u32 as f32);
+    let i = (ph as u32 as usize).min(t.saturating_sub(2));
+    let i1 = (i + 1).min(t - 1);
+    (i, i1, ph - i as u32 as f32)
+}
+
+/// The seven root rows of `G w_T` for the blend `(i, i1, a)` of rows of `U_T` (`u` row-major
+/// with `big_t` columns and at least eight entries from each row's start, as
+/// [`LodModel::time_rows`] pads it): [`root_sums`] with the time weights
+/// `w_b = (1 - a) U_T[i, b] + a U_T[i1, b]`. Up to eight columns (a root-only clip's `r_T`) the
+/// weights are computed eight lanes at once (the same operations per lane) and the AVX2 build
+/// sums in [`root_sums_avx2`].
+#[inline(always)]
+fn root_rows<const AVX2: bool>(
+    kernel: &ClipKernel,
+    u: &[f32],
+    big_t: usize,
+    (i, i1, a): (usize, usize, f32),
+) -> [f32; 8] {
+    let (g, rows, rt) = (&kernel.g[..], kernel.rows, kernel.ranks.t);
+    if rt <= 8 {
+        let (u0, u1): (&[f32; 8], &[f32; 8]) = (
+            u[i * big_t..][..8].try_into().expect("eight entries"),
+            u[i1 * big_t..][..8].try_into().expect("eight entries"),
+        );
+        let mut w = [0.0f32; 8];
+        for (l, w) in w.iter_mut().enumerate() {
+            *w = (1.0 - a) * u0[l] + a * u1[l];
+        }
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            // SAFETY: `AVX2` is true only in the AVX2 build, which runs where the CPU has it.
+            return unsafe { root_sums_avx2(g, rows, rt, &w) };
+        }
+        root_sums(g, rows, rt, |b| w[b])
+    } else {
+        let (u0, u1) = (&u[i * big_t..][..rt], &u[i1 * big_t..][..rt]);
+        root_sums(g, rows, rt, |b| (1.0 - a) * u0[b] + a * u1[b])
+    }
 }
 
 impl LodModel {
@@ -1115,7 +1169,7 @@ impl LodModel {
                 *d += gb * f64::from(u);
             }
         }
-        out.times.fill_from_iter(dt.iter().map(|&d| inv_scale * d));
+        out.times.fill_scaled(dt, inv_scale);
         out.frames_per_second = ((t - 1) as f64 / out.times.duration()) as f32;
 
         out.detail = detail;
@@ -1127,12 +1181,12 @@ impl LodModel {
         //    the travel turn (the clamped turn control; when the model ignores turn, the turn the data
         //    imply for the other controls, `ControlSpace::implied`; the pelvis's yaw change for a model
         //    without a turn dimension).
-        // The seven root rows (the register path of `pose_rows`; root motion reads the first six).
-        // (`::<false>`: the portable sums, the same bits, so that `root_sums_avx2` stays inlined
-        // in the one build that runs it every frame.)
+        // The seven root rows (the root pose of `pose_rows`; root motion reads the first six).
+        // (`::<false>`, inlined: the portable sums, the same bits, so that `root_sums_avx2` keeps
+        // one call site, the root pose every frame, where it stays inlined.)
         let mut ends = [[0.0f32; ALWAYS_ROWS]; 2];
         for (e, phase) in ends.iter_mut().zip([0.0, (t - 1) as f32]) {
-            self.pose_rows_body::<false>(out, phase, e)?;
+            self.root_pose_body::<false>(out, phase, e)?;
         }
         let [start, end] = ends;
         out.root_motion = self.controls().root_motion_of(controls, &start, &end);
@@ -1194,25 +1248,82 @@ impl LodModel {
         phase: f32,
         out: &mut [f32],
     ) -> Result<(), KernelError> {
+        // Root only (the crowd's far walkers, every frame): a small function of its own, without
+        // the frame and spills of the general one.
+        let root = out.len() == ALWAYS_ROWS;
         #[cfg(target_arch = "x86_64")]
         if isa == Isa::Avx2 && Isa::current() == Isa::Avx2 {
             // SAFETY: the CPU has AVX2 (`Isa::current`).
-            return unsafe { self.pose_rows_avx2(kernel, phase, out) };
+            return unsafe {
+                if root {
+                    self.root_pose_avx2(kernel, phase, out)
+                } else {
+                    self.pose_rows_avx2(kernel, phase, out)
+                }
+            };
         }
         let _ = isa;
-        self.pose_rows_body::<false>(kernel, phase, out)
+        if root {
+            self.root_pose_baseline(kernel, phase, out)
+        } else {
+            self.pose_rows_body(kernel, phase, out)
+        }
     }
 
-    avx2_build!(fn pose_rows_avx2 = pose_rows_body(
+    avx2_build!(fn root_pose_avx2 = root_pose_body(
         kernel: &ClipKernel,
         phase: f32,
         out: &mut [f32]
     ) -> Result<(), KernelError>);
 
-    /// The pose rows, inlined into each instruction-set build (`AVX2` as in
-    /// [`LodModel::weights_body`]: the root-only sums then run in one 256-bit register).
+    /// The baseline build of [`LodModel::root_pose_body`].
+    fn root_pose_baseline(
+        &self,
+        kernel: &ClipKernel,
+        phase: f32,
+        out: &mut [f32],
+    ) -> Result<(), KernelError> {
+        self.root_pose_body::<false>(kernel, phase, out)
+    }
+
+    /// [`LodModel::pose_rows_body`] for `out.len() = 7` (the root and the time increment): the
+    /// same checks and the same sums, in a function of its own.
     #[inline(always)]
-    fn pose_rows_body<const AVX2: bool>(
+    fn root_pose_body<const AVX2: bool>(
+        &self,
+        kernel: &ClipKernel,
+        phase: f32,
+        out: &mut [f32],
+    ) -> Result<(), KernelError> {
+        debug_assert_eq!(out.len(), ALWAYS_ROWS);
+        self.check_kernel(kernel)?;
+        // (`P >= 7`: a model has its root rows, so `out.len() <= P`.)
+        if !phase.is_finite() {
+            return Err(KernelError::NonFinitePhase { phase });
+        }
+        let key_index = self.levels()[kernel.detail.accuracy].key;
+        let big_t = self.keys()[key_index].ranks.t;
+        let (i, i1, a) = blend_at(phase, self.t());
+        let acc = root_rows::<AVX2>(kernel, self.time_rows(key_index), big_t, (i, i1, a));
+        out.copy_from_slice(&acc[..ALWAYS_ROWS]);
+        Ok(())
+    }
+
+    /// The AVX2 build of [`LodModel::pose_rows_body`] (see [`Isa`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn pose_rows_avx2(
+        &self,
+        kernel: &ClipKernel,
+        phase: f32,
+        out: &mut [f32],
+    ) -> Result<(), KernelError> {
+        self.pose_rows_body(kernel, phase, out)
+    }
+
+    /// The pose rows, inlined into each instruction-set build.
+    #[inline(always)]
+    fn pose_rows_body(
         &self,
         kernel: &ClipKernel,
         phase: f32,
@@ -1234,13 +1345,7 @@ impl LodModel {
         let rows = kernel.rows;
         let used = rows.min(out.len());
         let rt = kernel.ranks.t;
-        // `T` is a frame count, far below 2^24: its conversions through `u32` are exact (single
-        // instructions, where `usize` to `f32` needs an unsigned fix-up), and for `ph >= 0`
-        // truncation is `floor`.
-        let ph = phase.clamp(0.0, (t - 1) as u32 as f32);
-        let i = (ph as u32 as usize).min(t.saturating_sub(2));
-        let i1 = (i + 1).min(t - 1);
-        let a = ph - i as u32 as f32;
+        let (i, i1, a) = blend_at(phase, t);
         let (head, tail) = out.split_at_mut(used);
         // Rows i and i1 of U_T, contiguous (row-major copy).
         let big_t = key.ranks.t;
@@ -1255,17 +1360,11 @@ impl LodModel {
             }
             combine_columns(head, &w[..rt], &kernel.g, rows);
         } else if used == ALWAYS_ROWS {
-            // Root only: the seven sums held in registers over the columns (the same sums in the
-            // same order as the column loop below).
-            #[cfg(target_arch = "x86_64")]
-            let acc = if AVX2 {
-                // SAFETY: `AVX2` is true only in the AVX2 build, which runs where the CPU has it.
-                unsafe { root_sums_avx2(&kernel.g, rows, rt, wb) }
-            } else {
-                root_sums(&kernel.g, rows, rt, wb)
-            };
-            #[cfg(not(target_arch = "x86_64"))]
-            let acc = root_sums(&kernel.g, rows, rt, wb);
+            // Root only (`out` longer than the seven rows: the root pose itself goes to
+            // `root_pose_body`): the seven sums held in registers over the columns (the same sums
+            // in the same order as the column loop below; the portable sums, so that
+            // `root_sums_avx2` keeps its one call site).
+            let acc = root_rows::<false>(kernel, u, big_t, (i, i1, a));
             head.copy_from_slice(&acc[..ALWAYS_ROWS]);
         } else {
             // A few rows: one pass per column (the same sums in the same order).
@@ -1351,6 +1450,8 @@ mod tests {
             (7, 1, 0),
             (7, 7, 0),
             (7, 7, 1),
+            (7, 8, 0),
+            (8, 8, 0),
             (7, 34, 0),
             (8, 5, 0),
             (67, 29, 0),
@@ -1367,9 +1468,10 @@ mod tests {
             }
             let mut builds = vec![("portable", root_sums(&g, rows, rt, wb))];
             #[cfg(target_arch = "x86_64")]
-            if Isa::current() == Isa::Avx2 {
+            if Isa::current() == Isa::Avx2 && rt <= 8 {
+                let w: [f32; 8] = std::array::from_fn(wb);
                 // SAFETY: the CPU has AVX2.
-                builds.push(("avx2", unsafe { root_sums_avx2(&g, rows, rt, wb) }));
+                builds.push(("avx2", unsafe { root_sums_avx2(&g, rows, rt, &w) }));
             }
             for (build, got) in builds {
                 for r in 0..ALWAYS_ROWS {

@@ -493,8 +493,9 @@ pub struct LodModel {
     /// The kriging weights' projection with the trend folded in, row-major f64, for the kernels'
     /// dot products (derived from `parts` by [`LodModel::new`]; not stored in the model file).
     folded: FoldedProjections,
-    /// Each key's `U_T` row-major (`T x R_T`, row `i` at `[i R_T..(i + 1) R_T]`): the two rows a
-    /// pose blends are contiguous runs (derived by [`LodModel::new`]; not stored in the model file).
+    /// Each key's `U_T` row-major (`T x R_T`, row `i` at `[i R_T..(i + 1) R_T]`, then eight zeros):
+    /// the two rows a pose blends are contiguous runs (derived by [`LodModel::new`]; not stored in
+    /// the model file).
     time_rows: Vec<Vec<f32>>,
     /// The data's mix of styles: the mean of the samples' raw style dimensions (dimensions
     /// `Controls::COUNT..d`), each style's share of the samples; zeros beyond the model's styles
@@ -729,8 +730,9 @@ impl LodModel {
             .iter()
             .map(|k| {
                 let r_t = k.ranks.t;
-                let mut rows = vec![0.0f32; t * r_t];
-                for (i, row) in rows.chunks_exact_mut(r_t).enumerate() {
+                // Eight entries of padding: eight-wide loads from any row's start stay inside.
+                let mut rows = vec![0.0f32; t * r_t + 8];
+                for (i, row) in rows[..t * r_t].chunks_exact_mut(r_t).enumerate() {
                     for (b, v) in row.iter_mut().enumerate() {
                         *v = k.u_t[i + t * b];
                     }
@@ -1014,7 +1016,7 @@ impl LodModel {
         &self.folded
     }
 
-    /// `U_T` of key `k` row-major, `T x R_T` (derived by [`LodModel::new`]).
+    /// `U_T` of key `k` row-major, `T x R_T`, then eight zeros (derived by [`LodModel::new`]).
     pub(crate) fn time_rows(&self, k: usize) -> &[f32] {
         &self.time_rows[k]
     }

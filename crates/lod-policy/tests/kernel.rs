@@ -335,12 +335,19 @@ fn pose_rows_equal_the_leading_rows_of_pose() {
         model
             .build_kernel_values(&c, detail, &mut scratch, &mut kernel)
             .unwrap();
-        let mut full = vec![0.0f32; P];
-        model.pose(&kernel, 2.5, &mut full).unwrap();
-        for n in [0, 3, 7, 9, P] {
-            let mut head = vec![f32::NAN; n];
-            model.pose_rows(&kernel, 2.5, &mut head).unwrap();
-            assert_eq!(head, full[..n], "{detail:?}, {n} rows");
+        // Seven rows (the root pose's own function) at every kind of phase: the first frame,
+        // between frames, the last interval and the last frame (whose row of `U_T` is the last).
+        let t = model.t() as f32;
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for phase in [0.0, 0.37, 2.5, t - 1.3, t - 1.0, t + 4.0] {
+            let mut full = vec![0.0f32; P];
+            model.pose(&kernel, phase, &mut full).unwrap();
+            for n in [0, 3, 7, 9, P] {
+                let mut head = vec![f32::NAN; n];
+                model.pose_rows(&kernel, phase, &mut head).unwrap();
+                let what = format!("{detail:?}, r_T {}, {n} rows", kernel.ranks().t);
+                assert_eq!(bits(&head), bits(&full[..n]), "{what} at {phase}");
+            }
         }
         let mut too_long = vec![0.0f32; P + 1];
         assert!(model.pose_rows(&kernel, 2.5, &mut too_long).is_err());

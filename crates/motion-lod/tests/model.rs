@@ -405,6 +405,17 @@ fn avx2_and_baseline_builds_of_the_kernels_give_the_same_bits() {
                     lod.pose_rows(&fast, phase, &mut pa).unwrap();
                     lod.pose_rows_baseline(&base, phase, &mut pb).unwrap();
                     assert_eq!(bits(&pa), bits(&pb), "pose at {phase}, {what}");
+                    // The root pose alone (its own function, eight-wide time weights up to
+                    // r_T = 8), in both builds, against the leading rows of the whole pose.
+                    let (mut ra, mut rb) = ([0.0f32; 7], [0.0f32; 7]);
+                    lod.pose_rows(&fast, phase, &mut ra).unwrap();
+                    lod.pose_rows_baseline(&base, phase, &mut rb).unwrap();
+                    assert_eq!(bits(&ra), bits(&pa[..7]), "root pose at {phase}, {what}");
+                    assert_eq!(
+                        bits(&rb),
+                        bits(&pa[..7]),
+                        "baseline root at {phase}, {what}"
+                    );
                 }
                 compared += 1;
             }
