@@ -76,7 +76,11 @@ pub(crate) struct Walker<C> {
 /// The single-precision `(sin, cos)` of a cycle frame's heading, computed in double: what
 /// [`Walker::heading_sc`] caches.
 pub(crate) fn heading_sin_cos(frame: &CycleFrame) -> (f32, f32) {
-    let (sin, cos) = frame.heading.sin_cos();
+    to_single(frame.heading.sin_cos())
+}
+
+/// A `(sin, cos)` computed in double, rounded to single: [`Walker::heading_sc`]'s precision.
+fn to_single((sin, cos): (f64, f64)) -> (f32, f32) {
     (sin as f32, cos as f32)
 }
 
@@ -322,7 +326,7 @@ impl<C> Walker<C> {
             // The heading's and the path's sines once for the cycle frame, the closest point and
             // the controller (the same values each computed before).
             let heading_sc = self.frame.heading.sin_cos();
-            self.heading_sc = (heading_sc.0 as f32, heading_sc.1 as f32);
+            self.heading_sc = to_single(heading_sc);
             let rot = self.path.rotation_f64();
             let origin = DVec2::new(self.frame.x, self.frame.z);
             self.s = self.path.closest_param_near_rotated(rot, origin, self.s);

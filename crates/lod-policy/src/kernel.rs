@@ -1298,15 +1298,26 @@ impl LodModel {
         debug_assert_eq!(out.len(), ALWAYS_ROWS);
         self.check_kernel(kernel)?;
         // (`P >= 7`: a model has its root rows, so `out.len() <= P`.)
+        let (key_index, blend) = self.pose_blend(kernel, phase)?;
+        let big_t = self.keys()[key_index].ranks.t;
+        let acc = root_rows::<AVX2>(kernel, self.time_rows(key_index), big_t, blend);
+        out.copy_from_slice(&acc[..ALWAYS_ROWS]);
+        Ok(())
+    }
+
+    /// The key of a checked kernel's level and the blend of rows of its `U_T` a pose at `phase`
+    /// reads ([`blend_at`]); a phase that is not finite is an error.
+    #[inline(always)]
+    fn pose_blend(
+        &self,
+        kernel: &ClipKernel,
+        phase: f32,
+    ) -> Result<(usize, (usize, usize, f32)), KernelError> {
         if !phase.is_finite() {
             return Err(KernelError::NonFinitePhase { phase });
         }
         let key_index = self.levels()[kernel.detail.accuracy].key;
-        let big_t = self.keys()[key_index].ranks.t;
-        let (i, i1, a) = blend_at(phase, self.t());
-        let acc = root_rows::<AVX2>(kernel, self.time_rows(key_index), big_t, (i, i1, a));
-        out.copy_from_slice(&acc[..ALWAYS_ROWS]);
-        Ok(())
+        Ok((key_index, blend_at(phase, self.t())))
     }
 
     /// The AVX2 build of [`LodModel::pose_rows_body`] (see [`Isa`]).
@@ -1329,7 +1340,7 @@ impl LodModel {
         phase: f32,
         out: &mut [f32],
     ) -> Result<(), KernelError> {
-        let (p, t) = (self.p(), self.t());
+        let p = self.p();
         self.check_kernel(kernel)?;
         if out.len() > p {
             return Err(KernelError::OutputLength {
@@ -1337,15 +1348,11 @@ impl LodModel {
                 found: out.len(),
             });
         }
-        if !phase.is_finite() {
-            return Err(KernelError::NonFinitePhase { phase });
-        }
-        let key_index = self.levels()[kernel.detail.accuracy].key;
+        let (key_index, (i, i1, a)) = self.pose_blend(kernel, phase)?;
         let key = &self.keys()[key_index];
         let rows = kernel.rows;
         let used = rows.min(out.len());
         let rt = kernel.ranks.t;
-        let (i, i1, a) = blend_at(phase, t);
         let (head, tail) = out.split_at_mut(used);
         // Rows i and i1 of U_T, contiguous (row-major copy).
         let big_t = key.ranks.t;
