@@ -15,6 +15,8 @@
 # - stripped release builds of `xtask`, `gpu-crowd`'s example `h100` and its test `cpu_match`:
 #   plain x86-64 (no `-C target-cpu`), dynamically linked to glibc 2.35 or newer only
 #   (`objdump -T`);
+# - the criterion bench `model_file` (`benches/model_file.rs`: issue 35's two per-walker costs on
+#   a model file), gzipped (`model_file.gz`: the kit stays within the tool's 64 MiB);
 # - the model built from DATA_DIR, and DATA_DIR itself as `data.tar.gz` (for `xtask scaling`);
 # - the Vulkan loader as Debian packages (`gl/`, unpacked on the device where it has none);
 # - the commit it was made from (`COMMIT`), the data's name (`DATA`) and the folder it was built in
@@ -26,15 +28,19 @@ kit=.device-kit
 [ -d "$data" ] || { echo "prepare.sh: no data folder $data" >&2; exit 1; }
 rm -rf "$kit"
 mkdir -p "$kit/bin" "$kit/gl"
-echo "== release builds (motion-lod, xtask, gpu-crowd's example h100 and its test cpu_match)"
+echo "== release builds (motion-lod, xtask, gpu-crowd's example h100, its test cpu_match, the bench model_file)"
 cargo build --release -q -p motion-lod -p xtask
 cargo build --release -q -p gpu-crowd --example h100
 cargo test -q -p gpu-crowd --release --no-run 2>/dev/null
 match=$(cargo test -p gpu-crowd --release --no-run 2>&1 | sed -n 's|.*Executable tests/cpu_match.rs (\(.*\))|\1|p')
 [ -x "$match" ] || { echo "prepare.sh: no test binary of gpu-crowd's cpu_match" >&2; exit 1; }
+bench=$(cargo bench -p motion-lod-benches --bench model_file --no-run 2>&1 | sed -n 's|.*Executable model_file.rs (\(.*\))|\1|p')
+[ -x "$bench" ] || { echo "prepare.sh: no bench binary model_file" >&2; exit 1; }
 cp target/release/xtask target/release/examples/h100 "$kit/bin/"
 cp "$match" "$kit/bin/cpu_match"
+cp "$bench" "$kit/bin/model_file"
 strip "$kit/bin/"*
+gzip -9 "$kit/bin/model_file"
 echo "== the model of $data"
 target/release/motion-lod build "$data" -o "$kit/model.mlod" 2>&1 | tail -1
 echo "== the data for xtask scaling"

@@ -8,9 +8,12 @@
 #    detail, on every core beside it (`gpu.txt`);
 # 2. issue 32 item 3 on real hardware: gpu-crowd's test `cpu_match` (1,000 walkers, 300 frames,
 #    both scenes, every joint against the CPU crowd's), run on this GPU (`cpu-match.txt`);
-# 3. issue 35 item 1: `xtask frames`, the tables' frame-time rows with their fixed-work control, at
+# 3. issue 35 item 2: the per-walker costs by the criterion bench `model_file` on this machine's
+#    CPU (a root-only walker-frame at 100,000 and 2,000 walkers on one thread; a root-only and a
+#    level-0 clip build, kriging weights and pose) (`per-walker.txt`);
+# 4. issue 35 item 1: `xtask frames`, the tables' frame-time rows with their fixed-work control, at
 #    100,000 walkers on 1, 2, 4, 8 and 16 threads and 1,000,000 on 8 and 16 (`frames-*.md`);
-# 4. issue 35 item 3: `xtask scaling`, the build's time, stages and peak memory at 800 and 10,000
+# 5. issue 35 item 3: `xtask scaling`, the build's time, stages and peak memory at 800 and 10,000
 #    cycles on 1, 2, 4, 8 and 16 threads (`scaling.md`, `figures/scaling.svg`).
 #
 # Everything goes to $OUT (the device tool's folder that comes back; `out/device` elsewhere), with
@@ -39,10 +42,12 @@ if [ "${DEVICE_KIT_SMALL:-0}" = 1 ]; then
   gpu_args=(--full 2000 --lod 20000 --frames 5)
   frames_small=(--walkers 2000 --threads 1,2 --frames 10) frames_large=(--walkers 5000 --threads 2 --frames 10)
   scaling_args=(--sizes 800 --threads 2)
+  bench_args=(--warm-up-time 0.2 --measurement-time 0.5 'root_only$|crowd_root_only_one_thread/2000$')
 else
   gpu_args=(--full 1000000 --lod 10000000 --frames 60)
   frames_small=(--walkers 100000 --threads 1,2,4,8,16) frames_large=(--walkers 1000000 --threads 8,16)
   scaling_args=(--sizes 800,10000 --threads 1,2,4,8,16)
+  bench_args=(--warm-up-time 1 --measurement-time 3 'root_only|level0_all_joints')
 fi
 
 step "machine"
@@ -75,13 +80,25 @@ fi
 MOTION_LOD_REQUIRE_GPU=1 timeout "$(limit 90)" "$kit/bin/cpu_match" --nocapture 2>&1 | tee "$out/cpu-match.txt"
 echo "cpu_match exit status ${PIPESTATUS[0]}"
 
-step "3. frame times (issue 35, item 1)"
+step "3. per-walker costs (issue 35, item 2)"
+# The bench, unpacked outside the kit (which must stay small enough to carry); its own setup builds
+# both crowds (2,000 and 100,000 walkers) whatever the filter; criterion's reports go there too.
+bench=$(mktemp -d)
+{ gunzip -c "$kit/bin/model_file.gz" 2>/dev/null ||
+  python3 -c 'import gzip, sys; sys.stdout.buffer.write(gzip.open(sys.argv[1]).read())' \
+    "$kit/bin/model_file.gz"; } >"$bench/model_file" && chmod +x "$bench/model_file"
+CRITERION_HOME=$bench/criterion MOTION_LOD_BENCH_MODEL=$model timeout "$(limit 75)" \
+  "$bench/model_file" --bench --noplot "${bench_args[@]}" 2>&1 | tee "$out/per-walker.txt"
+echo "model_file exit status ${PIPESTATUS[0]}"
+rm -rf "$bench"
+
+step "4. frame times (issue 35, item 1)"
 timeout "$(limit 100)" "$kit/bin/xtask" frames "$model" "${frames_small[@]}" --quiet --out "$out/frames-small.md"
 echo "exit status $?"
 timeout "$(limit 120)" "$kit/bin/xtask" frames "$model" "${frames_large[@]}" --quiet --out "$out/frames-large.md"
 echo "exit status $?"
 
-step "4. build scaling (issue 35, item 3)"
+step "5. build scaling (issue 35, item 3)"
 data=$(mktemp -d)
 tar -xzf "$kit/data.tar.gz" -C "$data"
 timeout "$(limit 240)" "$kit/bin/xtask" scaling --data "$data/$(cat "$kit/DATA")" "${scaling_args[@]}" \
