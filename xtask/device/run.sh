@@ -81,9 +81,10 @@ MOTION_LOD_REQUIRE_GPU=1 timeout "$(limit 90)" "$kit/bin/cpu_match" --nocapture 
 echo "cpu_match exit status ${PIPESTATUS[0]}"
 
 step "3. per-walker costs (issue 35, item 2)"
-# The bench, unpacked outside the kit (which must stay small enough to carry); its own setup builds
-# both crowds (2,000 and 100,000 walkers) whatever the filter; criterion's reports go there too.
-bench=$(mktemp -d)
+# The bench, unpacked outside the kit (which must stay small enough to carry) into a folder of the
+# working tree (a temporary folder may forbid running programs); its own setup builds both crowds
+# (2,000 and 100,000 walkers) whatever the filter; criterion's reports go there too.
+bench=$(mktemp -d "$PWD/.device-bench.XXXXXX")
 { gunzip -c "$kit/bin/model_file.gz" 2>/dev/null ||
   python3 -c 'import gzip, sys; sys.stdout.buffer.write(gzip.open(sys.argv[1]).read())' \
     "$kit/bin/model_file.gz"; } >"$bench/model_file" && chmod +x "$bench/model_file"
