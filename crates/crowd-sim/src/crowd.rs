@@ -26,8 +26,8 @@ const PREFETCH: usize = 6;
 
 /// Walkers ahead whose own memory the kernel stage hints the CPU to fetch.
 const PREFETCH_WALKERS: usize = 4;
-/// Largest accepted time step (s).
-const MAX_DT: f32 = 10.0;
+/// Largest time step (s) [`Crowd::step`] accepts: a crowd's frame rate is at least its inverse.
+pub const MAX_DT: f32 = 10.0;
 
 /// How a crowd finds the walkers in view each frame. Both give the same flags (a walker is visible
 /// when its culling box, from the previous frame's placement, intersects the frustum:
@@ -86,7 +86,7 @@ pub struct CrowdConfig {
     pub field_size_m: f32,
     /// Seed of every walker's generator (walker `i` uses `seed` and `i`).
     pub seed: u64,
-    /// Frames per second of `Crowd::run` (`dt = 1 / fps`).
+    /// Frames per second of `Crowd::run` (`dt = 1 / fps`; at least `1 /` [`MAX_DT`]).
     pub fps: f32,
     /// At accuracy levels `0..seam_levels` a change of clip (a cycle seam, or a finer detail
     /// mid-cycle) is inertialized ([`lod_policy::SeamTransition`]): every row stays continuous in position
@@ -208,7 +208,8 @@ impl CrowdConfig {
         if !(self.field_size_m.is_finite() && self.field_size_m > 0.0) {
             return bad("field_size_m", self.field_size_m);
         }
-        if !(self.fps.is_finite() && self.fps > 0.0) {
+        // The crowd steps by `1 / fps`, at most `MAX_DT`.
+        if !(self.fps.is_finite() && self.fps >= 1.0 / MAX_DT) {
             return bad("fps", self.fps);
         }
         if !(self.seam_halflife_s.is_finite() && self.seam_halflife_s > 0.0) {

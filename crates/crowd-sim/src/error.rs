@@ -57,8 +57,9 @@ pub enum CrowdError {
         /// Which parameter is wrong.
         what: &'static str,
     },
-    /// The time step is not finite or negative.
-    #[error("time step dt = {dt} s is not a finite non-negative number")]
+    /// The time step is not finite, negative, or longer than the crowd steps in one frame
+    /// (`crate::MAX_DT`).
+    #[error("time step dt = {dt} s is not in [0, {}] s", crate::MAX_DT)]
     BadTimeStep {
         /// Offending time step in seconds.
         dt: f32,

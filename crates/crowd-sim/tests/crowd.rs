@@ -364,6 +364,30 @@ fn bad_input_gives_clear_errors() {
         crowd.step(&source, &policy, &Camera::default(), f32::NAN),
         Err(CrowdError::BadTimeStep { .. })
     ));
+    // A finite step longer than the crowd takes says the range it is outside, not "not finite".
+    let e = crowd
+        .step(&source, &policy, &Camera::default(), 100.0)
+        .unwrap_err();
+    assert_eq!(e.to_string(), "time step dt = 100 s is not in [0, 10] s");
+    // A frame rate whose step is longer than that is refused by the config, before any walker.
+    for fps in [0.0, 0.05, f32::MIN_POSITIVE] {
+        let cfg = CrowdConfig {
+            fps,
+            ..config(5, 50.0)
+        };
+        assert!(
+            matches!(
+                Crowd::new(&source, cfg),
+                Err(CrowdError::BadConfig { field: "fps", .. })
+            ),
+            "{fps}"
+        );
+    }
+    let slow = CrowdConfig {
+        fps: 1.0 / crowd_sim::MAX_DT,
+        ..config(5, 50.0)
+    };
+    assert!(Crowd::new(&source, slow).is_ok());
     let greedy = |_: f32, _: bool, _: &ViewParams| Detail {
         accuracy: 99,
         active_joints: 3,

@@ -4,7 +4,7 @@ use std::time::{Duration, Instant};
 
 use bytemuck::{Pod, Zeroable};
 use crowd_sim::path::{PathPlan, WalkerStart};
-use crowd_sim::{Camera, CrowdConfig, CrowdStyle, Frustum, check_control_range};
+use crowd_sim::{Camera, CrowdConfig, CrowdStyle, Frustum, MAX_DT, check_control_range};
 use glam::Vec3;
 use lod_policy::{Detail, LevelPolicy, RuntimeModel, SplitMix64, StyleMix, ViewParams};
 use wgpu::util::DeviceExt;
@@ -24,8 +24,6 @@ const MAX_X: u32 = 65535;
 const C_BUILDS: usize = 3;
 const C_FREE_TOP: usize = 6;
 const C_HIST: usize = 8;
-/// Largest time step (s), as the CPU crowd.
-const MAX_DT: f32 = 10.0;
 
 /// One walker as the shaders hold it (`struct Walker` of `crowd.wgsl`).
 #[repr(C)]

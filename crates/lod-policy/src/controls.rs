@@ -93,7 +93,15 @@ impl StyleMix {
             return None;
         }
         let sum: f32 = w.iter().sum();
-        if sum > 0.0 {
+        if sum.is_infinite() {
+            // Finite weights whose sum overflows (two of 2e38): over the largest first, so that
+            // the sum is at most `n` (every weight over an infinite sum gave 0, no style at all).
+            let largest = w.iter().fold(0.0f32, |a, &v| a.max(v));
+            let sum: f32 = w.iter().map(|&v| v / largest).sum();
+            for (o, &v) in out.iter_mut().zip(w) {
+                *o = v / largest / sum;
+            }
+        } else if sum > 0.0 {
             for (o, &v) in out.iter_mut().zip(w) {
                 *o = v / sum;
             }
@@ -265,6 +273,23 @@ mod tests {
             w.weights[1] = bad;
             assert!(w.normalised(3, &mix, &mut out).is_none());
             assert!(w.problem().unwrap().contains("style weight 1"));
+        }
+        // Finite weights whose sum overflows are the same blend as small ones (over an infinite
+        // sum every weight was 0: no style at all), at any scale up to the largest float.
+        for (big, want) in [
+            ([2e38, 2e38, 0.0], [0.5, 0.5, 0.0]),
+            (
+                [f32::MAX, f32::MAX, f32::MAX],
+                [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+            ),
+            ([f32::MAX, 0.0, f32::MAX / 4.0], [0.8, 0.0, 0.2]),
+        ] {
+            let mut w = StyleMix::DATA_MIX;
+            w.weights[..3].copy_from_slice(&big);
+            w.normalised(3, &mix, &mut out).unwrap();
+            for (o, e) in out.iter().zip(want) {
+                assert!((o - e).abs() <= 1e-6, "{big:?} -> {out:?}");
+            }
         }
         // The clamp of the four controls keeps the style.
         let c = Controls::from_array([0.0, 1.0, 0.0, 1.7]).with_style(StyleMix::one(2));

@@ -63,14 +63,29 @@ pub fn prefetch_slice<T>(slice: &[T]) {
 /// Wraps an angle (radians) into `(-pi, pi]`.
 pub fn wrap_angle(a: f32) -> f32 {
     let w = a - TAU * (a / TAU).round();
-    if w <= -PI { w + TAU } else { w }
+    let w = if w <= -PI { w + TAU } else { w };
+    if -PI < w && w <= PI {
+        w
+    } else {
+        // `a` so large (beyond about 2^24 turns) that `TAU * round(a / TAU)` is rounded by more
+        // than a turn (`wrap_angle(1e30)` gave about 7e22): the exact remainder.
+        let r = a.rem_euclid(TAU);
+        if r > PI { r - TAU } else { r }
+    }
 }
 
 /// [`wrap_angle`] in double precision: the heading of a cycle frame, summed over hours of turns.
 pub fn wrap_angle_f64(a: f64) -> f64 {
     use std::f64::consts::{PI, TAU};
     let w = a - TAU * (a / TAU).round();
-    if w <= -PI { w + TAU } else { w }
+    let w = if w <= -PI { w + TAU } else { w };
+    if -PI < w && w <= PI {
+        w
+    } else {
+        // As in `wrap_angle`: beyond about 2^53 turns (`wrap_angle_f64(1e18)` gave 128).
+        let r = a.rem_euclid(TAU);
+        if r > PI { r - TAU } else { r }
+    }
 }
 
 /// Ease-in/out weight `3u^2 - 2u^3` (smoothstep) for `u` clamped to `[0, 1]`: 0 at 0, 1 at 1,
@@ -83,6 +98,39 @@ pub fn ease_in_out(u: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Angles too large for `a - TAU * round(a / TAU)` (a C caller's heading of 1e18 came back as
+    /// 128) still land in `(-pi, pi]`; ordinary ones keep that formula's bits.
+    #[test]
+    fn huge_angles_wrap_into_the_half_open_interval() {
+        use std::f64::consts::PI as PI64;
+        for a in [
+            1e18,
+            -1e18,
+            3e300,
+            -f64::MAX,
+            f64::MAX,
+            1e16 + 0.5,
+            9.007e15,
+        ] {
+            let w = wrap_angle_f64(a);
+            assert!(-PI64 < w && w <= PI64, "{a} -> {w}");
+        }
+        for a in [1e30f32, -1e30, f32::MAX, -f32::MAX, 1e8, -3e7] {
+            let w = wrap_angle(a);
+            assert!(-PI < w && w <= PI, "{a} -> {w}");
+        }
+        for k in -1000..1000 {
+            let a = f64::from(k) * 12.345;
+            let w = a - std::f64::consts::TAU * (a / std::f64::consts::TAU).round();
+            let w = if w <= -PI64 {
+                w + std::f64::consts::TAU
+            } else {
+                w
+            };
+            assert_eq!(wrap_angle_f64(a).to_bits(), w.to_bits(), "{a}");
+        }
+    }
 
     #[test]
     fn wrap_angle_f64_lands_in_half_open_interval() {

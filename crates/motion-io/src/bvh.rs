@@ -311,6 +311,8 @@ fn parse_f64(t: &str) -> Result<f64, BvhErrorKind> {
 /// within a small multiple of the text's size whatever `Frames:` declares, and nesting depth
 /// costs no stack (the hierarchy is read without recursion).
 pub fn parse_bvh(text: &str) -> Result<Motion, BvhError> {
+    // A UTF-8 byte-order mark (what some Windows tools write first) is not part of the text.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut tk = Tokens::new(text);
     let skeleton = parse_hierarchy(&mut tk)?;
     if let Some((line, t)) = tk.peek() {
@@ -709,8 +711,8 @@ fn check_writable(motion: &Motion) -> Result<(), BvhErrorKind> {
     Ok(())
 }
 
-/// Writes a motion as a BVH file, atomically: the text goes to a temporary file in the same
-/// folder which is then renamed over `path`.
+/// Writes a motion as a BVH file, atomically ([`lod_policy::file::write_atomic`]): the text goes
+/// to a temporary file in the same folder which is then renamed over `path`.
 ///
 /// Refuses (before touching the disk) an invalid skeleton, a frame buffer whose length is not a
 /// multiple of the channel count, no frames, a bad frame time, or non-finite values.
@@ -722,18 +724,9 @@ pub fn write_bvh(motion: &Motion, path: impl AsRef<Path>) -> Result<(), BvhError
         kind,
     })?;
     let text = to_bvh_string(motion);
-    let file_name = path
-        .file_name()
-        .map_or_else(|| "out.bvh".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));
-    let io = |source| BvhError::Io {
+    lod_policy::file::write_atomic(path, text.as_bytes()).map_err(|source| BvhError::Io {
         path: path.to_path_buf(),
         source,
-    };
-    std::fs::write(&tmp, text.as_bytes()).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io(e)
     })
 }
 

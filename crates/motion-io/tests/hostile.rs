@@ -51,6 +51,10 @@ fn fail(r: Result<Motion, BvhError>) -> BvhError {
 fn small_reference_parses() {
     let m = parse_bvh(SMALL).unwrap();
     assert_eq!((m.skeleton.joints.len(), m.frame_count()), (2, 2));
+    // A UTF-8 byte-order mark first (what some Windows tools write) is not part of the text: it
+    // gave "expected `HIERARCHY`, found `\u{feff}HIERARCHY`".
+    let with_mark = parse_bvh(&format!("\u{feff}{SMALL}")).unwrap();
+    assert_eq!(with_mark, m);
 }
 
 #[test]

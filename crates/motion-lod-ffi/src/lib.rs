@@ -474,10 +474,12 @@ fn controls_of(c: &MlodControls) -> Controls {
     Controls::from_array([c.dx, c.dz, c.turn, c.height]).with_style(StyleMix { weights: c.style })
 }
 
-/// `detail` for `m`, checked: a level the model has and at most its animated joints.
+/// `detail` for `m`, checked: a level the model has; more joints than it animates mean all of
+/// them (`MlodDetail::joints`).
 fn checked_detail(m: &MlodModel, detail: MlodDetail, name: &str) -> Result<Detail, Failure> {
     let lod = m.model.lod();
-    lod.check_detail(Detail::new(detail.level as usize, detail.joints as usize))
+    let joints = (detail.joints as usize).min(lod.joints());
+    lod.check_detail(Detail::new(detail.level as usize, joints))
         .map_err(|e| Failure::invalid(format!("{name}: {e}")))
 }
 
@@ -1513,8 +1515,12 @@ unsafe fn step_walker(
         w.walk.cycle += 1;
         begun += 1;
     }
+    // The foot lock steps in single precision, where a step below about 7e-46 s (accepted:
+    // `0 < dt_s`) is 0, which it refuses: such a step failed after the walk had moved, and ended
+    // it. The smallest normal `f32` is the same as no time for the lock.
+    let lock_dt = (dt_s as f32).max(f32::MIN_POSITIVE);
     // SAFETY: `state` is null or writable per the caller's contract.
-    unsafe { finish_step(w, m, dt_s as f32, begun, state) }
+    unsafe { finish_step(w, m, lock_dt, begun, state) }
 }
 
 /// Moves the walk `dt_s` seconds forward (`0 < dt_s <=` `MLOD_MAX_STEP_S`) and evaluates the frame

@@ -805,3 +805,195 @@ fn ignored_controls_are_the_builds() {
         );
     }
 }
+
+/// Values at the edges of what the header accepts work as it says (found by a C audit,
+/// 2026-11-28): more joints than the model animates mean all of them; a step of 1e-300 s (`0 <
+/// dt_s`, but 0 in single precision, where the foot lock refused it after the walk had moved,
+/// and ended the walk) is a step; a start heading of 1e18 is reported in `(-pi, pi]` (it was
+/// 128).
+#[test]
+fn edge_values_the_header_accepts_work_as_it_says() {
+    let model = common::load_model();
+    let facts = common::model_facts(model);
+    let animated = facts.animated as u32;
+    let controls = middle(&facts);
+    let full = MlodDetail {
+        level: 0,
+        joints: animated,
+    };
+    // SAFETY: live objects; readable inputs; writable outputs throughout.
+    unsafe {
+        let mut walkers = [null_mut::<MlodWalker>(); 3];
+        let mut states = [MlodWalkerState::default(); 3];
+        let more = [
+            full,
+            MlodDetail {
+                joints: animated + 1,
+                ..full
+            },
+            MlodDetail {
+                joints: u32::MAX,
+                ..full
+            },
+        ];
+        for ((w, s), d) in walkers.iter_mut().zip(&mut states).zip(more) {
+            assert_eq!(mlod_walker_new(model, w), MlodStatus::Ok);
+            assert_eq!(
+                mlod_walker_start(*w, model, &controls, d, 0.0, 0.0, 0.0, s),
+                MlodStatus::Ok,
+                "{d:?}: {}",
+                message()
+            );
+        }
+        assert_eq!(states[1], states[0]);
+        assert_eq!(states[2], states[0]);
+        assert_eq!(
+            states[0].detail, full,
+            "the state's detail is clamped to the model's"
+        );
+        let next = MlodDetail {
+            joints: u32::MAX,
+            ..full
+        };
+        for _ in 0..45 {
+            for (k, (&w, s)) in walkers.iter().zip(&mut states).enumerate() {
+                let d = if k == 0 { &full } else { &next };
+                assert_eq!(
+                    mlod_walker_advance(w, model, 1.0 / 30.0, null(), d, s),
+                    MlodStatus::Ok,
+                    "{}",
+                    message()
+                );
+            }
+            assert_eq!(states[1], states[0]);
+            assert_eq!(states[2], states[0]);
+        }
+
+        // Steps of 1e-300 s and the smallest double, with the foot lock on, alone and in a crowd
+        // step: each is a step, and the walkers walk on.
+        for dt in [1e-300, f64::from_bits(1)] {
+            assert!(states[0].foot_locked);
+            assert_eq!(
+                mlod_walker_advance(walkers[0], model, dt, null(), null(), &mut states[0]),
+                MlodStatus::Ok,
+                "{dt}: {}",
+                message()
+            );
+            let cam = camera();
+            let (next, mut visible) = ([controls; 2], [false; 2]);
+            assert_eq!(
+                mlod_walkers_step(
+                    walkers[1..].as_ptr(),
+                    2,
+                    model,
+                    &cam,
+                    1.2,
+                    dt,
+                    next.as_ptr(),
+                    states[1..].as_mut_ptr(),
+                    visible.as_mut_ptr(),
+                ),
+                MlodStatus::Ok,
+                "{dt}: {}",
+                message()
+            );
+        }
+        for (&w, s) in walkers.iter().zip(&mut states) {
+            assert_eq!(
+                mlod_walker_advance(w, model, 1.0 / 30.0, null(), null(), s),
+                MlodStatus::Ok,
+                "{}",
+                message()
+            );
+            assert!(s.root_position.iter().all(|v| v.is_finite()), "{s:?}");
+        }
+
+        // A heading far beyond a turn is reported wrapped.
+        use std::f64::consts::PI;
+        for heading in [1e18, -1e18, 1e300, 7.0] {
+            assert_eq!(
+                mlod_walker_start(
+                    walkers[0],
+                    model,
+                    &controls,
+                    full,
+                    0.0,
+                    0.0,
+                    heading,
+                    &mut states[0]
+                ),
+                MlodStatus::Ok
+            );
+            let h = states[0].heading;
+            assert!(-PI < h && h <= PI, "{heading} -> {h}");
+        }
+        assert_eq!(states[0].heading, 7.0 - 2.0 * PI);
+        for w in walkers {
+            mlod_walker_free(w);
+        }
+        mlod_model_free(model);
+    }
+}
+
+/// A model file whose checksums hold but whose runtime section has one number set to `f32::MAX`
+/// (fixed CRC-32s, as a C audit made 9,000 of them on 2026-11-28: 483 loaded and animated with
+/// infinite joints) is refused when read, or plays finite poses at every level, at the middle of
+/// its controls and at both ends of their range.
+#[test]
+fn a_huge_number_behind_valid_checksums_is_refused_or_plays_finite() {
+    use lod_policy::file::{Section, frame, sections};
+    use lod_policy::{ClipKernel, Controls, Detail, KernelScratch, RuntimeModel};
+    let bytes = model_bytes();
+    let path = std::path::Path::new("m.mlod");
+    let parts = sections(&bytes, path).unwrap();
+    let rtim = parts
+        .iter()
+        .position(|s| s.tag == RuntimeModel::SECTION)
+        .unwrap();
+    let payload = parts[rtim].bytes;
+    let (mut refused, mut played) = (0, 0);
+    for at in (0..payload.len() - 4).step_by(5) {
+        let mut changed = payload.to_vec();
+        changed[at..at + 4].copy_from_slice(&f32::MAX.to_le_bytes());
+        let framed: Vec<Section> = parts
+            .iter()
+            .enumerate()
+            .map(|(i, s)| Section {
+                tag: s.tag,
+                version: s.version,
+                bytes: if i == rtim { &changed } else { s.bytes },
+                offset: 0,
+            })
+            .collect();
+        let Ok(model) = RuntimeModel::from_bytes(&frame(&framed)) else {
+            refused += 1;
+            continue;
+        };
+        played += 1;
+        let lod = model.lod();
+        let range = lod.controls().range().unwrap();
+        let (lo, hi) = (range.min.to_array(), range.max.to_array());
+        let mut scratch = KernelScratch::new(lod);
+        let mut kernel = ClipKernel::new(lod);
+        let mut pose = vec![0.0f32; lod.p()];
+        for c in [lo, std::array::from_fn(|k| 0.5 * lo[k] + 0.5 * hi[k]), hi] {
+            for level in 0..lod.levels().len() {
+                let detail = Detail::new(level, lod.joints());
+                lod.build_kernel(&Controls::from_array(c), detail, &mut scratch, &mut kernel)
+                    .unwrap();
+                for frame in 0..lod.t() {
+                    lod.pose(&kernel, frame as f32, &mut pose).unwrap();
+                    assert!(
+                        pose.iter().all(|v| v.is_finite()),
+                        "f32::MAX at byte {at} of the runtime section: level {level}, controls \
+                         {c:?}, frame {frame}: {pose:?}"
+                    );
+                }
+            }
+        }
+    }
+    assert!(
+        refused > 0 && played > 0,
+        "{refused} refused, {played} played"
+    );
+}

@@ -171,6 +171,19 @@ pub enum DatasetError {
         /// The I/O error.
         source: std::io::Error,
     },
+    /// One folder was given twice (under two names or the same one): every take would be read
+    /// twice, each sample with a twin.
+    #[error(
+        "{} and {} are the same folder: each take would be read twice; give it once",
+        first.display(),
+        second.display()
+    )]
+    SameFolder {
+        /// The folder as first given.
+        first: PathBuf,
+        /// The same folder given again.
+        second: PathBuf,
+    },
     /// The folders hold no `.bvh` file.
     #[error("no .bvh file in {folders}")]
     NoFiles {
@@ -412,14 +425,25 @@ pub struct AlignedSet {
 }
 
 /// Lists the `*.bvh` files (case-insensitive, not recursive) of each folder, sorted by name within a
-/// folder, folders in the given order.
+/// folder, folders in the given order. A folder given twice is an error
+/// ([`DatasetError::SameFolder`]): `cycles bvh bvh` read every take twice, and the model kept
+/// controls by a leave-one-out that left each sample's twin in.
 pub fn list_bvh_files(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
     let mut all = Vec::new();
+    let mut seen: Vec<(PathBuf, &PathBuf)> = Vec::new();
     for dir in dirs {
         let err = |source| DatasetError::Folder {
             path: dir.clone(),
             source,
         };
+        let canonical = std::fs::canonicalize(dir).map_err(err)?;
+        if let Some((_, first)) = seen.iter().find(|(c, _)| *c == canonical) {
+            return Err(DatasetError::SameFolder {
+                first: (*first).clone(),
+                second: dir.clone(),
+            });
+        }
+        seen.push((canonical, dir));
         let mut paths = Vec::new();
         for entry in std::fs::read_dir(dir).map_err(err)? {
             let p = entry.map_err(err)?.path();
@@ -431,6 +455,21 @@ pub fn list_bvh_files(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
         all.extend(paths);
     }
     Ok(all)
+}
+
+/// [`list_bvh_files`], or [`DatasetError::NoFiles`] naming the folders when they hold none.
+fn list_bvh_files_or_none(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
+    let paths = list_bvh_files(dirs)?;
+    if paths.is_empty() {
+        return Err(DatasetError::NoFiles {
+            folders: dirs
+                .iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+        });
+    }
+    Ok(paths)
 }
 
 /// Reads every take of `dirs` and segments it into gait cycles (see the module documentation).
@@ -449,16 +488,7 @@ pub fn load_cycles(
     if dirs.is_empty() {
         return Err(DatasetError::NoInput);
     }
-    let paths = list_bvh_files(dirs)?;
-    if paths.is_empty() {
-        return Err(DatasetError::NoFiles {
-            folders: dirs
-                .iter()
-                .map(|d| d.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-        });
-    }
+    let paths = list_bvh_files_or_none(dirs)?;
     let total = 2 * paths.len();
     let done = AtomicUsize::new(0);
     let tick = || progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
@@ -485,7 +515,8 @@ pub fn load_cycles_like(
     if dirs.is_empty() {
         return Err(DatasetError::NoInput);
     }
-    let paths = list_bvh_files(dirs)?;
+    // An empty held-out folder said "none of the 0 .bvh files could be read".
+    let paths = list_bvh_files_or_none(dirs)?;
     let read: Vec<Result<Motion, String>> = paths
         .par_iter()
         .map(|p| read_bvh(p).map_err(|e| e.to_string()))
@@ -682,7 +713,25 @@ fn cycles_from_takes(
     let segmented: Vec<_> = motions
         .par_iter()
         .map(|(p, n)| {
-            let r = segment_take(&n.motion, &layout, &cycle_config, p, &n.segments);
+            let r = segment_take(&n.motion, &layout, &cycle_config, p, &n.segments)
+                .map_err(|e| e.to_string())
+                .and_then(|report| {
+                    // Numbers no walk has (an OFFSET of 1e300) measure infinite controls: the
+                    // take is refused here, by name, not the build later by a sample index.
+                    match report
+                        .cycles
+                        .iter()
+                        .position(|c| !c.controls.to_array().iter().all(|v| v.is_finite()))
+                    {
+                        Some(k) => Err(format!(
+                            "cycle {} measures controls that are not finite ({:?}): the take's \
+                             OFFSETs or positions hold numbers no walk has",
+                            k + 1,
+                            report.cycles[k].controls.to_array()
+                        )),
+                        None => Ok(report),
+                    }
+                });
             tick();
             r
         })
@@ -1327,6 +1376,7 @@ struct JointMapFile {
 ///
 /// Errors name the line and the unknown or mistyped key.
 pub fn joint_map_from_toml(text: &str) -> Result<FootNames, DatasetError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let map: JointMapFile =
         toml::from_str(text).map_err(|e| DatasetError::JointMap(e.to_string()))?;
     Ok(FootNames {

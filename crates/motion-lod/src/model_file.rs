@@ -16,9 +16,7 @@
 //! panics and the decoder never allocates more than a small multiple of the file (see
 //! [`decode_payload`]).
 
-use std::fs;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use lod_policy::RuntimeModel;
 use lod_policy::file::Section;
@@ -154,33 +152,14 @@ pub fn decode(
     Ok((runtime, layout, report))
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed to disk, then renamed
-/// over `path`. An interrupted run leaves either the old file or the new one, never half of one.
+/// Writes `bytes` to `path` atomically ([`lod_policy::file::write_atomic`]: a temporary file in
+/// the same folder, flushed to disk, then renamed over `path`). An interrupted run leaves either
+/// the old file or the new one, never half of one.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ModelFileError> {
-    let io = |source| ModelFileError::Io {
+    lod_policy::file::write_atomic(path, bytes).map_err(|source| ModelFileError::Io {
         path: path.to_path_buf(),
         source,
-    };
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "model".to_owned());
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut file = fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = fs::remove_file(&tmp);
-        return Err(io(e));
-    }
-    Ok(())
+    })
 }
 
 /// Encodes `model` and writes it to `path` atomically.
@@ -249,6 +228,7 @@ pub fn load(path: &Path) -> Result<MotionModel, ModelFileError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs;
 
     #[test]
     fn atomic_write_replaces_and_leaves_no_temporary() {

@@ -129,6 +129,7 @@ impl Recording {
     /// Reads a recording from its JSON text and checks it: the format and version, a positive
     /// frame time, every pose of the stated length and every number finite.
     pub fn parse(text: &str) -> Result<Recording, RecordingError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let r: Recording = serde_json::from_str(text)?;
         if r.format != RECORDING_FORMAT || r.version != RECORDING_VERSION {
             return Err(RecordingError::Format {

@@ -264,6 +264,8 @@ impl Rule {
 /// Parses `take,style` rows: blank lines and `#` comments skipped, an optional header
 /// `take,style`, the take keyed without `.bvh`. Errors name the line.
 fn parse_table(text: &str) -> Result<BTreeMap<String, String>, String> {
+    // A UTF-8 byte-order mark (a spreadsheet's CSV export) is not part of the first name.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut table = BTreeMap::new();
     for (n, line) in text.lines().enumerate() {
         let line = line.trim();

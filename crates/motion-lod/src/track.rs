@@ -45,6 +45,8 @@ pub fn parse_track(
     styles: &[String],
     default_height: f32,
 ) -> Result<Vec<(f64, Controls)>, TrackError> {
+    // A UTF-8 byte-order mark (a spreadsheet's CSV export) is not part of the header.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let err = |line: usize, message: String| TrackError { line, message };
     let mut lines = text
         .lines()
@@ -99,11 +101,19 @@ pub fn parse_track(
         let number = |k: usize| -> Result<Option<f64>, TrackError> {
             cell(k)
                 .map(|c| {
+                    // Within single precision, which the controls are: `1e300` became an
+                    // infinite control, refused without its line.
                     c.parse::<f64>()
                         .ok()
-                        .filter(|v| v.is_finite())
+                        .filter(|v| v.is_finite() && v.abs() <= f64::from(f32::MAX))
                         .ok_or_else(|| {
-                            err(line, format!("{} {c:?} is not a finite number", COLUMNS[k]))
+                            err(
+                                line,
+                                format!(
+                                    "{} {c:?} is not a finite number (at most 3.4e38 in magnitude)",
+                                    COLUMNS[k]
+                                ),
+                            )
                         })
                 })
                 .transpose()
@@ -158,6 +168,10 @@ mod tests {
         let text = "# a walk that slows and ages\nTime, dx, dz, turn, style\n0,0,1.2,0,normal\n4,0.1,0.8,-10,elderly\n8,0,1.0,25,elderly=0.5;youthful=0.5\n9,0,1.0,0,\n";
         let rows = parse_track(text, &styles(), 1.7).unwrap();
         assert_eq!(rows.len(), 4);
+        // A spreadsheet's byte-order mark before the header (it gave `unknown column
+        // "\u{feff}time"`).
+        let marked = parse_track(&format!("\u{feff}{}", &text[29..]), &styles(), 1.7).unwrap();
+        assert_eq!(marked, rows);
         assert_eq!(rows[0].0, 0.0);
         assert_eq!(rows[0].1.style, StyleMix::one(1));
         assert_eq!(rows[1].1.dx, 0.1);
@@ -177,6 +191,11 @@ mod tests {
             ("time,dx,dz,turn\n0,0,1,0\n0,0,1,0\n", 3, "must increase"),
             ("time,dx,dz,turn\n0,0,x,0\n", 2, "not a finite number"),
             ("time,dx,dz,turn\n0,0,NaN,0\n", 2, "not a finite number"),
+            (
+                "time,dx,dz,turn\n0,0,1.2,0\n1,1e300,1.2,0\n",
+                3,
+                "at most 3.4e38",
+            ),
             ("time,dx,dz,turn\n0,0,1\n", 2, "3 cells for 4 columns"),
             ("time,dx,dz,turn,style\n0,0,1,0,old\n", 2, "no style"),
             (

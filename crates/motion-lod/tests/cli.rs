@@ -219,7 +219,7 @@ fn quality_measures_crowd_walkers_as_the_crowd_plays_them() {
         "{table}"
     );
     let (ok, _, stderr) = run(&["quality", m, "--crowd", "--seconds", "0"]);
-    assert!(!ok && stderr.contains("(0, 3600]"), "{stderr}");
+    assert!(!ok && stderr.contains("[0.001, 3600]"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -372,7 +372,7 @@ fn the_output_says_only_what_was_asked_or_must_be_known() {
     // Every number states its range in the help, and a value outside it is refused.
     let (_, help, _) = run(&["demo", "--help"]);
     assert!(
-        help.contains("1..=1000000") && help.contains("(0, 3600]"),
+        help.contains("1..=1000000") && help.contains("(0.001 to 3600)"),
         "{help}"
     );
     let (_, help, _) = run(&["quality", "--help"]);
@@ -604,6 +604,24 @@ fn styles_tracks_and_ignored_controls_on_the_command_line() {
             && stderr.contains("the other controls imply"),
         "{stderr}"
     );
+    // A track's height column is said as `--height` is (it was ignored unsaid).
+    std::fs::write(
+        dir.join("height.csv"),
+        "time,dx,dz,turn,height\n0,0,1.3,0,1.9\n2,0,1.3,0,1.9\n",
+    )
+    .unwrap();
+    let (ok, _, stderr) = run(&[
+        "synth",
+        &few,
+        "--track",
+        &path("height.csv"),
+        "-o",
+        &path("h.bvh"),
+    ]);
+    assert!(
+        ok && stderr.contains("height 1.900 has no effect"),
+        "{stderr}"
+    );
     // The embedded model: the cross-validation by take keeps turn, but the quality grid's walks
     // with it face against their travel beyond the data's narrow range at the hull's edges (0.8
     // degrees beyond -2.2..3.3), so the quality guard drops it again: a turn given is said with
@@ -784,5 +802,83 @@ fn a_one_take_model_says_why_it_keeps_its_control() {
         controls.iter().any(|l| l.contains("1 take is fewer")),
         "{controls:#?}"
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A reader that has gone away (`motion-lod explain | head -1`) ends the command quietly: every
+/// write to stdout fails with a broken pipe here, from the first. `println!` panicked there
+/// (exit 101, "failed printing to stdout"; found 2026-11-28).
+#[test]
+fn a_closed_pipe_on_stdout_is_not_a_panic() {
+    for args in [
+        &["explain"][..],
+        &["explain", "pop"],
+        &["crowd", "--walkers", "20", "--seconds", "0.5"],
+        &["crowd", "--walkers", "20", "--seconds", "0.5", "--json"],
+    ] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let out = Command::new(BIN)
+            .args(args)
+            .stdout(writer)
+            .output()
+            .expect("the binary runs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success() && !stderr.contains("panicked"),
+            "{args:?}: {:?} {stderr}",
+            out.status
+        );
+    }
+}
+
+/// Options of another mode are refused, not ignored (found 2026-11-28: `quality --walkers 5`
+/// without `--crowd`, `crowd --export-walkers 3` without `--export` ran as if not given), and so
+/// are outputs that are folders or the command's own input, before any work.
+#[test]
+fn options_of_another_mode_and_outputs_that_cannot_be_are_refused() {
+    let dir = std::env::temp_dir().join(format!("mlod-cli-modes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("m.mlod");
+    let m = model.to_str().unwrap();
+    let (ok, _, stderr) = run(&["build", "-o", m, "--samples", "12", "--levels", "2"]);
+    assert!(ok, "{stderr}");
+    let folder_glb = dir.join("clip.glb");
+    std::fs::create_dir_all(&folder_glb).unwrap();
+    let empty = dir.join("no-takes");
+    std::fs::create_dir_all(&empty).unwrap();
+    for (args, says) in [
+        (&["quality", m, "--walkers", "5"][..], "--crowd"),
+        (&["quality", m, "--camera", "ground"], "--crowd"),
+        (&["quality", m, "--crowd", "--level", "0"], "--crowd"),
+        (&["crowd", m, "--export-walkers", "3"], "--export"),
+        (&["crowd", m, "--render-every", "3"], "--render"),
+        (&["crowd", m, "--no-lod", "--policy", "screen"], "--no-lod"),
+        (&["build", "-o", dir.to_str().unwrap()], "it is a folder"),
+        (
+            &[
+                "synth", m, "--dx", "0", "--dz", "1.2", "--turn", "0", "-o", m,
+            ],
+            "is the model",
+        ),
+        (
+            &["crowd", m, "--export", folder_glb.to_str().unwrap()],
+            "it is a folder",
+        ),
+        (
+            &["build", "--control-margin", "-1", "-o", "x.mlod"],
+            "[0, 1]",
+        ),
+        (
+            &["eval", m, "--holdout", empty.to_str().unwrap()],
+            "no .bvh file in",
+        ),
+    ] {
+        let (ok, _, stderr) = run(args);
+        assert!(!ok && stderr.contains(says), "{args:?}: {stderr}");
+    }
+    // The model is still the model.
+    let (ok, _, stderr) = run(&["info", m]);
+    assert!(ok, "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }

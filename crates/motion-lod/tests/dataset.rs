@@ -378,7 +378,76 @@ fn negative_numbers_parse_as_values() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(
-        stderr.contains("-30 is not in (0, 1000]") && !stderr.contains("unexpected argument"),
+        stderr.contains("-30 is not in [1, 1000]") && !stderr.contains("unexpected argument"),
         "{stderr}"
     );
+}
+
+/// A folder given twice, under two names, is refused before any take is read: each take was read
+/// twice, and the build kept controls by a leave-one-out that left each sample's twin in (found
+/// 2026-11-28).
+#[test]
+fn a_folder_given_twice_is_refused() {
+    let dir = std::env::temp_dir().join(format!("mlod-twice-{}", std::process::id()));
+    let sub = dir.join("takes");
+    std::fs::create_dir_all(&sub).unwrap();
+    std::fs::write(sub.join("a.bvh"), "HIERARCHY\n").unwrap();
+    let again = dir.join("takes/../takes");
+    let e = load_cycles(
+        &[sub.clone(), again.clone()],
+        &DatasetConfig::default(),
+        &|_, _| {},
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, motion_lod::dataset::DatasetError::SameFolder { first, second } if *first == sub && *second == again),
+        "{e}"
+    );
+    assert!(e.to_string().contains("same folder"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A take whose numbers no walk has (the Spine's OFFSET at 1e300, which measured an infinite
+/// height) is refused by name with the reason, and the other take is kept: `cycles` printed
+/// `height [1.35, inf] m` and `build` failed on "controls of sample 0" (found 2026-11-28).
+#[test]
+fn a_take_measuring_infinite_controls_is_refused_by_name() {
+    let Some(bandai) =
+        motion_io::test_data::shared_mocap(env!("CARGO_MANIFEST_DIR"), "bandai-namco-2-walk")
+    else {
+        return;
+    };
+    let good = bandai.join("dataset-2_walk_normal_001.bvh");
+    let text = std::fs::read_to_string(&good).unwrap();
+    let dir = std::env::temp_dir().join(format!("mlod-inf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("a_good.bvh"), &text).unwrap();
+    // The first OFFSET after `JOINT Spine`.
+    let spine = text.find("JOINT Spine").unwrap();
+    let at = spine + text[spine..].find("OFFSET ").unwrap() + "OFFSET ".len();
+    let end = at + text[at..].find(' ').unwrap();
+    let huge = format!("{}1e300{}", &text[..at], &text[end..]);
+    let bad = dir.join("b_huge.bvh");
+    std::fs::write(&bad, huge).unwrap();
+    let set = load_cycles(
+        std::slice::from_ref(&dir),
+        &DatasetConfig::default(),
+        &|_, _| {},
+    )
+    .unwrap();
+    assert!(!set.cycles.is_empty());
+    assert!(
+        set.cycles
+            .iter()
+            .all(|c| c.controls.to_array().iter().all(|v| v.is_finite()))
+    );
+    let refused = set
+        .takes
+        .iter()
+        .find(|t| t.path == bad)
+        .expect("the take is listed");
+    assert_eq!(refused.cycles, 0);
+    let reason = refused.reason.as_deref().unwrap_or_default();
+    assert!(reason.contains("not finite"), "{reason}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -122,6 +122,52 @@ fn out_of_range_controls_are_clamped_and_reported() {
     assert!(model.synthesize_walk(&zero).is_err());
 }
 
+/// A walk samples every cycle with at least two frames, and says how many cycles it plays: at
+/// 1e-9 fps it was one frame reported as 832,471,138 cycles, at 1e-300 fps as `usize::MAX`.
+#[test]
+fn a_frame_rate_too_low_for_the_steps_is_refused_and_walks_count_their_cycles() {
+    let (model, _) = built();
+    let req = WalkRequest {
+        controls: lod_policy::Controls::from_array([0.0, 1.2, 0.0, 1.7]),
+        detail: model.lod().full_detail(),
+        cycles: 4,
+        fps: 30.0,
+        blend: true,
+        plant_feet: true,
+    };
+    let walk = model.synthesize_walk(&req).unwrap();
+    assert_eq!(walk.cycles, 4);
+    let duration = walk.cycle_seconds;
+    let track = [
+        (0.0, req.controls),
+        (
+            duration * 1.5,
+            lod_policy::Controls::from_array([0.0, 1.0, 0.3, 1.7]),
+        ),
+    ];
+    // Rows at 0 s and mid second cycle: the walk ends with the third cycle, the first to start
+    // after the last row.
+    assert_eq!(model.synthesize_track(&req, &track).unwrap().cycles, 3);
+    // Two frames a cycle is the least.
+    let least = WalkRequest {
+        fps: 2.01 / duration,
+        ..req
+    };
+    assert_eq!(model.synthesize_walk(&least).unwrap().cycles, 4);
+    for fps in [1.9 / duration, 0.5, 1e-9, 1e-300] {
+        let low = WalkRequest { fps, ..req };
+        for e in [
+            model.synthesize_walk(&low).unwrap_err(),
+            model.synthesize_track(&low, &track).unwrap_err(),
+        ] {
+            assert!(
+                e.to_string().contains("needs at least 2 a cycle"),
+                "{fps}: {e}"
+            );
+        }
+    }
+}
+
 #[test]
 fn crowd_runs_with_the_model_and_the_naive_source_identically_for_any_thread_count() {
     let (model, analysis) = built();

@@ -7,41 +7,20 @@ use crate::camera::Camera;
 use crate::crowd::Crowd;
 use crate::error::RenderError;
 use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Temporary sibling of `path`: `.<name>.tmp` in the same directory (same file system).
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp"))
-}
-
-/// Writes through `body` into a temp file, then renames it to `path`; removes the temp file on
-/// any failure.
+/// Encodes through `body` into memory, then writes the bytes to `path` atomically
+/// ([`lod_policy::file::write_atomic`]: a temporary file renamed over it, removed on failure).
 fn write_atomic(
     path: &Path,
-    body: impl FnOnce(&mut BufWriter<File>) -> Result<(), RenderError>,
+    body: impl FnOnce(&mut Vec<u8>) -> Result<(), RenderError>,
 ) -> Result<(), RenderError> {
-    let tmp = temp_path(path);
-    let io = |source| RenderError::Io {
+    let mut bytes = Vec::new();
+    body(&mut bytes)?;
+    lod_policy::file::write_atomic(path, &bytes).map_err(|source| RenderError::Io {
         path: path.to_path_buf(),
         source,
-    };
-    let result = (|| {
-        let mut w = BufWriter::new(File::create(&tmp).map_err(io)?);
-        body(&mut w)?;
-        w.flush().map_err(io)?;
-        w.get_ref().sync_all().map_err(io)?;
-        drop(w);
-        std::fs::rename(&tmp, path).map_err(io)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    })
 }
 
 /// Writes `img` as an 8-bit RGB PNG at `path`, atomically (temp file + rename).

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context as _;
+use anyhow::{Context as _, bail};
 use clap::Args;
 use motion_lod::build::RowWeights;
 use motion_lod::progress::{NoProgress, Progress};
@@ -42,14 +42,14 @@ pub struct ModelArgs {
     #[arg(long, value_enum, default_value_t = Weights::Position)]
     pub row_weights: Weights,
     /// A varying control stays in the model unless leaving it out lowers the error of 5-fold
-    /// cross-validation by take by more than this fraction (0.01 = 1%); with fewer than 10 takes,
-    /// only when leaving it out raises the kriging's leave-one-out error by more than it ...
-    #[arg(long, value_name = "FRACTION", default_value_t = BuildConfig::default().control_margin)]
+    /// cross-validation by take by more than this fraction (0.01 = 1%; 0 to 1); with fewer than
+    /// 10 takes, only when leaving it out raises the kriging's leave-one-out error by more than it ...
+    #[arg(long, value_name = "FRACTION", default_value_t = BuildConfig::default().control_margin, value_parser = super::ranges::control_margin)]
     pub control_margin: f64,
     /// ... and (leave-one-out only) when that rise is beyond noise: its paired t statistic over the
     /// samples reaches this value (1 = about 84% one-sided, 2 = about 97.5%; 0 tests the margin
-    /// alone).
-    #[arg(long, value_name = "T", default_value_t = BuildConfig::default().control_min_t)]
+    /// alone; at most 100).
+    #[arg(long, value_name = "T", default_value_t = BuildConfig::default().control_min_t, value_parser = super::ranges::control_min_t)]
     pub control_min_t: f64,
     /// Keep every control that varies over the data (no selection, no quality guard).
     #[arg(long)]
@@ -154,8 +154,12 @@ pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::R
 }
 
 /// Checks that a file can be created beside `path` (its folder exists and takes new files), by
-/// creating and removing an empty probe file there; nothing at `path` itself is touched.
+/// creating and removing an empty probe file there, and that `path` is not a folder; nothing at
+/// `path` itself is touched.
 pub fn check_writable(path: &std::path::Path) -> anyhow::Result<()> {
+    if path.is_dir() {
+        bail!("cannot write {}: it is a folder", path.display());
+    }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => std::path::Path::new("."),
@@ -171,6 +175,28 @@ pub fn check_writable(path: &std::path::Path) -> anyhow::Result<()> {
         )
     })?;
     let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// Refuses an output that is one of the command's inputs, `inputs` being `(what it is, path)`:
+/// `synth m.mlod -o m.mlod` replaced the model with a BVH (found 2026-11-28). An output that does
+/// not exist yet is none of them.
+pub fn check_not_input(
+    output: &std::path::Path,
+    inputs: &[(&str, &std::path::Path)],
+) -> anyhow::Result<()> {
+    let Ok(out) = std::fs::canonicalize(output) else {
+        return Ok(());
+    };
+    if let Some((what, _)) = inputs
+        .iter()
+        .find(|(_, input)| std::fs::canonicalize(input).is_ok_and(|i| i == out))
+    {
+        bail!(
+            "{} is {what}: writing there would replace it; choose another output",
+            output.display()
+        );
+    }
     Ok(())
 }
 
@@ -191,10 +217,10 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
     if args.json {
         let mut line = serde_json::to_value(motion_lod::info::summary(&model))?;
         line["seconds"] = serde_json::json!(seconds);
-        println!("{line}");
+        out!("{line}");
     } else {
         motion_lod::info::write_report(&mut std::io::stdout().lock(), &model)?;
-        println!("built in {seconds:.1} s; wrote {}", args.output.display());
+        out!("built in {seconds:.1} s; wrote {}", args.output.display());
     }
     Ok(())
 }

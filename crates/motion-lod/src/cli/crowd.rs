@@ -71,20 +71,20 @@ pub struct CrowdArgs {
     /// Number of walkers (1..=1000000).
     #[arg(long, default_value_t = 1000, value_parser = super::ranges::count(super::ranges::WALKERS))]
     pub walkers: usize,
-    /// Simulated seconds (0 < s <= 3600).
+    /// Simulated seconds (0.001 to 3600).
     #[arg(long, default_value_t = 10.0, value_parser = super::ranges::seconds)]
     pub seconds: f32,
-    /// Walkers per square metre, sets the field size (0 < d <= 10).
+    /// Walkers per square metre, sets the field size (0.000001 to 10).
     #[arg(long, default_value_t = 0.05, value_parser = super::ranges::density)]
     pub density: f32,
-    /// Frames per second of the simulation (0 < fps <= 1000).
+    /// Frames per second of the simulation (1 to 1000).
     #[arg(long, default_value_t = 30.0, value_parser = super::ranges::fps_f32)]
     pub fps: f32,
     /// Seed of the walkers' paths.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Level-of-detail policy.
-    #[arg(long, value_enum, default_value_t = PolicyArg::Distance)]
+    #[arg(long, value_enum, default_value_t = PolicyArg::Distance, conflicts_with = "no_lod")]
     pub policy: PolicyArg,
     /// Every walker at full detail, visible or not, with every source: no level of detail at all.
     #[arg(long)]
@@ -117,7 +117,7 @@ pub struct CrowdArgs {
     #[arg(long, value_name = "DIR")]
     pub render: Option<PathBuf>,
     /// Render every n-th frame (1..=1000000).
-    #[arg(long, default_value_t = 30, value_parser = super::ranges::count(super::ranges::RENDER_EVERY))]
+    #[arg(long, default_value_t = 30, value_parser = super::ranges::count(super::ranges::RENDER_EVERY), requires = "render")]
     pub render_every: usize,
     /// Print one JSON line instead of the report.
     #[arg(long)]
@@ -136,29 +136,16 @@ pub struct CrowdArgs {
     #[arg(long, value_name = "FILE.glb")]
     pub export: Option<PathBuf>,
     /// Walkers written by `--export`, spread evenly over their distance from the camera (1..=1000).
-    #[arg(long, default_value_t = 24, value_parser = super::ranges::count((1, 1000)))]
+    #[arg(long, default_value_t = 24, value_parser = super::ranges::count((1, 1000)), requires = "export")]
     pub export_walkers: usize,
-    /// Seconds recorded by `--export` (0 < s <= 60).
-    #[arg(long, default_value_t = 3.0, value_parser = export_seconds)]
+    /// Seconds recorded by `--export` (0.001 to 60).
+    #[arg(long, default_value_t = 3.0, value_parser = super::ranges::export_seconds, requires = "export")]
     pub export_seconds: f32,
     /// Run the crowd on the GPU (crate `gpu-crowd`, wgpu compute shaders; Vulkan by default) and
     /// time its frames; needs a build with `--features gpu`. Seams and the foot lock are off on
     /// the GPU.
     #[arg(long, conflicts_with_all = ["naive", "pca", "compare_naive", "compare_pca", "render", "export"])]
     pub gpu: bool,
-}
-
-/// `--export-seconds`: in `(0, 60]`.
-fn export_seconds(s: &str) -> Result<f32, String> {
-    let v: f32 = s
-        .trim()
-        .parse()
-        .map_err(|e| format!("`{s}` is not a number ({e})"))?;
-    if v.is_finite() && v > 0.0 && v <= 60.0 {
-        Ok(v)
-    } else {
-        Err(format!("{s} is not in (0, 60]"))
-    }
 }
 
 #[derive(Debug, Serialize)]
@@ -328,6 +315,10 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         }
         // Say now, not after the crowd has run, when the clip cannot be written where asked.
         super::build::check_writable(path).context("--export")?;
+        if let Some(model) = &args.model {
+            super::build::check_not_input(path, &[("the model", model.as_path())])
+                .context("--export")?;
+        }
     }
     if args.gpu {
         return super::gpu::run(&args);
@@ -415,7 +406,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             clip_faults: main.report.clip_faults,
             frame_ms: frame_ms(&main.report, args.fps),
         };
-        println!("{}", serde_json::to_string(&summary)?);
+        out!("{}", serde_json::to_string(&summary)?);
         if let Some(msg) = exported {
             eprintln!("{msg}");
         }
@@ -428,11 +419,15 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     } else {
         ("multilinear LOD", "LOD")
     };
-    println!(
+    out!(
         "{} walkers, {:.1} s at {} fps ({} frames), {source_name}, field {:.0} m",
-        args.walkers, args.seconds, args.fps, main.report.frames, main.field_m
+        args.walkers,
+        args.seconds,
+        args.fps,
+        main.report.frames,
+        main.field_m
     );
-    println!(
+    out!(
         "scene: camera {}, {} walkers per square metre, seed {}, {} policy; every frame timed from \
          the first (clip builds of the first cycle included); `cargo xtask tables` (section 4) times \
          another scene: density 0.01 after a warm-up",
@@ -445,15 +440,15 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         args.policy_name()
     );
     if let Some(from) = main.field_enlarged_from {
-        println!(
+        out!(
             "note: the model turns little per cycle, so its walkers need paths of large radius: \
              field enlarged from {from:.0} m to {:.0} m",
             main.field_m
         );
     }
-    println!("{}", main.report);
+    out!("{}", main.report);
     if let Some(t) = frame_ms(&main.report, args.fps) {
-        println!(
+        out!(
             "frame times after the first {WARMUP_S} s ({} frames): median {:.2} ms, p99 {:.2} ms, \
              worst {:.2} ms ({:.2}x the median); buffers allocated: {} in {} frames",
             t.frames,
@@ -465,25 +460,25 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
             t.allocating_frames
         );
     }
-    println!(
+    out!(
         "levels in the last frame (accuracy 0.., then root only): {:?}",
         main.last.level_histogram
     );
     if let (Some(n), Some(r)) = (&naive, ratio) {
-        println!("naive interpolation on the same crowd (same policy):");
-        println!("{}", n.report);
-        println!("{short} / naive mean frame rate: {r:.2}x");
+        out!("naive interpolation on the same crowd (same policy):");
+        out!("{}", n.report);
+        out!("{short} / naive mean frame rate: {r:.2}x");
     }
     if let (Some(n), Some(r)) = (&pca, pca_ratio) {
-        println!("PCA baseline on the same crowd (same policy):");
-        println!("{}", n.report);
-        println!("{short} / PCA mean frame rate: {r:.2}x");
+        out!("PCA baseline on the same crowd (same policy):");
+        out!("{}", n.report);
+        out!("{short} / PCA mean frame rate: {r:.2}x");
     }
     if let Some(msg) = exported {
-        println!("{msg}");
+        out!("{msg}");
     }
     if let Some(dir) = &args.render {
-        println!(
+        out!(
             "rendered {} frames into {} (frame_*.png, map_*.png){}",
             main.rendered,
             dir.display(),

@@ -102,6 +102,16 @@ pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
             super::build::check_writable(path).context(flag)?;
         }
     }
+    if let (Some(tensor), Some(controls)) = (&args.tensor, &args.controls)
+        && (tensor == controls
+            || std::fs::canonicalize(tensor)
+                .is_ok_and(|t| std::fs::canonicalize(controls).is_ok_and(|c| c == t)))
+    {
+        anyhow::bail!(
+            "--tensor and --controls both name {}: the controls would replace the tensor",
+            tensor.display()
+        );
+    }
     let loaded = match load(
         &args.data.spec()?,
         args.data.style_spec().as_ref(),
@@ -123,7 +133,7 @@ pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
                     error: format!("{e:#}"),
                     files,
                 };
-                println!("{}", serde_json::to_string(&line)?);
+                out!("{}", serde_json::to_string(&line)?);
             }
             return Err(e);
         }

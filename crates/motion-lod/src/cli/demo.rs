@@ -14,7 +14,7 @@ pub struct DemoArgs {
     /// Number of walkers (1..=1000000).
     #[arg(long, default_value_t = 1000, value_parser = super::ranges::count(super::ranges::WALKERS))]
     pub walkers: usize,
-    /// Simulated seconds ((0, 3600]).
+    /// Simulated seconds (0.001 to 3600).
     #[arg(long, default_value_t = 10.0, value_parser = super::ranges::seconds)]
     pub seconds: f32,
     /// Where to write the rendered frames, maps, GIF and the glTF clip `crowd.glb`.
@@ -24,9 +24,7 @@ pub struct DemoArgs {
 
 /// Runs the subcommand.
 pub fn run(args: DemoArgs) -> anyhow::Result<()> {
-    println!(
-        "building a model from the embedded data set (procedural walker, 3 performers, 120 Hz)"
-    );
+    out!("building a model from the embedded data set (procedural walker, 3 performers, 120 Hz)");
     super::crowd::run(CrowdArgs {
         model: None,
         walkers: args.walkers,
@@ -52,7 +50,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         export_seconds: 3.0,
         gpu: false,
     })?;
-    println!(
+    out!(
         "the crowd as a 3D file: {} (glTF 2.0, any engine or viewer); in a browser: motion-lod view {}",
         args.render.join("crowd.glb").display(),
         args.render.join("crowd.glb").display()

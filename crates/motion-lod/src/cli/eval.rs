@@ -133,16 +133,16 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         let report = k_fold(&loaded.training, &config, folds, by, &eval_config, progress)
             .context("cross-validation by refitting")?;
         if args.json {
-            println!("{}", serde_json::to_string(&report)?);
+            out!("{}", serde_json::to_string(&report)?);
         } else {
-            println!(
+            out!(
                 "{folds}-fold cross-validation by {}, every method refitted on the other folds \
                  (held out per fold: {:?})",
                 by.name(),
                 report.fold_sizes
             );
             let first_training = report.pooled.samples - report.fold_sizes[0];
-            println!(
+            out!(
                 "{} held-out cycles of {} samples, each predicted by the model of its fold (trained on \
                  the other folds); ranks and bytes are the first fold's model's ({first_training} \
                  training cycles): raw {} bytes (f64), hybrid model {} bytes (f64)",
@@ -151,7 +151,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
                 report.pooled.raw_bytes,
                 report.pooled.model_bytes
             );
-            print_methods(&report.pooled);
+            print_methods(&report.pooled)?;
         }
         return Ok(());
     }
@@ -165,14 +165,12 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         args.json,
     )?;
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        out!("{}", serde_json::to_string(&report)?);
     } else {
         if args.holdout.is_empty() {
-            println!(
-                "leave-one-out with the factors fitted on all samples (--folds K refits them)"
-            );
+            out!("leave-one-out with the factors fitted on all samples (--folds K refits them)");
         }
-        print(&report);
+        print(&report)?;
     }
     Ok(())
 }
@@ -244,18 +242,21 @@ pub fn evaluate(
     .context("held-out evaluation")
 }
 
-fn print(r: &EvalReport) {
-    println!(
+fn print(r: &EvalReport) -> std::io::Result<()> {
+    out!(
         "{} cycles evaluated against {} training samples; raw samples {} bytes (f64), hybrid model {} bytes (f64)",
-        r.evaluated, r.samples, r.raw_bytes, r.model_bytes
+        r.evaluated,
+        r.samples,
+        r.raw_bytes,
+        r.model_bytes
     );
-    print_methods(r);
+    print_methods(r)
 }
 
 /// The per-method table of `r`: one multilinear row per key level (`key`), with the accuracy level
 /// that key is (`acc.level`, what `--level` and `info` number); `motion-lod explain` defines both.
-fn print_methods(r: &EvalReport) {
-    println!(
+fn print_methods(r: &EvalReport) -> std::io::Result<()> {
+    out!(
         "  method          key  acc.level  ranks           joint error   shell error   bytes (f64)"
     );
     let mut key = 0;
@@ -267,7 +268,7 @@ fn print_methods(r: &EvalReport) {
             }
             None => ("-".to_string(), "-".to_string()),
         };
-        println!(
+        out!(
             "  {:<14}  {:>3}  {:>9}  {:<14}  {:>8.3} cm  {:>9.2} cm  {:>12}",
             m.name,
             key_col,
@@ -279,13 +280,17 @@ fn print_methods(r: &EvalReport) {
         );
     }
     if !r.styles.is_empty() {
-        println!("  per style (held-out cycles):   level 0      naive kriging");
+        out!("  per style (held-out cycles):   level 0      naive kriging");
         for st in &r.styles {
-            println!(
+            out!(
                 "  {:<16} {:>5} cycles  {:>7.3} cm   {:>7.3} cm",
-                st.style, st.evaluated, st.level0_cm, st.naive_cm
+                st.style,
+                st.evaluated,
+                st.level0_cm,
+                st.naive_cm
             );
         }
     }
-    println!("  (terms: motion-lod explain \"key level\", \"accuracy level\", \"shell error\")");
+    out!("  (terms: motion-lod explain \"key level\", \"accuracy level\", \"shell error\")");
+    Ok(())
 }

@@ -383,29 +383,38 @@ fn key(s: &str) -> String {
         .join(" ")
 }
 
-/// The entry for `term`, by its name or an alias.
+/// The entry for `term`: by its name or an alias as the list writes it, then by either with case,
+/// `--`, `-`, `_` and `.` folded ([`key`]). Folded first, `T` (the tensor's frames) opened the
+/// `t` statistic's entry and `levels` the key level's (`--levels`; found 2026-11-28).
 pub fn find(term: &str) -> Option<&'static Entry> {
+    let exact = term.trim();
     let k = key(term);
-    GLOSSARY.iter().find(|e| key(e.term) == k).or_else(|| {
-        GLOSSARY
-            .iter()
-            .find(|e| e.aliases.iter().any(|a| key(a) == k))
-    })
+    GLOSSARY
+        .iter()
+        .find(|e| e.term == exact)
+        .or_else(|| GLOSSARY.iter().find(|e| e.aliases.contains(&exact)))
+        .or_else(|| GLOSSARY.iter().find(|e| key(e.term) == k))
+        .or_else(|| {
+            GLOSSARY
+                .iter()
+                .find(|e| e.aliases.iter().any(|a| key(a) == k))
+        })
 }
 
 /// Runs the subcommand.
 pub fn run(args: ExplainArgs) -> anyhow::Result<()> {
     if args.term.is_empty() {
-        println!("terms (motion-lod explain TERM):");
+        out!("terms (motion-lod explain TERM):");
+        let width = GLOSSARY.iter().map(|e| e.term.len()).max().unwrap_or(0);
         for e in GLOSSARY {
-            println!("  {:<16} {}", e.term, e.aliases.join(", "));
+            out!("  {:<width$}  {}", e.term, e.aliases.join(", "));
         }
         return Ok(());
     }
     let term = args.term.join(" ");
     match find(&term) {
         Some(e) => {
-            println!("{}: {}", e.term, e.text);
+            out!("{}: {}", e.term, e.text);
             Ok(())
         }
         None => anyhow::bail!(
@@ -416,5 +425,36 @@ pub fn run(args: ExplainArgs) -> anyhow::Result<()> {
                 .collect::<Vec<_>>()
                 .join(", ")
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every name and every alias as the list writes it opens its own entry (or, for an alias
+    /// two entries list, the first of them).
+    #[test]
+    fn every_listed_name_and_alias_opens_its_entry() {
+        for e in GLOSSARY {
+            assert_eq!(find(e.term).unwrap().term, e.term);
+            for a in e.aliases {
+                let first = GLOSSARY
+                    .iter()
+                    .find(|g| g.term == *a)
+                    .or_else(|| GLOSSARY.iter().find(|g| g.aliases.contains(a)));
+                assert_eq!(
+                    find(a).unwrap().term,
+                    first.unwrap().term,
+                    "{a} ({})",
+                    e.term
+                );
+            }
+        }
+        assert_eq!(find("T").unwrap().term, "tensor");
+        assert_eq!(find("t").unwrap().term, "leave-one-out");
+        assert_eq!(find("levels").unwrap().term, "accuracy level");
+        assert_eq!(find("--levels").unwrap().term, "key level");
+        assert_eq!(find("Key_Level").unwrap().term, "key level");
     }
 }

@@ -76,7 +76,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     };
     let _ = levels;
     if args.json {
-        println!(
+        out!(
             "{{\"gpu\":{:?},\"walkers\":{},\"frames\":{},\"ms_mean\":{mean:.4},\"ms_p50\":{:.4},\"ms_p99\":{:.4},\"ms_worst\":{:.4},\"gpu_bytes\":{},\"levels\":{:?}}}",
             crowd.adapter_name(),
             args.walkers,
@@ -89,7 +89,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    println!(
+    out!(
         "{} walkers on the GPU ({}), {:.1} s at {} fps ({frames} frames), field {field:.0} m, {} policy",
         args.walkers,
         crowd.adapter_name(),
@@ -98,18 +98,16 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         args.policy_name()
     );
     if gpu.is_software() {
-        println!(
-            "note: a software adapter (it runs on the CPU): its timings say nothing about a GPU"
-        );
+        out!("note: a software adapter (it runs on the CPU): its timings say nothing about a GPU");
     }
-    println!("not on the GPU yet: seam inertialization and the foot lock (both off in this run)");
-    println!(
+    out!("not on the GPU yet: seam inertialization and the foot lock (both off in this run)");
+    out!(
         "set-up {:.0} ms (walkers placed, first clips built); GPU memory {:.1} MB ({:.0} bytes a walker)",
         setup.as_secs_f64() * 1e3,
         crowd.gpu_bytes() as f64 / 1e6,
         crowd.gpu_bytes() as f64 / args.walkers as f64
     );
-    println!(
+    out!(
         "frame times (step: upload, compute, read-back of the counters) after the first {warmup} frames: \
          median {:.2} ms, p99 {:.2} ms, worst {:.2} ms; mean over all frames {mean:.2} ms ({:.1} fps)",
         pct(0.5),
@@ -117,9 +115,11 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         after.last().copied().unwrap_or(0.0),
         1e3 / mean.max(1e-9)
     );
-    println!(
+    out!(
         "last frame: {} in view, {} clips built; levels (accuracy 0.., then root only): {:?}",
-        last.visible, last.kernels_built, last.level_histogram
+        last.visible,
+        last.kernels_built,
+        last.level_histogram
     );
     Ok(())
 }

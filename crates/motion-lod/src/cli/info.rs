@@ -23,7 +23,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
     let model = MotionModel::load(&args.model)
         .with_context(|| format!("reading {}", args.model.display()))?;
     if args.json {
-        println!("{}", serde_json::to_string(&summary(&model))?);
+        out!("{}", serde_json::to_string(&summary(&model))?);
     } else {
         write_report(&mut std::io::stdout().lock(), &model)?;
     }

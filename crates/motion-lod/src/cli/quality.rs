@@ -22,13 +22,13 @@ pub struct QualityArgs {
     pub model: PathBuf,
     /// Only this accuracy level (0 = full detail; default: every level; 0..=10000, and below the
     /// model's count).
-    #[arg(long, value_parser = super::ranges::count(super::ranges::LEVEL))]
+    #[arg(long, value_parser = super::ranges::count(super::ranges::LEVEL), conflicts_with = "crowd")]
     pub level: Option<usize>,
     /// Evaluated joints (default: all; 0..=10000, more than the model has means all).
     #[arg(long, value_parser = super::ranges::count(super::ranges::JOINTS))]
     pub joints: Option<usize>,
     /// Cycles per walk (2 to 64).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, conflicts_with = "crowd")]
     pub cycles: usize,
     /// Switch cycles without the seam transition (as the crowd does for far walkers).
     #[arg(long)]
@@ -43,16 +43,16 @@ pub struct QualityArgs {
     #[arg(long)]
     pub crowd: bool,
     /// Walkers of `--crowd` (1..=10000).
-    #[arg(long, default_value_t = 200, value_parser = super::ranges::count((1, 10_000)))]
+    #[arg(long, default_value_t = 200, value_parser = super::ranges::count((1, 10_000)), requires = "crowd")]
     pub walkers: usize,
-    /// Walkers per square metre of `--crowd`, sets the field size (0 < d <= 10).
-    #[arg(long, default_value_t = 0.01, value_parser = super::ranges::density)]
+    /// Walkers per square metre of `--crowd`, sets the field size (0.000001 to 10).
+    #[arg(long, default_value_t = 0.01, value_parser = super::ranges::density, requires = "crowd")]
     pub density: f32,
-    /// Simulated seconds of `--crowd` (0 < s <= 3600).
-    #[arg(long, default_value_t = 10.0, value_parser = super::ranges::seconds)]
+    /// Simulated seconds of `--crowd` (0.001 to 3600).
+    #[arg(long, default_value_t = 10.0, value_parser = super::ranges::seconds, requires = "crowd")]
     pub seconds: f32,
     /// Camera of `--crowd`: `ground` walks inside the crowd, `overview` circles above it.
-    #[arg(long, value_enum, default_value_t = super::crowd::CameraArg::Overview)]
+    #[arg(long, value_enum, default_value_t = super::crowd::CameraArg::Overview, requires = "crowd")]
     pub camera: super::crowd::CameraArg,
     /// Print one JSON document instead of the table.
     #[arg(long)]
@@ -196,7 +196,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         }
         let mut reference = reference.clone();
         reference.cycle_steps.clear();
-        println!(
+        out!(
             "{}",
             serde_json::to_string(&Doc {
                 reference: &reference,
@@ -207,9 +207,9 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     }
     let m = &reference.median;
     if let Some(styles) = postures {
-        println!("posture of each style's cycles (median, 10th-90th percentile):");
+        out!("posture of each style's cycles (median, 10th-90th percentile):");
         for st in styles {
-            println!(
+            out!(
                 "  {:<12} knee extension {:5.1} deg ({:.1}-{:.1}), head pitch {:5.1} deg ({:.1}-{:.1}), {} cycles",
                 st.style,
                 st.knee_extension_deg.median,
@@ -222,7 +222,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             );
         }
     }
-    println!(
+    out!(
         "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s, contact {:.2}, floating {:.2} cm, \
          float {:.2} cm, facing {:.1} deg (range {:.1}..{:.1}), floor at {:.3} m",
         reference.takes,
@@ -241,10 +241,10 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
     } else {
         String::new()
     };
-    println!(
+    out!(
         "x data: the walk's figure over the data's takes of similar step length (`explain x data`)"
     );
-    println!(
+    out!(
         "{:<16} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>12}{posture_head}",
         "walk",
         "level",
@@ -271,7 +271,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
             ),
             _ => String::new(),
         };
-        println!(
+        out!(
             "{:<16} {:>5} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.1} {:>12}{posture}",
             r.walk.name,
             r.level,
@@ -296,7 +296,7 @@ pub fn run(args: QualityArgs) -> anyhow::Result<()> {
         .map(|w| w.name.as_str())
         .collect();
     if !outside.is_empty() {
-        println!(
+        out!(
             "outside the data's hull (measured, held to no threshold; `explain hull`): {}",
             outside.join(", ")
         );
@@ -335,7 +335,7 @@ fn run_recorded(
             frame_time: f64,
             levels: (usize, usize),
         }
-        println!(
+        out!(
             "{}",
             serde_json::to_string(&Doc {
                 data: m,
@@ -348,18 +348,22 @@ fn run_recorded(
         );
         return Ok(());
     }
-    println!(
+    out!(
         "{}: {} frames of {:.4} s, {} seams, levels {lo}..{hi} (measured from the first seam)",
         path.display(),
         recording.frames.len(),
         recording.frame_time,
         track.seams.len()
     );
-    println!(
+    out!(
         "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s, contact {:.2}, floating {:.2} cm",
-        reference.takes, m.pop_cm, m.skate_cm_s, m.contact_share, m.floating_cm
+        reference.takes,
+        m.pop_cm,
+        m.skate_cm_s,
+        m.contact_share,
+        m.floating_cm
     );
-    println!(
+    out!(
         "recorded: pop {:.2} cm/frame^2 ({:.2}x the data), seam pop {:.2}, skate {:.2} cm/s ({:.2}x), \
          contact {:.2}, floating {:.2} cm, floor offset {:.2} cm",
         q.pop_cm,
@@ -405,7 +409,7 @@ fn run_crowd(
             data: &'a MotionQuality,
             walkers: &'a [motion_lod::crowd::WalkerQuality],
         }
-        println!(
+        out!(
             "{}",
             serde_json::to_string(&Doc {
                 data: &reference.median,
@@ -415,7 +419,7 @@ fn run_crowd(
         return Ok(());
     }
     let m = &reference.median;
-    println!(
+    out!(
         "scene: {} walkers, {} per m^2, {} camera, distance policy, {} s at 30 fps; each walker's \
          longest stretch drawn (in view, with joints; after its first seam, at least two cycles)",
         args.walkers,
@@ -426,11 +430,14 @@ fn run_crowd(
         },
         args.seconds
     );
-    println!(
+    out!(
         "data ({} takes): pop {:.2} cm/frame^2, skate {:.2} cm/s, contact {:.2}",
-        reference.takes, m.pop_cm, m.skate_cm_s, m.contact_share
+        reference.takes,
+        m.pop_cm,
+        m.skate_cm_s,
+        m.contact_share
     );
-    println!(
+    out!(
         "{:>6} {:>7} {:>7} {:>7} {:>6} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "walker",
         "frames",
@@ -448,7 +455,7 @@ fn run_crowd(
     );
     for w in &walkers {
         let q = &w.quality;
-        println!(
+        out!(
             "{:>6} {:>7} {:>7} {:>7} {:>6} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
             w.walker,
             w.frames,
@@ -466,7 +473,7 @@ fn run_crowd(
         );
     }
     if walkers.is_empty() {
-        println!(
+        out!(
             "no walker was drawn (in view, with joints) for two cycles; try more --seconds or --walkers"
         );
     }

@@ -8,12 +8,16 @@ use clap::builder::{RangedU64ValueParser, TypedValueParser};
 pub const CYCLES: (u64, u64) = (1, 10_000);
 /// `--walkers` of `crowd` and `demo`.
 pub const WALKERS: (u64, u64) = (1, 1_000_000);
-/// `--seconds` of `crowd` and `demo`: simulated seconds, in `(0, max]` (one hour).
-pub const SECONDS_MAX: f64 = 3600.0;
-/// `--fps` of `synth` and `crowd`: frames per second, in `(0, max]`.
-pub const FPS_MAX: f64 = 1000.0;
-/// `--density` of `crowd`: walkers per square metre, in `(0, max]`.
-pub const DENSITY_MAX: f64 = 10.0;
+/// `--seconds` of `crowd`, `demo` and `quality --crowd`: simulated seconds, from a millisecond to an
+/// hour.
+pub const SECONDS: (f64, f64) = (0.001, 3600.0);
+/// `--fps` of `synth` and `crowd`: frames per second. Below one frame a second a walk's steps
+/// are not seen (a cycle lasts about a second), and far below it the frame time leaves the
+/// numbers a crowd steps by.
+pub const FPS: (f64, f64) = (1.0, 1000.0);
+/// `--density` of `crowd` and `quality --crowd`: walkers per square metre, from one per square
+/// kilometre (a million walkers on a field of 1,000 km) to ten.
+pub const DENSITY: (f64, f64) = (1e-6, 10.0);
 /// `--frames` (aligned frames per cycle T).
 pub const FRAMES: (u64, u64) = (2, 2_000);
 /// `--levels` (key levels N).
@@ -44,32 +48,42 @@ pub fn count(range: (u64, u64)) -> impl TypedValueParser<Value = usize> {
     RangedU64ValueParser::<usize>::new().range(range.0..=range.1)
 }
 
-/// A finite number in `(0, max]`, or a message naming the value and the range.
-fn positive_up_to(s: &str, max: f64) -> Result<f64, String> {
+/// `--control-margin` of `build`: a fraction of the error (1 = 100%).
+pub const CONTROL_MARGIN: (f64, f64) = (0.0, 1.0);
+/// `--control-min-t` of `build`: a t statistic (0 tests the margin alone).
+pub const CONTROL_MIN_T: (f64, f64) = (0.0, 100.0);
+/// `--export-seconds` of `crowd`: seconds of the crowd recorded as glTF.
+pub const EXPORT_SECONDS: (f64, f64) = (0.001, 60.0);
+
+/// A number in `[range.0, range.1]`, or a message naming the value and the range. A closed lower
+/// bound, not `(0, max]`: `1e-300` is positive but is 0 as an `f32`, and a frame rate of `1e-9`
+/// gave a walk of one frame.
+fn within(s: &str, range: (f64, f64)) -> Result<f64, String> {
+    debug_assert!(0.0 <= range.0 && range.0 <= range.1);
     let v: f64 = s
         .trim()
         .parse()
         .map_err(|e| format!("`{s}` is not a number ({e})"))?;
-    if v.is_finite() && v > 0.0 && v <= max {
+    if (range.0..=range.1).contains(&v) {
         Ok(v)
     } else {
-        Err(format!("{s} is not in (0, {max}]"))
+        Err(format!("{s} is not in [{}, {}]", range.0, range.1))
     }
 }
 
-/// `--seconds`: in `(0, SECONDS_MAX]`.
+/// `--seconds`: in [`SECONDS`].
 pub fn seconds(s: &str) -> Result<f32, String> {
-    positive_up_to(s, SECONDS_MAX).map(|v| v as f32)
+    within(s, SECONDS).map(|v| v as f32)
 }
 
-/// `--fps` of `crowd`: in `(0, FPS_MAX]`.
+/// `--fps` of `crowd`: in [`FPS`].
 pub fn fps_f32(s: &str) -> Result<f32, String> {
-    positive_up_to(s, FPS_MAX).map(|v| v as f32)
+    within(s, FPS).map(|v| v as f32)
 }
 
-/// `--fps` of `synth`: in `(0, FPS_MAX]`.
+/// `--fps` of `synth`: in [`FPS`].
 pub fn fps(s: &str) -> Result<f64, String> {
-    positive_up_to(s, FPS_MAX)
+    within(s, FPS)
 }
 
 /// `--band` of the DTW alignment: a fraction of the cycle length in `[0, 1]`.
@@ -85,9 +99,40 @@ pub fn band(s: &str) -> Result<f64, String> {
     }
 }
 
-/// `--density`: in `(0, DENSITY_MAX]`.
+/// A control of `synth`: a finite number that single precision holds (`--dx 1e39` was read as
+/// infinity and refused as "dx inf is not a finite number").
+pub fn finite_f32(s: &str) -> Result<f32, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|e| format!("`{s}` is not a number ({e})"))?;
+    if v.is_finite() && v.abs() <= f64::from(f32::MAX) {
+        Ok(v as f32)
+    } else {
+        Err(format!(
+            "{s} is not a finite number (at most 3.4e38 in magnitude)"
+        ))
+    }
+}
+
+/// `--control-margin`: in [`CONTROL_MARGIN`].
+pub fn control_margin(s: &str) -> Result<f64, String> {
+    within(s, CONTROL_MARGIN)
+}
+
+/// `--control-min-t`: in [`CONTROL_MIN_T`].
+pub fn control_min_t(s: &str) -> Result<f64, String> {
+    within(s, CONTROL_MIN_T)
+}
+
+/// `--export-seconds`: in [`EXPORT_SECONDS`].
+pub fn export_seconds(s: &str) -> Result<f32, String> {
+    within(s, EXPORT_SECONDS).map(|v| v as f32)
+}
+
+/// `--density`: in [`DENSITY`].
 pub fn density(s: &str) -> Result<f32, String> {
-    positive_up_to(s, DENSITY_MAX).map(|v| v as f32)
+    within(s, DENSITY).map(|v| v as f32)
 }
 
 #[cfg(test)]
@@ -98,13 +143,54 @@ mod tests {
     fn floats_outside_their_range_are_refused_with_the_range() {
         assert_eq!(seconds("2.5"), Ok(2.5));
         assert_eq!(seconds("3600"), Ok(3600.0));
-        for bad in ["0", "-1", "1e30", "NaN", "inf", "3600.5"] {
+        assert_eq!(seconds("0.001"), Ok(0.001));
+        // Positive but 0 as an f32 (or a millisecond's fraction): refused, not passed on as 0.
+        for bad in [
+            "0", "-1", "1e30", "NaN", "inf", "3600.5", "1e-300", "0.0009",
+        ] {
             let e = seconds(bad).unwrap_err();
-            assert!(e.contains("(0, 3600]"), "{bad}: {e}");
+            assert!(e.contains("[0.001, 3600]"), "{bad}: {e}");
         }
         assert!(seconds("ten").unwrap_err().contains("not a number"));
-        assert!(fps("0").is_err() && fps("1001").is_err() && fps("30").is_ok());
+        assert_eq!(fps("1"), Ok(1.0));
+        for bad in ["0", "1e-300", "0.5", "1001"] {
+            assert!(fps(bad).unwrap_err().contains("[1, 1000]"), "{bad}");
+            assert!(fps_f32(bad).unwrap_err().contains("[1, 1000]"), "{bad}");
+        }
+        assert!(fps("30").is_ok() && fps_f32("1000").is_ok());
         assert!(density("0.05").is_ok() && density("11").is_err());
+        assert_eq!(density("1e-6"), Ok(1e-6));
+        for bad in ["1e-300", "1e-7", "0"] {
+            assert!(
+                density(bad).unwrap_err().contains("[0.000001, 10]"),
+                "{bad}"
+            );
+        }
+        // Refused when the command line is read, not after the data are loaded.
+        assert_eq!(control_margin("0"), Ok(0.0));
+        assert_eq!(control_min_t("2"), Ok(2.0));
+        for bad in ["-1", "NaN", "inf", "1e308", "1.5"] {
+            assert!(control_margin(bad).unwrap_err().contains("[0, 1]"), "{bad}");
+        }
+        for bad in ["-0.5", "NaN", "inf", "101"] {
+            assert!(
+                control_min_t(bad).unwrap_err().contains("[0, 100]"),
+                "{bad}"
+            );
+        }
+        for bad in ["0", "1e-300", "1e-45", "61"] {
+            assert!(
+                export_seconds(bad).unwrap_err().contains("[0.001, 60]"),
+                "{bad}"
+            );
+        }
+        assert_eq!(finite_f32("-0.25"), Ok(-0.25));
+        for bad in ["1e39", "-1e300", "NaN", "inf"] {
+            assert!(
+                finite_f32(bad).unwrap_err().contains("not a finite number"),
+                "{bad}"
+            );
+        }
         assert_eq!(band("0"), Ok(0.0));
         assert_eq!(band("1"), Ok(1.0));
         for bad in ["-0.1", "1.5", "NaN", "inf"] {

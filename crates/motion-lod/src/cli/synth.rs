@@ -18,16 +18,16 @@ pub struct SynthArgs {
     #[arg(value_name = "MODEL")]
     pub model: PathBuf,
     /// Sideways root displacement per cycle, metres (+ = to the character's left).
-    #[arg(long, allow_hyphen_values = true, required_unless_present = "track")]
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "track", value_parser = super::ranges::finite_f32)]
     pub dx: Option<f32>,
     /// Forward root displacement per cycle, metres.
-    #[arg(long, allow_hyphen_values = true, required_unless_present = "track")]
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "track", value_parser = super::ranges::finite_f32)]
     pub dz: Option<f32>,
     /// Heading change per cycle, degrees (+ = left).
-    #[arg(long, allow_hyphen_values = true, required_unless_present = "track")]
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "track", value_parser = super::ranges::finite_f32)]
     pub turn: Option<f32>,
     /// Standing height of the character, metres (default: the middle of the data's range).
-    #[arg(long)]
+    #[arg(long, value_parser = super::ranges::finite_f32)]
     pub height: Option<f32>,
     /// The performer's style, for a model built with style labels: one style (`elderly`), a blend
     /// (`elderly=0.5,youthful=0.5`; weights are scaled to sum to 1), or `data` for the data's own
@@ -48,7 +48,7 @@ pub struct SynthArgs {
     /// Number of cycles (1..=10000).
     #[arg(long, default_value_t = 4, value_parser = super::ranges::count(super::ranges::CYCLES))]
     pub cycles: usize,
-    /// Output frames per second (0 < fps <= 1000).
+    /// Output frames per second (1 to 1000).
     #[arg(long, default_value_t = 30.0, value_parser = super::ranges::fps)]
     pub fps: f64,
     /// Switch cycles as they are, without the seam transition (what the crowd does far away).
@@ -80,6 +80,11 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     }
     let glb = ext.as_deref() == Some("glb");
     super::build::check_writable(&args.output)?;
+    let mut inputs = vec![("the model", args.model.as_path())];
+    if let Some(track) = &args.track {
+        inputs.push(("the track", track.as_path()));
+    }
+    super::build::check_not_input(&args.output, &inputs)?;
     let model = MotionModel::load(&args.model)
         .with_context(|| format!("reading {}", args.model.display()))?;
     let range = model.control_range();
@@ -118,7 +123,8 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
         0 => c.dx != 0.0,
         1 => track.is_some() || args.dz.is_some(),
         2 => c.turn != 0.0,
-        _ => args.height.is_some(),
+        // A track's height column as much as `--height` (the column was ignored unsaid).
+        _ => args.height.is_some() || (track.is_some() && c.height != height),
     };
     let names = Controls::NAMES;
     let ignored = model.ignored_controls();
@@ -222,9 +228,7 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
         None => model.synthesize_walk(&req),
     }
     .context("synthesizing the walk")?;
-    let cycles = ((walk.poses.len() / model.layout.dof()) as f64 * walk.frame_time
-        / walk.cycle_seconds)
-        .round() as usize;
+    let cycles = walk.cycles;
     if glb {
         let name = args
             .output
@@ -236,7 +240,7 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
             .write(&args.output)
             .with_context(|| format!("writing {}", args.output.display()))?;
         let frames = walk.poses.len() / model.layout.dof();
-        println!(
+        out!(
             "wrote {}: {} cycles of {:.3} s, {frames} frames at {} fps (glTF 2.0; view it with \
              `motion-lod view {}`)",
             args.output.display(),
@@ -252,7 +256,7 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
         motion_io::with_rest_at_origin(&model.walk_motion(&walk).context("converting to BVH")?);
     motion_io::write_bvh(&motion, &args.output)
         .with_context(|| format!("writing {}", args.output.display()))?;
-    println!(
+    out!(
         "wrote {}: {} cycles of {:.3} s, {} frames at {} fps",
         args.output.display(),
         cycles,

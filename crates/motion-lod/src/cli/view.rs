@@ -14,7 +14,7 @@
 //! request, so a rebuilt model shows on reload), other paths the viewer's own files. Nothing else is
 //! served.
 
-use std::io::{BufRead as _, BufReader, Write as _};
+use std::io::{BufRead as _, BufReader, Read as _, Write as _};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 
@@ -160,7 +160,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         Some(file) => file.display().to_string(),
         None => "no file (open or drop a model file in the page)".to_string(),
     };
-    println!(
+    out!(
         "serving {what} at http://{addr}/ in {page} (viewer: {from}); open it in a browser, Ctrl-C to stop"
     );
     std::io::stdout().flush()?;
@@ -218,6 +218,9 @@ fn resolve(url_path: &str, kind: Kind) -> Option<Target> {
         .map(|(n, _)| Target::Asset(n))
 }
 
+/// The most bytes the server reads of a request's line or of one header.
+const MAX_REQUEST_LINE: u64 = 8192;
+
 /// Answers one request.
 fn serve(
     stream: TcpStream,
@@ -226,13 +229,17 @@ fn serve(
     source: &Source,
 ) -> std::io::Result<()> {
     stream.set_read_timeout(Some(std::time::Duration::from_secs(10)))?;
-    let mut reader = BufReader::new(stream.try_clone()?);
+    // Every line read through a limit: one request line of 400 MiB without a line break took the
+    // server from 6 to 416 MB (found 2026-11-28). A longer line is cut there, and the request is
+    // then nothing the server knows.
+    let mut reader = BufReader::new(stream.try_clone()?).take(MAX_REQUEST_LINE);
     let mut line = String::new();
     reader.read_line(&mut line)?;
     // Skip the headers (bounded).
     let mut header = String::new();
     for _ in 0..200 {
         header.clear();
+        reader.set_limit(MAX_REQUEST_LINE);
         if reader.read_line(&mut header)? == 0 || header == "\r\n" || header == "\n" {
             break;
         }

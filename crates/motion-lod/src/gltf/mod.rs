@@ -142,19 +142,10 @@ pub fn walk_rest(layout: &motion_io::PoseLayout, walk: &Walk) -> Result<Rest, Gl
     Rest::facing(layout, a, Some(travel))
 }
 
-/// Writes `bytes` to `path` atomically (a temporary file in the same folder renamed over it).
+/// Writes `bytes` to `path` atomically ([`lod_policy::file::write_atomic`]).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GltfError> {
-    let io = |source| GltfError::Io {
+    lod_policy::file::write_atomic(path, bytes).map_err(|source| GltfError::Io {
         path: path.to_path_buf(),
         source,
-    };
-    let file_name = path
-        .file_name()
-        .map_or_else(|| "out.glb".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, bytes).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io(e)
     })
 }
