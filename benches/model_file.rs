@@ -3,7 +3,8 @@
 //! detail, so the runtime's costs are measured at a real sample count (S = 800 for Bandai) rather
 //! than the embedded fixtures'. Also one frame of a crowd of walkers that are all root only, on one
 //! thread, at 2,000 walkers (which stay in cache) and at 100,000 (time per walker-frame = frame
-//! time / walkers; criterion prints the walkers per second). Without the variable it prints how to set it and measures nothing.
+//! time / walkers; criterion prints the walkers per second). And the runtime model read from the
+//! file's bytes. Without the variable it prints how to set it and measures nothing.
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -84,6 +85,17 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // Reading the runtime model from the file's bytes, as an engine, the C ABI and the browser
+    // do: the framing and checksums, the decode, the array checks and the play check
+    // (`RuntimeModel::check_played`: every accuracy level at the middle of the controls, every
+    // aligned frame).
+    let bytes = std::fs::read(&path).expect("MOTION_LOD_BENCH_MODEL reads");
+    g.bench_function("read_runtime_model", |b| {
+        b.iter(|| {
+            let model = lod_policy::RuntimeModel::from_bytes(black_box(&bytes)).unwrap();
+            black_box(model.lod().p())
+        })
+    });
     g.finish();
     for walkers in [2_000, 100_000] {
         root_only_crowd(c, &model, &name, walkers);
