@@ -847,6 +847,8 @@ fn options_of_another_mode_and_outputs_that_cannot_be_are_refused() {
     std::fs::create_dir_all(&folder_glb).unwrap();
     let empty = dir.join("no-takes");
     std::fs::create_dir_all(&empty).unwrap();
+    // One file not there yet, named two ways.
+    let (tensor, same_tensor) = (dir.join("t.npy"), dir.join("no-takes/../t.npy"));
     for (args, says) in [
         (&["quality", m, "--walkers", "5"][..], "--crowd"),
         (&["quality", m, "--camera", "ground"], "--crowd"),
@@ -872,6 +874,16 @@ fn options_of_another_mode_and_outputs_that_cannot_be_are_refused() {
         (
             &["eval", m, "--holdout", empty.to_str().unwrap()],
             "no .bvh file in",
+        ),
+        (
+            &[
+                "cycles",
+                "--tensor",
+                tensor.to_str().unwrap(),
+                "--controls",
+                same_tensor.to_str().unwrap(),
+            ],
+            "both name",
         ),
     ] {
         let (ok, _, stderr) = run(args);

@@ -179,25 +179,36 @@ pub fn check_writable(path: &std::path::Path) -> anyhow::Result<()> {
 }
 
 /// Refuses an output that is one of the command's inputs, `inputs` being `(what it is, path)`:
-/// `synth m.mlod -o m.mlod` replaced the model with a BVH (found 2026-11-28). An output that does
-/// not exist yet is none of them.
+/// `synth m.mlod -o m.mlod` replaced the model with a BVH (found 2026-11-28).
 pub fn check_not_input(
     output: &std::path::Path,
     inputs: &[(&str, &std::path::Path)],
 ) -> anyhow::Result<()> {
-    let Ok(out) = std::fs::canonicalize(output) else {
-        return Ok(());
-    };
-    if let Some((what, _)) = inputs
-        .iter()
-        .find(|(_, input)| std::fs::canonicalize(input).is_ok_and(|i| i == out))
-    {
+    if let Some((what, _)) = inputs.iter().find(|(_, input)| same_file(output, input)) {
         bail!(
             "{} is {what}: writing there would replace it; choose another output",
             output.display()
         );
     }
     Ok(())
+}
+
+/// Whether two paths name one file: the same canonical path (links followed, as the writer
+/// follows them), or for a file not there yet the same canonical folder and name (`out.npy` and
+/// `./out.npy`); a folder that does not exist compares as written.
+pub fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    let canonical = |p: &std::path::Path| {
+        if let Ok(file) = std::fs::canonicalize(p) {
+            return file;
+        }
+        let folder = match p.parent() {
+            Some(f) if !f.as_os_str().is_empty() => f,
+            _ => std::path::Path::new("."),
+        };
+        let folder = std::fs::canonicalize(folder).unwrap_or_else(|_| folder.to_path_buf());
+        folder.join(p.file_name().unwrap_or_default())
+    };
+    canonical(a) == canonical(b)
 }
 
 /// Runs the subcommand.

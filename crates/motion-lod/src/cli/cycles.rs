@@ -103,9 +103,7 @@ pub fn run(args: CyclesArgs) -> anyhow::Result<()> {
         }
     }
     if let (Some(tensor), Some(controls)) = (&args.tensor, &args.controls)
-        && (tensor == controls
-            || std::fs::canonicalize(tensor)
-                .is_ok_and(|t| std::fs::canonicalize(controls).is_ok_and(|c| c == t)))
+        && super::build::same_file(tensor, controls)
     {
         anyhow::bail!(
             "--tensor and --controls both name {}: the controls would replace the tensor",

@@ -60,15 +60,19 @@ pub const EXPORT_SECONDS: (f64, f64) = (0.001, 60.0);
 /// gave a walk of one frame.
 fn within(s: &str, range: (f64, f64)) -> Result<f64, String> {
     debug_assert!(0.0 <= range.0 && range.0 <= range.1);
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|e| format!("`{s}` is not a number ({e})"))?;
+    let v = number(s)?;
     if (range.0..=range.1).contains(&v) {
         Ok(v)
     } else {
         Err(format!("{s} is not in [{}, {}]", range.0, range.1))
     }
+}
+
+/// `s` as a number, or a message naming it.
+fn number(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse()
+        .map_err(|e| format!("`{s}` is not a number ({e})"))
 }
 
 /// `--seconds`: in [`SECONDS`].
@@ -88,24 +92,13 @@ pub fn fps(s: &str) -> Result<f64, String> {
 
 /// `--band` of the DTW alignment: a fraction of the cycle length in `[0, 1]`.
 pub fn band(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|e| format!("`{s}` is not a number ({e})"))?;
-    if (0.0..=1.0).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!("{s} is not in [0, 1]"))
-    }
+    within(s, (0.0, 1.0))
 }
 
 /// A control of `synth`: a finite number that single precision holds (`--dx 1e39` was read as
 /// infinity and refused as "dx inf is not a finite number").
 pub fn finite_f32(s: &str) -> Result<f32, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|e| format!("`{s}` is not a number ({e})"))?;
+    let v = number(s)?;
     if v.is_finite() && v.abs() <= f64::from(f32::MAX) {
         Ok(v as f32)
     } else {

@@ -131,9 +131,6 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     for k in 0..names.len() {
         let (lo, hi) = range[k];
         let values: Vec<f32> = all.iter().map(|c| c.to_array()[k]).collect();
-        if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
-            bail!("{} {bad} is not a finite number", names[k]);
-        }
         if ignored[k] {
             if let Some(c) = all.iter().find(|c| given(k, c)) {
                 let v = c.to_array()[k];
