@@ -74,7 +74,7 @@ fn recorder_writes_pngs_maps_and_a_gif_atomically() {
     for _ in 0..4 {
         rec.record(&crowd, &cam).unwrap();
     }
-    let gif = rec.finish().unwrap().unwrap();
+    let gif = rec.finish().unwrap().gif.unwrap();
     let names: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().into_string().unwrap())

@@ -95,7 +95,7 @@ mod variogram;
 // The jobs an engine runs, in call order (docs/architecture.md, "How an engine uses it").
 
 // 1. Load: the one model type, read from its section of a model file.
-pub use runtime::{RuntimeModel, STYLE_PREFIX, style_name_problem};
+pub use runtime::{RuntimeModel, STYLE_PREFIX, check_stature, style_name_problem};
 
 // 2. Per character, once: the buffers every job writes into.
 pub use kernel::{ClipKernel, KernelScratch};

@@ -19,6 +19,12 @@
  and returns them with mlod_buffer_free.
  Lower level (the engine chains cycles): mlod_walker_prepare, mlod_walker_pose, mlod_model_detail_at.
 
+ Threads: a loaded model is read-only, so any number of threads may use one model at once (every
+ call that reads it, and its walkers); mlod_model_free waits until no call on the model runs and
+ its walkers are freed. A walker is used by one thread at a time: the caller serialises calls on
+ the same walker; distinct walkers need no lock. mlod_last_error() is the calling thread's own.
+ The library starts no threads and takes no locks.
+
  Units: metres, seconds, radians; +y up, a heading of 0 faces +z. A zero-initialised
  MlodControls.style (every weight 0) asks for the data's own mix of styles.
  */

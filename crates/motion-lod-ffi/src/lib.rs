@@ -355,6 +355,12 @@ pub struct MlodWalker {
 // SAFETY: the raw pointer is only compared, never dereferenced; everything else is owned data.
 unsafe impl Send for MlodWalker {}
 
+// The header's thread rules rest on this: a model shared by threads is read through `&` only.
+const _: () = {
+    const fn shared_by_threads<T: Send + Sync>() {}
+    shared_by_threads::<MlodModel>();
+};
+
 /// A failed call: its status and message.
 struct Failure(MlodStatus, String);
 

@@ -11,4 +11,5 @@ mod header;
 mod layouts;
 mod shown_pose;
 mod styles;
+mod threads;
 mod web_reference;

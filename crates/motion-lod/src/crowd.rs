@@ -54,6 +54,9 @@ pub struct CrowdOutcome {
     pub rendered: usize,
     /// The animated GIF written at the end, if any.
     pub gif: Option<std::path::PathBuf>,
+    /// Files an earlier recording into the render folder had left under the recorder's names
+    /// (frames past this run's last, its GIF), removed ([`crowd_sim::render::Recorder::finish`]).
+    pub stale_removed: usize,
     /// The field size used, metres.
     pub field_m: f32,
     /// The field size asked for, when the source's turn range needed a larger one
@@ -106,15 +109,19 @@ where
             rendered += 1;
         }
     }
-    let gif = match recorder {
-        Some(rec) => rec.finish()?,
-        None => None,
+    let (gif, stale_removed) = match recorder {
+        Some(rec) => {
+            let done = rec.finish()?;
+            (done.gif, done.stale_removed)
+        }
+        None => (None, 0),
     };
     Ok(CrowdOutcome {
         report,
         last,
         rendered,
         gif,
+        stale_removed,
         field_m: crowd.config().field_size_m,
         field_enlarged_from: crowd.field_enlarged_from(),
     })

@@ -255,6 +255,17 @@ pub enum DatasetError {
     /// Time alignment failed.
     #[error("time alignment: {0}")]
     Align(#[from] TimewarpError),
+    /// Time alignment failed between one cycle and the reference cycle.
+    #[error("time alignment of cycle {cycle} against the reference cycle {reference}: {source}")]
+    AlignCycle {
+        /// The cycle: its take and frames.
+        cycle: String,
+        /// The reference cycle: its take and frames.
+        reference: String,
+        /// What failed.
+        #[source]
+        source: TimewarpError,
+    },
     /// The tensor could not be formed.
     #[error("motion tensor: {0}")]
     Tensor(#[from] tensor_ops::TensorError),
@@ -713,8 +724,12 @@ fn cycles_from_takes(
     let segmented: Vec<_> = motions
         .par_iter()
         .map(|(p, n)| {
-            let r = segment_take(&n.motion, &layout, &cycle_config, p, &n.segments)
-                .map_err(|e| e.to_string())
+            let r =
+                match capture_rate_problem(n.motion.frame_time) {
+                    Some(problem) => Err(problem),
+                    None => segment_take(&n.motion, &layout, &cycle_config, p, &n.segments)
+                        .map_err(|e| e.to_string()),
+                }
                 .and_then(|report| {
                     // Numbers no walk has (an OFFSET of 1e300) measure infinite controls: the
                     // take is refused here, by name, not the build later by a sample index.
@@ -729,7 +744,18 @@ fn cycles_from_takes(
                             k + 1,
                             report.cycles[k].controls.to_array()
                         )),
-                        None => Ok(report),
+                        None => match report.cycles.iter().position(|c| {
+                            lod_policy::check_stature(c.controls.height as f32).is_err()
+                        }) {
+                            Some(k) => Err(format!(
+                                "cycle {} measures a standing height of {:.1} m, not a body's \
+                                 (0.01 to 100 m): the take's OFFSETs or positions hold numbers \
+                                 no walk has, or its units are not those of the data (see --units)",
+                                k + 1,
+                                report.cycles[k].controls.height
+                            )),
+                            None => Ok(report),
+                        },
                     }
                 });
             tick();
@@ -801,7 +827,7 @@ fn cycles_from_takes(
                 dropped.extend(report.dropped.into_iter().map(|d| (p.to_path_buf(), d)));
             }
             Err(e) => {
-                let error = format!("cycle segmentation: {e}");
+                let error = e.clone();
                 takes.push(TakeSummary {
                     path: p.to_path_buf(),
                     cycles: 0,
@@ -883,6 +909,51 @@ fn walking_frames(n: &NormalizedTake) -> std::borrow::Cow<'_, Motion> {
         frame_time: n.motion.frame_time,
         frames,
     })
+}
+
+/// The capture rates a walk is taken at: frame times from 1e-4 s (10,000 frames per second) to
+/// 0.25 s (4 frames per second; a step then spans two frames).
+pub const CAPTURE_FRAME_TIME_S: (f64, f64) = (1e-4, 0.25);
+
+/// Why a take's `Frame Time` (s) is no capture rate of a walk (outside [`CAPTURE_FRAME_TIME_S`]),
+/// with a hint when it reads as milliseconds; `None` when it is one. The BVH reader refuses only
+/// what no file can hold (zero, negative, not finite); this is the walk's own bound.
+pub fn capture_rate_problem(frame_time: f64) -> Option<String> {
+    let (lo, hi) = CAPTURE_FRAME_TIME_S;
+    if (lo..=hi).contains(&frame_time) {
+        return None;
+    }
+    // 33.3333 as written; 1e300 rather than its 301 digits.
+    let show = |v: f64| {
+        if (1e-4..1e6).contains(&v) {
+            format!("{}", (v * 1e6).round() / 1e6)
+        } else {
+            // Four significant digits, trailing zeros left out: 1e300, 1.235e-5.
+            let text = format!("{v:.3e}");
+            match text.split_once('e') {
+                Some((m, e)) if m.contains('.') => {
+                    format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+                }
+                _ => text,
+            }
+        }
+    };
+    let hint = if (lo..=hi).contains(&(frame_time / 1000.0)) {
+        format!(
+            "; Frame Time is in seconds, and read as milliseconds it would be {} s ({} frames \
+             per second)",
+            show(frame_time / 1000.0),
+            show(1000.0 / frame_time)
+        )
+    } else {
+        String::new()
+    };
+    Some(format!(
+        "Frame Time {} s ({} frames per second) is not a capture rate of a walk ({lo} to {hi} s, \
+         4 to 10,000 frames per second){hint}",
+        show(frame_time),
+        show(1.0 / frame_time)
+    ))
 }
 
 /// Why a take that read and segmented gave no cycle: its dropped candidates by reason, or no
@@ -1058,7 +1129,26 @@ fn align_with_reference(
     if reference.is_some() {
         config.reference = Some(0);
     }
-    let alignment = align(&features, &values, &frame_time, &config)?;
+    let label = |c: &GaitCycle| {
+        format!(
+            "{} frames {}..={}",
+            c.source.display(),
+            c.first_frame,
+            c.last_frame
+        )
+    };
+    let alignment = align(&features, &values, &frame_time, &config).map_err(|e| match e {
+        TimewarpError::Pair {
+            index,
+            reference,
+            source,
+        } if index < all.len() && reference < all.len() => DatasetError::AlignCycle {
+            cycle: label(all[index]),
+            reference: label(all[reference]),
+            source: *source,
+        },
+        other => DatasetError::Align(other),
+    })?;
     debug_assert_eq!(alignment.increment_col, TIME_ROW);
     let skip = usize::from(reference.is_some());
     let s = set.cycles.len();

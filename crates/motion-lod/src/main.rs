@@ -60,10 +60,13 @@ fn main() -> std::process::ExitCode {
     let matches = Cli::command()
         .mut_subcommands(|c| c.allow_negative_numbers(true))
         .get_matches();
-    let cli = match Cli::from_arg_matches(&matches) {
+    let mut cli = match Cli::from_arg_matches(&matches) {
         Ok(cli) => cli,
         Err(e) => e.exit(),
     };
+    if let (Command::Eval(args), Some(("eval", sub))) = (&mut cli.command, matches.subcommand()) {
+        args.given_settings = cli::eval::given_settings(sub);
+    }
     match run(cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         // The reader went away (`motion-lod info m.mlod | head -1`): not an error of ours.

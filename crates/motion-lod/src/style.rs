@@ -340,6 +340,16 @@ impl StyleLabels {
 /// weights (`elderly=0.5,youthful=0.5`, normalised by the kernel), or `data` for the data's own mix.
 /// Names match exactly, or by a unique prefix. Errors name the style and list the model's.
 pub fn parse_style_mix(styles: &[String], text: &str) -> Result<StyleMix, StyleError> {
+    parse_style_mix_split(styles, text, &[','])
+}
+
+/// [`parse_style_mix`] with the blend's parts split at any of `separators` (a track's CSV cell
+/// writes `elderly=0.5;youthful=0.5`); errors quote `text` as given.
+pub fn parse_style_mix_split(
+    styles: &[String],
+    text: &str,
+    separators: &[char],
+) -> Result<StyleMix, StyleError> {
     let err = |why: String| StyleError::Request {
         given: text.to_string(),
         why,
@@ -384,26 +394,29 @@ pub fn parse_style_mix(styles: &[String], text: &str) -> Result<StyleMix, StyleE
     }
     let mut mix = StyleMix::DATA_MIX;
     let mut given = vec![false; styles.len()];
-    for part in trimmed.split(',') {
+    let sep = separators.first().copied().unwrap_or(',');
+    for part in trimmed.split(separators) {
         let Some((name, w)) = part.split_once('=') else {
             return Err(err(format!(
-                "{part:?} is not NAME=WEIGHT (a blend reads elderly=0.5,youthful=0.5)"
+                "{part:?} is not NAME=WEIGHT (a blend reads elderly=0.5{sep}youthful=0.5)"
             )));
         };
         let j = find(name.trim())?;
-        let w: f32 = w.trim().parse().map_err(|_| {
+        let given_w = w.trim();
+        let w: f64 = given_w.parse().map_err(|_| {
             err(format!(
-                "weight {:?} of {} is not a number",
-                w.trim(),
+                "weight {given_w:?} of {} is not a number",
                 styles[j]
             ))
         })?;
-        if !(w.is_finite() && w >= 0.0) {
+        // Checked before the cast: 1e39 would read as an infinite f32.
+        if !(w.is_finite() && w >= 0.0 && w <= f64::from(f32::MAX)) {
             return Err(err(format!(
-                "weight {w} of {} must be finite and >= 0",
+                "weight {given_w} of {} must be finite, >= 0 and at most 3.4e38",
                 styles[j]
             )));
         }
+        let w = w as f32;
         if std::mem::replace(&mut given[j], true) {
             return Err(err(format!("{} is given twice", styles[j])));
         }
@@ -592,10 +605,24 @@ mod tests {
             ("elderly=0,elderly=0.5", "twice"),
             ("eld=0.2,elderly=0.3", "twice"),
             ("elderly=1,normal", "NAME=WEIGHT"),
+            // The weight as written: it said "weight inf" (found 2026-11-28).
+            (
+                "elderly=1e39,normal=1",
+                "weight 1e39 of elderly must be finite",
+            ),
         ] {
             let e = parse_style_mix(&styles, bad).unwrap_err().to_string();
             assert!(e.contains(says), "{bad}: {e}");
         }
+        // A track's blend, split at `;`, is quoted as written (it was echoed with `,`).
+        assert_eq!(
+            parse_style_mix_split(&styles, "elderly=0.5;normal=0.5", &[';']).unwrap(),
+            blend
+        );
+        let e = parse_style_mix_split(&styles, "elderly;normal", &[';'])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("\"elderly;normal\""), "{e}");
         assert!(
             parse_style_mix(&[], "normal")
                 .unwrap_err()

@@ -18,7 +18,7 @@
 
 use lod_policy::{Controls, StyleMix};
 
-use crate::style::parse_style_mix;
+use crate::style::parse_style_mix_split;
 
 /// Why a track could not be read.
 #[derive(Debug, thiserror::Error)]
@@ -126,7 +126,7 @@ pub fn parse_track(
         let height = number(4)?.map_or(default_height, |h| h as f32);
         let style = match cell(STYLE_COLUMN) {
             None => StyleMix::DATA_MIX,
-            Some(s) => parse_style_mix(styles, &s.replace([';', '+'], ","))
+            Some(s) => parse_style_mix_split(styles, s, &[';', '+', ','])
                 .map_err(|e| err(line, e.to_string()))?,
         };
         match rows.last() {

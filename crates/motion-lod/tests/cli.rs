@@ -849,6 +849,29 @@ fn options_of_another_mode_and_outputs_that_cannot_be_are_refused() {
     std::fs::create_dir_all(&empty).unwrap();
     // One file not there yet, named two ways.
     let (tensor, same_tensor) = (dir.join("t.npy"), dir.join("no-takes/../t.npy"));
+    // The model's takes under another skeleton (the chest's rotation order changed; other names
+    // alone are the same skeleton, `skeleton_variants.rs`).
+    let other = dir.join("other-skeleton");
+    std::fs::create_dir_all(&other).unwrap();
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+    for name in [
+        "walk_p160_t01.bvh",
+        "walk_p160_t02.bvh",
+        "walk_p175_t01.bvh",
+    ] {
+        let text = std::fs::read_to_string(fixtures.join(name)).unwrap();
+        let chest = text.find("JOINT Chest\n").unwrap();
+        let at = chest
+            + text[chest..]
+                .find("CHANNELS 3 Zrotation Xrotation")
+                .unwrap();
+        let reordered = format!(
+            "{}CHANNELS 3 Xrotation Zrotation{}",
+            &text[..at],
+            &text[at + "CHANNELS 3 Zrotation Xrotation".len()..]
+        );
+        std::fs::write(other.join(name), reordered).unwrap();
+    }
     for (args, says) in [
         (&["quality", m, "--walkers", "5"][..], "--crowd"),
         (&["quality", m, "--camera", "ground"], "--crowd"),
@@ -875,6 +898,40 @@ fn options_of_another_mode_and_outputs_that_cannot_be_are_refused() {
             &["eval", m, "--holdout", empty.to_str().unwrap()],
             "no .bvh file in",
         ),
+        // In the user's numbers, before any data are read (it said "min rank 5 above max rank 1
+        // in mode 0", the 7 scaled by the DOF reference).
+        (
+            &[
+                "build",
+                "--max-ranks",
+                "1,1,1",
+                "--min-ranks",
+                "7,7,9",
+                "-o",
+                "x.mlod",
+            ],
+            "--min-ranks 7,7,9 is above --max-ranks 1,1,1 in mode 0",
+        ),
+        // The options named, and both cycles by take and frames (it said "sequence 1 against
+        // reference 0").
+        (
+            &["cycles", "--band", "0", "--max-slope", "0"],
+            "widen --band or raise --max-slope",
+        ),
+        (
+            &["cycles", "--band", "0", "--max-slope", "0"],
+            "against the reference cycle fixtures/walk_",
+        ),
+        // A model brings its own settings: they were ignored without a word.
+        (
+            &["eval", m, "--levels", "3", "--frames", "50"],
+            "--levels, --frames apply to folders of takes only",
+        ),
+        // Another skeleton's data evaluated a model refitted on them, printed as the model's.
+        (
+            &["eval", m, "--data", other.to_str().unwrap()],
+            "their skeleton differs (joint 2 (`Chest`) has another parent or channels",
+        ),
         (
             &[
                 "cycles",
@@ -892,5 +949,47 @@ fn options_of_another_mode_and_outputs_that_cannot_be_are_refused() {
     // The model is still the model.
     let (ok, _, stderr) = run(&["info", m]);
     assert!(ok, "{stderr}");
+    // A file named `.glb` is glTF (it was written as BVH: `Path::extension` reads no extension).
+    let dot_glb = dir.join(".glb");
+    let (ok, _, stderr) = run(&[
+        "synth",
+        m,
+        "--dx",
+        "0",
+        "--dz",
+        "1.2",
+        "--turn",
+        "0",
+        "-o",
+        dot_glb.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(std::fs::read(&dot_glb).unwrap().starts_with(b"glTF"));
+    // The seconds as given (it printed "0.0 s").
+    let (ok, stdout, stderr) = run(&["crowd", m, "--walkers", "5", "--seconds", "0.001"]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("5 walkers, 0.001 s at 30 fps"), "{stdout}");
+    // Fewer key levels than asked for are said (the ranks leave room for 4: 8,8,10 down to 7,7,9).
+    let few = dir.join("few.mlod");
+    let (ok, _, stderr) = run(&[
+        "build",
+        "--samples",
+        "12",
+        "--max-ranks",
+        "8,8,10",
+        "--min-ranks",
+        "7,7,9",
+        "--dof-rank-reference",
+        "0",
+        "--levels",
+        "5",
+        "-o",
+        few.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.contains("note: --levels 5: the model has 4 key levels"),
+        "{stderr}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -451,3 +451,48 @@ fn a_take_measuring_infinite_controls_is_refused_by_name() {
     assert!(reason.contains("not finite"), "{reason}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A take whose `Frame Time` is no capture rate of a walk (milliseconds written for seconds) and a
+/// take whose skeleton stands 10 km tall (an OFFSET a million times too long) are each refused by
+/// name with their own reason, and the good take is kept. Both used to be read: the first said "no
+/// cycle candidate ... the feet or up axis are wrong", the second printed `height [1.3, 10001] m`
+/// and failed the build at its very end on the runtime's stature (found 2026-11-28).
+#[test]
+fn a_take_with_no_capture_rate_or_no_body_height_is_refused_by_name() {
+    let good = Path::new(FIXTURES).join("walk_p160_t01.bvh");
+    let text = std::fs::read_to_string(&good).expect("fixtures are in the repository");
+    let dir = std::env::temp_dir().join(format!("mlod-rate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("a_good.bvh"), &text).unwrap();
+    let line = text.lines().find(|l| l.starts_with("Frame Time:")).unwrap();
+    let seconds: f64 = line["Frame Time:".len()..].trim().parse().unwrap();
+    let ms = text.replace(line, &format!("Frame Time: {}", seconds * 1000.0));
+    let (slow, tall) = (dir.join("b_ms.bvh"), dir.join("c_tall.bvh"));
+    std::fs::write(&slow, ms).unwrap();
+    // The first OFFSET after `JOINT Spine`, a million times longer.
+    let spine = text.find("JOINT Spine").unwrap();
+    let at = spine + text[spine..].find("OFFSET ").unwrap() + "OFFSET ".len();
+    let end = at + text[at..].find(char::is_whitespace).unwrap();
+    let long: f64 = text[at..end].parse().unwrap();
+    let long = if long == 0.0 { 1e6 } else { long * 1e6 };
+    std::fs::write(&tall, format!("{}{long}{}", &text[..at], &text[end..])).unwrap();
+    let set = load_cycles(
+        std::slice::from_ref(&dir),
+        &DatasetConfig::default(),
+        &|_, _| {},
+    )
+    .unwrap();
+    assert!(!set.cycles.is_empty());
+    for (path, says) in [
+        (&slow, "read as milliseconds it would be"),
+        (&tall, "standing height"),
+    ] {
+        let take = set.takes.iter().find(|t| t.path == *path).unwrap();
+        assert_eq!(take.cycles, 0, "{}", path.display());
+        let reason = take.reason.as_deref().unwrap_or_default();
+        assert!(reason.contains(says), "{}: {reason}", path.display());
+    }
+    let kept = set.takes.iter().find(|t| t.path.ends_with("a_good.bvh"));
+    assert!(kept.is_some_and(|t| t.cycles > 0));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -27,7 +27,7 @@ mod perspective;
 
 pub use image::{Image, Rgb};
 pub use map::render_map;
-pub use output::{Recorder, write_gif_atomic, write_png_atomic};
+pub use output::{Finished, Recorder, write_gif_atomic, write_png_atomic};
 pub use perspective::render_frame;
 
 /// Colours and options of the renderers.

@@ -141,14 +141,167 @@ impl Recorder {
     }
 
     /// Writes `crowd.gif` when frames were collected (frame delay assumes 30 recorded frames per
-    /// second, times `gif_every`); returns its path.
-    pub fn finish(self) -> Result<Option<PathBuf>, RenderError> {
-        if self.gif_frames.is_empty() {
-            return Ok(None);
-        }
+    /// second, times `gif_every`), then removes what an earlier recording into the same folder left
+    /// under this recorder's names and this one did not write: `frame_NNNNN.png` and
+    /// `map_NNNNN.png` past its last frame (every `map_` when it drew no maps) and `crowd.gif` when
+    /// it wrote none. Other files are not touched. Without that, a folder used before held two
+    /// runs' frames under one pattern.
+    pub fn finish(self) -> Result<Finished, RenderError> {
         let path = self.dir.join("crowd.gif");
-        let delay = (100 * self.style.gif_every.max(1) / 30).max(2) as u16;
-        write_gif_atomic(&path, &self.gif_frames, delay)?;
-        Ok(Some(path))
+        let gif = if self.gif_frames.is_empty() {
+            None
+        } else {
+            let delay = (100 * self.style.gif_every.max(1) / 30).max(2) as u16;
+            write_gif_atomic(&path, &self.gif_frames, delay)?;
+            Some(path)
+        };
+        let stale_removed = self.remove_stale(gif.is_some())?;
+        Ok(Finished { gif, stale_removed })
+    }
+
+    /// Removes the files of [`Recorder::finish`]'s rule; returns how many.
+    fn remove_stale(&self, wrote_gif: bool) -> Result<usize, RenderError> {
+        let derr = |source| RenderError::Dir {
+            path: self.dir.clone(),
+            source,
+        };
+        let mut removed = 0;
+        for entry in std::fs::read_dir(&self.dir).map_err(derr)? {
+            let entry = entry.map_err(derr)?;
+            let name = entry.file_name();
+            let Some(name) = name.to_str() else {
+                continue;
+            };
+            let stale = match recorded_index(name) {
+                Some(("frame", i)) => i >= self.index,
+                Some(("map", i)) => !self.style.map || i >= self.index,
+                _ => name == "crowd.gif" && !wrote_gif,
+            };
+            if stale && entry.file_type().is_ok_and(|t| t.is_file()) {
+                let path = entry.path();
+                std::fs::remove_file(&path).map_err(|source| RenderError::Io { path, source })?;
+                removed += 1;
+            }
+        }
+        Ok(removed)
+    }
+}
+
+/// What [`Recorder::finish`] did beyond the frames.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Finished {
+    /// The animated GIF written, if frames were collected for one.
+    pub gif: Option<PathBuf>,
+    /// Files an earlier recording had left under the recorder's names, removed.
+    pub stale_removed: usize,
+}
+
+/// The kind (`frame` or `map`) and index of a file named as [`Recorder`] names them
+/// (`frame_00012.png`: at least five digits, nothing else).
+fn recorded_index(name: &str) -> Option<(&'static str, usize)> {
+    let (kind, rest) = if let Some(rest) = name.strip_prefix("frame_") {
+        ("frame", rest)
+    } else {
+        ("map", name.strip_prefix("map_")?)
+    };
+    let digits = rest.strip_suffix(".png")?;
+    if digits.len() < 5 || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    Some((kind, digits.parse().ok()?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_the_recorders_own_names_are_read_as_frames() {
+        assert_eq!(recorded_index("frame_00012.png"), Some(("frame", 12)));
+        assert_eq!(recorded_index("map_123456.png"), Some(("map", 123456)));
+        for other in [
+            "frame_0012.png",
+            "frame_00012.PNG",
+            "frame_00012.png.bak",
+            "my_frame_00012.png",
+            "frame_0001a.png",
+            "maps_00001.png",
+            "crowd.gif",
+        ] {
+            assert_eq!(recorded_index(other), None, "{other}");
+        }
+    }
+
+    /// A second, shorter recording into the folder of a first leaves only its own frames under
+    /// the recorder's names, and every other file: the first run's `frame_00003.png` and later,
+    /// and its maps and GIF, were left mixed with the second's (found 2026-11-28).
+    #[test]
+    fn a_second_recording_leaves_only_its_own_frames() {
+        use crate::testing::{ProceduralSource, paper_distance_policy};
+        use crate::{Camera, ClipSource, CrowdConfig};
+        let source = ProceduralSource::new();
+        let policy = paper_distance_policy(source.levels());
+        let config = CrowdConfig {
+            walkers: 20,
+            ..CrowdConfig::default()
+        };
+        let dir = std::env::temp_dir().join(format!("crowd-sim-stale-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let cam = Camera {
+            image_width: 64,
+            image_height: 48,
+            ..Camera::default()
+        };
+        let small = RenderStyle {
+            map_size_px: 32,
+            ..RenderStyle::default()
+        };
+        let record = |frames: usize, style: RenderStyle| {
+            let mut crowd = Crowd::new(&source, config).unwrap();
+            let mut rec = Recorder::new(&dir, style).unwrap();
+            for _ in 0..frames {
+                crowd.step(&source, &policy, &cam, 1.0 / 30.0).unwrap();
+                rec.record(&crowd, &cam).unwrap();
+            }
+            rec.finish().unwrap()
+        };
+        let first = record(
+            5,
+            RenderStyle {
+                map: true,
+                gif_every: 1,
+                ..small.clone()
+            },
+        );
+        assert!(first.gif.is_some());
+        assert_eq!(first.stale_removed, 0);
+        let keep = ["notes.txt", "frame_7.png", "frame_00001.png.bak"];
+        for name in keep {
+            std::fs::write(dir.join(name), b"mine").unwrap();
+        }
+        let second = record(
+            2,
+            RenderStyle {
+                map: false,
+                gif_every: 0,
+                ..small
+            },
+        );
+        assert_eq!(second.gif, None);
+        // Frames 2..5, maps 0..5 and the GIF.
+        assert_eq!(second.stale_removed, 3 + 5 + 1);
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        let mut want: Vec<String> = ["frame_00000.png", "frame_00001.png"]
+            .iter()
+            .chain(&keep)
+            .map(|s| s.to_string())
+            .collect();
+        want.sort();
+        assert_eq!(names, want);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

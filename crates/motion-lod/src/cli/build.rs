@@ -66,6 +66,26 @@ pub enum Weights {
 }
 
 impl ModelArgs {
+    /// Checks what can be checked before any data are read, in the numbers the user gave: each of
+    /// `--min-ranks` at most the same mode's `--max-ranks` (both are scaled and clamped alike
+    /// later, which keeps their order).
+    pub fn check(&self) -> anyhow::Result<()> {
+        const MODES: [&str; 3] = ["DOF", "time", "samples"];
+        let show = |r: [usize; 3]| format!("{},{},{}", r[0], r[1], r[2]);
+        for (n, mode) in MODES.iter().enumerate() {
+            let (lo, hi) = (self.min_ranks[n], self.max_ranks[n]);
+            if lo > hi {
+                bail!(
+                    "--min-ranks {} is above --max-ranks {} in mode {n} ({mode}): {lo} > {hi}; \
+                     the last key level's ranks cannot exceed the first's",
+                    show(self.min_ranks),
+                    show(self.max_ranks),
+                );
+            }
+        }
+        Ok(())
+    }
+
     /// The build configuration these options describe.
     pub fn config(&self) -> BuildConfig {
         BuildConfig {
@@ -124,6 +144,7 @@ pub struct BuildArgs {
 
 /// Loads the data of `data` and builds a model with `model`'s settings (progress on stderr unless quiet).
 pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::Result<MotionModel> {
+    model.check()?;
     let spec = data.spec()?;
     let loaded = load(&spec, data.style_spec().as_ref(), quiet)?;
     let bar = BarProgress::new(!quiet);
@@ -133,13 +154,19 @@ pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::R
     built.report.data = Some(spec);
     let config = model.config();
     let made = built.lod().levels().len();
-    // Said only when the user asked for a count: the default is a target the data may not meet.
+    let keys = built.lod().keys().len();
+    // Said when the user asked for a count: the defaults are targets the data may not meet.
+    if model.levels != BuildConfig::default().key_levels && keys != model.levels {
+        eprintln!(
+            "note: --levels {}: the model has {keys} key levels (each key level lowers at least \
+             one rank, and the ranks from --max-ranks down to --min-ranks, scaled and clamped to \
+             this data, leave room for no more)",
+            model.levels
+        );
+    }
     if model.accuracy_levels.is_some() && made != config.accuracy_levels {
-        let why = if config.accuracy_levels < config.key_levels {
-            format!(
-                "every one of the {} key levels is an accuracy level",
-                config.key_levels
-            )
+        let why = if config.accuracy_levels < keys {
+            format!("every one of the {keys} key levels is an accuracy level")
         } else {
             "levels between key levels whose ranks would repeat are merged; the ranks between \
              --max-ranks and --min-ranks leave room for no more"
@@ -151,6 +178,13 @@ pub fn build_model(data: &DataArgs, model: &ModelArgs, quiet: bool) -> anyhow::R
         );
     }
     Ok(built)
+}
+
+/// The extension of `path`'s file name, lower-cased: what follows its last dot, even when the name is
+/// nothing else (`.glb`, which [`std::path::Path::extension`] reads as a hidden file without one).
+pub fn suffix(path: &std::path::Path) -> Option<String> {
+    let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
+    name.rsplit_once('.').map(|(_, ext)| ext.to_string())
 }
 
 /// Checks that a file can be created beside `path` (its folder exists and takes new files), by

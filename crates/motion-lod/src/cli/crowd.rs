@@ -113,7 +113,9 @@ pub struct CrowdArgs {
     /// Principal components kept by the PCA baseline (the paper: 40; 1..=10000, at most P used).
     #[arg(long, default_value_t = 40, value_parser = super::ranges::count(super::ranges::PCA_RANK))]
     pub pca_rank: usize,
-    /// Write PNG frames, top-down maps and a GIF here.
+    /// Write PNG frames, top-down maps and a GIF here (created when missing); frames and maps
+    /// an earlier run left there past this run's last (`frame_NNNNN.png`, `map_NNNNN.png`) are
+    /// removed, no other file.
     #[arg(long, value_name = "DIR")]
     pub render: Option<PathBuf>,
     /// Render every n-th frame (1..=1000000).
@@ -304,10 +306,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         bail!("--pca-rank must be at least 1");
     }
     if let Some(path) = &args.export {
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        if ext.as_deref() != Some("glb") {
+        if super::build::suffix(path).as_deref() != Some("glb") {
             bail!(
                 "--export {}: the clip is written as glTF binary; use a name ending in .glb",
                 path.display()
@@ -420,7 +419,7 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
         ("multilinear LOD", "LOD")
     };
     out!(
-        "{} walkers, {:.1} s at {} fps ({} frames), {source_name}, field {:.0} m",
+        "{} walkers, {} s at {} fps ({} frames), {source_name}, field {:.0} m",
         args.walkers,
         args.seconds,
         args.fps,
@@ -479,12 +478,16 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     }
     if let Some(dir) = &args.render {
         out!(
-            "rendered {} frames into {} (frame_*.png, map_*.png){}",
+            "rendered {} frames into {} (frame_*.png, map_*.png){}{}",
             main.rendered,
             dir.display(),
             main.gif
                 .as_ref()
-                .map_or(String::new(), |g| format!(" and {}", g.display()))
+                .map_or(String::new(), |g| format!(" and {}", g.display())),
+            match main.stale_removed {
+                0 => String::new(),
+                n => format!("; removed {n} files an earlier run had left there under these names"),
+            }
         );
     }
     Ok(())

@@ -207,6 +207,25 @@ pub fn load(spec: &DataSpec, style: Option<&StyleSpec>, quiet: bool) -> anyhow::
             bar.set_length(total as u64);
             bar.inc(1);
         })
+        .map_err(|e| {
+            // The library names its configuration; the user gave options.
+            let no_path = matches!(
+                &e,
+                motion_lod::dataset::DatasetError::AlignCycle {
+                    source: timewarp::TimewarpError::NoPath { .. },
+                    ..
+                }
+            );
+            let e = anyhow::Error::new(e);
+            if no_path {
+                e.context(
+                    "--band and --max-slope leave no warping path between two cycles of other \
+                     lengths: widen --band or raise --max-slope (or --align uniform)",
+                )
+            } else {
+                e
+            }
+        })
         .with_context(|| format!("loading {}", spec.describe_data()))?;
     bar.finish_and_clear();
     let mut loaded = loaded;

@@ -53,6 +53,81 @@ pub struct EvalArgs {
     /// (which are relative to the model file).
     #[arg(long = "data", value_name = "DIR", num_args = 1..)]
     pub data_dirs: Vec<std::path::PathBuf>,
+    /// The model and data options given on the command line (`--levels`, `--frames`, ...), as
+    /// `main` finds them: a model file brings its own, so they are refused with one.
+    #[arg(skip)]
+    pub given_settings: Vec<String>,
+}
+
+/// The model and data options (`--levels`, `--frames`, ...) that `matches` (eval's) holds from the
+/// command line, as the user spelled them; the positional folders are not among them.
+pub fn given_settings(matches: &clap::ArgMatches) -> Vec<String> {
+    use clap::Args as _;
+    let cmd = DataArgs::augment_args(ModelArgs::augment_args(clap::Command::new("eval")));
+    cmd.get_arguments()
+        .filter(|a| a.get_long().is_some())
+        .filter(|a| {
+            matches
+                .try_get_raw(a.get_id().as_str())
+                .is_ok_and(|v| v.is_some())
+                && matches.value_source(a.get_id().as_str())
+                    == Some(clap::parser::ValueSource::CommandLine)
+        })
+        .map(|a| format!("--{}", a.get_long().unwrap_or_default()))
+        .collect()
+}
+
+/// What the data of a model file's evaluation must match: the model's skeleton.
+struct Recorded<'a> {
+    /// The model file, for messages.
+    path: &'a Path,
+    /// Its model.
+    model: &'a MotionModel,
+}
+
+impl Recorded<'_> {
+    /// Refuses data whose skeleton is not shaped as the model's (joint count, parents, channels;
+    /// names may differ: the same takes exported under other names are the model's data), and
+    /// notes a sample count that differs (the data were added to or cut since the build).
+    fn check(&self, loaded: &motion_lod::dataset::LoadedData) -> anyhow::Result<()> {
+        let theirs = &loaded.training.layout.skeleton().joints;
+        let ours = &self.model.layout.skeleton().joints;
+        let differs = if theirs.len() != ours.len() {
+            Some(format!(
+                "{} joints against the model's {}",
+                theirs.len(),
+                ours.len()
+            ))
+        } else {
+            theirs
+                .iter()
+                .zip(ours)
+                .enumerate()
+                .find(|(_, (a, b))| a.parent != b.parent || a.channels != b.channels)
+                .map(|(j, (a, b))| {
+                    format!(
+                        "joint {j} (`{}`) has another parent or channels than the model's (`{}`)",
+                        a.name, b.name
+                    )
+                })
+        };
+        if let Some(detail) = differs {
+            anyhow::bail!(
+                "the data of --data are not {}'s: their skeleton differs ({detail}); --data \
+                 names the folders of the model's own takes when they have moved",
+                self.path.display()
+            );
+        }
+        let (samples, model_samples) = (loaded.training.controls.len(), self.model.report.samples);
+        if samples != model_samples {
+            eprintln!(
+                "note: --data gives {samples} cycles; {} was built on {model_samples}: the \
+                 evaluation is of a model built with its settings on these data",
+                self.path.display()
+            );
+        }
+        Ok(())
+    }
 }
 
 /// `--by` values.
@@ -85,10 +160,25 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
                 .display()
         );
     }
-    let (spec, config, style) = match args.data.dirs.as_slice() {
+    let loaded_model;
+    let (spec, config, style, recorded) = match args.data.dirs.as_slice() {
         [one] if is_model_file(one) => {
-            let model =
+            if !args.given_settings.is_empty() {
+                anyhow::bail!(
+                    "{} brings its own settings and data options; {} appl{} to folders of takes \
+                     only (evaluate the folders to change them)",
+                    one.display(),
+                    args.given_settings.join(", "),
+                    if args.given_settings.len() == 1 {
+                        "ies"
+                    } else {
+                        "y"
+                    }
+                );
+            }
+            loaded_model =
                 MotionModel::load(one).with_context(|| format!("reading {}", one.display()))?;
+            let model = &loaded_model;
             let spec = model.report.data.clone().with_context(|| {
                 format!(
                     "{} does not record its training data; evaluate its folders instead",
@@ -105,21 +195,27 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
             };
             // The style weight is chosen anew on every fold's training cycles, as the build did.
             let config = model.report.config.clone();
-            (spec, config, model.style.map(|s| s.spec))
+            let recorded = (!args.data_dirs.is_empty()).then_some(Recorded { path: one, model });
+            (spec, config, model.style.clone().map(|s| s.spec), recorded)
         }
         _ => {
             if !args.data_dirs.is_empty() {
                 anyhow::bail!("--data replaces a model file's data folders; name a model file");
             }
+            args.model.check()?;
             (
                 args.data.spec()?,
                 args.model.config(),
                 args.data.style_spec(),
+                None,
             )
         }
     };
     if let Some(folds) = args.folds {
         let loaded = load(&spec, style.as_ref(), args.json)?;
+        if let Some(r) = &recorded {
+            r.check(&loaded)?;
+        }
         let bar = BarProgress::new(!args.json);
         let progress: &dyn Progress = if args.json { &NoProgress } else { &bar };
         let by = match args.by {
@@ -163,6 +259,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         args.max_samples,
         args.pca_rank,
         args.json,
+        recorded.as_ref(),
     )?;
     if args.json {
         out!("{}", serde_json::to_string(&report)?);
@@ -175,9 +272,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Loads the data, builds the model and runs the leave-one-out evaluation.
+/// Loads the data (checked against `recorded`'s model when given), builds the model and runs the
+/// leave-one-out evaluation.
 #[allow(clippy::too_many_arguments)]
-pub fn evaluate(
+fn evaluate(
     spec: &motion_lod::dataset::DataSpec,
     style: Option<&motion_lod::style::StyleSpec>,
     config: &BuildConfig,
@@ -185,8 +283,12 @@ pub fn evaluate(
     max_samples: Option<usize>,
     pca_rank: usize,
     quiet: bool,
+    recorded: Option<&Recorded<'_>>,
 ) -> anyhow::Result<EvalReport> {
     let loaded = load(spec, style, quiet)?;
+    if let Some(r) = recorded {
+        r.check(&loaded)?;
+    }
     let bar = BarProgress::new(!quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bar };
     let analysis =

@@ -90,7 +90,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     out!(
-        "{} walkers on the GPU ({}), {:.1} s at {} fps ({frames} frames), field {field:.0} m, {} policy",
+        "{} walkers on the GPU ({}), {} s at {} fps ({frames} frames), field {field:.0} m, {} policy",
         args.walkers,
         crowd.adapter_name(),
         args.seconds,

@@ -68,10 +68,7 @@ pub struct SynthArgs {
 
 /// Runs the subcommand.
 pub fn run(args: SynthArgs) -> anyhow::Result<()> {
-    let ext = args
-        .output
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let ext = super::build::suffix(&args.output);
     if ext.as_deref() == Some("gltf") {
         bail!(
             "{}: glTF is written as binary .glb only; use a name ending in .glb",

@@ -89,10 +89,16 @@ impl Kind {
 fn kind_of(file: &Path) -> anyhow::Result<Kind> {
     let bytes = std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
     if bytes.starts_with(b"glTF") {
+        glb_problem(&bytes).map_or(Ok(()), |why| {
+            Err(anyhow::anyhow!(
+                "{} is not a glTF binary the viewer can play: {why}",
+                file.display()
+            ))
+        })?;
         return Ok(Kind::Gltf);
     }
     if bytes.starts_with(&lod_policy::file::MAGIC) {
-        lod_policy::RuntimeModel::from_bytes(&bytes)
+        lod_policy::RuntimeModel::decode(&bytes, file)
             .with_context(|| format!("{} is not a model the runtime can load", file.display()))?;
         return Ok(Kind::Model);
     }
@@ -101,6 +107,59 @@ fn kind_of(file: &Path) -> anyhow::Result<Kind> {
          it starts with neither `MLOD` nor `glTF`",
         file.display()
     )
+}
+
+/// What makes `bytes` (starting `glTF`) no glTF 2.0 binary, as the glTF specification frames one:
+/// a 12-byte header (magic, version 2, the file's length), then chunks of a length, a type and
+/// that many bytes, each within the file, the first the JSON chunk, which parses as a JSON object.
+/// `None` when the framing holds; the viewer's loader checks the rest.
+fn glb_problem(bytes: &[u8]) -> Option<String> {
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Some(format!("{} bytes, under the 12-byte header", bytes.len()));
+    };
+    if version != 2 {
+        return Some(format!("version {version}, not 2"));
+    }
+    if length as usize != bytes.len() {
+        return Some(format!(
+            "the header gives a length of {length} bytes, the file holds {} (truncated or padded)",
+            bytes.len()
+        ));
+    }
+    let mut at = 12;
+    let mut first = true;
+    while at < bytes.len() {
+        let (Some(size), Some(kind)) = (word(at), word(at + 4)) else {
+            return Some(format!("a chunk header at byte {at} is cut off"));
+        };
+        let data = at + 8;
+        let Some(end) = data
+            .checked_add(size as usize)
+            .filter(|&e| e <= bytes.len())
+        else {
+            return Some(format!(
+                "the chunk at byte {at} announces {size} bytes, past the end of the file"
+            ));
+        };
+        if first {
+            if kind != u32::from_le_bytes(*b"JSON") {
+                return Some("the first chunk is not the JSON chunk".into());
+            }
+            match serde_json::from_slice::<serde_json::Value>(&bytes[data..end]) {
+                Ok(v) if v.is_object() => {}
+                Ok(_) => return Some("the JSON chunk is not a JSON object".into()),
+                Err(e) => return Some(format!("the JSON chunk does not parse: {e}")),
+            }
+            first = false;
+        }
+        at = end;
+    }
+    first.then(|| "it has no JSON chunk".into())
 }
 
 /// Where the viewer's files come from.
@@ -385,13 +444,36 @@ mod tests {
             err.contains("notes.txt") && err.contains("neither"),
             "{err}"
         );
+        // The smallest glTF binary: the header and a JSON chunk padded with spaces to 4 bytes.
+        let json = br#"{"asset":{"version":"2.0"}}  "#;
+        let mut bytes = b"glTF".to_vec();
+        bytes.extend(2u32.to_le_bytes());
+        bytes.extend((12 + 8 + json.len() as u32).to_le_bytes());
+        bytes.extend((json.len() as u32).to_le_bytes());
+        bytes.extend(b"JSON");
+        bytes.extend(json);
         let glb = dir.join("w.glb");
-        std::fs::write(&glb, b"glTF\x02\0\0\0").unwrap();
+        std::fs::write(&glb, &bytes).unwrap();
         assert_eq!(kind_of(&glb).unwrap(), Kind::Gltf);
+        // Truncated, a bare header, and a JSON chunk that is not JSON: served without complaint
+        // before (found 2026-11-28).
+        let broken = dir.join("broken.glb");
+        let mut not_json = bytes.clone();
+        not_json[20] = b'[';
+        for (b, says) in [
+            (&bytes[..bytes.len() - 10], "truncated"),
+            (&b"glTF\x02\0\0\0"[..], "under the 12-byte header"),
+            (&not_json[..], "does not parse"),
+        ] {
+            std::fs::write(&broken, b).unwrap();
+            let err = format!("{:#}", kind_of(&broken).unwrap_err());
+            assert!(err.contains("broken.glb") && err.contains(says), "{err}");
+        }
         let truncated = dir.join("m.mlod");
         std::fs::write(&truncated, lod_policy::file::MAGIC).unwrap();
         let err = format!("{:#}", kind_of(&truncated).unwrap_err());
         assert!(err.contains("m.mlod") && err.contains("runtime"), "{err}");
+        assert!(!err.contains("<model bytes>"), "{err}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
