@@ -11,7 +11,9 @@ use faer::{Mat, MatMut, MatRef, Par};
 ///
 /// faer returns eigenvalues in increasing order; they are reversed here. Each eigenvector is
 /// sign-normalised so that its largest-magnitude entry (first one on ties) is positive, which
-/// makes the result a deterministic function of `g`. `mode` only labels errors.
+/// makes the result a deterministic function of `g`. `mode` only labels errors:
+/// [`HosvdError::GramOverflow`] when the lower triangle holds a non-finite entry (a Gram matrix of
+/// finite data that overflowed), [`HosvdError::Eigen`] when the solver fails.
 pub(crate) fn leading_eigen(
     g: MatRef<'_, f64>,
     r: usize,
@@ -20,6 +22,9 @@ pub(crate) fn leading_eigen(
     let n = g.nrows();
     debug_assert_eq!(n, g.ncols());
     debug_assert!(r <= n);
+    if (0..n).any(|j| (j..n).any(|i| !g[(i, j)].is_finite())) {
+        return Err(HosvdError::GramOverflow { mode, size: n });
+    }
     let mut s = Diag::<f64>::zeros(n);
     let mut u = Mat::<f64>::zeros(n, n);
     let req =

@@ -25,6 +25,19 @@ pub enum HosvdError {
         /// The Gram matrix size.
         size: usize,
     },
+    /// A Gram matrix `X_(n) X_(n)^T` (or one of the projected tensor's) has entries that
+    /// overflowed to infinity: the data are finite but too large (squares around `1e308`, values
+    /// around `1e154` and above). Scale the tensor down before decomposing it.
+    #[error(
+        "the mode-{mode} Gram matrix ({size} x {size}) overflowed to a non-finite value: the data \
+         are too large (scale the tensor down)"
+    )]
+    GramOverflow {
+        /// The mode whose Gram matrix overflowed.
+        mode: usize,
+        /// The Gram matrix size.
+        size: usize,
+    },
     /// An ALS option is out of range.
     #[error("invalid ALS option {field} = {value}: {reason}")]
     BadOption {

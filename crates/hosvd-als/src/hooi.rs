@@ -175,7 +175,7 @@ fn product(
     a: MatRef<'_, f64>,
     out: &mut [f64],
 ) -> Result<[usize; 3], HosvdError> {
-    let od = product_dims(dims, mode, a.nrows());
+    let od = product_dims(dims, mode, a.nrows())?;
     debug_assert_eq!(out.len(), od[0] * od[1] * od[2]);
     mode_product_into(src, dims, mode, a, out)?;
     Ok(od)

@@ -53,7 +53,8 @@ pub(crate) fn project_core(x: &Tensor3, factors: &[Mat<f64>; 3]) -> Result<Tenso
 /// ([`Tucker::into_ordered`]); the model `X~` is the truncated HOSVD's.
 ///
 /// Errors: [`HosvdError::EmptyTensor`], NaN/inf in `x` or a rank that is zero or above its mode
-/// size ([`HosvdError::Tensor`]), [`HosvdError::Eigen`].
+/// size ([`HosvdError::Tensor`]), [`HosvdError::GramOverflow`] when the data are so large that a
+/// Gram matrix overflows (values around `1e154` and above), [`HosvdError::Eigen`].
 pub fn hosvd(x: &Tensor3, ranks: [usize; 3]) -> Result<Tucker, HosvdError> {
     validate(x, ranks)?;
     let factors = hosvd_factors(x, ranks)?;

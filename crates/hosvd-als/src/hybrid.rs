@@ -15,6 +15,11 @@ pub struct HybridLevel {
     pub ranks: [usize; 3],
 }
 
+/// Most accuracy levels [`hybrid_levels`] makes: `65_536` (2 MiB of levels; models use tens).
+/// A larger `accuracy_levels` is lowered to it, as [`crate::key_levels`] lowers `levels` to what
+/// the rank range allows.
+pub const MAX_ACCURACY_LEVELS: usize = 1 << 16;
+
 /// The `N_A` accuracy levels of the hybrid scheme for `N` key levels.
 ///
 /// Key `i` sits at accuracy level `p_i = round(i (N_A - 1) / (N - 1))` (evenly spread; level 0 is
@@ -23,7 +28,8 @@ pub struct HybridLevel {
 /// `t = 1..m`, componentwise, and are truncations of key `i`, the nearest *larger* key tensor
 /// (paper 4.2). Ranks never increase with the level; they strictly decrease when the key ranks
 /// leave room for it. `accuracy_levels < N` is raised to `N` (every key level is an accuracy
-/// level); a single key gives a single level; no keys give none.
+/// level), `accuracy_levels > MAX_ACCURACY_LEVELS` lowered to [`MAX_ACCURACY_LEVELS`] (or `N`
+/// if that is larger); a single key gives a single level; no keys give none.
 pub fn hybrid_levels(keys: &KeyLevels, accuracy_levels: usize) -> Vec<HybridLevel> {
     let n = keys.levels.len();
     if n <= 1 {
@@ -36,7 +42,7 @@ pub fn hybrid_levels(keys: &KeyLevels, accuracy_levels: usize) -> Vec<HybridLeve
             })
             .collect();
     }
-    let na = accuracy_levels.max(n);
+    let na = accuracy_levels.min(MAX_ACCURACY_LEVELS).max(n);
     let step = (na - 1) as f64 / (n - 1) as f64;
     let pos: Vec<usize> = (0..n).map(|i| (i as f64 * step).round() as usize).collect();
     let mut out = Vec::with_capacity(na);

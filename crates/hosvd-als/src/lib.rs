@@ -57,6 +57,6 @@ mod tucker;
 pub use error::HosvdError;
 pub use hooi::{AlsOptions, AlsReport, hooi, hooi_with_start};
 pub use hosvd::{hosvd, hosvd_full};
-pub use hybrid::{HybridLevel, hybrid_levels};
+pub use hybrid::{HybridLevel, MAX_ACCURACY_LEVELS, hybrid_levels};
 pub use keys::{KeyLevel, KeyLevels, KeySearchConfig, key_levels};
 pub use tucker::Tucker;

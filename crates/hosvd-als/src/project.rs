@@ -40,7 +40,7 @@ pub(crate) fn multi_product(
     for m in best {
         if let Some(a) = mats[m] {
             debug_assert_eq!(a.ncols(), d[m]);
-            let nd = product_dims(d, m, a.nrows());
+            let nd = product_dims(d, m, a.nrows())?;
             let mut out = vec![0.0; nd[0] * nd[1] * nd[2]];
             mode_product_into(&cur, d, m, a, &mut out)?;
             cur = out;

@@ -9,11 +9,14 @@
 use crate::{HybridLevel, KeyLevels};
 
 /// Bytes of one Tucker model of `value_bytes`-byte elements (8 for f64, 4 for f32):
-/// `(R_0 R_1 R_2 + sum_n I_n R_n) * value_bytes`.
+/// `(R_0 R_1 R_2 + sum_n I_n R_n) * value_bytes`, saturating at `usize::MAX` (no real model comes
+/// near it; the byte counts of this module never wrap).
 pub fn tucker_bytes(dims: [usize; 3], ranks: [usize; 3], value_bytes: usize) -> usize {
-    let core = ranks[0] * ranks[1] * ranks[2];
-    let factors: usize = (0..3).map(|n| dims[n] * ranks[n]).sum();
-    (core + factors) * value_bytes
+    let core = ranks[0].saturating_mul(ranks[1]).saturating_mul(ranks[2]);
+    let factors = (0..3).fold(0usize, |acc, n| {
+        acc.saturating_add(dims[n].saturating_mul(ranks[n]))
+    });
+    core.saturating_add(factors).saturating_mul(value_bytes)
 }
 
 /// Bytes of the hybrid model: every key level's core and factors (paper: "all key tensors and
@@ -22,7 +25,7 @@ pub fn key_levels_bytes(keys: &KeyLevels, value_bytes: usize) -> usize {
     keys.levels
         .iter()
         .map(|l| tucker_bytes(l.tucker.dims(), l.ranks, value_bytes))
-        .sum()
+        .fold(0, usize::saturating_add)
 }
 
 /// Bytes needed if every accuracy level were stored as its own ALS model (the paper's
@@ -31,12 +34,16 @@ pub fn all_levels_bytes(dims: [usize; 3], levels: &[HybridLevel], value_bytes: u
     levels
         .iter()
         .map(|l| tucker_bytes(dims, l.ranks, value_bytes))
-        .sum()
+        .fold(0, usize::saturating_add)
 }
 
-/// Bytes of the dense data tensor `I_0 I_1 I_2 * value_bytes` (the paper's "naive interpolation").
+/// Bytes of the dense data tensor `I_0 I_1 I_2 * value_bytes` (the paper's "naive interpolation"),
+/// saturating at `usize::MAX`.
 pub fn dense_bytes(dims: [usize; 3], value_bytes: usize) -> usize {
-    dims[0] * dims[1] * dims[2] * value_bytes
+    dims[0]
+        .saturating_mul(dims[1])
+        .saturating_mul(dims[2])
+        .saturating_mul(value_bytes)
 }
 
 /// Bytes to mebibytes (`/ 2^20`), the unit of the paper's MB figures.

@@ -30,7 +30,10 @@ impl SplitMix {
 /// (`I_n x R_n`, entries uniform in `[-1, 1)`), and uniform noise of relative size `noise`
 /// (per element, relative to the RMS of the noiseless tensor). Same arguments, same bytes.
 ///
-/// Errors: [`TensorError::BadRank`] if `ranks` is zero somewhere (ranks above dims are allowed).
+/// Errors: [`TensorError::BadRank`] if `ranks` is zero somewhere (ranks above dims are allowed);
+/// [`TensorError::NonFinite`] if a value is NaN or infinite: a `decay` or `noise` that is not
+/// finite, or values that overflow (a result that [`Tensor3::from_vec`] would reject is never
+/// returned).
 pub fn decaying_tucker(
     dims: [usize; 3],
     ranks: [usize; 3],
@@ -58,5 +61,6 @@ pub fn decaying_tucker(
     for v in x.as_mut_slice() {
         *v += noise * rms * rng.next_f64();
     }
+    x.check_finite()?;
     Ok(x)
 }

@@ -16,6 +16,10 @@ use tensor_ops::{Tensor3, TensorError, check_ranks, mode_vec_product_into};
 /// of `Z` are mutually orthogonal) with the mode-n singular values `||Z(.., r, ..)||` decreasing
 /// in `r`, so [`Tucker::truncate`] to leading sub-blocks is the natural reduction (paper 4.1).
 /// Factor column signs are fixed (largest-magnitude entry positive) for determinism.
+///
+/// The fields are public; factor `n` must have `R_n` columns, `R_n` the core's size in mode `n`
+/// (as every `Tucker` of this crate has). The methods returning `Result` check it
+/// ([`Tucker::check`]); [`Tucker::reconstruct`] and [`Tucker::sample_core`] panic on it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tucker {
     /// The core tensor `Z`.
@@ -39,6 +43,30 @@ impl Tucker {
         ]
     }
 
+    /// Checks that factor `n` has as many columns as the core's size in mode `n` (the invariant
+    /// that the public fields let a caller break).
+    ///
+    /// Errors: [`HosvdError::Tensor`] with [`TensorError::ShapeMismatch`] naming the columns
+    /// expected and found.
+    pub fn check(&self) -> Result<(), HosvdError> {
+        let r = self.ranks();
+        for (n, f) in self.factors.iter().enumerate() {
+            if f.ncols() != r[n] {
+                return Err(TensorError::ShapeMismatch {
+                    what: [
+                        "Tucker: factor 0 columns (core size in mode 0)",
+                        "Tucker: factor 1 columns (core size in mode 1)",
+                        "Tucker: factor 2 columns (core size in mode 2)",
+                    ][n],
+                    expected: r[n],
+                    found: f.ncols(),
+                }
+                .into());
+            }
+        }
+        Ok(())
+    }
+
     /// Squared Frobenius norm of the core, `||Z||^2`. With orthonormal factors and a core that is
     /// the projection `X x_n U_n^T` (HOSVD and HOOI cores are), `||X - X~||^2 = ||X||^2 - ||Z||^2`.
     pub fn core_squared_norm(&self) -> f64 {
@@ -49,8 +77,10 @@ impl Tucker {
     /// columns of each factor.
     ///
     /// Errors: [`HosvdError::Tensor`] with [`TensorError::BadRank`] if a rank is zero or larger
-    /// than the current rank in that mode.
+    /// than the current rank in that mode, [`TensorError::ShapeMismatch`] for inconsistent fields
+    /// ([`Tucker::check`]).
     pub fn truncate(&self, ranks: [usize; 3]) -> Result<Tucker, HosvdError> {
+        self.check()?;
         let core = self.core.truncate(ranks)?;
         let factors =
             std::array::from_fn(|n| self.factors[n].as_ref().subcols(0, ranks[n]).to_owned());
@@ -58,6 +88,10 @@ impl Tucker {
     }
 
     /// The approximation `X~ = Z x_0 U_0 x_1 U_1 x_2 U_2` (`I_0 x I_1 x I_2`).
+    ///
+    /// # Panics
+    /// If the fields are inconsistent ([`Tucker::check`]) or the product overflows to a non-finite
+    /// value; see [`Tucker::try_reconstruct`] for the checked form.
     pub fn reconstruct(&self) -> Tensor3 {
         tensor_ops::reconstruct(
             &self.core,
@@ -69,11 +103,27 @@ impl Tucker {
         )
     }
 
+    /// Checked [`Tucker::reconstruct`].
+    ///
+    /// Errors: [`TensorError::ShapeMismatch`] for inconsistent fields, [`TensorError::NonFinite`]
+    /// when the product overflows.
+    pub fn try_reconstruct(&self) -> Result<Tensor3, HosvdError> {
+        Ok(tensor_ops::try_reconstruct(
+            &self.core,
+            [
+                self.factors[0].as_ref(),
+                self.factors[1].as_ref(),
+                self.factors[2].as_ref(),
+            ],
+        )?)
+    }
+
     /// The per-sample core of paper eq. 7, `K_i = Z x_2 u_{S,i}` (`R_0 x R_1`), where
     /// `u_{S,i}` is row `i` of the mode-2 factor: `K_i(p, t) = sum_s Z(p, t, s) U_2(i, s)`.
     ///
     /// # Panics
-    /// If `i >= I_2`; see [`Tucker::sample_core_into`] for the checked, allocation-free form.
+    /// If `i >= I_2` or the fields are inconsistent ([`Tucker::check`]); see
+    /// [`Tucker::sample_core_into`] for the checked, allocation-free form.
     pub fn sample_core(&self, i: usize) -> Mat<f64> {
         let r = self.ranks();
         let mut out = Mat::<f64>::zeros(r[0], r[1]);
@@ -84,8 +134,10 @@ impl Tucker {
 
     /// Writes `K_i = Z x_2 u_{S,i}` into `out` (`R_0 x R_1`) without allocating.
     ///
-    /// Errors: [`TensorError::ShapeMismatch`] if `i >= I_2` or `out` has the wrong shape.
+    /// Errors: [`TensorError::ShapeMismatch`] if `i >= I_2`, `out` has the wrong shape or the
+    /// fields are inconsistent ([`Tucker::check`]).
     pub fn sample_core_into(&self, i: usize, out: MatMut<'_, f64>) -> Result<(), HosvdError> {
+        self.check()?;
         let u2 = &self.factors[2];
         if i >= u2.nrows() {
             return Err(TensorError::ShapeMismatch {
@@ -136,7 +188,12 @@ impl Tucker {
 
     /// The mode-n singular values of the core, `sigma^(n)_r = ||Z(.., r, ..)||` (de Lathauwer et
     /// al. 2000, Th. 2), for `r = 0..R_n`. Decreasing for an ordered core.
-    pub fn mode_singular_values(&self, mode: usize) -> Vec<f64> {
+    ///
+    /// Errors: [`TensorError::BadMode`] if `mode >= 3`.
+    pub fn mode_singular_values(&self, mode: usize) -> Result<Vec<f64>, HosvdError> {
+        if mode >= 3 {
+            return Err(TensorError::BadMode { mode }.into());
+        }
         let d = self.core.dims();
         let mut s = vec![0.0; d[mode]];
         let z = self.core.as_slice();
@@ -150,7 +207,7 @@ impl Tucker {
                 }
             }
         }
-        s.iter().map(|v| v.sqrt()).collect()
+        Ok(s.iter().map(|v| v.sqrt()).collect())
     }
 
     /// Storage of the core and the three factors in bytes, for elements of `value_bytes` bytes
@@ -162,17 +219,22 @@ impl Tucker {
     /// Mean squared error `||X - X~||_F^2 / (I_0 I_1 I_2)` computed explicitly by reconstruction
     /// (for verification; decompositions report it from norms without forming `X~`).
     ///
-    /// Errors: [`TensorError::ShapeMismatch`] if `x` has other dims than the model.
+    /// Errors: [`TensorError::ShapeMismatch`] if `x` has other dims than the model or the fields
+    /// are inconsistent ([`Tucker::check`]), [`TensorError::NonFinite`] if the reconstruction
+    /// overflows.
     pub fn explicit_mse(&self, x: &Tensor3) -> Result<f64, HosvdError> {
         if x.dims() != self.dims() {
             return Err(TensorError::ShapeMismatch {
                 what: "explicit_mse: tensor elements",
-                expected: self.dims().iter().product(),
+                expected: self
+                    .dims()
+                    .iter()
+                    .fold(1, |a: usize, &d| a.saturating_mul(d)),
                 found: x.len(),
             }
             .into());
         }
-        let y = self.reconstruct();
+        let y = self.try_reconstruct()?;
         let mut acc = 0.0;
         for (a, b) in x.as_slice().iter().zip(y.as_slice()) {
             acc += (a - b) * (a - b);
@@ -186,7 +248,12 @@ impl Tucker {
     /// of `Z_(n) Z_(n)^T`, eigenvalues decreasing), the same model is `W x_n (U_n V_n)`; `W` is
     /// all-orthogonal and ordered. Column signs of `U_n V_n` are then normalised (largest entry
     /// positive) and the matching core slices flipped.
+    ///
+    /// Errors: [`TensorError::ShapeMismatch`] for inconsistent fields ([`Tucker::check`]),
+    /// [`TensorError::BadRank`] if a rank is zero or above its mode size, and the eigensolver's
+    /// errors ([`HosvdError::GramOverflow`], [`HosvdError::Eigen`]).
     pub fn into_ordered(self) -> Result<Tucker, HosvdError> {
+        self.check()?;
         let r = self.ranks();
         check_ranks(self.dims(), r)?;
         let mut v: [Mat<f64>; 3] = std::array::from_fn(|_| Mat::<f64>::zeros(0, 0));

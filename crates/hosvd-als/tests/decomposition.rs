@@ -150,7 +150,7 @@ fn sample_core_is_core_times_sample_row() {
     assert_eq!(out, t.sample_core(2));
     // Mode singular values are decreasing for the ordered core.
     for n in 0..3 {
-        let s = t.mode_singular_values(n);
+        let s = t.mode_singular_values(n).unwrap();
         assert!(s.windows(2).all(|w| w[0] >= w[1] * (1.0 - 1e-12)), "{s:?}");
     }
 }
@@ -281,4 +281,70 @@ fn decompositions_are_the_same_bits_on_any_pool() {
             );
         }
     }
+}
+
+/// Finite data so large that the Gram matrices overflow: the error says so (it used to blame the
+/// eigensolver's convergence).
+#[test]
+fn overflowing_gram_matrices_are_named() {
+    let x = decaying_tucker([4, 5, 6], [2, 2, 2], 1.0, 0.0, 1).unwrap();
+    for scale in [1e160, 1e200] {
+        let mut big = x.clone();
+        big.as_mut_slice().iter_mut().for_each(|v| *v *= scale);
+        big.check_finite().unwrap();
+        let err = hosvd(&big, [2, 2, 2]).unwrap_err();
+        assert!(
+            matches!(err, HosvdError::GramOverflow { mode: 0, size: 4 }),
+            "{err}"
+        );
+        assert!(err.to_string().contains("too large"), "{err}");
+        let err = hooi(&big, [2, 2, 2], &AlsOptions::default()).unwrap_err();
+        assert!(matches!(err, HosvdError::GramOverflow { .. }), "{err}");
+    }
+}
+
+/// A `Tucker` whose public fields disagree (a factor with another column count than the core)
+/// gives errors from the methods that return `Result`, and `mode_singular_values` checks the mode.
+#[test]
+fn inconsistent_tucker_fields_are_errors() {
+    let x = decaying_tucker([4, 5, 6], [2, 2, 2], 1.0, 0.01, 1).unwrap();
+    let good = hosvd(&x, [3, 3, 3]).unwrap();
+    assert!(good.check().is_ok());
+    assert_eq!(good.try_reconstruct().unwrap(), good.reconstruct());
+    assert!(matches!(
+        good.mode_singular_values(3),
+        Err(HosvdError::Tensor(TensorError::BadMode { mode: 3 }))
+    ));
+    for (mode, cols) in [(2, 2), (0, 1), (1, 4)] {
+        let mut bad = good.clone();
+        let f = &bad.factors[mode];
+        bad.factors[mode] = Mat::from_fn(f.nrows(), cols, |i, j| if i == j { 1.0 } else { 0.0 });
+        let shape = |r: Result<(), HosvdError>| {
+            matches!(
+                r,
+                Err(HosvdError::Tensor(TensorError::ShapeMismatch { expected: 3, found, .. }))
+                    if found == cols
+            )
+        };
+        assert!(shape(bad.check()), "{mode}");
+        let mut out = Mat::<f64>::zeros(3, 3);
+        assert!(shape(bad.sample_core_into(0, out.as_mut())), "{mode}");
+        assert!(shape(bad.truncate([2, 2, 2]).map(|_| ())), "{mode}");
+        assert!(shape(bad.try_reconstruct().map(|_| ())), "{mode}");
+        assert!(bad.explicit_mse(&x).is_err(), "{mode}");
+        assert!(shape(bad.clone().into_ordered().map(|_| ())), "{mode}");
+    }
+}
+
+/// Noise that is not finite is refused, not returned as a tensor of NaN.
+#[test]
+fn synthetic_tensors_refuse_non_finite_parameters() {
+    for noise in [f64::NAN, f64::INFINITY] {
+        assert!(matches!(
+            decaying_tucker([3, 4, 5], [2, 2, 2], 1.0, noise, 1),
+            Err(TensorError::NonFinite { .. })
+        ));
+    }
+    assert!(decaying_tucker([3, 4, 5], [2, 2, 2], f64::NAN, 0.0, 1).is_err());
+    assert!(decaying_tucker([3, 4, 5], [2, 2, 2], 1.0, 0.5, 1).is_ok());
 }

@@ -182,3 +182,37 @@ fn convergence_is_reported_per_key() {
     );
     assert!(keys.levels.iter().all(|l| l.iterations == 1));
 }
+
+/// Byte counts saturate instead of wrapping to small numbers.
+#[test]
+fn byte_counts_saturate() {
+    assert_eq!(dense_bytes([1 << 22; 3], 8), usize::MAX);
+    assert_eq!(dense_bytes([1 << 40, 1 << 40, 0], 8), 0);
+    assert_eq!(tucker_bytes([10; 3], [1 << 22; 3], 8), usize::MAX);
+    assert_eq!(tucker_bytes([usize::MAX; 3], [2; 3], 1), usize::MAX);
+    // Ordinary counts are unchanged.
+    assert_eq!(dense_bytes([94, 100, 186], 8), 94 * 100 * 186 * 8);
+    assert_eq!(
+        tucker_bytes([94, 100, 186], [20, 30, 40], 4),
+        (20 * 30 * 40 + 94 * 20 + 100 * 30 + 186 * 40) * 4
+    );
+}
+
+/// Absurd accuracy level counts are lowered to the documented maximum instead of aborting on the
+/// allocation (or panicking on `usize::MAX`).
+#[test]
+fn accuracy_levels_are_capped() {
+    let x = data();
+    let keys = key_levels(&x, &cfg(3, [8, 8, 8], [3, 3, 3])).unwrap();
+    for requested in [1 << 40, usize::MAX] {
+        let levels = hybrid_levels(&keys, requested);
+        assert_eq!(levels.len(), hosvd_als::MAX_ACCURACY_LEVELS);
+        assert_eq!(levels[0].ranks, keys.levels[0].ranks);
+        assert_eq!(levels.last().unwrap().ranks, keys.levels[2].ranks);
+    }
+    assert_eq!(
+        hybrid_levels(&keys, hosvd_als::MAX_ACCURACY_LEVELS),
+        hybrid_levels(&keys, hosvd_als::MAX_ACCURACY_LEVELS + 1)
+    );
+    assert_eq!(hybrid_levels(&keys, 28).len(), 28);
+}

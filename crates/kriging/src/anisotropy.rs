@@ -67,18 +67,30 @@ pub enum Anisotropy {
 }
 
 impl Anisotropy {
+    /// The most coordinate dimensions [`Anisotropy::matrix`] accepts (4096: a 128 MiB matrix).
+    pub const MAX_DIMS: usize = 1 << 12;
+
     /// The `d x d` matrix (row-major) that maps centred coordinates to isotropic ones; fails when the
-    /// anisotropy does not fit `d` dimensions or a parameter is out of its domain.
+    /// anisotropy does not fit `d` dimensions or a parameter is out of its domain, when `d` is
+    /// above [`Anisotropy::MAX_DIMS`] (the identity of [`Anisotropy::Isotropic`] would take `d^2`
+    /// entries), and with [`KrigingError::Overflow`] when a ratio is so small (below about
+    /// `5.6e-309`) that its reciprocal overflows.
     pub fn matrix(&self, d: usize) -> Result<Vec<f64>, KrigingError> {
         let bad = |m: String| Err(KrigingError::InvalidConfig(format!("anisotropy: {m}")));
         let ok_ratio = |r: f64| r.is_finite() && r > 0.0 && r <= 1.0;
-        match *self {
+        let m = match *self {
             Anisotropy::Isotropic => {
+                if d > Self::MAX_DIMS {
+                    return bad(format!(
+                        "{d}-D coordinates: at most {} dimensions",
+                        Self::MAX_DIMS
+                    ));
+                }
                 let mut m = vec![0.0; d * d];
                 for k in 0..d {
                     m[k * d + k] = 1.0;
                 }
-                Ok(m)
+                m
             }
             Anisotropy::TwoD { angle, ratio } => {
                 if d != 2 {
@@ -90,7 +102,7 @@ impl Anisotropy {
                     ));
                 }
                 let (s, c) = angle.to_radians().sin_cos();
-                Ok(vec![c, s, -s / ratio, c / ratio])
+                vec![c, s, -s / ratio, c / ratio]
             }
             Anisotropy::ThreeD { angles, ratios } => {
                 if d != 3 {
@@ -125,8 +137,16 @@ impl Anisotropy {
                         m[i * 3 + j] = stretch[i] * r[j][i];
                     }
                 }
-                Ok(m)
+                m
             }
+        };
+        // A subnormal ratio: 1 / ratio is inf (an inf entry, or inf * 0 = NaN).
+        if m.iter().any(|v| !v.is_finite()) {
+            return Err(KrigingError::Overflow {
+                what: format!("anisotropy {self:?}"),
+                reason: "the reciprocal of a ratio overflows".into(),
+            });
         }
+        Ok(m)
     }
 }

@@ -101,7 +101,8 @@ pub struct KrigingConfig {
     pub method: Method,
     /// Variogram model choice.
     pub model: ModelChoice,
-    /// Number of distance intervals `S_I` of the empirical variogram.
+    /// Number of distance intervals `S_I` of the empirical variogram, at least 1 and at most
+    /// [`crate::MAX_BINS`] (not used with [`ModelChoice::Given`]).
     pub bins: usize,
     /// Per-dimension scaling of the parameters.
     pub scaling: ScalingChoice,

@@ -9,6 +9,72 @@ use crate::error::KrigingError;
 /// Below this many `S^2 D` operations the pairwise value distances run on one thread.
 const PARALLEL_MIN_WORK: usize = 1 << 24;
 
+/// The most intervals an empirical variogram may have ([`EmpiricalVariogram::compute`],
+/// [`Binning::bins`], [`crate::KrigingConfig::bins`]); more is a
+/// [`KrigingError::InvalidConfig`] error. A million intervals is far more than any variogram
+/// fit uses (tens), and keeps the per-interval sums and counts within about 16 MB per row being
+/// binned.
+pub const MAX_BINS: usize = 1_000_000;
+
+/// Per-row interval sums held at once while binning (rows `ROW_BLOCK_ENTRIES / bins` at a time),
+/// so that memory does not grow with the number of samples times the number of intervals.
+const ROW_BLOCK_ENTRIES: usize = 1 << 22;
+
+/// The checks on an interval count: at least one, at most [`MAX_BINS`].
+pub(crate) fn check_bins(bins: usize) -> Result<(), KrigingError> {
+    if bins == 0 {
+        return Err(KrigingError::InvalidConfig(
+            "the empirical variogram needs at least one bin".into(),
+        ));
+    }
+    if bins > MAX_BINS {
+        return Err(KrigingError::InvalidConfig(format!(
+            "the empirical variogram takes at most {MAX_BINS} bins (kriging::MAX_BINS), got {bins}"
+        )));
+    }
+    Ok(())
+}
+
+/// Runs `row` over the rows `0..s` (in parallel when `parallel`) and hands the results to `add`
+/// in row order, at most `ROW_BLOCK_ENTRIES / bins` rows' results held at a time. The order of
+/// the additions is the row order whatever the blocks, so the sums have the same bits as one
+/// pass over all rows.
+pub(crate) fn fold_rows<A: Send>(
+    s: usize,
+    bins: usize,
+    parallel: bool,
+    row: impl Fn(usize) -> A + Sync + Send,
+    mut add: impl FnMut(A),
+) {
+    let block = (ROW_BLOCK_ENTRIES / bins.max(1)).max(1);
+    let mut start = 0;
+    while start < s {
+        let end = s.min(start + block);
+        if parallel {
+            let part: Vec<A> = (start..end).into_par_iter().map(&row).collect();
+            part.into_iter().for_each(&mut add);
+        } else {
+            (start..end).map(&row).for_each(&mut add);
+        }
+        start = end;
+    }
+}
+
+/// [`KrigingError::Overflow`] when an interval's semi-variance is not finite: finite values whose
+/// squared differences (or their sums) overflow.
+pub(crate) fn check_gamma(gamma: &[f64]) -> Result<(), KrigingError> {
+    match gamma.iter().position(|g| !g.is_finite()) {
+        None => Ok(()),
+        Some(u) => Err(KrigingError::Overflow {
+            what: "values".into(),
+            reason: format!(
+                "the semi-variance of interval {u} of the empirical variogram is {}",
+                gamma[u]
+            ),
+        }),
+    }
+}
+
 /// Pairwise Euclidean distances between the rows of a parameter matrix, packed (upper triangle).
 #[derive(Debug, Clone)]
 pub(crate) struct PairDistances {
@@ -100,6 +166,11 @@ impl EmpiricalVariogram {
     /// Computes the empirical variogram of `values` (S x D, one sample per row) over the rows of
     /// `params` (S x d, already scaled) with `bins` intervals.
     ///
+    /// Errors: shapes that do not match, fewer than two samples, NaN or infinite input, `bins` 0
+    /// or above [`MAX_BINS`], all samples at one point ([`KrigingError::NoSpread`]), and
+    /// [`KrigingError::Overflow`] when finite parameters or values are so large that a distance
+    /// or a semi-variance overflows.
+    ///
     /// ```
     /// use kriging::faer::Mat;
     /// use kriging::EmpiricalVariogram;
@@ -150,14 +221,16 @@ impl EmpiricalVariogram {
                 got: s,
             });
         }
-        if bins == 0 {
-            return Err(KrigingError::InvalidConfig(
-                "the empirical variogram needs at least one bin".into(),
-            ));
-        }
+        check_bins(bins)?;
         let hmax = dist.max();
         if hmax.is_nan() || hmax <= 0.0 {
             return Err(KrigingError::NoSpread { samples: s });
+        }
+        if hmax.is_infinite() {
+            return Err(KrigingError::Overflow {
+                what: "parameters".into(),
+                reason: "the largest distance between two samples is inf".into(),
+            });
         }
         let dh = hmax / bins as f64;
         let dcols = values.ncols();
@@ -181,24 +254,21 @@ impl EmpiricalVariogram {
         };
         // Rows are independent: the parallel and the sequential loop give the same bits. Small
         // problems stay sequential (waking the pool costs more than the work).
-        let per_row: Vec<(Vec<f64>, Vec<usize>)> = if s * s * dcols < PARALLEL_MIN_WORK {
-            (0..s).map(row_bins).collect()
-        } else {
-            (0..s).into_par_iter().map(row_bins).collect()
-        };
         let mut sums = vec![0.0; bins];
         let mut counts = vec![0usize; bins];
-        for (rs, rc) in &per_row {
+        let parallel = s * s * dcols >= PARALLEL_MIN_WORK;
+        fold_rows(s, bins, parallel, row_bins, |(rs, rc)| {
             for u in 0..bins {
                 sums[u] += rs[u];
                 counts[u] += rc[u];
             }
-        }
-        let gamma = sums
+        });
+        let gamma: Vec<f64> = sums
             .iter()
             .zip(&counts)
             .map(|(&sm, &n)| if n > 0 { sm / n as f64 } else { 0.0 })
             .collect();
+        check_gamma(&gamma)?;
         let centers = (0..bins).map(|u| dh * (u as f64 + 0.5)).collect();
         Ok(EmpiricalVariogram {
             bin_width: dh,
@@ -229,7 +299,7 @@ pub enum MaxLag {
 /// `[0, max_lag]`; pairs farther apart than the maximum lag are left out.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Binning {
-    /// Number of equal-width intervals, at least 1.
+    /// Number of equal-width intervals, at least 1 and at most [`MAX_BINS`].
     pub bins: usize,
     /// The largest lag binned.
     pub max_lag: MaxLag,
@@ -307,27 +377,25 @@ impl EmpiricalVariogram {
             }
             (sums, counts)
         };
-        let per_row: Vec<(Vec<f64>, Vec<usize>)> = if s * s * (d + dv) < PARALLEL_MIN_WORK {
-            (0..s).map(row_bins).collect()
-        } else {
-            (0..s).into_par_iter().map(row_bins).collect()
-        };
         let mut sums = vec![0.0; bins];
         let mut counts = vec![0usize; bins];
-        for (rs, rc) in &per_row {
+        let parallel = s * s * (d + dv) >= PARALLEL_MIN_WORK;
+        fold_rows(s, bins, parallel, row_bins, |(rs, rc)| {
             for u in 0..bins {
                 sums[u] += rs[u];
                 counts[u] += rc[u];
             }
-        }
+        });
+        let gamma: Vec<f64> = sums
+            .iter()
+            .zip(&counts)
+            .map(|(&sm, &n)| if n > 0 { sm / n as f64 } else { 0.0 })
+            .collect();
+        check_gamma(&gamma)?;
         Ok(EmpiricalVariogram {
             bin_width: dh,
             centers: (0..bins).map(|u| dh * (u as f64 + 0.5)).collect(),
-            gamma: sums
-                .iter()
-                .zip(&counts)
-                .map(|(&sm, &n)| if n > 0 { sm / n as f64 } else { 0.0 })
-                .collect(),
+            gamma,
             counts,
         })
     }
@@ -358,10 +426,5 @@ pub(crate) fn check_inputs(
     }
     crate::check_finite("coordinates", coords)?;
     crate::check_finite("values", values)?;
-    if binning.bins == 0 {
-        return Err(KrigingError::InvalidConfig(
-            "the empirical variogram needs at least one bin".into(),
-        ));
-    }
-    Ok(())
+    check_bins(binning.bins)
 }

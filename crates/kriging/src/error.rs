@@ -73,6 +73,20 @@ pub enum KrigingError {
     /// A configuration value is out of range.
     #[error("invalid configuration: {0}")]
     InvalidConfig(String),
+    /// Finite input whose intermediate results leave the range of double precision: values or
+    /// coordinates so large (or so far apart) that their squares, variances or distances
+    /// overflow, or so close together that their squared distances underflow to zero. Reported
+    /// instead of the misleading consequence (values that seem not to vary, samples that seem to
+    /// coincide, a dimension that seems constant, a NaN result). Rescale the input.
+    #[error(
+        "{what}: {reason} (too large or too small to compute with in double precision; rescale)"
+    )]
+    Overflow {
+        /// What overflowed (for example `"values column 0"` or `"coordinates"`).
+        what: String,
+        /// What was computed and what it gave.
+        reason: String,
+    },
     /// A scaling is malformed (wrong length, negative or non-finite entries).
     #[error("invalid parameter scaling at dimension {dim}: {reason}")]
     InvalidScaling {

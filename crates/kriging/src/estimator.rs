@@ -135,7 +135,20 @@ pub(crate) fn max_lag(
     if h.is_nan() || h <= 0.0 {
         return Err(KrigingError::NoSpread { samples: s });
     }
+    check_max_lag(h)?;
     Ok(h)
+}
+
+/// [`KrigingError::Overflow`] for an infinite largest lag: finite coordinates so far apart that
+/// their distance overflows (or a maximum lag fraction that overflows the diagonal).
+fn check_max_lag(h: f64) -> Result<(), KrigingError> {
+    if h.is_infinite() {
+        return Err(KrigingError::Overflow {
+            what: "coordinates".into(),
+            reason: "the largest lag of the empirical variogram is inf".into(),
+        });
+    }
+    Ok(())
 }
 
 /// Per-interval accumulator: sums and counts, or the absolute differences (Dowd).
@@ -269,6 +282,7 @@ impl EmpiricalVariogram {
             }
             _ => max_lag(binning, &pts, s, d)?,
         };
+        check_max_lag(hmax)?;
         let dh = hmax / bins as f64;
         let max2 = hmax * hmax;
         let est = opts.estimator;
@@ -342,16 +356,12 @@ impl EmpiricalVariogram {
             }
             acc
         };
-        let per_row: Vec<Acc> = if s * s * (d + 1) < PARALLEL_MIN_WORK {
-            (0..s).map(row).collect()
-        } else {
-            (0..s).into_par_iter().map(row).collect()
-        };
         let mut sums = vec![0.0; bins];
         let mut counts = vec![0usize; bins];
         let mut diffs: Vec<Vec<f64>> =
             vec![Vec::new(); if est == Estimator::Dowd { bins } else { 0 }];
-        for a in per_row {
+        let parallel = s * s * (d + 1) >= PARALLEL_MIN_WORK;
+        crate::empirical::fold_rows(s, bins, parallel, row, |a| {
             for u in 0..bins {
                 sums[u] += a.sums[u];
                 counts[u] += a.counts[u];
@@ -359,8 +369,8 @@ impl EmpiricalVariogram {
             for (all, mut part) in diffs.iter_mut().zip(a.diffs) {
                 all.append(&mut part);
             }
-        }
-        let gamma = (0..bins)
+        });
+        let gamma: Vec<f64> = (0..bins)
             .map(|u| {
                 let n = counts[u];
                 if n == 0 {
@@ -376,6 +386,7 @@ impl EmpiricalVariogram {
                 }
             })
             .collect();
+        crate::empirical::check_gamma(&gamma)?;
         Ok(EmpiricalVariogram {
             bin_width: dh,
             centers: (0..bins).map(|u| dh * (u as f64 + 0.5)).collect(),

@@ -102,8 +102,11 @@ struct Points {
 /// the best fit for each `nu`. Parameters that end at a bound are reported in
 /// [`FittedVariogram::bounds`].
 ///
-/// Errors: no non-empty interval, an all-zero empirical variogram (the values do not vary), or a
-/// best fit with zero sill (no spatial correlation: a pure nugget).
+/// Errors: no non-empty interval, an all-zero empirical variogram (the values do not vary), a
+/// best fit with zero sill (no spatial correlation: a pure nugget), and a malformed hand-built
+/// `emp` (its fields are public): `centers`, `gamma` and `counts` of different lengths, a
+/// `bin_width` that is not finite and > 0, or a non-empty interval whose centre or semi-variance
+/// is not finite or whose centre is not > 0. All are [`KrigingError::VariogramFit`].
 ///
 /// ```
 /// use kriging::{fit_variogram, EmpiricalVariogram, FitOptions, Variogram, VariogramModel};
@@ -218,8 +221,22 @@ pub fn fit_variogram(
     })
 }
 
-/// The non-empty intervals of `emp` with their weights; `Err(reason)` when none or all zero.
+/// The non-empty intervals of `emp` with their weights; `Err(reason)` when none or all zero, or
+/// when a hand-built `emp` is malformed: fields of different lengths, a bin width that is not
+/// finite and > 0, or a non-empty interval whose centre is not finite and > 0 (the range search
+/// runs on the logarithm of the first centre).
 fn points(emp: &EmpiricalVariogram, opts: &FitOptions) -> Result<Points, &'static str> {
+    if emp.centers.len() != emp.counts.len() || emp.gamma.len() != emp.counts.len() {
+        return Err("the empirical variogram's centers, gamma and counts have different lengths");
+    }
+    if !(emp.bin_width.is_finite() && emp.bin_width > 0.0) {
+        return Err("the empirical variogram's bin width must be finite and > 0");
+    }
+    if (0..emp.counts.len())
+        .any(|u| emp.counts[u] > 0 && emp.centers[u].is_finite() && emp.centers[u] <= 0.0)
+    {
+        return Err("the empirical variogram has a non-empty interval whose centre is not > 0");
+    }
     let mut p = Points {
         h: Vec::new(),
         y: Vec::new(),

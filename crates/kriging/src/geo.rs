@@ -152,12 +152,17 @@ pub enum Drift {
 }
 
 impl Drift {
-    /// Number of drift terms in `d` dimensions (without external variables).
+    /// Number of drift terms in `d` dimensions (without external variables); saturates at
+    /// `usize::MAX` for a `d` so large that the count does not fit.
     pub fn n_terms(self, d: usize) -> usize {
         match self {
             Drift::Constant => 1,
-            Drift::Linear => 1 + d,
-            Drift::Quadratic => 1 + d + d * (d + 1) / 2,
+            Drift::Linear => d.saturating_add(1),
+            Drift::Quadratic => {
+                // In 128 bits: d (d + 1) / 2 overflows usize from d = 2^32 on.
+                let d = d as u128;
+                usize::try_from(1 + d + d * (d + 1) / 2).unwrap_or(usize::MAX)
+            }
         }
     }
 }
@@ -842,6 +847,25 @@ impl Geometry {
         if scale.is_nan() || scale <= 0.0 {
             return Err(KrigingError::NoSpread { samples: n });
         }
+        // Squared distances must be representable, or far-apart samples would read as duplicates
+        // (an infinite tolerance) and close ones too (squares that underflow to 0). Neither bound
+        // binds below coordinates of about 1e153 or spreads above about 1e-142.
+        let extent2 = (2.0 * scale) * (2.0 * scale) * d as f64;
+        let tol = 1e-12 * scale;
+        if !extent2.is_finite() || tol * tol == 0.0 {
+            return Err(KrigingError::Overflow {
+                what: "coordinates".into(),
+                reason: format!(
+                    "their squared distances {} (largest centred coordinate {scale:e}, after the \
+                     anisotropy)",
+                    if extent2.is_finite() {
+                        "underflow to 0"
+                    } else {
+                        "overflow"
+                    }
+                ),
+            });
+        }
         let m = data.n_ext;
         let mut ext_mean = vec![0.0; m];
         let mut ext_sd = vec![1.0; m];
@@ -1338,6 +1362,7 @@ impl KrigeModel {
                 self.solve_block(&sys, &u, &f, &mut val, &mut var);
             }
         }
+        check_prediction(&val, &var, None)?;
         Ok(Prediction {
             value: val[0],
             variance: var[0],
@@ -1514,6 +1539,7 @@ impl KrigeModel {
         for r in results {
             r?;
         }
+        check_prediction(&values, &variances, Some(0))?;
         Ok(Predictions { values, variances })
     }
 
@@ -1740,6 +1766,37 @@ fn validate_variogram(v: &NestedVariogram, measurement_error: bool) -> Result<()
         )));
     }
     v.validate()
+}
+
+/// `Ok` when every prediction and variance is finite, else [`KrigingError::Overflow`] naming the
+/// first query point whose result is not (`first`: the index of `values[0]` among the query
+/// points, `None` for a single query): a point so far from the samples, or data so large, that
+/// the variogram or the drift overflows.
+fn check_prediction(
+    values: &[f64],
+    variances: &[f64],
+    first: Option<usize>,
+) -> Result<(), KrigingError> {
+    let bad = values
+        .iter()
+        .position(|v| !v.is_finite())
+        .into_iter()
+        .chain(variances.iter().position(|v| !v.is_finite()))
+        .min();
+    match bad {
+        None => Ok(()),
+        Some(q) => Err(KrigingError::Overflow {
+            what: match first {
+                Some(f) => format!("the prediction at query point {}", f + q),
+                None => "the prediction at the query point".into(),
+            },
+            reason: format!(
+                "value {} and variance {} (the point is too far from the samples)",
+                values[q],
+                variances.get(q).copied().unwrap_or(0.0)
+            ),
+        }),
+    }
 }
 
 /// Adds the query index to an error about a query point.

@@ -148,12 +148,29 @@ fn check_residuals_vary(
     let mut spread = 0.0;
     for j in 0..dv {
         let mean = (0..s).map(|i| values[(i, j)]).sum::<f64>() / s as f64;
-        spread += (0..s).map(|i| (values[(i, j)] - mean).powi(2)).sum::<f64>();
+        let col = (0..s).map(|i| (values[(i, j)] - mean).powi(2)).sum::<f64>();
+        // Finite values whose squared deviations overflow would otherwise read as "do not vary".
+        if !col.is_finite() {
+            return Err(KrigingError::Overflow {
+                what: format!("values column {j}"),
+                reason: format!("the sum of squared deviations from the mean is {col}"),
+            });
+        }
+        spread += col;
     }
     let rnorm: f64 = (0..dv)
         .flat_map(|j| (0..s).map(move |i| (i, j)))
         .map(|(i, j)| residuals[(i, j)].powi(2))
         .sum();
+    if !(spread.is_finite() && rnorm.is_finite()) {
+        return Err(KrigingError::Overflow {
+            what: "values".into(),
+            reason: format!(
+                "the sums of squares over the samples are {spread} (values) and {rnorm} \
+                 (residuals of the trend)"
+            ),
+        });
+    }
     if rnorm.sqrt() <= 1e-10 * spread.sqrt() {
         return Err(KrigingError::VariogramFit {
             model: None,
@@ -320,6 +337,12 @@ impl Kriging {
         let dist = PairDistances::new(scaled.as_ref());
         if dist.max().is_nan() || dist.max() <= 0.0 {
             return Err(KrigingError::NoSpread { samples: s });
+        }
+        if dist.max().is_infinite() {
+            return Err(KrigingError::Overflow {
+                what: "parameters".into(),
+                reason: "the distance between two (scaled) samples is inf".into(),
+            });
         }
         let mut scaled_rows = Vec::with_capacity(s * scaled.ncols());
         for i in 0..s {
@@ -693,7 +716,7 @@ impl Kriging {
                 *o += g * a;
             }
         }
-        Ok(())
+        check_result("the kriging weights", out)
     }
 
     /// The prediction at `c` (length D): `F [c; 1] + sum_i b_i(c) r_i` (eq. 8; ordinary kriging:
@@ -721,7 +744,7 @@ impl Kriging {
                 }
             }
         }
-        Ok(())
+        check_result("the prediction", out)
     }
 
     /// The predictions at every row of `queries` (n x d, unscaled like [`Kriging::predict`]'s
@@ -769,6 +792,19 @@ impl Kriging {
                 }
             });
             out += crate::linalg::matmul_par_cols(z.as_ref(), f.transpose());
+        }
+        for i in 0..n {
+            for j in 0..dv {
+                if !out[(i, j)].is_finite() {
+                    return Err(KrigingError::Overflow {
+                        what: format!("the prediction at query row {i}, value column {j}"),
+                        reason: format!(
+                            "it is {} (the query is too far from the samples)",
+                            out[(i, j)]
+                        ),
+                    });
+                }
+            }
         }
         Ok(out)
     }
@@ -891,11 +927,30 @@ pub(crate) fn check_query(
     Ok(())
 }
 
+/// `Ok` when every entry of a query's result is finite, else [`KrigingError::Overflow`] naming
+/// `what` and the first non-finite column (a query so far from the samples that the variogram
+/// or the trend overflows).
+fn check_result(what: &str, out: &[f64]) -> Result<(), KrigingError> {
+    match out.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(j) => Err(KrigingError::Overflow {
+            what: format!("{what} at the query (column {j})"),
+            reason: format!("it is {} (the query is too far from the samples)", out[j]),
+        }),
+    }
+}
+
 /// `out[j] = gamma(|scale(c) - p_j|)` for `j < out.len()`: the variogram column of a query `c`
 /// (unscaled, length `d`) against scaled sample parameters `scaled_params` (row-major, `d` per
 /// sample), the right-hand side of the kriging system without its trailing 1. The one evaluation
 /// of it offline, shared by [`crate::ProjectedQuery::query`] and the motion baselines' dual form.
 /// No allocation.
+///
+/// # Panics
+///
+/// When `scaled_params` holds fewer than `out.len()` samples of `c.len()` entries, or `scaling`
+/// has fewer than `c.len()` dimensions (a model's own [`Kriging::scaling`] and scaled rows with
+/// a query of [`Kriging::n_params`] entries always fit).
 ///
 /// ```
 /// use kriging::{ParamScaling, Variogram, VariogramModel, variogram_column};
@@ -916,6 +971,20 @@ pub fn variogram_column(
     c: &[f64],
     out: &mut [f64],
 ) {
+    assert!(
+        out.len()
+            .checked_mul(c.len())
+            .is_some_and(|n| n <= scaled_params.len())
+            && c.len() <= scaling.offset.len().min(scaling.scale.len()),
+        "variogram_column: {} outputs of {}-D queries need {} scaled entries and a scaling of {} \
+         dimensions, got {} and {}",
+        out.len(),
+        c.len(),
+        out.len().saturating_mul(c.len()),
+        c.len(),
+        scaled_params.len(),
+        scaling.dims()
+    );
     for (j, g) in out.iter_mut().enumerate() {
         *g = variogram.eval(scaled_dist(scaling, scaled_params, c, j));
     }

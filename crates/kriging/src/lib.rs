@@ -129,7 +129,7 @@ pub use faer;
 
 pub use anisotropy::Anisotropy;
 pub use config::{CandidateReport, KrigingConfig, LooReport, Method, ModelChoice, Selection};
-pub use empirical::{Binning, EmpiricalVariogram, MaxLag};
+pub use empirical::{Binning, EmpiricalVariogram, MAX_BINS, MaxLag};
 pub use error::KrigingError;
 pub use estimator::{
     AnisotropyEstimate, AnisotropyOptions, Direction, DirectionalRange, EstimateOptions, Estimator,
@@ -153,7 +153,7 @@ pub use select::{
     DimDecision, DimSelection, SelectRule, TRIAL_SEARCH_MAX_SAMPLES, held_out_squared_error,
     select_dims, select_dims_by_folds,
 };
-pub use simulate::{Realisations, Sgs, SgsMean, SgsPath};
+pub use simulate::{MAX_SIMULATED_VALUES, Realisations, Sgs, SgsMean, SgsPath};
 pub use sphere::{chord_distance, great_circle_distance, latlon_to_xyz};
 pub use variogram::{Variogram, VariogramModel, shape};
 

@@ -427,6 +427,13 @@ pub const PINV_RTOL: f64 = 1e-12;
 /// eigen-decomposition, eigenvalues `<= PINV_RTOL * max(eig)` treated as zero. Returns the
 /// pseudo-inverse and the numerical rank.
 ///
+/// The input must be finite: a NaN or infinite entry gives a meaningless result (in practice the
+/// zero matrix and rank 0), so check the input first when it can hold one.
+///
+/// # Panics
+///
+/// When `g` is not square.
+///
 /// ```
 /// use kriging::faer::Mat;
 /// use kriging::sym_pinv;
@@ -442,6 +449,13 @@ pub const PINV_RTOL: f64 = 1e-12;
 /// }
 /// ```
 pub fn sym_pinv(g: MatRef<'_, f64>) -> (Mat<f64>, usize) {
+    assert_eq!(
+        g.nrows(),
+        g.ncols(),
+        "sym_pinv needs a square matrix, got {} x {}",
+        g.nrows(),
+        g.ncols()
+    );
     let n = g.nrows();
     let (vals, vecs) = sym_eigen(g);
     let vmax = vals.iter().fold(0.0f64, |m, v| m.max(*v));
@@ -503,6 +517,10 @@ pub(crate) fn matmul_par_cols(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64
 /// are the eigensolver's. Returns a copy when `k` would be `D`, and an S x 1 zero column for zero
 /// values.
 ///
+/// # Panics
+///
+/// When `rel_energy` is not in `[0, 1]` (NaN included): it is a fraction of the energy.
+///
 /// ```
 /// use kriging::faer::Mat;
 /// // 6 samples of 4 values that lie in a 2-dimensional subspace.
@@ -513,6 +531,10 @@ pub(crate) fn matmul_par_cols(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64
 /// assert!((d(&x, 1, 4) - d(&c, 1, 4)).abs() < 1e-9);
 /// ```
 pub fn compress_columns(values: MatRef<'_, f64>, rel_energy: f64) -> Mat<f64> {
+    assert!(
+        (0.0..=1.0).contains(&rel_energy),
+        "compress_columns: rel_energy {rel_energy} must be in [0, 1]"
+    );
     leading_columns(values, |vals| {
         // Ascending eigenvalues: keep the leading ones until the rest is within `rel_energy`.
         let n = vals.len();

@@ -40,7 +40,9 @@ impl ParamScaling {
 
     /// Standardises each column of `params` (S x d): offset = mean, scale = 1 / standard deviation
     /// (population). A column whose standard deviation is at most `1e-12 * max(1, |mean|)` is
-    /// constant: scale 0 (dropped). Fails on an empty matrix or a non-finite entry.
+    /// constant: scale 0 (dropped). Fails on an empty matrix or a non-finite entry, and with
+    /// [`KrigingError::Overflow`] naming the column when its mean or variance overflows (finite
+    /// entries near `1e154` and beyond), instead of dropping the column as constant.
     ///
     /// ```
     /// use kriging::faer::Mat;
@@ -77,6 +79,12 @@ impl ParamScaling {
                 })
                 .sum::<f64>()
                 / s as f64;
+            if !(mean.is_finite() && var.is_finite()) {
+                return Err(KrigingError::Overflow {
+                    what: format!("params column {k}"),
+                    reason: format!("its mean is {mean} and its variance {var}"),
+                });
+            }
             let sd = var.sqrt();
             offset[k] = mean;
             scale[k] = if sd > 1e-12 * mean.abs().max(1.0) {
@@ -176,7 +184,18 @@ impl ParamScaling {
     }
 
     /// Applies the scaling to every row of `params` (S x d).
+    ///
+    /// # Panics
+    ///
+    /// When `params` has more columns than the scaling has dimensions ([`ParamScaling::dims`]);
+    /// [`ParamScaling::from_choice`] returns a scaling with one dimension per column.
     pub fn apply_rows(&self, params: MatRef<'_, f64>) -> faer::Mat<f64> {
+        assert!(
+            params.ncols() <= self.dims(),
+            "ParamScaling::apply_rows: {} columns for a scaling of {} dimensions",
+            params.ncols(),
+            self.dims()
+        );
         faer::Mat::from_fn(params.nrows(), params.ncols(), |i, k| {
             (params[(i, k)] - self.offset[k]) * self.scale[k]
         })

@@ -420,6 +420,13 @@ pub fn select_dims_by_folds(
             got: fold.len(),
         });
     }
+    // A label of at least `s` leaves a fold empty (and `usize::MAX + 1` would wrap).
+    if let Some(&big) = fold.iter().find(|&&f| f >= s) {
+        return Err(KrigingError::InvalidConfig(format!(
+            "cross-validation folds are labelled 0..folds with folds at most the {s} samples, \
+             got the label {big}"
+        )));
+    }
     let folds = fold.iter().max().map_or(0, |&f| f + 1);
     if folds < 2 || (0..folds).any(|f| !fold.contains(&f)) {
         return Err(KrigingError::InvalidConfig(format!(
@@ -542,13 +549,40 @@ pub fn select_dims_by_folds(
 /// The squared error, summed over the held-out samples `test` and the value columns `scored`
 /// marks (all when `None`), of `pred` (one row per held-out sample, in `test`'s order) against
 /// `values` (S x D). Column by column, so that the column-major values are read in runs.
+///
+/// # Panics
+///
+/// When the shapes do not fit together: `pred` must have one row per entry of `test` and a
+/// column for every scored value column, every entry of `test` must be a row of `values`, and
+/// `scored` (when given) must have an entry for every value column.
 pub fn held_out_squared_error(
     pred: MatRef<'_, f64>,
     values: MatRef<'_, f64>,
     test: &[usize],
     scored: Option<&[bool]>,
 ) -> f64 {
-    debug_assert_eq!(pred.nrows(), test.len());
+    assert!(
+        scored.is_none_or(|m| m.len() >= values.ncols()),
+        "held_out_squared_error: the scored mask has {} entries for {} value columns",
+        scored.map_or(0, <[bool]>::len),
+        values.ncols()
+    );
+    let last_scored = (0..values.ncols())
+        .rev()
+        .find(|&j| scored.is_none_or(|m| m[j]));
+    assert!(
+        pred.nrows() == test.len() && last_scored.is_none_or(|j| j < pred.ncols()),
+        "held_out_squared_error: predictions {} x {} for {} held-out samples of {} value columns",
+        pred.nrows(),
+        pred.ncols(),
+        test.len(),
+        values.ncols()
+    );
+    assert!(
+        test.iter().all(|&i| i < values.nrows()),
+        "held_out_squared_error: a held-out sample index is not below {} (the rows of values)",
+        values.nrows()
+    );
     (0..values.ncols())
         .filter(|&j| scored.is_none_or(|m| m[j]))
         .map(|j| {

@@ -172,9 +172,15 @@ pub struct Sgs {
     pub path: SgsPath,
     /// The seed of every random stream.
     pub seed: u64,
-    /// Number of realisations, at least one.
+    /// Number of realisations, at least one; realisations times targets at most
+    /// [`MAX_SIMULATED_VALUES`].
     pub realisations: usize,
 }
+
+/// The most values a simulation returns: realisations times targets (`2^30`, 8 GiB of results).
+/// A larger request is a [`KrigingError::InvalidConfig`] error before anything is allocated
+/// (draw the realisations in batches with different seeds instead).
+pub const MAX_SIMULATED_VALUES: usize = 1 << 30;
 
 impl Sgs {
     /// The defaults (see [`Sgs`]) with this variogram (a [`crate::Variogram`] or a
@@ -252,7 +258,8 @@ impl Sgs {
     /// Errors: no data ([`KrigingError::TooFewSamples`]; see [`Sgs::simulate_unconditional`]),
     /// shapes ([`KrigingError::ShapeMismatch`]), NaN or infinity in coordinates, values or targets
     /// ([`KrigingError::NonFinite`] with row and column), two data at one site
-    /// ([`KrigingError::CoincidentData`]), zero realisations, a global or empty neighbourhood, a
+    /// ([`KrigingError::CoincidentData`]), zero realisations or more than
+    /// [`MAX_SIMULATED_VALUES`] values in all, a global or empty neighbourhood, a
     /// non-finite mean or an anisotropy that does not fit ([`KrigingError::InvalidConfig`]), an
     /// unbounded or invalid variogram ([`KrigingError::InvalidVariogram`] or
     /// [`KrigingError::InvalidConfig`]), and a node whose kriging system fails
@@ -521,9 +528,14 @@ impl Prepared {
                 "a simulation needs at least one realisation, got 0".into(),
             ));
         }
-        if sgs.realisations.checked_mul(targets.nrows()).is_none() {
+        if sgs
+            .realisations
+            .checked_mul(targets.nrows())
+            .is_none_or(|n| n > MAX_SIMULATED_VALUES)
+        {
             return Err(KrigingError::InvalidConfig(format!(
-                "{} realisations of {} targets do not fit in memory",
+                "{} realisations of {} targets do not fit in memory (at most \
+                 kriging::MAX_SIMULATED_VALUES = {MAX_SIMULATED_VALUES} values in all)",
                 sgs.realisations,
                 targets.nrows()
             )));

@@ -274,6 +274,9 @@ pub fn shape(model: VariogramModel, h: f64, range: f64, exponent: f64) -> f64 {
             if t < 1e-4 {
                 // 1 - sin(t)/t = t^2/6 - t^4/120 + ...
                 t * t / 6.0 - t * t * t * t / 120.0
+            } else if t == f64::INFINITY {
+                // sin(inf) / inf is NaN; the limit is 0 (a tiny range or a huge lag).
+                1.0
             } else {
                 1.0 - t.sin() / t
             }

@@ -13,6 +13,7 @@ mod meuse;
 mod meuse_variogram;
 mod properties;
 mod rbf_smoothing;
+mod robustness;
 mod search;
 mod select;
 mod select_folds;

@@ -587,7 +587,13 @@ pub fn read_bvh(path: impl AsRef<Path>) -> Result<Motion, BvhError> {
 
 /// Formats a motion as BVH text (tab indentation, 6 decimals, one frame per line).
 ///
-/// Does not check values; [`write_bvh`] refuses non-finite ones.
+/// The frame time is written with 7 decimals (`0.0333333`, `0.0083333`) when that reads back
+/// within a relative `1e-4` of it, and otherwise (frame times below about half a millisecond) as
+/// its shortest exact form (`1e-9`), so that every positive frame time reads back positive.
+///
+/// Does not check the motion: a non-finite value or frame time, or a joint name the reader cannot
+/// read back (empty, with whitespace or braces, `MOTION`, used twice), gives text that
+/// [`parse_bvh`] rejects. [`to_bvh_string_checked`] and [`write_bvh`] refuse such motions.
 pub fn to_bvh_string(motion: &Motion) -> String {
     let sk = &motion.skeleton;
     let nf = motion.frame_count();
@@ -607,11 +613,10 @@ pub fn to_bvh_string(motion: &Motion) -> String {
     if !sk.joints.is_empty() {
         write_joint(&mut s, sk, &children, 0, 0);
     }
-    let _ = write!(
-        s,
-        "MOTION\nFrames: {nf}\nFrame Time: {:.7}\n",
-        motion.frame_time
-    );
+    s.push_str("MOTION\nFrames: ");
+    let _ = write!(s, "{nf}\nFrame Time: ");
+    write_frame_time(&mut s, motion.frame_time);
+    s.push('\n');
     for f in 0..nf {
         let fr = motion.frame(f);
         for (k, v) in fr.iter().enumerate() {
@@ -623,6 +628,24 @@ pub fn to_bvh_string(motion: &Motion) -> String {
         s.push('\n');
     }
     s
+}
+
+/// Relative error up to which the 7-decimal form of a frame time is kept ([`to_bvh_string`]).
+const FRAME_TIME_TOLERANCE: f64 = 1e-4;
+
+/// Writes a frame time: 7 decimals (the files' customary form) when that reads back close to it,
+/// else (a positive frame time that 7 decimals round to 0 or distort) the shortest form that
+/// reads back exactly.
+fn write_frame_time(s: &mut String, t: f64) {
+    let fixed = format!("{t:.7}");
+    let close = fixed
+        .parse::<f64>()
+        .is_ok_and(|r| r > 0.0 && (r - t).abs() <= FRAME_TIME_TOLERANCE * t);
+    if t.is_finite() && t > 0.0 && !close {
+        let _ = write!(s, "{t:e}");
+    } else {
+        s.push_str(&fixed);
+    }
 }
 
 fn write_num(s: &mut String, v: f64) {
@@ -679,14 +702,29 @@ fn check_writable(motion: &Motion) -> Result<(), BvhErrorKind> {
     let sk = &motion.skeleton;
     sk.validate()
         .map_err(|e| BvhErrorKind::BadMotion(e.to_string()))?;
-    for j in &sk.joints {
-        if j.name.is_empty()
-            || j.name
-                .chars()
-                .any(|c| c.is_whitespace() || c == '{' || c == '}')
-        {
+    if sk.joints.len() > MAX_JOINTS {
+        return Err(BvhErrorKind::TooManyJoints { max: MAX_JOINTS });
+    }
+    let mut names = std::collections::HashSet::with_capacity(sk.joints.len());
+    for (i, j) in sk.joints.iter().enumerate() {
+        // The reader splits at whitespace, reads `{`/`}` as structure and stops the hierarchy at
+        // a `MOTION` token.
+        let why = if j.name.is_empty() {
+            Some("is empty")
+        } else if j.name.chars().any(char::is_whitespace) {
+            Some("contains whitespace")
+        } else if j.name.contains(['{', '}']) {
+            Some("contains a brace")
+        } else if j.name.eq_ignore_ascii_case("MOTION") {
+            Some("is the keyword MOTION")
+        } else if !names.insert(j.name.as_str()) {
+            Some("is used twice")
+        } else {
+            None
+        };
+        if let Some(why) = why {
             return Err(BvhErrorKind::BadMotion(format!(
-                "joint name `{}` cannot be written",
+                "joint {i}: name {:?} {why}: the file could not be read back",
                 j.name
             )));
         }
@@ -711,11 +749,21 @@ fn check_writable(motion: &Motion) -> Result<(), BvhErrorKind> {
     Ok(())
 }
 
+/// [`to_bvh_string`] after the checks of [`write_bvh`]: the text of a motion that reads back, or an
+/// error ([`BvhError::Syntax`] without path or line) naming what cannot be written (a joint by
+/// index and name, a non-finite value by frame and channel, the frame time, the shape).
+pub fn to_bvh_string_checked(motion: &Motion) -> Result<String, BvhError> {
+    check_writable(motion).map_err(|kind| err(0, kind))?;
+    Ok(to_bvh_string(motion))
+}
+
 /// Writes a motion as a BVH file, atomically ([`lod_policy::file::write_atomic`]): the text goes
 /// to a temporary file in the same folder which is then renamed over `path`.
 ///
-/// Refuses (before touching the disk) an invalid skeleton, a frame buffer whose length is not a
-/// multiple of the channel count, no frames, a bad frame time, or non-finite values.
+/// Refuses (before touching the disk) an invalid skeleton, a joint name the reader cannot read back
+/// (empty, with whitespace or braces, `MOTION`, used twice; the error names the joint), more than
+/// [`MAX_JOINTS`] joints, a frame buffer whose length is not a multiple of the channel count, no
+/// frames, a bad frame time, or non-finite values.
 pub fn write_bvh(motion: &Motion, path: impl AsRef<Path>) -> Result<(), BvhError> {
     let path = path.as_ref();
     check_writable(motion).map_err(|kind| BvhError::Syntax {

@@ -125,13 +125,13 @@ pub fn side_of(name: &str) -> Option<bool> {
 /// [`side_of`] recognises (`Left`<->`Right` in the case written, `l_`<->`r_`, `_L`<->`_R`, `.l`<->`.r`,
 /// `lFoot`<->`rFoot`), without duplicates. Empty for a name without a side marker. A caller picks the
 /// candidate that exists in its skeleton.
+///
+/// Takes time proportional to the size of its result (at most one candidate per character of
+/// `name`, each as long as `name`).
 pub fn mirrored_names(name: &str) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
-    let mut push = |n: String| {
-        if n != name && !out.contains(&n) {
-            out.push(n);
-        }
-    };
+    // Whole-word swaps change the length by one byte (`left` <-> `right`): they never equal
+    // `name` nor a single-letter swap below, and there are at most six of them to deduplicate.
     for (a, b) in [
         ("left", "right"),
         ("Left", "Right"),
@@ -141,52 +141,65 @@ pub fn mirrored_names(name: &str) -> Vec<String> {
         ("RIGHT", "LEFT"),
     ] {
         if name.contains(a) {
-            push(name.replacen(a, b, 1));
+            let n = name.replacen(a, b, 1);
+            if !out.contains(&n) {
+                out.push(n);
+            }
         }
     }
-    let swap = |c: char| match c {
-        'l' => Some('r'),
-        'r' => Some('l'),
-        'L' => Some('R'),
-        'R' => Some('L'),
+    let swap = |c: u8| match c {
+        b'l' => Some(b'r'),
+        b'r' => Some(b'l'),
+        b'L' => Some(b'R'),
+        b'R' => Some(b'L'),
         _ => None,
     };
-    let chars: Vec<char> = name.chars().collect();
-    let n = chars.len();
-    let replace_at = |i: usize, c: char| {
-        let mut v = chars.clone();
-        v[i] = c;
-        v.into_iter().collect::<String>()
+    // The markers are ASCII, and an ASCII byte of UTF-8 text is always a whole character, so the
+    // rules can be read on bytes: the characters next to an ASCII letter at byte `i` start at
+    // `i - 1` (when that byte is ASCII) and `i + 1`.
+    let bytes = name.as_bytes();
+    let len = bytes.len();
+    // Each single-letter swap changes exactly one position, a different one for every
+    // candidate: they are distinct from each other and from `name`.
+    let replace_at = |i: usize, c: u8| {
+        let mut s = String::with_capacity(len);
+        s.push_str(&name[..i]);
+        s.push(char::from(c));
+        s.push_str(&name[i + 1..]);
+        s
     };
-    if n > 1 {
+    if name.chars().nth(1).is_some() {
         // Prefix `l_` / camel `lFoot`.
-        if let Some(c) = swap(chars[0]) {
-            if chars[1] == '_' || chars[1].is_ascii_uppercase() {
-                push(replace_at(0, c));
+        if let Some(c) = swap(bytes[0]) {
+            if bytes[1] == b'_' || bytes[1].is_ascii_uppercase() {
+                out.push(replace_at(0, c));
             }
         }
         // A middle marker `_L_` (`CC_Base_L_Foot`).
-        for i in 1..n - 1 {
-            if let Some(c) = swap(chars[i]) {
-                if chars[i - 1] == '_' && chars[i + 1] == '_' {
-                    push(replace_at(i, c));
+        for i in 1..len - 1 {
+            if let Some(c) = swap(bytes[i]) {
+                if bytes[i - 1] == b'_' && bytes[i + 1] == b'_' {
+                    out.push(replace_at(i, c));
                 }
             }
         }
         // Suffix `_l` / `.l`.
-        if let Some(c) = swap(chars[n - 1]) {
-            if chars[n - 2] == '_' || chars[n - 2] == '.' {
-                push(replace_at(n - 1, c));
+        if let Some(c) = swap(bytes[len - 1]) {
+            if bytes[len - 2] == b'_' || bytes[len - 2] == b'.' {
+                out.push(replace_at(len - 1, c));
             }
         }
     }
     out
 }
 
-/// Number of ancestors of joint `j`.
+/// Number of ancestors of joint `j` (at most the joint count, whatever the parent links).
 pub(crate) fn depth(sk: &Skeleton, mut j: usize) -> usize {
     let mut d = 0;
-    while let Some(p) = sk.joints[j].parent {
+    while let Some(p) = sk.joints.get(j).and_then(|x| x.parent) {
+        if d == sk.joints.len() {
+            break;
+        }
         d += 1;
         j = p;
     }
@@ -234,7 +247,11 @@ pub struct FootNames {
 /// side marker (`Left`, `l_`, `_L`, `lFoot`, `CC_Base_L_Foot`, `mixamorig:LeftFoot`, `foot.L` ...,
 /// see [`side_of`]); toes are joints below them containing `toe` (or `ball`), or, below a joint
 /// named `ankle`, `foot` (SMPL's `L_Ankle` and `L_Foot`).
+///
+/// Fails with [`CycleError::Pose`] ([`crate::PoseError::Skeleton`]) on a skeleton that
+/// [`Skeleton::validate`] rejects (a hand-built one with a parent cycle or out of range, say).
 pub fn find_feet(sk: &Skeleton, names: &FootNames) -> Result<Feet, CycleError> {
+    sk.validate().map_err(crate::pose::PoseError::from)?;
     let foot = |ov: &Option<String>, left: bool, side: &'static str| -> Result<usize, CycleError> {
         match ov {
             Some(n) => lookup(sk, n),
@@ -323,11 +340,14 @@ pub fn find_feet(sk: &Skeleton, names: &FootNames) -> Result<Feet, CycleError> {
 /// toe, if any, below it: the toe is the ankle's next joint in the chain). Left and right: the left
 /// hip lies on the walker's left of the direction of travel (`up x forward`), on average. The head
 /// (unless named) is the highest joint on average outside the legs.
+///
+/// `None` as well for a skeleton whose parents are not all listed before their children
+/// ([`Skeleton::validate`]).
 pub fn feet_by_hierarchy(motion: &crate::Motion, names: &FootNames) -> Option<FootNames> {
     let sk = &motion.skeleton;
     let nf = motion.frame_count();
     let nj = sk.joints.len();
-    if nf < 3 || nj < 3 {
+    if nf < 3 || nj < 3 || !sk.hierarchy_ok() {
         return None;
     }
     let step = nf.div_ceil(256).max(1);
@@ -440,11 +460,19 @@ pub(crate) fn legs_below(
 /// head ([`Feet::head`]: by name, or as [`feet_by_hierarchy`] found it) and the head's End Site;
 /// the leg length alone without a head. It leaves out the ankle height and the scalp, so it underestimates the height of a
 /// real person by about 10%.
+///
+/// Never loops or panics on a skeleton that does not match `feet` ([`Skeleton::chain_length`]
+/// stops at a parent cycle; a head index out of range has no End Site), but the result is only
+/// meaningful for the skeleton [`find_feet`] was given.
 pub fn standing_height(sk: &Skeleton, feet: &Feet) -> f64 {
     let head = feet.head;
     let trunk = match head {
         Some(h) => {
-            sk.chain_length(feet.pelvis, h) + sk.joints[h].end_site.map_or(0.0, |e| e.length())
+            sk.chain_length(feet.pelvis, h)
+                + sk.joints
+                    .get(h)
+                    .and_then(|j| j.end_site)
+                    .map_or(0.0, |e| e.length())
         }
         None => 0.0,
     };
@@ -465,6 +493,12 @@ pub struct ContactThresholds {
 
 /// Per-frame contacts of one foot: ankle or toe slow and near the floor, then short runs and short
 /// gaps removed. `positions[f]` holds the world positions of every joint at frame `f`; y is up.
+///
+/// No contact at all when `frame_time` is not positive and finite. Windows longer than the take
+/// (a tiny `frame_time`) are cut to the take.
+///
+/// # Panics
+/// If `ankle` or `toe` is not an index into every `positions[f]` (with at least 3 frames).
 pub fn foot_contacts(
     positions: &[Vec<DVec3>],
     ankle: usize,
@@ -475,14 +509,24 @@ pub fn foot_contacts(
 ) -> Vec<bool> {
     let n = positions.len();
     let mut contact = vec![false; n];
-    if n < 3 {
+    if n < 3 || !(frame_time.is_finite() && frame_time > 0.0) {
         return contact;
+    }
+    for j in std::iter::once(ankle).chain(toe) {
+        if let Some(f) = positions.iter().position(|p| j >= p.len()) {
+            panic!(
+                "foot_contacts: joint {j} out of range at frame {f} ({} joints)",
+                positions[f].len()
+            );
+        }
     }
     // Speed: central difference over +-0.04 s (1 frame at 30 fps, 5 at 120 fps) to damp marker
     // jitter. Floor: the lowest height of the joint within +-0.75 s (a stance always falls in
-    // such a window while walking), which follows floors that drift within a take.
-    let k = ((0.04 / frame_time).round() as usize).max(1);
-    let w = ((0.75 / frame_time).round() as usize).max(2);
+    // such a window while walking), which follows floors that drift within a take. A window
+    // beyond the take's length acts as the take's length (so it is cut there, which also keeps
+    // `f + k` from overflowing).
+    let k = ((0.04 / frame_time).round() as usize).clamp(1, n);
+    let w = ((0.75 / frame_time).round() as usize).clamp(2, n.max(2));
     let mut joint_contact = |j: usize| {
         let ys: Vec<f64> = positions.iter().map(|p| p[j].y).collect();
         let floor = rolling_min(&ys, w);
@@ -500,7 +544,8 @@ pub fn foot_contacts(
     if let Some(t) = toe {
         joint_contact(t);
     }
-    let min_run = ((th.min_run_seconds / frame_time).round() as usize).max(1);
+    // Runs longer than the take are as long as it (no run is that short).
+    let min_run = ((th.min_run_seconds / frame_time).round() as usize).clamp(1, n + 1);
     clean_runs(&mut contact, true, min_run);
     clean_runs(&mut contact, false, min_run);
     contact

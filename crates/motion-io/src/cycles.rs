@@ -50,6 +50,7 @@ use crate::contacts::{
 };
 use crate::expmap::{exp_to_quat, quat_to_exp, wrap_angle};
 use crate::motion::Motion;
+use crate::normalize::{check_frame_time, check_whole_frames};
 use crate::pose::{ALWAYS_ROWS, PoseLayout, align_sequence};
 use crate::skeleton::Transform;
 
@@ -417,6 +418,11 @@ fn travel_heading(g: &[DVec3], f: usize, period: f64) -> Result<f64, bool> {
 /// each third is above `min_speed` and the first and last thirds differ by at most
 /// `max_speed_change`, the headings at both ends can be measured inside the take (module docs), it
 /// moves forward and turns less than `max_turn`; otherwise it is dropped with the reason.
+///
+/// Errors: a bad `config`; a frame time that is not finite and at least
+/// [`crate::normalize::MIN_FRAME_TIME`], a frame buffer that is not whole frames, or non-finite
+/// values ([`CycleError::BadMotion`]); a skeleton that [`crate::Skeleton::validate`] rejects or
+/// feet that cannot be found ([`find_feet`]); a pose conversion error ([`CycleError::Pose`]).
 pub fn segment_cycles(
     motion: &Motion,
     layout: &PoseLayout,
@@ -425,9 +431,8 @@ pub fn segment_cycles(
 ) -> Result<CycleReport, CycleError> {
     config.validate()?;
     let dt = motion.frame_time;
-    if !(dt.is_finite() && dt > 0.0) {
-        return Err(CycleError::BadMotion(format!("frame time {dt}")));
-    }
+    check_frame_time(dt)?;
+    check_whole_frames(motion)?;
     if let Some(i) = motion.frames.iter().position(|v| !v.is_finite()) {
         return Err(CycleError::BadMotion(format!(
             "non-finite value at index {i}"
@@ -617,6 +622,9 @@ pub fn segment_cycles(
 /// see [`crate::normalize_take`]), with frame numbers of the whole take: cycles never span two
 /// pieces, and `skip_start_seconds` counts from the start of the take. One range covering the whole
 /// take gives exactly [`segment_cycles`]'s result.
+///
+/// Errors: those of [`segment_cycles`]; a frame buffer that is not whole frames is refused
+/// whatever the ranges.
 pub fn segment_take(
     motion: &Motion,
     layout: &PoseLayout,
@@ -624,6 +632,7 @@ pub fn segment_take(
     source: &Path,
     segments: &[std::ops::Range<usize>],
 ) -> Result<CycleReport, CycleError> {
+    check_whole_frames(motion)?;
     let nf = motion.frame_count();
     if let [only] = segments {
         if only.start == 0 && only.end == nf {

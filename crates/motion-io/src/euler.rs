@@ -51,8 +51,16 @@ fn full_order(axes: &[usize]) -> [usize; 3] {
 /// With `s = +1` for a cyclic order (xyz, yzx, zxy) and `-1` otherwise:
 /// `b = asin(s R[i][k])`, `a = atan2(-s R[j][k], R[k][k])`, `c = atan2(-s R[i][j], R[i][i])`
 /// (`R[row][col]`). At gimbal lock `c = 0` and `a` is read from `R R_j(b)^-1`.
+///
+/// # Panics
+/// If `order` is not a permutation of `[0, 1, 2]` (a repeated or out-of-range axis has no Euler
+/// decomposition).
 pub fn quat_to_euler(q: DQuat, order: [usize; 3]) -> [f64; 3] {
     let [i, j, k] = order;
+    assert!(
+        i < 3 && j < 3 && k < 3 && i != j && j != k && i != k,
+        "quat_to_euler: order {order:?} is not a permutation of the axes [0, 1, 2]"
+    );
     let s = if (j + 3 - i) % 3 == 1 { 1.0 } else { -1.0 };
     let m = DMat3::from_quat(q.normalize());
     // glam matrices are column-major: m.col(c)[r] = R[r][c].

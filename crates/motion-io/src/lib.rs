@@ -47,7 +47,8 @@ pub mod test_data;
 pub mod units;
 
 pub use bvh::{
-    BvhError, BvhErrorKind, parse_bvh, read_bvh, to_bvh_string, with_rest_at_origin, write_bvh,
+    BvhError, BvhErrorKind, parse_bvh, read_bvh, to_bvh_string, to_bvh_string_checked,
+    with_rest_at_origin, write_bvh,
 };
 pub use contacts::{
     CycleError, Feet, FootNames, feet_by_hierarchy, find_feet, mirrored_names, name_words, side_of,

@@ -309,8 +309,12 @@ fn sampled_positions(motion: &Motion) -> Vec<Vec<DVec3>> {
 /// below the pelvis, on average over the take (for every signed axis, the joint whose second-lowest
 /// child subtree reaches lowest below it; the pelvis with its two legs wins along the true up axis,
 /// by the leg length against a stride's reach sideways or a trunk's reach upside down). `None` when
-/// no axis stands out (by 20%) from the four perpendicular ones.
+/// no axis stands out (by 20%) from the four perpendicular ones, or when the skeleton's parents are
+/// not all listed before their children ([`crate::Skeleton::validate`]).
 pub fn detect_up(motion: &Motion) -> Option<SignedAxis> {
+    if !motion.skeleton.hierarchy_ok() {
+        return None;
+    }
     let frames = sampled_positions(motion);
     if frames.is_empty() {
         return None;
@@ -442,11 +446,22 @@ fn fix_root_positions(motion: &mut Motion) -> RootPositions {
 /// Standing height (file units) measured on the take's bone lengths (median over sampled frames):
 /// the leg chain (pelvis to ankle, the longer side) plus the chain from the pelvis to the head
 /// ([`Feet::head`]) and its End Site; without a head, 1.75 leg lengths.
+///
+/// 0 when the skeleton's parents are not all listed before their children
+/// ([`crate::Skeleton::validate`]).
+///
+/// # Panics
+/// If a joint of `feet` is not a joint of the skeleton (`feet` comes from [`find_feet`] on another
+/// skeleton).
 pub fn take_standing_height(motion: &Motion, feet: &Feet) -> f64 {
     let sk = &motion.skeleton;
+    if !sk.hierarchy_ok() {
+        return 0.0;
+    }
     let head = feet.head;
     let chain = |p: &[DVec3], top: usize, mut j: usize| {
         let mut len = 0.0;
+        // Parents come before children, so the chain ends within the joint count.
         while j != top {
             let Some(parent) = sk.joints[j].parent else {
                 break;
@@ -480,24 +495,30 @@ pub fn take_standing_height(motion: &Motion, feet: &Feet) -> f64 {
 
 /// Brings a take into the project's conventions (see the module documentation).
 ///
-/// Errors: a take without frames or with non-finite values or frame time, feet that cannot be
-/// found (by the map, by name or by hierarchy), or a standing height of zero.
+/// Errors: a take without frames, with a frame buffer that is not whole frames, with non-finite
+/// values or a frame time that is not finite and at least [`MIN_FRAME_TIME`]
+/// ([`CycleError::BadMotion`]), a skeleton that [`crate::Skeleton::validate`] rejects
+/// ([`CycleError::Pose`]), feet that cannot be found (by the map, by name or by hierarchy), or a
+/// standing height of zero.
 pub fn normalize_take(
     motion: &Motion,
     options: &NormalizeOptions,
 ) -> Result<NormalizedTake, CycleError> {
     let dt = motion.frame_time;
-    if !(dt.is_finite() && dt > 0.0) {
-        return Err(CycleError::BadMotion(format!("frame time {dt}")));
-    }
+    check_frame_time(dt)?;
     if motion.frame_count() == 0 {
         return Err(CycleError::BadMotion("no frames".into()));
     }
+    check_whole_frames(motion)?;
     if let Some(i) = motion.frames.iter().position(|v| !v.is_finite()) {
         return Err(CycleError::BadMotion(format!(
             "non-finite value at index {i}"
         )));
     }
+    motion
+        .skeleton
+        .validate()
+        .map_err(crate::pose::PoseError::from)?;
     let mut m = motion.clone();
     let (up, up_detected) = match options.up {
         Some(u) => (u, false),
@@ -550,13 +571,47 @@ pub fn normalize_take(
     })
 }
 
+/// Shortest frame time (seconds) that [`normalize_take`] and [`crate::segment_cycles`] accept: a
+/// million frames per second, far beyond any capture system, and far enough from 0 that every
+/// window they compute in frames (`seconds / frame_time`) stays an ordinary number.
+pub const MIN_FRAME_TIME: f64 = 1e-6;
+
+/// A frame time that is finite and at least [`MIN_FRAME_TIME`], else [`CycleError::BadMotion`].
+pub(crate) fn check_frame_time(dt: f64) -> Result<(), CycleError> {
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(CycleError::BadMotion(format!("frame time {dt}")));
+    }
+    if dt < MIN_FRAME_TIME {
+        return Err(CycleError::BadMotion(format!(
+            "frame time {dt} s is below {MIN_FRAME_TIME} s (a frame rate above a million per second)"
+        )));
+    }
+    Ok(())
+}
+
+/// A frame buffer of whole frames (its length a multiple of the channel count), else
+/// [`CycleError::BadMotion`].
+pub(crate) fn check_whole_frames(motion: &Motion) -> Result<(), CycleError> {
+    let n = motion.skeleton.channel_count();
+    if n > 0 && motion.frames.len() % n != 0 {
+        return Err(CycleError::BadMotion(format!(
+            "{} values are not whole frames of {n} channels",
+            motion.frames.len()
+        )));
+    }
+    Ok(())
+}
+
 /// The ground velocity of the motion root at each of the given frames' positions (file units per
 /// frame, central differences over `k` frames).
 fn ground_speeds(track: &[DVec3], k: usize) -> Vec<f64> {
     let n = track.len();
     (0..n)
         .map(|f| {
-            let (a, b) = (f.saturating_sub(k), (f + k).min(n.saturating_sub(1)));
+            let (a, b) = (
+                f.saturating_sub(k),
+                f.saturating_add(k).min(n.saturating_sub(1)),
+            );
             if b <= a {
                 return 0.0;
             }
@@ -572,7 +627,7 @@ fn travel_forward(motion: &Motion) -> Option<SignedAxis> {
     let root = motion_root(motion);
     let nf = motion.frame_count();
     let k = ((0.25 / motion.frame_time).round() as usize).max(1);
-    if nf <= 2 * k {
+    if nf <= k.saturating_mul(2) {
         return None;
     }
     let mut t = vec![Transform::IDENTITY; motion.skeleton.joints.len()];

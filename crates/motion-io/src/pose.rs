@@ -87,6 +87,9 @@ pub enum PoseError {
     /// ([`PoseLayout::from_parts`]).
     #[error("invalid pose layout: {0}")]
     BadLayout(String),
+    /// A frame time that is not positive and finite ([`PoseLayout::motion_from_poses`]).
+    #[error("frame time must be positive and finite, found {0}")]
+    BadFrameTime(f64),
 }
 
 /// How a joint is evaluated by the layout's forward kinematics.
@@ -125,6 +128,9 @@ pub struct PoseLayout {
     channel_starts: Vec<usize>,
     /// World transform of the root's parent in the template frame (identity when the root is 0).
     root_parent_world: Transform,
+    /// The root and its ancestors, top (joint 0) first: the joints whose local transforms make the
+    /// root's world transform ([`PoseLayout::pose_from_frame`]).
+    root_chain: Vec<usize>,
     /// Local rotation of every joint used when it is not evaluated from the pose (static joints:
     /// the template's; rotating joints beyond the active count: the mean rotation).
     rest: Vec<DQuat>,
@@ -438,6 +444,14 @@ impl PoseLayout {
         let root_parent_world = skeleton.joints[root]
             .parent
             .map_or(Transform::IDENTITY, |p| world[p]);
+        // The skeleton is valid (parents before children): the chain ends within `nj` links.
+        let mut root_chain = Vec::new();
+        let mut j = Some(root);
+        while let Some(k) = j {
+            root_chain.push(k);
+            j = skeleton.joints[k].parent;
+        }
+        root_chain.reverse();
         let mut rest = Vec::with_capacity(nj);
         let mut offset_m = Vec::with_capacity(nj);
         for (j, joint) in skeleton.joints.iter().enumerate() {
@@ -456,6 +470,7 @@ impl PoseLayout {
             template,
             channel_starts,
             root_parent_world,
+            root_chain,
             rest,
             offset_m,
             rig,
@@ -637,6 +652,9 @@ impl PoseLayout {
     }
 
     /// Rest (mean or template) local rotation of skeleton joint `j`.
+    ///
+    /// # Panics
+    /// If `j` is not a joint of the layout's skeleton (`j >= skeleton().joint_count()`).
     pub fn rest_rotation(&self, j: usize) -> DQuat {
         self.rest[j]
     }
@@ -678,15 +696,26 @@ impl PoseLayout {
         self.refresh_rig()
     }
 
+    /// The motion's skeleton has this layout's joint and channel counts, and its frame buffer is
+    /// whole frames.
     fn check_motion(&self, motion: &Motion) -> Result<(), PoseError> {
         let a = &self.skeleton;
         let b = &motion.skeleton;
-        if a.joints.len() != b.joints.len() || a.channel_count() != b.channel_count() {
+        let nch = b.channel_count();
+        if a.joints.len() != b.joints.len() || a.channel_count() != nch {
             return check_same_skeleton(a, b, 0).and(Err(PoseError::SkeletonMismatch {
                 motion: 0,
                 joint: 0,
                 what: "channel count".into(),
             }));
+        }
+        let len = motion.frames.len();
+        if nch > 0 && len % nch != 0 {
+            return Err(PoseError::Length {
+                what: "motion frames (whole frames of every channel)",
+                expected: len / nch * nch,
+                found: len,
+            });
         }
         Ok(())
     }
@@ -695,6 +724,11 @@ impl PoseLayout {
     /// `out` (length [`PoseLayout::dof`]): root position `p / units_per_metre`, root orientation
     /// `log(q_root_world)`, `dt = 0`, joint rotations `log(q_local)` on the principal branch
     /// (`|v| <= pi`; see [`unwrap_exp_maps`] for continuity over frames).
+    ///
+    /// Errors: a skeleton with other joint or channel counts, a frame buffer that is not whole
+    /// frames ([`PoseError::Length`]), a frame out of range, an output of the wrong length, a
+    /// non-finite value in the frame (`what: "motion frames"`, `index` into `motion.frames`) or a
+    /// pose that overflows (huge offsets or positions).
     pub fn pose_from_frame(
         &self,
         motion: &Motion,
@@ -717,20 +751,17 @@ impl PoseLayout {
             });
         }
         let fr = motion.frame(frame_idx);
-        let sk = &motion.skeleton;
-        // World transform of the root: walk its ancestor chain.
-        let mut chain = [0usize; 64];
-        let mut n = 0;
-        let mut j = Some(self.root);
-        while let Some(k) = j {
-            if n < chain.len() {
-                chain[n] = k;
-                n += 1;
-            }
-            j = sk.joints[k].parent;
+        if let Some(k) = fr.iter().position(|v| !v.is_finite()) {
+            return Err(PoseError::NonFinite {
+                what: "motion frames",
+                index: frame_idx * fr.len() + k,
+            });
         }
+        let sk = &motion.skeleton;
+        // World transform of the root: compose its ancestor chain (the layout's, any depth) from
+        // the top down.
         let mut world = Transform::IDENTITY;
-        for &k in chain[..n].iter().rev() {
+        for &k in &self.root_chain {
             let s = self.channel_starts[k];
             world = world.mul(&sk.local_transform(k, &fr[s..s + sk.joints[k].channels.len()]));
         }
@@ -745,12 +776,22 @@ impl PoseLayout {
             out[ALWAYS_ROWS + 3 * k..ALWAYS_ROWS + 3 * k + 3]
                 .copy_from_slice(&quat_to_exp(q).to_array());
         }
+        if let Some(index) = out.iter().position(|v| !v.is_finite()) {
+            return Err(PoseError::NonFinite {
+                what: "pose computed from the motion frame (overflow)",
+                index,
+            });
+        }
         Ok(())
     }
 
     /// Pose vectors of every frame of `motion` (`frames x dof`, row-major), exp-maps unwrapped
     /// over time.
+    ///
+    /// Errors: those of [`PoseLayout::pose_from_frame`] (a frame buffer that is not whole frames
+    /// is refused even when it holds no whole frame).
     pub fn poses_from_motion(&self, motion: &Motion) -> Result<Vec<f64>, PoseError> {
+        self.check_motion(motion)?;
         let p = self.dof();
         let n = motion.frame_count();
         let mut out = vec![0.0; n * p];
@@ -764,6 +805,10 @@ impl PoseLayout {
     /// Inverse of [`PoseLayout::pose_from_frame`]: BVH channel values (the file's own channel
     /// orders, degrees) for `pose`. Channels the pose does not hold come from the template frame.
     /// Euler angles are on the principal branch; see [`PoseLayout::frame_from_pose_near`].
+    ///
+    /// Errors: a pose or output of the wrong length, a non-finite pose value, or a pose whose
+    /// channels are not finite numbers (an exp-map or position so large that it overflows);
+    /// `out_channels` is then partly written.
     pub fn frame_from_pose(&self, pose: &[f64], out_channels: &mut [f64]) -> Result<(), PoseError> {
         self.frame_from_pose_impl(pose, None, out_channels)
     }
@@ -771,6 +816,9 @@ impl PoseLayout {
     /// Like [`PoseLayout::frame_from_pose`], choosing for every joint the Euler solution (and
     /// 360-degree shift) nearest `reference` (e.g. the previous written frame, or the source frame),
     /// so that written channels stay continuous.
+    ///
+    /// Errors: as [`PoseLayout::frame_from_pose`], and a reference of the wrong length or with a
+    /// non-finite value.
     pub fn frame_from_pose_near(
         &self,
         pose: &[f64],
@@ -782,6 +830,12 @@ impl PoseLayout {
                 what: "reference frame",
                 expected: self.template.len(),
                 found: reference.len(),
+            });
+        }
+        if let Some(index) = reference.iter().position(|v| !v.is_finite()) {
+            return Err(PoseError::NonFinite {
+                what: "reference frame",
+                index,
             });
         }
         self.frame_from_pose_impl(pose, Some(reference), out_channels)
@@ -846,12 +900,24 @@ impl PoseLayout {
                 &mut out[s..s + ch.len()],
             );
         }
+        if let Some(index) = out.iter().position(|v| !v.is_finite()) {
+            return Err(PoseError::NonFinite {
+                what: "channels computed from the pose (overflow)",
+                index,
+            });
+        }
         Ok(())
     }
 
     /// A motion (this layout's skeleton) from pose vectors `poses` (`frames x dof`), every frame's
     /// Euler angles chosen nearest the previous frame's so the written channels are continuous.
+    ///
+    /// Errors: a frame time that is not positive and finite ([`PoseError::BadFrameTime`]), a
+    /// buffer that is not whole poses, and the errors of [`PoseLayout::frame_from_pose`].
     pub fn motion_from_poses(&self, poses: &[f64], frame_time: f64) -> Result<Motion, PoseError> {
+        if !(frame_time.is_finite() && frame_time > 0.0) {
+            return Err(PoseError::BadFrameTime(frame_time));
+        }
         let p = self.dof();
         if poses.is_empty() || poses.len() % p != 0 {
             return Err(PoseError::BadShape {
@@ -1025,15 +1091,38 @@ fn exp_triples(dof: usize) -> impl Iterator<Item = usize> {
 /// Makes every exp-map of a sequence of pose vectors (`frames x dof`, row-major) continuous over
 /// frames: frame `f`'s map is replaced by its branch nearest frame `f - 1`'s (already unwrapped)
 /// map, so there is no jump at `|v| = pi`.
+///
+/// Errors: a shape that is not whole poses of `7 + 3 n` rows ([`PoseError::BadShape`]), or an
+/// exp-map that is not finite, in the input or once unwrapped (a map so large that its length
+/// overflows, `|v| > ~1e154`): [`PoseError::NonFinite`] with the index into `poses`, which is
+/// then partly unwrapped.
 pub fn unwrap_exp_maps(poses: &mut [f64], dof: usize) -> Result<(), PoseError> {
     check_shape(poses.len(), dof)?;
     let n = poses.len() / dof;
+    if n > 0 {
+        check_exp_maps(&poses[..dof], 0)?;
+    }
     for f in 1..n {
         let (prev, cur) = poses.split_at_mut(f * dof);
         let prev = &prev[(f - 1) * dof..];
+        let cur = &mut cur[..dof];
         for r in exp_triples(dof) {
             let v = nearest_branch(DVec3::from_slice(&cur[r..]), DVec3::from_slice(&prev[r..]));
             cur[r..r + 3].copy_from_slice(&v.to_array());
+        }
+        check_exp_maps(cur, f * dof)?;
+    }
+    Ok(())
+}
+
+/// The exp-map rows of one pose are finite, else [`PoseError::NonFinite`] at `base` + the row.
+fn check_exp_maps(pose: &[f64], base: usize) -> Result<(), PoseError> {
+    for r in exp_triples(pose.len()) {
+        if let Some(k) = pose[r..r + 3].iter().position(|v| !v.is_finite()) {
+            return Err(PoseError::NonFinite {
+                what: "exp-map",
+                index: base + r + k,
+            });
         }
     }
     Ok(())
@@ -1041,6 +1130,9 @@ pub fn unwrap_exp_maps(poses: &mut [f64], dof: usize) -> Result<(), PoseError> {
 
 /// Brings every exp-map of one pose onto the branch nearest the same map in `reference` (continuity
 /// across samples, e.g. to the first cycle's first frame or a mean pose).
+///
+/// Errors: shapes that differ or are not `7 + 3 n` rows, or an exp-map of the result that is not
+/// finite ([`PoseError::NonFinite`], as [`unwrap_exp_maps`]).
 pub fn align_exp_maps(pose: &mut [f64], reference: &[f64]) -> Result<(), PoseError> {
     let dof = reference.len();
     check_shape(pose.len(), dof)?;
@@ -1058,7 +1150,7 @@ pub fn align_exp_maps(pose: &mut [f64], reference: &[f64]) -> Result<(), PoseErr
         );
         pose[r..r + 3].copy_from_slice(&v.to_array());
     }
-    Ok(())
+    check_exp_maps(pose, 0)
 }
 
 /// Brings a whole sequence (`frames x dof`) onto the branch nearest `reference` as one block:

@@ -216,8 +216,13 @@ impl Skeleton {
     }
 
     /// True when `ancestor` is `j` or one of its ancestors.
+    ///
+    /// Follows at most one parent link per joint, so a hand-built skeleton whose parents form a
+    /// cycle (which [`Skeleton::validate`] rejects) gets `false` instead of an endless loop; a
+    /// parent index out of range ends the chain.
     pub fn is_ancestor_or_self(&self, ancestor: usize, mut j: usize) -> bool {
-        loop {
+        // A valid chain has at most `len - 1` links, so `len + 1` checks always reach its top.
+        for _ in 0..=self.joints.len() {
             if j == ancestor {
                 return true;
             }
@@ -226,6 +231,17 @@ impl Skeleton {
                 None => return false,
             }
         }
+        false
+    }
+
+    /// True when every parent index is smaller than its joint's own index and only joint 0 is a
+    /// root: the hierarchy part of [`Skeleton::validate`] (no cycles, no index out of range), what
+    /// the forward kinematics needs. True for an empty skeleton.
+    pub(crate) fn hierarchy_ok(&self) -> bool {
+        self.joints.iter().enumerate().all(|(i, j)| match j.parent {
+            None => i == 0,
+            Some(p) => p < i,
+        })
     }
 
     /// Checks the invariants the rest of the crate relies on: at least one joint, parents before
@@ -296,9 +312,14 @@ impl Skeleton {
     ///
     /// `world_j = world_parent(j) * local_j` with `local_j` from [`Skeleton::local_transform`].
     ///
+    /// Expects parents before their children ([`Skeleton::validate`]; every skeleton the reader
+    /// returns): a parent listed after its child reads that parent's transform before it is
+    /// computed.
+    ///
     /// # Panics
     /// If `frame.len() != self.channel_count()` or `out.len() != self.joints.len()` (a programming
-    /// error, like an out-of-range slice index).
+    /// error, like an out-of-range slice index), or if a parent index is not a joint index (a
+    /// hand-built skeleton that [`Skeleton::validate`] rejects).
     pub fn forward_kinematics(&self, frame: &[f64], out: &mut [Transform]) {
         assert_eq!(
             frame.len(),
@@ -324,6 +345,10 @@ impl Skeleton {
 
     /// World positions of every joint for one frame (file units), allocating; see
     /// [`Skeleton::forward_kinematics`].
+    ///
+    /// # Panics
+    /// As [`Skeleton::forward_kinematics`]: if `frame.len() != self.channel_count()` or a parent
+    /// index is not a joint index.
     pub fn joint_positions(&self, frame: &[f64]) -> Vec<DVec3> {
         let mut t = vec![Transform::IDENTITY; self.joints.len()];
         self.forward_kinematics(frame, &mut t);
@@ -331,14 +356,19 @@ impl Skeleton {
     }
 
     /// Sum of bone lengths (|OFFSET|) along the path from `ancestor` (exclusive) down to `j`
-    /// (inclusive). Zero when `ancestor == j` or `ancestor` is not an ancestor of `j`.
+    /// (inclusive). Zero when `ancestor == j` or `ancestor` is not an ancestor of `j` (see
+    /// [`Skeleton::is_ancestor_or_self`]: a parent cycle or an index out of range ends the search).
     pub fn chain_length(&self, ancestor: usize, j: usize) -> f64 {
         if !self.is_ancestor_or_self(ancestor, j) {
             return 0.0;
         }
         let mut len = 0.0;
         let mut k = j;
-        while k != ancestor {
+        // The walk above reached `ancestor` within `len + 1` steps, along the same links.
+        for _ in 0..=self.joints.len() {
+            if k == ancestor {
+                break;
+            }
             len += self.joints[k].offset.length();
             match self.joints[k].parent {
                 Some(p) => k = p,

@@ -33,10 +33,12 @@ pub fn motion_root(motion: &Motion) -> usize {
 
 /// Guesses the file's units per metre from the median height (y) of the motion root over the
 /// take: above 20 units means centimetres (100), otherwise metres (1). A walking person's hips are
-/// 0.7-1.1 m high, i.e. 70-110 in centimetres. Returns 100 for an empty take.
+/// 0.7-1.1 m high, i.e. 70-110 in centimetres. Returns 100 for an empty take, and for a skeleton
+/// whose parents are not all listed before their children (a hand-built one that
+/// [`crate::Skeleton::validate`] rejects: no forward kinematics).
 pub fn detect_units_per_metre(motion: &Motion) -> f64 {
     let nf = motion.frame_count();
-    if nf == 0 {
+    if nf == 0 || !motion.skeleton.hierarchy_ok() {
         return 100.0;
     }
     let root = motion_root(motion);

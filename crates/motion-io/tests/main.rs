@@ -2,6 +2,7 @@
 //! with `cargo test -p motion-io --test integration FILE::`). One binary links once instead of 6
 //! times (the workspace's first build, issue 36).
 
+mod api_defects;
 mod bvh_io;
 mod conventions;
 mod hostile;

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 /// failed and where (index, dimension, byte offset, file).
 #[derive(Debug, thiserror::Error)]
 pub enum TensorError {
-    /// `dims` asks for more elements than `usize` can count.
+    /// `dims` asks for more elements than `usize` can count, or (for an empty tensor) the product
+    /// of its nonzero dimensions overflows.
     #[error("tensor dims {dims:?} overflow usize")]
     DimsOverflow {
         /// The requested dimensions.

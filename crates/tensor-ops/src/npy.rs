@@ -59,6 +59,11 @@ impl NpyDtype {
 }
 
 /// An n-dimensional float array as stored in an NPY file.
+///
+/// The fields are public; `data.len()` must be the product of `shape` (as [`NpyArray::new`] and
+/// the readers guarantee). The conversions returning `Result` check it ([`NpyArray::check`]);
+/// [`NpyArray::get`] returns `None` for a position outside `data`; [`NpyArray::to_order`] panics
+/// when it has to transpose inconsistent fields.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NpyArray {
     /// numpy's shape (empty for a 0-d scalar).
@@ -104,6 +109,23 @@ impl NpyArray {
         })
     }
 
+    /// Checks that `data.len()` is the product of `shape` (the invariant of the type, which the
+    /// public fields let a caller break).
+    ///
+    /// Errors: [`TensorError::ShapeMismatch`] naming both lengths (`usize::MAX` as expected when
+    /// the product overflows).
+    pub fn check(&self) -> Result<(), TensorError> {
+        let expected = shape_len(&self.shape).unwrap_or(usize::MAX);
+        if expected != self.data.len() {
+            return Err(TensorError::ShapeMismatch {
+                what: "NpyArray: data length (product of shape)",
+                expected,
+                found: self.data.len(),
+            });
+        }
+        Ok(())
+    }
+
     /// Number of dimensions.
     pub fn ndim(&self) -> usize {
         self.shape.len()
@@ -127,17 +149,26 @@ impl NpyArray {
         Some(pos)
     }
 
-    /// Element at a multi-index (numpy's `a[i, j, ...]`), or `None` if out of range.
+    /// Element at a multi-index (numpy's `a[i, j, ...]`), or `None` if out of range (of the
+    /// shape, or of `data` when the fields are inconsistent).
     pub fn get(&self, index: &[usize]) -> Option<f64> {
-        self.position(index).map(|p| self.data[p])
+        self.position(index).and_then(|p| self.data.get(p).copied())
     }
 
     /// The same logical array with data in the requested order.
+    ///
+    /// # Panics
+    /// If the data must be transposed (the order changes and there are at least two dimensions)
+    /// and `data.len()` is not the product of `shape` (see [`NpyArray::check`]; arrays from
+    /// [`NpyArray::new`] and the readers are always consistent).
     pub fn to_order(&self, fortran_order: bool) -> NpyArray {
         if fortran_order == self.fortran_order || self.shape.len() < 2 {
             let mut a = self.clone();
             a.fortran_order = fortran_order;
             return a;
+        }
+        if let Err(e) = self.check() {
+            panic!("NpyArray::to_order: {e}");
         }
         // Reversing the axes turns C order into Fortran order of the same data; transpose by
         // walking the destination in its own order.
@@ -186,8 +217,9 @@ impl NpyArray {
 
     /// The 3-D array as a [`Tensor3`] with `X(i, j, k) = a[i, j, k]`, whatever the file order.
     ///
-    /// Errors: [`TensorError::NpyRank`] unless `ndim() == 3`; [`TensorError::NpyEmpty`] for an array
-    /// without elements; [`TensorError::NonFinite`] for NaN/inf.
+    /// Errors: [`TensorError::NpyRank`] unless `ndim() == 3`; [`TensorError::ShapeMismatch`] when
+    /// `data.len()` is not the product of `shape` ([`NpyArray::check`]); [`TensorError::NpyEmpty`]
+    /// for an array without elements; [`TensorError::NonFinite`] for NaN/inf.
     pub fn to_tensor(&self) -> Result<Tensor3, TensorError> {
         if self.shape.len() != 3 {
             return Err(TensorError::NpyRank {
@@ -195,6 +227,7 @@ impl NpyArray {
                 expected: 3,
             });
         }
+        self.check()?;
         if self.data.is_empty() {
             return Err(TensorError::NpyEmpty {
                 shape: self.shape.clone(),
@@ -223,8 +256,9 @@ impl NpyArray {
 
     /// The 2-D array as a matrix `M(i, j) = a[i, j]`.
     ///
-    /// Errors: [`TensorError::NpyRank`] unless `ndim() == 2`; [`TensorError::NpyEmpty`] for an array
-    /// without elements.
+    /// Errors: [`TensorError::NpyRank`] unless `ndim() == 2`; [`TensorError::ShapeMismatch`] when
+    /// `data.len()` is not the product of `shape` ([`NpyArray::check`]); [`TensorError::NpyEmpty`]
+    /// for an array without elements.
     pub fn to_matrix(&self) -> Result<Mat<f64>, TensorError> {
         if self.shape.len() != 2 {
             return Err(TensorError::NpyRank {
@@ -232,6 +266,7 @@ impl NpyArray {
                 expected: 2,
             });
         }
+        self.check()?;
         if self.data.is_empty() {
             return Err(TensorError::NpyEmpty {
                 shape: self.shape.clone(),

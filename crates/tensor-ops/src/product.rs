@@ -21,10 +21,13 @@ use rayon::prelude::*;
 const SLICES_PER_TASK: usize = 16;
 
 /// Shape of `X x_mode A` for a tensor of shape `dims` and a matrix with `rows` rows.
-pub fn product_dims(dims: [usize; 3], mode: usize, rows: usize) -> [usize; 3] {
+///
+/// Errors: [`TensorError::BadMode`] if `mode >= 3`.
+pub fn product_dims(dims: [usize; 3], mode: usize, rows: usize) -> Result<[usize; 3], TensorError> {
+    check_mode(mode)?;
     let mut d = dims;
     d[mode] = rows;
-    d
+    Ok(d)
 }
 
 /// Writes `X x_mode A` into `out` (length `I J K` with `I_mode` replaced by `A.nrows()`),
@@ -55,7 +58,7 @@ pub fn mode_product_into(
             found: a.ncols(),
         });
     }
-    let od = product_dims(dims, mode, a.nrows());
+    let od = product_dims(dims, mode, a.nrows())?;
     let olen = checked_len(od)?;
     if out.len() != olen {
         return Err(TensorError::ShapeMismatch {
@@ -215,7 +218,7 @@ impl Tensor3 {
         a: MatRef<'_, f64>,
     ) -> Result<Tensor3, TensorError> {
         check_mode(mode)?;
-        let od = product_dims(self.dims(), mode, a.nrows());
+        let od = product_dims(self.dims(), mode, a.nrows())?;
         let mut out = vec![0.0; checked_len(od)?];
         mode_product_into(self.as_slice(), self.dims(), mode, a, &mut out)?;
         Tensor3::from_vec(od, out)

@@ -14,12 +14,14 @@ pub struct Tensor3 {
     data: Vec<f64>,
 }
 
-/// Number of elements of a tensor with `dims`, or an error on overflow.
+/// Number of elements of a tensor with `dims`, or [`TensorError::DimsOverflow`] when the product
+/// of the *nonzero* dimensions overflows `usize`: an empty tensor of dims `[0, usize::MAX, 2]`
+/// would make every product of two dimensions (unfolding widths, slice sizes) wrap.
 pub(crate) fn checked_len(dims: [usize; 3]) -> Result<usize, TensorError> {
-    dims[0]
-        .checked_mul(dims[1])
-        .and_then(|x| x.checked_mul(dims[2]))
-        .ok_or(TensorError::DimsOverflow { dims })
+    dims.iter()
+        .try_fold(1usize, |acc, &d| acc.checked_mul(d.max(1)))
+        .ok_or(TensorError::DimsOverflow { dims })?;
+    Ok(dims[0] * dims[1] * dims[2])
 }
 
 /// Checks that `mode < 3`.
@@ -49,7 +51,8 @@ impl Tensor3 {
     /// An all-zero tensor of shape `dims` (a zero dimension gives an empty tensor).
     ///
     /// # Panics
-    /// If the element count overflows `usize` (no allocation could hold it anyway).
+    /// If the element count, or the product of the nonzero dimensions, overflows `usize` (no
+    /// allocation could hold it anyway; see [`TensorError::DimsOverflow`]).
     pub fn zeros(dims: [usize; 3]) -> Self {
         let len = checked_len(dims).expect("Tensor3::zeros: dims overflow usize");
         Self {
@@ -60,8 +63,10 @@ impl Tensor3 {
 
     /// Wraps `data` laid out as `i + I * (j + J * k)`.
     ///
-    /// Errors: [`TensorError::SizeMismatch`] if `data.len() != I J K`, [`TensorError::NonFinite`]
-    /// (with the index of the first bad value) if any value is NaN or infinite.
+    /// Errors: [`TensorError::DimsOverflow`] if the product of the nonzero dimensions overflows
+    /// `usize` (even for an empty tensor), [`TensorError::SizeMismatch`] if `data.len() != I J K`,
+    /// [`TensorError::NonFinite`] (with the index of the first bad value) if any value is NaN or
+    /// infinite.
     pub fn from_vec(dims: [usize; 3], data: Vec<f64>) -> Result<Self, TensorError> {
         let expected = checked_len(dims)?;
         if data.len() != expected {
@@ -111,6 +116,9 @@ impl Tensor3 {
     }
 
     /// The index `(i, j, k)` of linear position `pos` (`pos < len()`).
+    ///
+    /// # Panics
+    /// If `I` or `J` is zero (an empty tensor has no positions).
     pub fn index_of(&self, pos: usize) -> [usize; 3] {
         let [ni, nj, _] = self.dims;
         [pos % ni, (pos / ni) % nj, pos / (ni * nj)]

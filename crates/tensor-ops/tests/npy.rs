@@ -231,3 +231,56 @@ fn malformed_and_unsupported_files_are_typed_errors() {
     };
     assert!(to_npy_bytes(&bad, NpyDtype::F64).is_err());
 }
+
+/// An array whose public fields disagree (data shorter or longer than the shape's product) gives
+/// errors from the conversions, `None` from `get`, and a named panic (not an index panic) from
+/// `to_order` when it must transpose.
+#[test]
+fn inconsistent_fields_are_errors_not_index_panics() {
+    for (shape, len, fortran) in [
+        (vec![2, 3], 2, false),
+        (vec![2, 3], 2, true),
+        (vec![2, 3], 9, false),
+        (vec![2, 3, 4], 2, false),
+        (vec![2, 3, 4], 2, true),
+        (vec![2, 3, 4], 0, false),
+    ] {
+        let bad = NpyArray {
+            shape: shape.clone(),
+            data: vec![1.0; len],
+            fortran_order: fortran,
+            dtype: NpyDtype::F64,
+        };
+        assert!(
+            matches!(bad.check(), Err(TensorError::ShapeMismatch { expected, found, .. })
+                if expected == shape.iter().product::<usize>() && found == len),
+            "{shape:?} {len}"
+        );
+        let conv = if shape.len() == 2 {
+            bad.to_matrix().map(|_| ())
+        } else {
+            bad.to_tensor().map(|_| ())
+        };
+        assert!(
+            matches!(conv, Err(TensorError::ShapeMismatch { .. })),
+            "{shape:?} {len}: {conv:?}"
+        );
+        let last: Vec<usize> = shape.iter().map(|d| d - 1).collect();
+        // The last element sits at position `product - 1` in either order.
+        let present = len >= shape.iter().product::<usize>();
+        assert_eq!(bad.get(&last), present.then_some(1.0));
+        let transposed = std::panic::catch_unwind(|| bad.to_order(!fortran));
+        let msg = transposed.unwrap_err();
+        let msg = msg
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .unwrap_or("");
+        assert!(msg.contains("NpyArray::to_order"), "{msg}");
+        // No transposition needed: the flag alone changes.
+        assert_eq!(bad.to_order(fortran).data.len(), len);
+    }
+    let good = NpyArray::new(vec![2, 3], (0..6).map(f64::from).collect(), false).unwrap();
+    assert!(good.check().is_ok());
+    assert_eq!(good.get(&[1, 2]), Some(5.0));
+    assert_eq!(good.to_order(true).get(&[1, 2]), Some(5.0));
+}

@@ -190,3 +190,48 @@ fn construction_errors_name_what_and_where() {
     assert!(try_reconstruct(&x, [f[0].as_ref(), f[1].as_ref(), f[2].as_ref()]).is_err());
     assert!(Tensor3::zeros([0, 3, 2]).is_empty());
 }
+
+/// Element counts use checked products of every dimension: an empty tensor whose other
+/// dimensions multiply past `usize` is refused (its unfolding widths would wrap).
+#[test]
+fn dims_whose_products_overflow_are_refused_even_when_empty() {
+    for dims in [
+        [0, usize::MAX, 2],
+        [usize::MAX, 2, 0],
+        [2, 0, usize::MAX],
+        [0, 1 << 33, 1 << 33],
+    ] {
+        assert!(
+            matches!(
+                Tensor3::from_vec(dims, vec![]),
+                Err(TensorError::DimsOverflow { dims: d }) if d == dims
+            ),
+            "{dims:?}"
+        );
+        assert!(matches!(
+            Tensor3::from_fn(dims, |_, _, _| 0.0),
+            Err(TensorError::DimsOverflow { .. })
+        ));
+    }
+    assert!(matches!(
+        Tensor3::fold(0, Mat::<f64>::zeros(0, 0).as_ref(), [0, 1 << 33, 1 << 33]),
+        Err(TensorError::DimsOverflow { .. })
+    ));
+    assert!(std::panic::catch_unwind(|| Tensor3::zeros([0, usize::MAX, 2])).is_err());
+    // Empty tensors whose dimensions fit are fine.
+    let empty = Tensor3::from_vec([0, 1 << 20, 1 << 20], vec![]).unwrap();
+    assert_eq!(empty.as_mode0_matrix().ncols(), 1 << 40);
+    assert_eq!(Tensor3::zeros([0, 3, 4]).unfold(1).shape(), (3, 0));
+}
+
+#[test]
+fn product_dims_checks_the_mode() {
+    assert_eq!(
+        tensor_ops::product_dims([1, 2, 3], 1, 5).unwrap(),
+        [1, 5, 3]
+    );
+    assert!(matches!(
+        tensor_ops::product_dims([1, 2, 3], 3, 5),
+        Err(TensorError::BadMode { mode: 3 })
+    ));
+}

@@ -27,8 +27,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::dtw::{DtwConfig, WarpPath, dtw};
 use crate::error::TimewarpError;
-use crate::frame_seq::FrameSeq;
+use crate::frame_seq::{FrameSeq, check_buffer};
 use crate::medoid::{check_set, median_length, medoid, uniform_medoid};
+
+/// Most aligned frames `T` that [`align`] accepts (`1_000_000`: over nine hours at 30 fps for one
+/// sequence; the usual `T` is a median clip length of tens to hundreds of frames). Larger values
+/// are refused with [`TimewarpError::InvalidConfig`] instead of attempting the allocation.
+pub const MAX_ALIGN_FRAMES: usize = 1_000_000;
 
 /// How each sequence's time is mapped onto the reference's.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -42,8 +47,8 @@ pub enum AlignMethod {
 /// Parameters of [`align`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct AlignConfig {
-    /// Number of aligned frames `T` (at least 2). The usual choice is the median sequence length,
-    /// see [`AlignConfig::for_data`] and [`median_length`].
+    /// Number of aligned frames `T` (at least 2, at most [`MAX_ALIGN_FRAMES`]). The usual choice
+    /// is the median sequence length, see [`AlignConfig::for_data`] and [`median_length`].
     pub frames: usize,
     /// Time mapping method.
     pub method: AlignMethod,
@@ -95,8 +100,11 @@ pub struct Alignment {
 /// the result does not depend on the thread count.
 ///
 /// Errors: empty input, mismatched counts, dimensions or frame counts, sequences shorter than two
-/// frames, NaN or infinite values, a non-positive frame time, `frames < 2`, a reference or increment
-/// row out of range, or a DTW failure ([`TimewarpError::Pair`]).
+/// frames, NaN or infinite values, a non-positive frame time, a duration `(n_s - 1) frame_time_s`
+/// that overflows ([`TimewarpError::DurationOverflow`]), `frames < 2` or above
+/// [`MAX_ALIGN_FRAMES`], an output of more than [`MAX_BUFFER_VALUES`](crate::MAX_BUFFER_VALUES)
+/// values in all ([`TimewarpError::TooLarge`]), a reference or increment row out of range, or a
+/// DTW failure ([`TimewarpError::Pair`]).
 pub fn align(
     features: &[FrameSeq],
     values: &[FrameSeq],
@@ -133,12 +141,29 @@ pub fn align(
             value: frame_time[index],
         });
     }
+    for (index, (v, &ft)) in values.iter().zip(frame_time).enumerate() {
+        // The increments sum to this duration; each is at most it.
+        if !((v.len() - 1) as f64 * ft).is_finite() {
+            return Err(TimewarpError::DurationOverflow {
+                index,
+                frames: v.len(),
+                frame_time: ft,
+            });
+        }
+    }
     let t_frames = config.frames;
     if t_frames < 2 {
         return Err(TimewarpError::InvalidConfig {
             what: "frames",
             value: t_frames.to_string(),
             reason: "at least 2 aligned frames are needed",
+        });
+    }
+    if t_frames > MAX_ALIGN_FRAMES {
+        return Err(TimewarpError::InvalidConfig {
+            what: "frames",
+            value: t_frames.to_string(),
+            reason: "at most MAX_ALIGN_FRAMES (1 000 000) aligned frames",
         });
     }
     let vdim = values[0].dim;
@@ -150,6 +175,10 @@ pub fn align(
             reason: "must not exceed the value dimension",
         });
     }
+    check_buffer(
+        "aligned values (sequences x frames x (values dim + 1))",
+        &[count, t_frames, vdim + 1],
+    )?;
     if let AlignMethod::Dtw(dtw_config) = &config.method {
         dtw_config.validate()?;
     }

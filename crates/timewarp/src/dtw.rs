@@ -33,11 +33,17 @@
 //! Time `O(n m (dim + 2 max_slope + 1))`, memory `O(n m (2 max_slope + 2))` in a reusable
 //! [`DtwWorkspace`]. Ties are broken in a fixed order (diagonal, then along `a`, then along `b`), so
 //! results are deterministic.
+//!
+//! Limits: the tables hold `n m (2 max_slope + 2)` values with a binding slope, `2 n m` without;
+//! above [`MAX_BUFFER_VALUES`](crate::MAX_BUFFER_VALUES) values (8 GiB) the call fails with
+//! [`TimewarpError::TooLarge`] instead of attempting the allocation. A cost that overflows `f64`
+//! (feature values around `1e154` and above) is reported as [`TimewarpError::NonFiniteCost`],
+//! distinct from [`TimewarpError::NoPath`].
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::TimewarpError;
-use crate::frame_seq::{FrameSeq, squared_distance};
+use crate::frame_seq::{FrameSeq, check_buffer, squared_distance};
 
 /// Band and slope constraints of [`dtw`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -124,12 +130,15 @@ impl DtwWorkspace {
 /// recursion). Allocates its buffers; use [`dtw_with`] to reuse them.
 ///
 /// Errors: empty, ragged or non-finite sequences (`a` is sequence 0, `b` sequence 1), different
-/// frame dimensions, an invalid band, or [`TimewarpError::NoPath`] when the constraints admit no path.
+/// frame dimensions, an invalid band, [`TimewarpError::NoPath`] when the constraints admit no path,
+/// [`TimewarpError::NonFiniteCost`] when the cost overflows (values too large), or
+/// [`TimewarpError::TooLarge`] when the tables would exceed
+/// [`MAX_BUFFER_VALUES`](crate::MAX_BUFFER_VALUES) (see the module documentation).
 pub fn dtw(a: &FrameSeq, b: &FrameSeq, config: &DtwConfig) -> Result<WarpPath, TimewarpError> {
     dtw_with(a, b, config, &mut DtwWorkspace::new())
 }
 
-/// [`dtw`] with caller-owned buffers.
+/// [`dtw`] with caller-owned buffers (errors as [`dtw`]).
 pub fn dtw_with(
     a: &FrameSeq,
     b: &FrameSeq,
@@ -137,16 +146,18 @@ pub fn dtw_with(
     ws: &mut DtwWorkspace,
 ) -> Result<WarpPath, TimewarpError> {
     check_pair(a, b, config)?;
-    let grid = Grid::new(a.len(), b.len(), config.max_slope);
-    let cost = run_dp(a, b, config, &grid, ws);
+    let grid = Grid::new(a.len(), b.len(), config.max_slope)?;
+    fill_distances(a, b, config, &grid, ws);
+    let cost = run_dp(&grid, ws);
     if !cost.is_finite() {
-        return Err(no_path(a, b, config));
+        return Err(failure(a, b, config, &grid, ws));
     }
     let pairs = backtrack(&grid, &ws.cost);
     Ok(WarpPath { pairs, cost })
 }
 
-/// The cost of the optimal path only (no backtracking, no allocation once `ws` is large enough).
+/// The cost of the optimal path only (no backtracking, no allocation once `ws` is large enough;
+/// errors as [`dtw`]).
 pub fn dtw_cost_with(
     a: &FrameSeq,
     b: &FrameSeq,
@@ -154,22 +165,56 @@ pub fn dtw_cost_with(
     ws: &mut DtwWorkspace,
 ) -> Result<f64, TimewarpError> {
     check_pair(a, b, config)?;
-    let cost = dtw_cost_unchecked(a, b, config, ws);
-    if !cost.is_finite() {
-        return Err(no_path(a, b, config));
-    }
-    Ok(cost)
+    dtw_cost_unchecked(a, b, config, ws)
 }
 
-/// Cost of the optimal path for already validated sequences; infinite when there is no path.
+/// Cost of the optimal path for already validated sequences: [`TimewarpError::NoPath`] when there
+/// is no path, [`TimewarpError::NonFiniteCost`] when the cost overflows,
+/// [`TimewarpError::TooLarge`] for tables over the limit.
 pub(crate) fn dtw_cost_unchecked(
     a: &FrameSeq,
     b: &FrameSeq,
     config: &DtwConfig,
     ws: &mut DtwWorkspace,
-) -> f64 {
-    let grid = Grid::new(a.len(), b.len(), config.max_slope);
-    run_dp(a, b, config, &grid, ws)
+) -> Result<f64, TimewarpError> {
+    let grid = Grid::new(a.len(), b.len(), config.max_slope)?;
+    fill_distances(a, b, config, &grid, ws);
+    let cost = run_dp(&grid, ws);
+    if !cost.is_finite() {
+        return Err(failure(a, b, config, &grid, ws));
+    }
+    Ok(cost)
+}
+
+/// Why the optimal cost is not finite: the programme is run again with a local distance of 0 in
+/// every cell of the band, so it finds a (finite) path exactly when the constraints admit one; if
+/// they do, the real cost overflowed ([`TimewarpError::NonFiniteCost`]), else
+/// [`TimewarpError::NoPath`]. Only called on failure (it overwrites the workspace).
+fn failure(
+    a: &FrameSeq,
+    b: &FrameSeq,
+    config: &DtwConfig,
+    grid: &Grid,
+    ws: &mut DtwWorkspace,
+) -> TimewarpError {
+    let (n, m) = (grid.n, grid.m);
+    for i in 0..n {
+        for j in 0..m {
+            ws.dist[i * m + j] = if config.allows(n, m, i, j) {
+                0.0
+            } else {
+                f64::INFINITY
+            };
+        }
+    }
+    if run_dp(grid, ws).is_finite() {
+        TimewarpError::NonFiniteCost {
+            len_a: a.len(),
+            len_b: b.len(),
+        }
+    } else {
+        no_path(a, b, config)
+    }
 }
 
 fn check_pair(a: &FrameSeq, b: &FrameSeq, config: &DtwConfig) -> Result<(), TimewarpError> {
@@ -205,9 +250,12 @@ struct Grid {
 }
 
 impl Grid {
-    fn new(n: usize, m: usize, max_slope: usize) -> Self {
+    /// The sizes for sequences of `n` and `m` frames; [`TimewarpError::TooLarge`] when the
+    /// distance and cost tables together (`n m (states + 1)` values) exceed
+    /// [`MAX_BUFFER_VALUES`](crate::MAX_BUFFER_VALUES).
+    fn new(n: usize, m: usize, max_slope: usize) -> Result<Self, TimewarpError> {
         let longest_run = n.max(m) - 1;
-        if max_slope >= longest_run {
+        let grid = if max_slope >= longest_run {
             Self {
                 n,
                 m,
@@ -221,7 +269,12 @@ impl Grid {
                 k: Some(max_slope),
                 states: 1 + 2 * max_slope,
             }
-        }
+        };
+        check_buffer(
+            "DTW table values (n m (2 max_slope + 2), or 2 n m when the slope cannot bind)",
+            &[n, m, grid.states + 1],
+        )?;
+        Ok(grid)
     }
 
     #[inline]
@@ -230,14 +283,14 @@ impl Grid {
     }
 }
 
-/// Fills the local distances and the cost table; returns the best final cost (infinite if none).
-fn run_dp(
+/// Fills the local distances (infinite outside the band).
+fn fill_distances(
     a: &FrameSeq,
     b: &FrameSeq,
     config: &DtwConfig,
     grid: &Grid,
     ws: &mut DtwWorkspace,
-) -> f64 {
+) {
     let (n, m) = (grid.n, grid.m);
     ws.dist.clear();
     ws.dist.resize(n * m, f64::INFINITY);
@@ -249,6 +302,12 @@ fn run_dp(
             }
         }
     }
+}
+
+/// Fills the cost table from the local distances of [`fill_distances`]; returns the best final
+/// cost (infinite if none).
+fn run_dp(grid: &Grid, ws: &mut DtwWorkspace) -> f64 {
+    let (n, m) = (grid.n, grid.m);
     ws.cost.clear();
     ws.cost.resize(n * m * grid.states, f64::INFINITY);
     let dist = &ws.dist;

@@ -118,6 +118,55 @@ pub enum TimewarpError {
         /// Slope limit of the configuration.
         max_slope: usize,
     },
+    /// The DTW cost of two sequences is not finite although the constraints admit a path: the
+    /// squared distances of their feature values (or their sum along the path) overflow `f64`.
+    /// The features are too large (around `1e154` and above); scale them down.
+    #[error(
+        "the DTW cost between sequences of {len_a} and {len_b} frames is not finite: the squared \
+         distances of the feature values overflow (the values are too large; scale them down)"
+    )]
+    NonFiniteCost {
+        /// Frames of the first sequence.
+        len_a: usize,
+        /// Frames of the second sequence.
+        len_b: usize,
+    },
+    /// A buffer that the inputs ask for exceeds this crate's documented limit
+    /// ([`MAX_BUFFER_VALUES`](crate::MAX_BUFFER_VALUES) values,
+    /// [`MAX_PLAYBACK_FRAMES`](crate::MAX_PLAYBACK_FRAMES) frames): the memory it needs could
+    /// not be allocated (or would be absurd).
+    #[error("{what}: {requested} exceeds the limit of {limit}")]
+    TooLarge {
+        /// What would be allocated, e.g. "DTW table values".
+        what: &'static str,
+        /// The size asked for, formatted (it may not fit a `usize`).
+        requested: String,
+        /// The limit.
+        limit: usize,
+    },
+    /// A sequence's duration, `(frames - 1) * frame_time`, overflows `f64`.
+    #[error("sequence {index}: {frames} frames of {frame_time} s overflow the duration")]
+    DurationOverflow {
+        /// Index of the sequence.
+        index: usize,
+        /// Frames of the sequence.
+        frames: usize,
+        /// Its frame time in seconds.
+        frame_time: f64,
+    },
+    /// The cumulative playback times ([`fill_times`](crate::fill_times)) of an aligned sequence
+    /// are not finite or stop increasing: its increments are so large that the sum overflows or
+    /// absorbs the next increment (durations around `1e10` s and above).
+    #[error(
+        "playback time {time} s at aligned frame {frame} is not finite or does not increase \
+         (the time increments are too large)"
+    )]
+    PlaybackTimes {
+        /// The aligned frame whose time is bad.
+        frame: usize,
+        /// Its cumulative time in seconds.
+        time: f64,
+    },
     /// DTW failed between the reference and one sequence of a set.
     #[error("sequence {index} against reference {reference}: {source}")]
     Pair {

@@ -122,6 +122,34 @@ impl FrameSeq {
     }
 }
 
+/// Most `f64` values one buffer of this crate may hold: `2^30` (8 GiB). Larger requests, which
+/// no real alignment needs, fail with [`TimewarpError::TooLarge`] instead of aborting the process
+/// on a failed allocation: a DTW table ([`dtw`](crate::dtw): `n m (2 max_slope + 2)` values), all
+/// aligned sequences of one [`align`](crate::align) call together
+/// (`sequences * frames * (values dim + 1)`), and the output of
+/// [`playback`](crate::playback) (`frames * (dim - 1)`).
+pub const MAX_BUFFER_VALUES: usize = 1 << 30;
+
+/// The product of `factors` when it is at most [`MAX_BUFFER_VALUES`], else
+/// [`TimewarpError::TooLarge`] naming `what` (the product printed approximately when it
+/// overflows `usize`).
+pub(crate) fn check_buffer(what: &'static str, factors: &[usize]) -> Result<usize, TimewarpError> {
+    let exact = factors
+        .iter()
+        .try_fold(1usize, |acc, &f| acc.checked_mul(f));
+    match exact {
+        Some(values) if values <= MAX_BUFFER_VALUES => Ok(values),
+        _ => Err(TimewarpError::TooLarge {
+            what,
+            requested: match exact {
+                Some(values) => values.to_string(),
+                None => format!("{:e}", factors.iter().map(|&f| f as f64).product::<f64>()),
+            },
+            limit: MAX_BUFFER_VALUES,
+        }),
+    }
+}
+
 /// Splits a fractional frame position into `(k, f)` with `k + f = phase` clamped to
 /// `[0, frames - 1]`, `0 <= f < 1` and `k + 1 < frames` whenever `f > 0` (NaN gives `(0, 0)`):
 /// the rule by which resampling and playback interpolate between frames (the runtime's

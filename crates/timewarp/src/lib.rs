@@ -45,11 +45,13 @@ mod frame_seq;
 mod medoid;
 mod playback;
 
-pub use align::{AlignConfig, AlignMethod, Alignment, align};
+pub use align::{AlignConfig, AlignMethod, Alignment, MAX_ALIGN_FRAMES, align};
 pub use dtw::{DtwConfig, DtwWorkspace, WarpPath, dtw, dtw_cost_with, dtw_with};
 pub use error::TimewarpError;
-pub use frame_seq::FrameSeq;
+pub use frame_seq::{FrameSeq, MAX_BUFFER_VALUES};
 pub use medoid::{
     DEFAULT_MEDOID_CANDIDATES, median_length, medoid, medoid_with_candidates, uniform_medoid,
 };
-pub use playback::{MIN_INCREMENT, fill_times, phase_at, playback, playback_into};
+pub use playback::{
+    MAX_PLAYBACK_FRAMES, MIN_INCREMENT, fill_times, phase_at, playback, playback_into,
+};

@@ -22,7 +22,9 @@ pub const DEFAULT_MEDOID_CANDIDATES: usize = 24;
 /// (see the module documentation). Ties go to the smaller index.
 ///
 /// Errors: no sequences, empty, ragged or non-finite sequences, different dimensions, an invalid
-/// band, or [`TimewarpError::Pair`] when no candidate has a warping path to every other sequence.
+/// band, or [`TimewarpError::Pair`] when no candidate has a warping path to every other sequence
+/// (its source is [`TimewarpError::NoPath`], or [`TimewarpError::NonFiniteCost`] when the costs
+/// overflow) or when a DTW table exceeds the size limit ([`TimewarpError::TooLarge`]).
 pub fn medoid(features: &[FrameSeq], config: &DtwConfig) -> Result<usize, TimewarpError> {
     medoid_with_candidates(features, config, DEFAULT_MEDOID_CANDIDATES)
 }
@@ -55,7 +57,12 @@ pub fn medoid_with_candidates(
         ranked
     };
     chosen.dedup();
-    let sums: Vec<(f64, Option<usize>)> = chosen
+    let pair = |index: usize, reference: usize, e: TimewarpError| TimewarpError::Pair {
+        index,
+        reference,
+        source: Box::new(e),
+    };
+    let sums: Vec<Result<f64, TimewarpError>> = chosen
         .par_iter()
         .map_init(DtwWorkspace::new, |ws, &r| {
             let mut sum = 0.0;
@@ -63,37 +70,46 @@ pub fn medoid_with_candidates(
                 if s == r {
                     continue;
                 }
-                let c = dtw_cost_unchecked(&features[r], seq, config, ws);
-                if !c.is_finite() {
-                    return (f64::INFINITY, Some(s));
-                }
+                let c =
+                    dtw_cost_unchecked(&features[r], seq, config, ws).map_err(|e| pair(s, r, e))?;
                 sum += c;
+                if !sum.is_finite() {
+                    // Finite costs whose sum overflows: the values are too large.
+                    return Err(pair(
+                        s,
+                        r,
+                        TimewarpError::NonFiniteCost {
+                            len_a: features[r].len(),
+                            len_b: seq.len(),
+                        },
+                    ));
+                }
             }
-            (sum, None)
+            Ok(sum)
         })
         .collect();
+    // A table over the size limit is no property of one candidate: report it.
+    if let Some(Err(e)) = sums.iter().find(|res| {
+        matches!(res, Err(TimewarpError::Pair { source, .. })
+            if matches!(**source, TimewarpError::TooLarge { .. }))
+    }) {
+        return Err(e.clone());
+    }
     let mut best: Option<(usize, f64)> = None;
-    for (&r, &(sum, _)) in chosen.iter().zip(&sums) {
-        if sum.is_finite() && best.is_none_or(|(_, b)| sum < b) {
+    for (&r, res) in chosen.iter().zip(&sums) {
+        if let Ok(sum) = *res
+            && best.is_none_or(|(_, b)| sum < b)
+        {
             best = Some((r, sum));
         }
     }
     match best {
         Some((r, _)) => Ok(r),
-        None => {
-            let r = chosen[0];
-            let s = sums[0].1.unwrap_or(0);
-            Err(TimewarpError::Pair {
-                index: s,
-                reference: r,
-                source: Box::new(TimewarpError::NoPath {
-                    len_a: features[r].len(),
-                    len_b: features[s].len(),
-                    band: config.band,
-                    max_slope: config.max_slope,
-                }),
-            })
-        }
+        // No candidate has a finite summed cost: the first candidate's failure.
+        None => match sums.into_iter().next() {
+            Some(Err(e)) => Err(e),
+            _ => Err(TimewarpError::NoSequences),
+        },
     }
 }
 

@@ -322,3 +322,75 @@ fn bad_inputs_are_errors() {
         Err(TimewarpError::Pair { reference: 0, .. })
     ));
 }
+
+/// The medoid reports overflowing DTW costs as such (inside [`TimewarpError::Pair`]).
+#[test]
+fn medoid_reports_overflowing_costs() {
+    let seq = |v: &[f64]| FrameSeq::new(1, v.to_vec()).unwrap();
+    let set = [
+        seq(&[1e200, 0.0, 1.0]),
+        seq(&[-1e200, 0.0, 1.0]),
+        seq(&[0.0, 1.0, 1e200]),
+    ];
+    let err = medoid(&set, &DtwConfig::default()).unwrap_err();
+    assert!(
+        matches!(&err, TimewarpError::Pair { source, .. }
+            if matches!(**source, TimewarpError::NonFiniteCost { .. })),
+        "{err}"
+    );
+}
+
+/// Absurd aligned frame counts, outputs and durations are refused instead of aborting on the
+/// allocation or returning infinite increments.
+#[test]
+fn absurd_sizes_and_durations_are_refused() {
+    let seqs = cycles(2);
+    let ft = vec![1.0 / 30.0; seqs.len()];
+    for frames in [1 << 40, timewarp::MAX_ALIGN_FRAMES + 1] {
+        assert!(matches!(
+            align(
+                &seqs,
+                &seqs,
+                &ft,
+                &AlignConfig::new(frames, AlignMethod::Uniform)
+            ),
+            Err(TimewarpError::InvalidConfig { what: "frames", .. })
+        ));
+    }
+    // 7 sequences x 1e6 frames x 201 columns: over the buffer limit.
+    let wide: Vec<FrameSeq> = seqs.iter().map(|s| FrameSeq::zeros(200, s.len())).collect();
+    let cfg = AlignConfig::new(timewarp::MAX_ALIGN_FRAMES, AlignMethod::Uniform);
+    assert!(matches!(
+        align(&seqs, &wide, &ft, &cfg),
+        Err(TimewarpError::TooLarge { .. })
+    ));
+    // A frame time whose duration overflows gives no infinite increments.
+    let mut huge = ft.clone();
+    huge[3] = f64::MAX;
+    assert!(matches!(
+        align(
+            &seqs,
+            &seqs,
+            &huge,
+            &AlignConfig::new(5, AlignMethod::Uniform)
+        ),
+        Err(TimewarpError::DurationOverflow {
+            index: 3,
+            frames: 33,
+            ..
+        })
+    ));
+    // Large but finite durations stay fine.
+    let al = align(
+        &seqs,
+        &seqs,
+        &[1e300; 7],
+        &AlignConfig::new(5, AlignMethod::Uniform),
+    )
+    .unwrap();
+    assert!(
+        al.aligned
+            .iter()
+            .all(|a| a.frames.iter().all(|v| v.is_finite()))
+    );
+}

@@ -307,3 +307,80 @@ fn bad_inputs_are_errors() {
         ));
     }
 }
+
+/// One-column sequence from its values.
+fn column(values: &[f64]) -> FrameSeq {
+    FrameSeq::new(1, values.to_vec()).unwrap()
+}
+
+/// Finite features whose squared distances (or their sum along the path) overflow give a
+/// non-finite cost, reported as such and not as "no path" (the band and slope admit a path).
+#[test]
+fn overflowing_costs_are_not_reported_as_no_path() {
+    let cfg = DtwConfig::default();
+    let mut ws = DtwWorkspace::new();
+    for big in [1e155, 1e200] {
+        let a = column(&[big, -big, big]);
+        let b = column(&[-big, big, -big]);
+        let err = dtw(&a, &b, &cfg).unwrap_err();
+        assert_eq!(
+            err,
+            TimewarpError::NonFiniteCost { len_a: 3, len_b: 3 },
+            "{err}"
+        );
+        assert!(err.to_string().contains("too large"), "{err}");
+        assert_eq!(dtw_cost_with(&a, &b, &cfg, &mut ws).unwrap_err(), err);
+    }
+    // Each squared distance (1.44e308) is finite, their sum along the path is not.
+    let a = column(&[0.0, 0.0]);
+    let b = column(&[1.2e154, 1.2e154]);
+    assert_eq!(
+        dtw(&a, &b, &cfg).unwrap_err(),
+        TimewarpError::NonFiniteCost { len_a: 2, len_b: 2 }
+    );
+    // Constraints that admit no path are still reported as such, even with large values.
+    let a = column(&[1e200, 0.0]);
+    let b = column(&[-1e200, 0.0, 1.0, 2.0, 3.0]);
+    let none = DtwConfig {
+        band: 1.0,
+        max_slope: 0,
+    };
+    assert!(matches!(
+        dtw(&a, &b, &none),
+        Err(TimewarpError::NoPath { .. })
+    ));
+}
+
+/// A binding slope limit on long sequences would need a table of `n m (2 max_slope + 2)` values
+/// (144 GB here): refused before any allocation.
+#[test]
+fn oversized_tables_are_refused() {
+    let a = common::warped(3000, 1, |s| s);
+    let b = common::warped(3000, 1, common::bump(0.1));
+    let cfg = DtwConfig {
+        band: 1.0,
+        max_slope: 1000,
+    };
+    let err = dtw(&a, &b, &cfg).unwrap_err();
+    assert!(
+        matches!(
+            &err,
+            TimewarpError::TooLarge {
+                limit: timewarp::MAX_BUFFER_VALUES,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(err.to_string().contains("18018000000"), "{err}");
+    assert_eq!(
+        dtw_cost_with(&a, &b, &cfg, &mut DtwWorkspace::new()).unwrap_err(),
+        err
+    );
+    let err = timewarp::medoid(&[a.clone(), b.clone()], &cfg).unwrap_err();
+    assert!(
+        matches!(&err, TimewarpError::Pair { source, .. }
+            if matches!(**source, TimewarpError::TooLarge { .. })),
+        "{err}"
+    );
+}

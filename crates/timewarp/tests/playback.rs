@@ -179,3 +179,82 @@ fn playback_into_reuses_buffers_and_rejects_bad_input() {
         })
     ));
 }
+
+/// Two-column aligned sequence (value = frame index) with the increments in column 1.
+fn with_increments(incs: &[f64]) -> FrameSeq {
+    let frames = incs
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &d)| [i as f64, d])
+        .collect();
+    FrameSeq::new(2, frames).unwrap()
+}
+
+/// Frame counts beyond the limit (or beyond `usize`) are errors, not 0 frames, an overflow
+/// panic or an aborted allocation.
+#[test]
+fn absurd_frame_counts_are_refused() {
+    let cases: [(&[f64], f64); 3] = [
+        (&[0.1, 0.1, 0.0], 1e300),
+        (&[1e300, 1e300, 0.0], 1e10),
+        // 1e7 s at 1e6 fps: 1e13 frames (80 TB).
+        (&[1e7, 0.0], 1e6),
+    ];
+    for (incs, fps) in cases {
+        let err = playback(&with_increments(incs), 1, fps).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                TimewarpError::TooLarge {
+                    limit: timewarp::MAX_PLAYBACK_FRAMES,
+                    ..
+                }
+            ),
+            "{incs:?} at {fps}: {err}"
+        );
+    }
+    // One frame over the limit; the limit itself is a count, not a duration.
+    let over = timewarp::MAX_PLAYBACK_FRAMES as f64 / 1000.0;
+    assert!(matches!(
+        playback(&with_increments(&[over, 0.0]), 1, 1000.0),
+        Err(TimewarpError::TooLarge { .. })
+    ));
+    // Ordinary counts are unchanged: 2 s at 30 fps.
+    assert_eq!(
+        playback(&with_increments(&[1.0, 1.0, 0.0]), 1, 30.0)
+            .unwrap()
+            .len(),
+        61
+    );
+}
+
+/// Increments whose cumulative times overflow or stop increasing are refused by playback
+/// (`fill_times` and `phase_at` keep the runtime's rule).
+#[test]
+fn overflowing_or_absorbed_times_are_refused() {
+    // f64::MAX twice: the duration is infinite.
+    let err = playback(&with_increments(&[f64::MAX, f64::MAX, 0.0]), 1, 1.0).unwrap_err();
+    assert!(
+        matches!(err, TimewarpError::PlaybackTimes { frame: 2, time } if time.is_infinite()),
+        "{err}"
+    );
+    // 1e300 absorbs the next increments: times [0, 1e300, 1e300, 1e300].
+    let err = playback(&with_increments(&[1e300, 1e-3, 1e-3, 0.0]), 1, 1e-300).unwrap_err();
+    assert!(
+        matches!(err, TimewarpError::PlaybackTimes { frame: 2, .. }),
+        "{err}"
+    );
+    let mut out = FrameSeq::zeros(1, 3);
+    let before = out.clone();
+    assert!(
+        playback_into(
+            &with_increments(&[f64::MAX, f64::MAX, 0.0]),
+            1,
+            1.0,
+            &mut Vec::new(),
+            &mut out
+        )
+        .is_err()
+    );
+    assert_eq!(out, before);
+}
