@@ -60,6 +60,38 @@ pub(crate) fn fold_rows<A: Send>(
     }
 }
 
+/// The empirical variogram of `bins` intervals of width `dh` whose semi-variance sums and pair
+/// counts each row `0..s` gives (`row_bins`, folded in row order by [`fold_rows`]): each
+/// interval's mean, 0 where it holds no pair, checked finite ([`check_gamma`]).
+fn interval_means(
+    s: usize,
+    bins: usize,
+    dh: f64,
+    parallel: bool,
+    row_bins: impl Fn(usize) -> (Vec<f64>, Vec<usize>) + Sync + Send,
+) -> Result<EmpiricalVariogram, KrigingError> {
+    let mut sums = vec![0.0; bins];
+    let mut counts = vec![0usize; bins];
+    fold_rows(s, bins, parallel, row_bins, |(rs, rc)| {
+        for u in 0..bins {
+            sums[u] += rs[u];
+            counts[u] += rc[u];
+        }
+    });
+    let gamma: Vec<f64> = sums
+        .iter()
+        .zip(&counts)
+        .map(|(&sm, &n)| if n > 0 { sm / n as f64 } else { 0.0 })
+        .collect();
+    check_gamma(&gamma)?;
+    Ok(EmpiricalVariogram {
+        bin_width: dh,
+        centers: (0..bins).map(|u| dh * (u as f64 + 0.5)).collect(),
+        gamma,
+        counts,
+    })
+}
+
 /// [`KrigingError::Overflow`] when an interval's semi-variance is not finite: finite values whose
 /// squared differences (or their sums) overflow.
 pub(crate) fn check_gamma(gamma: &[f64]) -> Result<(), KrigingError> {
@@ -254,28 +286,8 @@ impl EmpiricalVariogram {
         };
         // Rows are independent: the parallel and the sequential loop give the same bits. Small
         // problems stay sequential (waking the pool costs more than the work).
-        let mut sums = vec![0.0; bins];
-        let mut counts = vec![0usize; bins];
         let parallel = s * s * dcols >= PARALLEL_MIN_WORK;
-        fold_rows(s, bins, parallel, row_bins, |(rs, rc)| {
-            for u in 0..bins {
-                sums[u] += rs[u];
-                counts[u] += rc[u];
-            }
-        });
-        let gamma: Vec<f64> = sums
-            .iter()
-            .zip(&counts)
-            .map(|(&sm, &n)| if n > 0 { sm / n as f64 } else { 0.0 })
-            .collect();
-        check_gamma(&gamma)?;
-        let centers = (0..bins).map(|u| dh * (u as f64 + 0.5)).collect();
-        Ok(EmpiricalVariogram {
-            bin_width: dh,
-            centers,
-            gamma,
-            counts,
-        })
+        interval_means(s, bins, dh, parallel, row_bins)
     }
 
     /// Number of non-empty intervals.
@@ -377,27 +389,8 @@ impl EmpiricalVariogram {
             }
             (sums, counts)
         };
-        let mut sums = vec![0.0; bins];
-        let mut counts = vec![0usize; bins];
         let parallel = s * s * (d + dv) >= PARALLEL_MIN_WORK;
-        fold_rows(s, bins, parallel, row_bins, |(rs, rc)| {
-            for u in 0..bins {
-                sums[u] += rs[u];
-                counts[u] += rc[u];
-            }
-        });
-        let gamma: Vec<f64> = sums
-            .iter()
-            .zip(&counts)
-            .map(|(&sm, &n)| if n > 0 { sm / n as f64 } else { 0.0 })
-            .collect();
-        check_gamma(&gamma)?;
-        Ok(EmpiricalVariogram {
-            bin_width: dh,
-            centers: (0..bins).map(|u| dh * (u as f64 + 0.5)).collect(),
-            gamma,
-            counts,
-        })
+        interval_means(s, bins, dh, parallel, row_bins)
     }
 }
 

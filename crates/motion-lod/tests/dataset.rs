@@ -407,6 +407,15 @@ fn a_folder_given_twice_is_refused() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `text` (a BVH) with the first number of the first OFFSET after `JOINT Spine` (its x) replaced
+/// by what `replace` makes of it.
+fn with_spine_offset_x(text: &str, replace: impl Fn(&str) -> String) -> String {
+    let spine = text.find("JOINT Spine").unwrap();
+    let at = spine + text[spine..].find("OFFSET ").unwrap() + "OFFSET ".len();
+    let end = at + text[at..].find(char::is_whitespace).unwrap();
+    format!("{}{}{}", &text[..at], replace(&text[at..end]), &text[end..])
+}
+
 /// A take whose numbers no walk has (the Spine's OFFSET at 1e300, which measured an infinite
 /// height) is refused by name with the reason, and the other take is kept: `cycles` printed
 /// `height [1.35, inf] m` and `build` failed on "controls of sample 0" (found 2026-11-28).
@@ -422,11 +431,7 @@ fn a_take_measuring_infinite_controls_is_refused_by_name() {
     let dir = std::env::temp_dir().join(format!("mlod-inf-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("a_good.bvh"), &text).unwrap();
-    // The first OFFSET after `JOINT Spine`.
-    let spine = text.find("JOINT Spine").unwrap();
-    let at = spine + text[spine..].find("OFFSET ").unwrap() + "OFFSET ".len();
-    let end = at + text[at..].find(' ').unwrap();
-    let huge = format!("{}1e300{}", &text[..at], &text[end..]);
+    let huge = with_spine_offset_x(&text, |_| "1e300".into());
     let bad = dir.join("b_huge.bvh");
     std::fs::write(&bad, huge).unwrap();
     let set = load_cycles(
@@ -469,13 +474,12 @@ fn a_take_with_no_capture_rate_or_no_body_height_is_refused_by_name() {
     let ms = text.replace(line, &format!("Frame Time: {}", seconds * 1000.0));
     let (slow, tall) = (dir.join("b_ms.bvh"), dir.join("c_tall.bvh"));
     std::fs::write(&slow, ms).unwrap();
-    // The first OFFSET after `JOINT Spine`, a million times longer.
-    let spine = text.find("JOINT Spine").unwrap();
-    let at = spine + text[spine..].find("OFFSET ").unwrap() + "OFFSET ".len();
-    let end = at + text[at..].find(char::is_whitespace).unwrap();
-    let long: f64 = text[at..end].parse().unwrap();
-    let long = if long == 0.0 { 1e6 } else { long * 1e6 };
-    std::fs::write(&tall, format!("{}{long}{}", &text[..at], &text[end..])).unwrap();
+    // The Spine's x offset a million times longer (1e6 where it is 0).
+    let tall_text = with_spine_offset_x(&text, |x| {
+        let x: f64 = x.parse().unwrap();
+        format!("{}", if x == 0.0 { 1e6 } else { x * 1e6 })
+    });
+    std::fs::write(&tall, tall_text).unwrap();
     let set = load_cycles(
         std::slice::from_ref(&dir),
         &DatasetConfig::default(),
