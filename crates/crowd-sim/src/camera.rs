@@ -65,7 +65,9 @@ impl Camera {
     }
 
     /// Checks every field: finite, `0 < fov_y < pi`, `aspect > 0`, `0 < near < far`, a non-zero
-    /// view direction not parallel to `up`, and a non-zero image.
+    /// view direction (`target - position`, finite and of a length single precision can
+    /// normalise) not parallel to `up`, `tan(fov_y / 2) * aspect` finite, a non-zero image, and a
+    /// frustum whose six planes ([`Frustum::from_camera`]) are finite with unit normals.
     pub fn validate(&self) -> Result<(), CrowdError> {
         let bad = |what| Err(CrowdError::BadCamera { what });
         let vs = [self.position, self.target, self.up];
@@ -91,13 +93,46 @@ impl Camera {
         if f.length_squared() < 1e-12 {
             return bad("target equals position");
         }
-        if f.normalize().cross(self.up).length_squared() < 1e-10 {
+        let forward = f.normalize();
+        if !(f.is_finite() && forward.is_finite() && (forward.length_squared() - 1.0).abs() < 1e-3)
+        {
+            return bad("target - position overflows or cannot be normalised (too far apart)");
+        }
+        if forward.cross(self.up).length_squared() < 1e-10 {
             return bad("up is zero or parallel to the view direction");
+        }
+        if !((0.5 * self.fov_y).tan() * self.aspect).is_finite() {
+            return bad("tan(fov_y / 2) * aspect overflows (aspect too large)");
         }
         if self.image_width == 0 || self.image_height == 0 {
             return bad("image size is zero");
         }
+        let unit_and_finite =
+            |p: &Vec4| p.is_finite() && (p.truncate().length_squared() - 1.0).abs() < 1e-3;
+        if !self.frustum_planes().iter().all(unit_and_finite) {
+            return bad("frustum planes overflow (position, far or aspect too large)");
+        }
         Ok(())
+    }
+
+    /// The six planes of [`Frustum::from_camera`] (near, far, left, right, bottom, top), unchecked.
+    fn frustum_planes(&self) -> [Vec4; 6] {
+        let b = self.basis();
+        let tv = (0.5 * self.fov_y).tan();
+        let th = tv * self.aspect;
+        let eye = self.position;
+        let plane = |n: Vec3, through: Vec3| {
+            let n = n.normalize();
+            n.extend(-n.dot(through))
+        };
+        [
+            plane(b.forward, eye + b.forward * self.near),
+            plane(-b.forward, eye + b.forward * self.far),
+            plane(b.right + b.forward * th, eye),
+            plane(-b.right + b.forward * th, eye),
+            plane(b.up + b.forward * tv, eye),
+            plane(-b.up + b.forward * tv, eye),
+        ]
     }
 
     /// The orthonormal basis; call on a validated camera.
@@ -318,34 +353,20 @@ pub struct Frustum {
 }
 
 impl Frustum {
-    /// The frustum of a camera (validated first).
+    /// The frustum of a camera (validated first, [`Camera::validate`]: a camera whose planes would
+    /// not be finite with unit normals is an error).
     ///
     /// With forward `f`, right `r`, up `u`, `tv = tan(fov_y / 2)` and `th = aspect * tv`, the
     /// inward normals are `f` (near), `-f` (far), `r + th f` (left), `-r + th f` (right),
     /// `u + tv f` (bottom) and `-u + tv f` (top), normalised; side planes pass through the eye.
     pub fn from_camera(camera: &Camera) -> Result<Self, CrowdError> {
         camera.validate()?;
-        let b = camera.basis();
-        let tv = (0.5 * camera.fov_y).tan();
-        let th = tv * camera.aspect;
-        let eye = camera.position;
-        let plane = |n: Vec3, through: Vec3| {
-            let n = n.normalize();
-            n.extend(-n.dot(through))
-        };
-        Ok(Self::from_planes([
-            plane(b.forward, eye + b.forward * camera.near),
-            plane(-b.forward, eye + b.forward * camera.far),
-            plane(b.right + b.forward * th, eye),
-            plane(-b.right + b.forward * th, eye),
-            plane(b.up + b.forward * tv, eye),
-            plane(-b.up + b.forward * tv, eye),
-        ]))
+        Ok(Self::from_planes(camera.frustum_planes()))
     }
 
     /// The frustum bounded by six planes `(n.x, n.y, n.z, d)` (inward unit normals `n`; a point
     /// `p` is inside plane `(n, d)` when `n . p + d >= 0`), in the order near, far, left, right,
-    /// bottom, top.
+    /// bottom, top. The planes are taken as given: a plane with a NaN makes every test false.
     pub fn from_planes(planes: [Vec4; 6]) -> Self {
         let lane = |i: usize| planes[if i < 6 { i } else { 0 }];
         let lanes: [[f32; 8]; 4] = [0, 1, 2, 3].map(|c| std::array::from_fn(|i| lane(i)[c]));

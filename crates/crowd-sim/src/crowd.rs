@@ -28,6 +28,19 @@ const PREFETCH: usize = 6;
 const PREFETCH_WALKERS: usize = 4;
 /// Largest time step (s) [`Crowd::step`] accepts: a crowd's frame rate is at least its inverse.
 pub const MAX_DT: f32 = 10.0;
+/// Most walkers a crowd holds ([`CrowdConfig::walkers`]), `2^31 - 1`: the walker indices and the
+/// per-frame counts (`FrameStats::level_histogram` is `u32`) fit in 32 bits, as the GPU crowd
+/// (`gpu-crowd`) needs. A crowd within the cap that does not fit in memory is an error too
+/// ([`CrowdError::OutOfMemory`]).
+pub const MAX_WALKERS: usize = (u32::MAX / 2) as usize;
+/// Largest field side (m) a crowd places walkers on ([`CrowdConfig::field_size_m`], also after
+/// it is enlarged for the source's turn range), 100,000 km: walkers' world positions are single
+/// precision outside their cycle frames, and within 50,000 km of the origin they resolve 4 m at
+/// worst (1/16 m within 1,000 km, the command line's largest field is about 1,000 km). A field
+/// that large is only reached by enlarging: a model of straight walks, whose paths can barely
+/// turn, needs about 39,000 km (tests/skeleton_variants.rs in motion-lod) and still runs. Beyond
+/// the cap a field is a mistake (1e20 m, where a stride is lost in rounding).
+pub const MAX_FIELD_M: f32 = 1.0e8;
 
 /// How a crowd finds the walkers in view each frame. Both give the same flags (a walker is visible
 /// when its culling box, from the previous frame's placement, intersects the frustum:
@@ -80,9 +93,9 @@ impl ChunkOutcome {
 /// How to populate and run a crowd.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CrowdConfig {
-    /// Number of walkers (at least 1).
+    /// Number of walkers (at least 1, at most [`MAX_WALKERS`]).
     pub walkers: usize,
-    /// Side of the square field `[-size/2, size/2]^2` (m).
+    /// Side of the square field `[-size/2, size/2]^2` (m), at most [`MAX_FIELD_M`].
     pub field_size_m: f32,
     /// Seed of every walker's generator (walker `i` uses `seed` and `i`).
     pub seed: u64,
@@ -192,9 +205,10 @@ impl CrowdConfig {
         }
     }
 
-    /// Checks every value (walkers at least 1; sizes, rates and margins finite and in their
-    /// domains; style weights finite and non-negative): what [`Crowd::new`] asks of a config, for
-    /// any crowd that runs one (`gpu-crowd` too).
+    /// Checks every value (walkers in `1..=`[`MAX_WALKERS`]; sizes, rates and margins finite and
+    /// in their domains, the field side at most [`MAX_FIELD_M`]; style weights finite and
+    /// non-negative): what [`Crowd::new`] asks of a config, for any crowd that runs one
+    /// (`gpu-crowd` too).
     pub fn validate(&self) -> Result<(), CrowdError> {
         let bad = |field, value: f32| {
             Err(CrowdError::BadConfig {
@@ -205,8 +219,20 @@ impl CrowdConfig {
         if self.walkers == 0 {
             return Err(CrowdError::NoWalkers);
         }
+        if self.walkers > MAX_WALKERS {
+            return Err(CrowdError::TooManyWalkers {
+                walkers: self.walkers,
+            });
+        }
         if !(self.field_size_m.is_finite() && self.field_size_m > 0.0) {
             return bad("field_size_m", self.field_size_m);
+        }
+        if self.field_size_m > MAX_FIELD_M {
+            return Err(CrowdError::AboveLimit {
+                field: "field_size_m",
+                value: f64::from(self.field_size_m),
+                max: f64::from(MAX_FIELD_M),
+            });
         }
         // The crowd steps by `1 / fps`, at most `MAX_DT`.
         if !(self.fps.is_finite() && self.fps >= 1.0 / MAX_DT) {
@@ -234,6 +260,31 @@ impl CrowdConfig {
         }
         Ok(())
     }
+}
+
+/// Asks the system for every per-walker buffer of a crowd of `n` walkers at once (reserved
+/// together, then given back; [`Crowd::new`] then allocates them as before, zeroed pages left to
+/// the system until written): [`CrowdError::OutOfMemory`] for a size beyond the address space or
+/// an allocation refused, instead of an abort partway through `new`.
+fn check_memory<C>(n: usize, levels: &LevelTable) -> Result<(), CrowdError> {
+    fn reserve<T>(len: Option<usize>, what: &'static str, n: usize) -> Result<Vec<T>, CrowdError> {
+        let mut v = Vec::new();
+        len.and_then(|len| v.try_reserve_exact(len).ok())
+            .ok_or(CrowdError::OutOfMemory { what, walkers: n })?;
+        Ok(v)
+    }
+    let npos = levels.joints.checked_add(1);
+    let _held = (
+        reserve::<f32>(n.checked_mul(levels.pose_len), "pose vectors", n)?,
+        reserve::<Vec3>(npos.and_then(|p| n.checked_mul(p)), "joint positions", n)?,
+        reserve::<Bounds>(n.checked_mul(2), "culling boxes", n)?,
+        reserve::<u32>(Some(n), "level bins", n)?,
+        reserve::<bool>(Some(n), "visibility flags", n)?,
+        reserve::<Walker<C>>(Some(n), "walker states", n)?,
+        // Each frame's level histogram (`FrameStats`, `CrowdReport`): one bin per level.
+        reserve::<u64>(levels.accuracy_levels.checked_add(1), "level histogram", n)?,
+    );
+    Ok(())
 }
 
 /// Culling box of a walker: root ground position +-(0.4 height + margin) horizontally,
@@ -288,8 +339,11 @@ impl<C: Send> Crowd<C> {
     /// walks turns little per cycle, so its paths need large radii) is enlarged to fit them:
     /// [`Crowd::field_enlarged_from`] tells, and [`Crowd::config`] holds the size used.
     ///
-    /// Errors: zero walkers, a source without levels or with unusable control bounds, a bad
-    /// config value, or an invalid clip.
+    /// Errors: zero walkers or more than [`MAX_WALKERS`], a source without levels or with unusable
+    /// control bounds, a bad config value, a field that the paths need enlarged beyond
+    /// [`MAX_FIELD_M`], an invalid clip, or buffers the system cannot allocate
+    /// ([`CrowdError::OutOfMemory`]: asked for before any is made, so that a crowd too large for
+    /// the machine is an error, not an abort).
     pub fn new<S: ClipSource<Clip = C>>(
         source: &S,
         mut config: CrowdConfig,
@@ -318,6 +372,14 @@ impl<C: Send> Crowd<C> {
         // Preferred strides, the tightest curvature they can follow, and the field that needs.
         let plan = PathPlan::new(&bounds, config.border_m);
         let field_enlarged_from = plan.fit_field(&mut config.field_size_m);
+        if config.field_size_m > MAX_FIELD_M {
+            return Err(CrowdError::FieldTooLarge {
+                needed_m: config.field_size_m,
+            });
+        }
+        let n = config.walkers;
+        check_memory::<C>(n, &levels)?;
+        let npos = levels.joints + 1;
         let root_only = levels.root_only().ok_or(CrowdError::NoLevels {
             accuracy_levels: levels.accuracy_levels,
             pose_len: levels.pose_len,
@@ -392,13 +454,36 @@ impl<C: Send> Crowd<C> {
                 root: Vec3::new(base.x, 0.0, base.y),
             })
         };
-        let walkers = (0..config.walkers)
-            .into_par_iter()
-            .with_min_len(CHUNK)
-            .map(make)
-            .collect::<Result<Vec<_>, _>>()?;
-        let n = walkers.len();
-        let npos = levels.joints + 1;
+        // Into a vector reserved up front (a refused allocation is an error), stopping at a
+        // failing walker as `collect::<Result<Vec<_>, _>>` does.
+        let mut walkers = Vec::new();
+        walkers
+            .try_reserve_exact(n)
+            .map_err(|_| CrowdError::OutOfMemory {
+                what: "walker states",
+                walkers: n,
+            })?;
+        let first_error = std::sync::Mutex::new(None);
+        walkers.par_extend(
+            (0..n)
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .map(make)
+                .map(|w| match w {
+                    Ok(w) => Some(w),
+                    Err(e) => {
+                        if let Ok(mut first) = first_error.lock() {
+                            first.get_or_insert(e);
+                        }
+                        None
+                    }
+                })
+                .while_some(),
+        );
+        if let Some(e) = first_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
+            return Err(e);
+        }
+        debug_assert_eq!(walkers.len(), n);
         let mut crowd = Self {
             config,
             params,
@@ -579,7 +664,8 @@ impl<C: Send> Crowd<C> {
     /// any thread count. The policy's detail is checked against the source's [`LevelTable`]
     /// ([`LevelTable::check`]); a clip the source cannot build is counted in
     /// `stats.clip_faults` and the walker keeps its previous clip (a level the source does not
-    /// have, or a clip of unusable duration, is an error).
+    /// have, [`CrowdError::BadLevel`], more joints than it has, [`CrowdError::BadJoints`], or a
+    /// clip of unusable duration is an error).
     pub fn step_into<S, P>(
         &mut self,
         source: &S,
@@ -830,18 +916,30 @@ impl<C> Crowd<C> {
     }
 
     /// World joint positions of walker `i` after the last step (root first; empty before the
-    /// first step). Panics if `i >= len()`.
+    /// first step).
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn joint_positions(&self, i: usize) -> &[Vec3] {
         let npos = self.params.levels.joints + 1;
         &self.joints[i * npos..i * npos + self.walkers[i].n_joints]
     }
 
     /// World root position of walker `i` after the last step (its path start before).
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn root_position(&self, i: usize) -> Vec3 {
         self.walkers[i].root
     }
 
     /// Whether walker `i`'s box intersected the frustum in the last step.
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn is_visible(&self, i: usize) -> bool {
         self.visible[i]
     }
@@ -857,43 +955,75 @@ impl<C> Crowd<C> {
     }
 
     /// Detail of walker `i`'s current clip.
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn detail(&self, i: usize) -> Detail {
         self.walkers[i].cur_detail
     }
 
     /// Level histogram bin of walker `i` (see `FrameStats::level_histogram`).
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn level_bin(&self, i: usize) -> usize {
         self.params.levels.bin(&self.walkers[i].cur_detail)
     }
 
     /// The path of walker `i`.
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn path(&self, i: usize) -> &EllipsePath {
         &self.walkers[i].path
     }
 
     /// Standing height of walker `i` (m).
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn height(&self, i: usize) -> f32 {
         self.walkers[i].height
     }
 
     /// Controls of walker `i`'s current cycle (after clamping).
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn controls(&self, i: usize) -> Controls {
         self.walkers[i].controls
     }
 
     /// Walker `i`'s current cycle frame: origin `(x, z)` and heading, in double precision.
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn cycle_frame(&self, i: usize) -> CycleFrame {
         self.walkers[i].frame
     }
 
     /// Pose vector of walker `i` from the last step, in its cycle frame ([`Crowd::cycle_frame`]):
     /// the rows its clip wrote (the runtime's row layout, `ClipSource`), seam transition applied.
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn pose(&self, i: usize) -> &[f32] {
         let pl = self.params.levels.pose_len;
         &self.poses[i * pl..i * pl + self.walkers[i].rows.min(pl)]
     }
 
     /// Whether walker `i` is inside a seam transition.
+    ///
+    /// # Panics
+    ///
+    /// If `i >= len()`.
     pub fn in_transition(&self, i: usize) -> bool {
         self.walkers[i].in_transition()
     }
@@ -902,10 +1032,18 @@ impl<C> Crowd<C> {
 fn walker_error(walker: usize, e: WalkerFault, params: &StageParams) -> CrowdError {
     match e {
         WalkerFault::Duration(duration) => CrowdError::BadClipDuration { walker, duration },
-        WalkerFault::Level(level) => CrowdError::BadLevel {
+        WalkerFault::Level(d) if d.accuracy >= params.levels.accuracy_levels => {
+            CrowdError::BadLevel {
+                walker,
+                level: d.accuracy,
+                levels: params.levels.accuracy_levels,
+            }
+        }
+        WalkerFault::Level(d) => CrowdError::BadJoints {
             walker,
-            level,
-            levels: params.levels.accuracy_levels,
+            level: d.accuracy,
+            active_joints: d.active_joints,
+            joints: params.levels.joints,
         },
     }
 }

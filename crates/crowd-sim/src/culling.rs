@@ -44,11 +44,50 @@ impl BHShape<f32, 3> for BoxShape {
     }
 }
 
+/// The tree's box of a walker box: as given, but for an infinite coordinate, taken as the largest
+/// finite value of its sign (a plane test `n . p` then has no `0 * inf`, and the inner boxes above
+/// it stay finite), and a box with a NaN, stored as an empty box (`min = f32::MAX`,
+/// `max = f32::MIN`: no union grows by it, no plane has it inside, as the frustum test answers for
+/// the NaN box itself).
+#[inline]
 fn to_aabb(b: &Bounds) -> Aabb<f32, 3> {
+    if b.min.is_nan() || b.max.is_nan() {
+        return Aabb::with_bounds(Point3::from([f32::MAX; 3]), Point3::from([f32::MIN; 3]));
+    }
+    let c = |v: f32| v.clamp(f32::MIN, f32::MAX);
     Aabb::with_bounds(
-        Point3::new(b.min.x, b.min.y, b.min.z),
-        Point3::new(b.max.x, b.max.y, b.max.z),
+        Point3::new(c(b.min.x), c(b.min.y), c(b.min.z)),
+        Point3::new(c(b.max.x), c(b.max.y), c(b.max.z)),
     )
+}
+
+/// Largest coordinate magnitude (m) of a box the tree is built over as it is
+/// ([`WalkerAabbTree::rebuild`]): the SAH build's centroids, extents and surface areas (times the
+/// box count) stay finite in single precision within it.
+const BUILD_LIMIT: f32 = 1e12;
+
+/// Whether the SAH build can take `b` as it is: finite coordinates within [`BUILD_LIMIT`] and
+/// `min <= max` (the build's bucket index of a NaN or infinite centroid is undefined).
+fn buildable(b: &Bounds) -> bool {
+    let ok = |v: f32| v.abs() <= BUILD_LIMIT;
+    b.min.to_array().into_iter().chain(b.max.to_array()).all(ok) && b.min.cmple(b.max).all()
+}
+
+/// A box the build can take in place of one it cannot ([`buildable`]): each coordinate clamped to
+/// `[-BUILD_LIMIT, BUILD_LIMIT]` (NaN to 0), each axis ordered. Only the tree's shape depends on
+/// it: the leaf then gets its box ([`to_aabb`]).
+fn build_stand_in(b: &Bounds) -> Aabb<f32, 3> {
+    let c = |v: f32| {
+        if v.is_nan() {
+            0.0
+        } else {
+            v.clamp(-BUILD_LIMIT, BUILD_LIMIT)
+        }
+    };
+    let (lo, hi) = (b.min.to_array().map(c), b.max.to_array().map(c));
+    let min: [f32; 3] = std::array::from_fn(|k| lo[k].min(hi[k]));
+    let max: [f32; 3] = std::array::from_fn(|k| lo[k].max(hi[k]));
+    Aabb::with_bounds(Point3::from(min), Point3::from(max))
 }
 
 /// Levels of the tree below which [`WalkerAabbTree::refit`] stops splitting work between threads
@@ -132,7 +171,8 @@ pub struct WalkerAabbTree {
 }
 
 impl WalkerAabbTree {
-    /// Builds the hierarchy over `bounds` (one box per walker, may be empty).
+    /// Builds the hierarchy over `bounds` (one box per walker, may be empty; any boxes, see
+    /// [`WalkerAabbTree::rebuild`]).
     pub fn new(bounds: &[Bounds]) -> Self {
         let mut s = Self {
             tree: Bvh { nodes: Vec::new() },
@@ -157,10 +197,23 @@ impl WalkerAabbTree {
 
     /// Rebuilds the tree from scratch with SAH splits (allocates; parallel over rayon's pool,
     /// with the same tree for any thread count).
+    ///
+    /// Any boxes are accepted (here and in [`WalkerAabbTree::refit`]). A box with a NaN is never
+    /// visible (stored empty: the frustum test, [`Frustum::intersects`], is false for it too); an
+    /// infinite coordinate is taken as the largest finite value of its sign. One the build cannot
+    /// take as it is (a NaN or infinite coordinate, one beyond 10^12 m, or `min > max` on an axis)
+    /// places its leaf by a clamped stand-in and then gets its box: the same answers, a tree of
+    /// another shape.
     pub fn rebuild(&mut self, bounds: &[Bounds]) {
         self.shapes.clear();
+        let mut stand_ins = false;
         self.shapes.extend(bounds.iter().map(|b| BoxShape {
-            aabb: to_aabb(b),
+            aabb: if buildable(b) {
+                to_aabb(b)
+            } else {
+                stand_ins = true;
+                build_stand_in(b)
+            },
             node: 0,
         }));
         self.tree = Bvh::build_par(&mut self.shapes);
@@ -170,6 +223,10 @@ impl WalkerAabbTree {
         self.stack.reserve(64);
         debug_assert!(self.children_follow_parents());
         self.depth_first = self.is_depth_first();
+        if stand_ins {
+            // The leaves get their boxes as given, the inner boxes their unions.
+            self.refit(bounds);
+        }
     }
 
     /// Whether the nodes are stored depth first: every node's left child follows it and its right
@@ -236,9 +293,17 @@ impl WalkerAabbTree {
 
     /// Sets `visible[i]` to whether box `i` intersects `query` (as decided by
     /// `query.intersects_aabb` on the box itself), visiting only subtrees whose box intersects.
-    /// Returns the number of visible boxes. `visible.len()` must equal `len()`.
+    /// Returns the number of visible boxes.
+    ///
+    /// # Panics
+    ///
+    /// If `visible.len() != len()` (one flag per box).
     pub fn query<Q: IntersectsAabb<f32, 3>>(&mut self, query: &Q, visible: &mut [bool]) -> usize {
-        debug_assert_eq!(visible.len(), self.shapes.len());
+        assert_eq!(
+            visible.len(),
+            self.shapes.len(),
+            "WalkerAabbTree::query: one visibility flag per box"
+        );
         visible.fill(false);
         let nodes = &self.tree.nodes;
         if nodes.is_empty() {

@@ -8,6 +8,24 @@ pub enum CrowdError {
     /// `CrowdConfig::walkers` was zero.
     #[error("a crowd needs at least one walker (config.walkers = 0)")]
     NoWalkers,
+    /// `CrowdConfig::walkers` is above [`MAX_WALKERS`](crate::MAX_WALKERS).
+    #[error(
+        "config.walkers = {walkers} is above the most walkers a crowd holds ({})",
+        crate::MAX_WALKERS
+    )]
+    TooManyWalkers {
+        /// The walkers asked for.
+        walkers: usize,
+    },
+    /// The system refused the memory of a crowd's buffers (or their size does not fit in the
+    /// address space): the crowd is too large for this machine.
+    #[error("cannot allocate the {what} of {walkers} walkers: out of memory")]
+    OutOfMemory {
+        /// Which buffer.
+        what: &'static str,
+        /// Walkers of the crowd.
+        walkers: usize,
+    },
     /// The clip source reports no accuracy level or an empty pose vector.
     #[error(
         "clip source has no levels: accuracy_levels = {accuracy_levels}, pose_len = {pose_len}"
@@ -40,6 +58,29 @@ pub enum CrowdError {
         field: &'static str,
         /// Offending value.
         value: f64,
+    },
+    /// A configuration value is finite but above its limit (the field side above
+    /// [`MAX_FIELD_M`](crate::MAX_FIELD_M)).
+    #[error("crowd config field `{field}` = {value} is above its limit {max}")]
+    AboveLimit {
+        /// Name of the field in `CrowdConfig`.
+        field: &'static str,
+        /// Offending value.
+        value: f64,
+        /// The largest value accepted.
+        max: f64,
+    },
+    /// The field, enlarged to fit the paths the source's turn range can follow (and
+    /// `CrowdConfig::border_m`), is larger than a crowd places walkers on
+    /// ([`MAX_FIELD_M`](crate::MAX_FIELD_M)).
+    #[error(
+        "paths need a field of {needed_m} m (turn range too narrow or border_m too large), above \
+         the largest a crowd places walkers on ({} m)",
+        crate::MAX_FIELD_M
+    )]
+    FieldTooLarge {
+        /// The side length the paths need (m).
+        needed_m: f32,
     },
     /// The field is too small for paths whose curvature the source's turn range can follow.
     #[error(
@@ -89,6 +130,21 @@ pub enum CrowdError {
         level: usize,
         /// Number of accuracy levels of the source.
         levels: usize,
+    },
+    /// The policy asked for more active joints than the source has (at an accuracy level it has).
+    #[error(
+        "walker {walker}: policy asked for {active_joints} active joints (at accuracy level \
+         {level}), source has {joints} joints"
+    )]
+    BadJoints {
+        /// Index of the walker.
+        walker: usize,
+        /// Requested accuracy level (one the source has).
+        level: usize,
+        /// Requested active joints.
+        active_joints: usize,
+        /// Number of joints of the source (besides the root).
+        joints: usize,
     },
 }
 

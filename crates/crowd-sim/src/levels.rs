@@ -55,15 +55,17 @@ impl LevelTable {
     /// Number of bins of a level histogram: one per accuracy level, plus one (the last) for
     /// root-only walkers.
     pub fn histogram_bins(&self) -> usize {
-        self.accuracy_levels + 1
+        self.accuracy_levels.saturating_add(1)
     }
 
-    /// Histogram bin of a detail: its accuracy level, or the last bin when root-only.
+    /// Histogram bin of a detail: its accuracy level (at most the last level), or the last bin
+    /// when root-only. Always below [`LevelTable::histogram_bins`]: a table without levels has
+    /// one bin, 0.
     pub fn bin(&self, d: &Detail) -> usize {
         if d.active_joints == 0 {
             self.accuracy_levels
         } else {
-            d.accuracy.min(self.accuracy_levels - 1)
+            d.accuracy.min(self.accuracy_levels.saturating_sub(1))
         }
     }
 }

@@ -59,7 +59,7 @@ pub mod testing;
 mod walker;
 
 pub use camera::{Bounds, Camera, CameraPath, Frustum, Scene};
-pub use crowd::{Crowd, CrowdConfig, CrowdStyle, Culling, MAX_DT};
+pub use crowd::{Crowd, CrowdConfig, CrowdStyle, Culling, MAX_DT, MAX_FIELD_M, MAX_WALKERS};
 pub use error::{ClipError, CrowdError, RenderError};
 pub use levels::{LevelTable, check_control_range};
 pub use source::{ClipSource, MAX_CLIP_CLASSES};

@@ -138,9 +138,11 @@ pub struct FrameTimes {
 impl FrameTimes {
     /// Median, 99th percentile and worst of `seconds` (frame times in seconds, any order;
     /// nearest-rank percentiles: the value at rank `ceil(q n)` of the `n` sorted times); `None` when
-    /// `seconds` is empty. [`CrowdReport::frame_times`] takes its figures from here.
+    /// `seconds` is empty or holds a time that is not one (NaN, infinite or negative): such a
+    /// slice is refused whole, not filtered, so that the figures never come from some of the
+    /// frames only. [`CrowdReport::frame_times`] takes its figures from here.
     pub fn of_seconds(seconds: &[f64]) -> Option<FrameTimes> {
-        if seconds.is_empty() {
+        if seconds.is_empty() || !seconds.iter().all(|s| s.is_finite() && *s >= 0.0) {
             return None;
         }
         let mut v = seconds.to_vec();
@@ -168,14 +170,23 @@ impl CrowdReport {
     }
 
     /// An empty report with room for `frames` frame times, so that adding that many frames does
-    /// not allocate inside a frame loop.
+    /// not allocate inside a frame loop. The room is a hint: at most
+    /// [`CrowdReport::MAX_RESERVED_FRAMES`] frames, and none when the system refuses the memory
+    /// (frames beyond it are still added, growing the report as they come).
     pub fn with_frames(frames: usize) -> Self {
-        Self {
-            frame_s: Vec::with_capacity(frames),
-            frame_allocations: Vec::with_capacity(frames),
-            ..Self::default()
+        let room = frames.min(Self::MAX_RESERVED_FRAMES);
+        let mut report = Self::default();
+        if report.frame_s.try_reserve_exact(room).is_ok()
+            && report.frame_allocations.try_reserve_exact(room).is_err()
+        {
+            report.frame_s = Vec::new();
         }
+        report
     }
+
+    /// Most frames [`CrowdReport::with_frames`] makes room for up front: 2^24 (155 hours at
+    /// 30 fps; 256 MiB of frame times and allocation counts).
+    pub const MAX_RESERVED_FRAMES: usize = 1 << 24;
 
     /// Adds one frame.
     pub fn add(&mut self, f: &FrameStats) {
@@ -221,14 +232,19 @@ impl CrowdReport {
         FrameTimes::of_seconds(self.frame_s.get(warmup..)?)
     }
 
-    /// Mean stage timings per frame.
+    /// Mean stage timings per frame: the sums divided by `frames` (at least 1), in integer
+    /// nanoseconds below 2^32 frames and in floating point beyond (a `Duration` divides by a `u32`).
     pub fn mean_timings(&self) -> StageTimings {
-        let n = self.frames.max(1) as u32;
+        let n = self.frames.max(1);
+        let mean = |d: Duration| match u32::try_from(n) {
+            Ok(n) => d / n,
+            Err(_) => d.div_f64(n as f64),
+        };
         StageTimings {
-            cull: self.total.cull / n,
-            kernels: self.total.kernels / n,
-            poses: self.total.poses / n,
-            fk: self.total.fk / n,
+            cull: mean(self.total.cull),
+            kernels: mean(self.total.kernels),
+            poses: mean(self.total.poses),
+            fk: mean(self.total.fk),
         }
     }
 

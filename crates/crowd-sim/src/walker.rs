@@ -121,7 +121,8 @@ impl Advance {
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum WalkerFault {
     Duration(f32),
-    Level(usize),
+    /// The policy's detail, which the source's level table does not have.
+    Level(Detail),
 }
 
 impl<C> Walker<C> {
@@ -261,7 +262,7 @@ impl<C> Walker<C> {
         d: Detail,
         stock: &mut Lender<'_, C>,
     ) -> Result<Advance, WalkerFault> {
-        let d = p.levels.check(&d).ok_or(WalkerFault::Level(d.accuracy))?;
+        let d = p.levels.check(&d).ok_or(WalkerFault::Level(d))?;
         let mut done = Advance::default();
         self.hold_s = 0.0;
         if d.is_finer_than(&self.cur_detail) {
@@ -315,7 +316,7 @@ impl<C> Walker<C> {
         dt: f32,
         stock: &mut Lender<'_, C>,
     ) -> Result<Advance, WalkerFault> {
-        let d = p.levels.check(&d).ok_or(WalkerFault::Level(d.accuracy))?;
+        let d = p.levels.check(&d).ok_or(WalkerFault::Level(d))?;
         let mut done = Advance::default();
         self.t += dt;
         while self.t >= self.cur_dur {

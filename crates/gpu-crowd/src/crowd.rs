@@ -285,10 +285,16 @@ impl GpuCrowd {
         // The walkers, as crowd_sim::Crowd::new draws them (the same plan and draws).
         let bounds = range;
         let plan = PathPlan::new(&bounds, config.border_m);
-        let field_enlarged_from = plan.fit_field(&mut config.field_size_m);
+        let field_enlarged_from = fit_field(&plan, &mut config)?;
         let mix = model.data_style_mix();
         let last = tables.levels - 1;
-        let mut walkers = Vec::with_capacity(config.walkers);
+        let mut walkers = Vec::new();
+        walkers.try_reserve_exact(config.walkers).map_err(|_| {
+            crowd_sim::CrowdError::OutOfMemory {
+                what: "walker states",
+                walkers: config.walkers,
+            }
+        })?;
         for i in 0..config.walkers {
             let mut g = SplitMix64::for_walker(config.seed, i);
             let start @ WalkerStart {
@@ -641,8 +647,8 @@ impl GpuCrowd {
             self.policy_cache = Some((
                 view,
                 entries,
-                table.visible.len() as u32,
-                table.hidden.len() as u32,
+                table.visible().len() as u32,
+                table.hidden().len() as u32,
             ));
         }
         let (_, entries, vis, hid) = self.policy_cache.as_ref().expect("tabulated");
@@ -819,16 +825,25 @@ impl GpuCrowd {
     }
 }
 
+/// The field enlarged for the paths as `crowd_sim::Crowd::new` enlarges it (returns the size asked
+/// for when it was), and refused likewise beyond `crowd_sim::MAX_FIELD_M`.
+fn fit_field(plan: &PathPlan, config: &mut CrowdConfig) -> Result<Option<f32>, GpuError> {
+    let enlarged_from = plan.fit_field(&mut config.field_size_m);
+    if config.field_size_m > crowd_sim::MAX_FIELD_M {
+        return Err(crowd_sim::CrowdError::FieldTooLarge {
+            needed_m: config.field_size_m,
+        }
+        .into());
+    }
+    Ok(enlarged_from)
+}
+
 /// The CPU crowd's checks of the settings the GPU crowd uses, and the settings it does not
 /// implement.
 fn check_config(c: &CrowdConfig) -> Result<(), GpuError> {
+    // Also the walker cap, `crowd_sim::MAX_WALKERS` (2^31 - 1: walker indices and counts in 32
+    // bits, as the shaders keep them).
     c.validate()?;
-    if c.walkers > u32::MAX as usize / 2 {
-        return Err(GpuError::Config(format!(
-            "{} walkers: at most 2^31",
-            c.walkers
-        )));
-    }
     if c.seam_levels > 0 || c.foot_lock_levels > 0 {
         return Err(GpuError::Config(format!(
             "seam_levels = {} and foot_lock_levels = {}: the GPU crowd has no seam \
@@ -838,4 +853,50 @@ fn check_config(c: &CrowdConfig) -> Result<(), GpuError> {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crowd_sim::ClipSource;
+    use crowd_sim::testing::ProceduralSource;
+
+    fn config(walkers: usize, field_size_m: f32, border_m: f32) -> CrowdConfig {
+        CrowdConfig {
+            walkers,
+            field_size_m,
+            border_m,
+            seam_levels: 0,
+            foot_lock_levels: 0,
+            ..CrowdConfig::default()
+        }
+    }
+
+    /// The walker and field caps of the CPU crowd, before anything reaches the GPU.
+    #[test]
+    fn walker_and_field_caps_are_the_cpu_crowds() {
+        assert!(check_config(&config(crowd_sim::MAX_WALKERS, 100.0, 2.0)).is_ok());
+        for walkers in [crowd_sim::MAX_WALKERS + 1, usize::MAX] {
+            assert!(matches!(
+                check_config(&config(walkers, 100.0, 2.0)),
+                Err(GpuError::Crowd(
+                    crowd_sim::CrowdError::TooManyWalkers { .. }
+                ))
+            ));
+        }
+        assert!(matches!(
+            check_config(&config(10, 1e20, 2.0)),
+            Err(GpuError::Crowd(crowd_sim::CrowdError::AboveLimit { .. }))
+        ));
+        let range = ProceduralSource::new().control_range();
+        let mut small = config(10, 4.0, 2.0);
+        let plan = PathPlan::new(&range, small.border_m);
+        assert_eq!(fit_field(&plan, &mut small).unwrap(), Some(4.0));
+        let mut huge_border = config(10, 100.0, 1e30);
+        let plan = PathPlan::new(&range, huge_border.border_m);
+        assert!(matches!(
+            fit_field(&plan, &mut huge_border),
+            Err(GpuError::Crowd(crowd_sim::CrowdError::FieldTooLarge { .. }))
+        ));
+    }
 }

@@ -15,13 +15,20 @@ use crate::error::GpuError;
 use crate::tables::POLICY_MAX;
 
 /// The details a policy gives, as `(first distance, detail)` runs: visible walkers, then hidden.
+///
+/// Made by [`PolicyTable::new`] only (the fields are private), so that both run lists hold at
+/// least one run, the first at distance 0, in increasing distance:
+///
+/// ```compile_fail
+/// let empty = gpu_crowd::PolicyTable { visible: vec![], hidden: vec![] };
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct PolicyTable {
     /// Runs for walkers in view: the detail of entry `k` holds from its distance (m) up to the
     /// next entry's; the first starts at 0.
-    pub visible: Vec<(f32, Detail)>,
+    visible: Vec<(f32, Detail)>,
     /// Runs for walkers out of view.
-    pub hidden: Vec<(f32, Detail)>,
+    hidden: Vec<(f32, Detail)>,
 }
 
 /// The distances of the sweep (see the module documentation), increasing from 0.
@@ -98,7 +105,18 @@ impl PolicyTable {
         Ok(table)
     }
 
-    /// The detail at `distance_m` (what the shaders look up).
+    /// Runs for walkers in view: the detail of entry `k` holds from its distance (m) up to the
+    /// next entry's; the first starts at 0 (never empty).
+    pub fn visible(&self) -> &[(f32, Detail)] {
+        &self.visible
+    }
+
+    /// Runs for walkers out of view, as [`PolicyTable::visible`] (never empty).
+    pub fn hidden(&self) -> &[(f32, Detail)] {
+        &self.hidden
+    }
+
+    /// The detail at `distance_m` (what the shaders look up; the first run's below 0 or at NaN).
     pub fn detail(&self, distance_m: f32, visible: bool) -> Detail {
         let runs = if visible { &self.visible } else { &self.hidden };
         runs.iter()
@@ -147,6 +165,14 @@ mod tests {
             .unwrap()
             .0;
         assert_eq!(boundary, 95.3);
+        // The accessors give the runs, never empty; below 0 and at NaN the first run holds.
+        assert_eq!(table.visible(), &table.visible[..]);
+        assert_eq!(table.hidden(), &[(0.0, Detail::new(3, 0))][..]);
+        assert_eq!(table.visible()[0], (0.0, Detail::new(0, 10)));
+        for d in [-1.0, f32::NAN, f32::NEG_INFINITY] {
+            assert_eq!(table.detail(d, true), Detail::new(0, 10));
+            assert_eq!(table.detail(d, false), Detail::new(3, 0));
+        }
         let bad = |_: f32, _: bool, _: &ViewParams| Detail::new(9, 0);
         assert!(matches!(
             PolicyTable::new(&bad, &view, 4, 10),

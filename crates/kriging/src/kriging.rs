@@ -930,7 +930,7 @@ pub(crate) fn check_query(
 /// `Ok` when every entry of a query's result is finite, else [`KrigingError::Overflow`] naming
 /// `what` and the first non-finite column (a query so far from the samples that the variogram
 /// or the trend overflows).
-fn check_result(what: &str, out: &[f64]) -> Result<(), KrigingError> {
+pub(crate) fn check_result(what: &str, out: &[f64]) -> Result<(), KrigingError> {
     match out.iter().position(|v| !v.is_finite()) {
         None => Ok(()),
         Some(j) => Err(KrigingError::Overflow {

@@ -5,7 +5,7 @@ use faer::MatRef;
 use serde::{Deserialize, Serialize};
 
 use crate::error::KrigingError;
-use crate::kriging::{Kriging, check_query, variogram_column};
+use crate::kriging::{Kriging, check_query, check_result, variogram_column};
 use crate::scaling::ParamScaling;
 use crate::variogram::Variogram;
 
@@ -94,6 +94,10 @@ impl ProjectedQuery {
 
     /// `out = L b(c) = Q [gamma(c); 1]`. `gamma_scratch` must hold S+1 entries (it receives
     /// `[gamma(c); 1]`), `out` R entries. No allocation.
+    ///
+    /// Errors: a query of the wrong dimension or not finite, buffers of the wrong length, and a
+    /// result that is not finite ([`KrigingError::Overflow`], a query so far from the samples that
+    /// the variogram overflows; `out` then holds what was computed).
     pub fn query(
         &self,
         c: &[f64],
@@ -120,7 +124,7 @@ impl ProjectedQuery {
         for (o, row) in out.iter_mut().zip(self.matrix.chunks_exact(s + 1)) {
             *o = dot(row, gamma_scratch);
         }
-        Ok(())
+        check_result("the projected weights", out)
     }
 
     /// Number of rows R of `L`.

@@ -167,6 +167,38 @@ fn predictions_are_never_ok_nan() {
     }
 }
 
+#[test]
+fn projected_queries_are_never_ok_nan() {
+    // The runtime's hot path (`L b(c)` without the weights): the same overflow as `weights`.
+    let cfg = given(
+        Variogram::new(VariogramModel::Linear, 0.0, 1.0, 0.0, 1.0).unwrap(),
+        Method::Regression,
+    );
+    let k = Kriging::fit(line(6).as_ref(), vcol(6).as_ref(), &cfg).unwrap();
+    let l = Mat::from_fn(2, 6, |r, i| if r == 0 { 1.0 } else { i as f64 });
+    let pq = ProjectedQuery::new(&k, l.as_ref()).unwrap();
+    let (mut scratch, mut out) = (vec![0.0; 7], [0.0; 2]);
+    let mut overflowed = 0;
+    for q in [1e300, 1e307, f64::MAX, -f64::MAX] {
+        match pq.query(&[q], &mut scratch, &mut out) {
+            Ok(()) => assert!(out.iter().all(|v| v.is_finite()), "{q}: {out:?}"),
+            Err(KrigingError::Overflow { what, .. }) => {
+                assert!(what.contains("projected weights"), "{what}");
+                overflowed += 1;
+            }
+            Err(e) => panic!("{q}: {e}"),
+        }
+    }
+    assert!(overflowed > 0);
+    // An ordinary query: L b(c), as the weights give it.
+    pq.query(&[2.5], &mut scratch, &mut out).unwrap();
+    let mut b = [0.0; 6];
+    k.weights(&[2.5], &mut b).unwrap();
+    assert!((out[0] - 1.0).abs() < 1e-12, "{out:?}");
+    let lb: f64 = (0..6).map(|i| i as f64 * b[i]).sum();
+    assert!((out[1] - lb).abs() < 1e-9, "{out:?} against {lb}");
+}
+
 // --- 2. Size parameters ------------------------------------------------------------------------
 
 #[test]

@@ -88,13 +88,17 @@ impl CycleFrame {
         )
     }
 
-    /// Places the root of `pose` (a pose vector of this cycle frame, at least 6 rows) in the world:
+    /// Places the root of `pose` (a pose vector of this cycle frame, at least 6 rows; a shorter
+    /// one is left as it is) in the world:
     /// rows `0..3` become the world position ([`CycleFrame::to_world`], rounded to single
     /// precision: for poses near the origin, such as a synthesized take written to a file; far
     /// from it keep the frame and the pose apart), rows `3..6` the exponential map of the world
     /// orientation (the frame's rotation times the root's). The other rows are local and stay as
     /// they are.
     pub fn place_root(&self, pose: &mut [f32]) {
+        if pose.len() < 6 {
+            return;
+        }
         let root = self.to_world(Vec3::from_slice(&pose[0..3])).as_vec3();
         let orient = self.rotation() * exp_map_to_quat(Vec3::from_slice(&pose[3..6]));
         pose[0..3].copy_from_slice(&root.to_array());
@@ -172,15 +176,21 @@ impl PoseState {
     }
 
     /// Sets the state to `pose` with the velocity from `earlier` to `later`, two poses `h` seconds
-    /// apart (finite differences; `pose` is usually one of them). `h > 0`.
+    /// apart (finite differences; `pose` is usually one of them). Sets the rows all four slices
+    /// (`pose`, `earlier`, `later` and this state's `pose` and `velocity`) hold. An `h` that is not
+    /// finite and positive (two poses at the same time) gives zero velocity.
     pub fn set(&mut self, pose: &[f32], earlier: &[f32], later: &[f32], h: f32) {
         let n = pose
             .len()
             .min(earlier.len())
             .min(later.len())
-            .min(self.pose.len());
-        debug_assert!(h > 0.0);
+            .min(self.pose.len())
+            .min(self.velocity.len());
         self.pose[..n].copy_from_slice(&pose[..n]);
+        if !(h.is_finite() && h > 0.0) {
+            self.velocity[..n].fill(0.0);
+            return;
+        }
         for ((v, &a), &b) in self.velocity[..n].iter_mut().zip(later).zip(earlier) {
             *v = (a - b) / h;
         }
@@ -194,9 +204,9 @@ impl PoseState {
 
     /// Re-expresses the state, given in a cycle frame, in the frame after `motion` (the next cycle's):
     /// root position `R_y(-turn) (p - (dx, 0, dz))`, orientation `R_y(-turn) q`, and the velocities
-    /// rotated likewise.
+    /// rotated likewise. A state of fewer than 6 pose or velocity rows is left as it is.
     pub fn into_next_frame(&mut self, motion: &RootMotion) {
-        if self.pose.len() < 6 {
+        if self.pose.len() < 6 || self.velocity.len() < 6 {
             return;
         }
         let r = Quat::from_rotation_y(-motion.turn);
@@ -251,9 +261,10 @@ impl SeamTransition {
     }
 
     /// Stops the transition once its offset has decayed below `1e-4` of its start (`t` seconds after
-    /// the seam); returns whether it is still active.
+    /// the seam; an infinite `t` finishes it); returns whether it is still active.
     pub fn finish_after(&mut self, t: f32) -> bool {
-        if self.active && (1.0 + self.decay * t) * (-self.decay * t).exp() < 1e-4 {
+        let x = self.decay * t;
+        if self.active && (x == f32::INFINITY || (1.0 + x) * (-x).exp() < 1e-4) {
             self.clear();
         }
         self.active
@@ -261,12 +272,15 @@ impl SeamTransition {
 
     /// Starts a transition from `prev` (the displayed state at the seam, already in the next clip's
     /// cycle frame, see [`PoseState::into_next_frame`]) to `next` (the next clip's own state at the
-    /// seam). Only the first `rows` rows are blended (both clips evaluate at least that many).
+    /// seam). Only the first `rows` rows are blended (both clips evaluate at least that many; at
+    /// most the rows every pose and velocity of the two states holds).
     pub fn start(&mut self, prev: &PoseState, next: &PoseState, rows: usize) {
         let rows = rows
             .min(self.offset.len())
             .min(prev.pose.len())
-            .min(next.pose.len());
+            .min(next.pose.len())
+            .min(prev.velocity.len())
+            .min(next.velocity.len());
         for r in 0..rows {
             let (x, v) = if r == TIME_ROW || (3..6).contains(&r) {
                 (0.0, 0.0)
@@ -312,12 +326,16 @@ impl SeamTransition {
     }
 
     /// Applies the transition `t` seconds after the seam to the next clip's pose (its first `rows`
-    /// rows, in its cycle frame). Does nothing when no transition is active.
+    /// rows, in its cycle frame). Does nothing when no transition is active, or when `t` is so
+    /// large that the transition has decayed completely (`decay t` infinite).
     pub fn apply(&self, t: f32, pose: &mut [f32]) {
         if !self.active {
             return;
         }
         let t = t.max(0.0);
+        if !(self.decay * t).is_finite() {
+            return;
+        }
         let e = (-self.decay * t).exp();
         let (a, b) = ((1.0 + self.decay * t) * e, t * e);
         let rows = self.rows.min(pose.len());
@@ -399,6 +417,15 @@ impl SeamScratch {
     where
         F: FnMut(f32, &mut [f32]) -> Result<usize, E>,
     {
+        // A time that is not finite reads as the clip's start (NaN, -inf) or end (+inf); a time so
+        // large that the window collapses (`t - h == t`) gives zero velocity (`PoseState::set`).
+        let t = if t.is_finite() {
+            t
+        } else if t > 0.0 && duration.is_finite() {
+            duration
+        } else {
+            0.0
+        };
         let (t0, t1) = difference_window(t, duration, h);
         let rows = pose_at(t0, a)?.min(pose_at(t1, b)?);
         let at = if t1 == t { &*b } else { &*a };
@@ -410,7 +437,9 @@ impl SeamScratch {
     /// pose the character shows at clip time `t` (the clip's pose with any running transition
     /// applied) and returns how many rows it wrote. With `motion` (a seam at the end of a cycle) the
     /// state is re-expressed in the next cycle frame ([`PoseState::into_next_frame`]); without (a
-    /// change of detail mid-cycle) it stays in the current frame.
+    /// change of detail mid-cycle) it stays in the current frame. A `t` that is not finite reads
+    /// as 0 (NaN, -infinity) or `duration` (+infinity); at a `t` so large that single precision
+    /// cannot step back from it, the velocity is zero.
     pub fn capture<E, F>(
         &mut self,
         t: f32,
@@ -439,7 +468,8 @@ impl SeamScratch {
 
     /// Starts `transition` from the captured state to the incoming clip at its time `t` (of its
     /// `duration`; `pose_at(t, out)` writes the clip's own pose and returns the rows written). The
-    /// transition then applies over the rows both clips hold, with its clock at 0 at `t`.
+    /// transition then applies over the rows both clips hold, with its clock at 0 at `t`. A `t`
+    /// that is not finite or very large is read as [`SeamScratch::capture`] reads it.
     pub fn start<E, F>(
         &mut self,
         t: f32,

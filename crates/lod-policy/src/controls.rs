@@ -85,9 +85,12 @@ impl StyleMix {
 
     /// The normalised weights of the first `n` styles (`n <= MAX_STYLES`) into `out[..n]`: the
     /// weights over their sum, or `data_mix` when they are all 0. `None` when a weight is not
-    /// finite and non-negative ([`StyleMix::problem`]).
+    /// finite and non-negative ([`StyleMix::problem`]), or when `n > MAX_STYLES` or `out` or
+    /// `data_mix` is shorter than `n` (nothing is written then).
     pub fn normalised(&self, n: usize, data_mix: &[f32], out: &mut [f32]) -> Option<()> {
-        debug_assert!(n <= MAX_STYLES && out.len() >= n && data_mix.len() >= n);
+        if n > MAX_STYLES || out.len() < n || data_mix.len() < n {
+            return None;
+        }
         let w = &self.weights[..n];
         if w.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
             return None;
@@ -156,13 +159,29 @@ impl Controls {
 }
 
 /// Clamps one control value into `[lo, hi]`; NaN becomes the midpoint. The one clamp of controls
-/// into a model's range ([`ControlRange::clamp`]).
+/// into a model's range ([`ControlRange::clamp`]). Never panics: for a valid range this is
+/// `f32::clamp` bit for bit (the same two comparisons, so `-0.0` and `+0.0` are kept as they
+/// come); an inverted range (`lo > hi`) gives `hi`, and a NaN bound is ignored.
 pub fn clamp_control(v: f32, lo: f32, hi: f32) -> f32 {
     if v.is_nan() {
         0.5 * (lo + hi)
     } else {
-        v.clamp(lo, hi)
+        clamp_unchecked(v, lo, hi)
     }
+}
+
+/// `f32::clamp`'s comparisons without its assertion (`lo <= hi`, neither NaN): the same bits for
+/// a valid range, no panic for another.
+#[inline]
+pub(crate) fn clamp_unchecked(v: f32, lo: f32, hi: f32) -> f32 {
+    let mut x = v;
+    if x < lo {
+        x = lo;
+    }
+    if x > hi {
+        x = hi;
+    }
+    x
 }
 
 /// A per-dimension range of controls, e.g. what a model's training data cover.
@@ -175,8 +194,9 @@ pub struct ControlRange {
 }
 
 impl ControlRange {
-    /// Each control clamped into `[min, max]` ([`clamp_control`]: NaN becomes the midpoint); the
-    /// style is kept as it is.
+    /// Each control clamped into `[min, max]` ([`clamp_control`]: NaN becomes the midpoint; never
+    /// panics, also for an inverted or NaN range, see [`ControlRange::problem`]); the style is kept
+    /// as it is.
     pub fn clamp(&self, c: &Controls) -> Controls {
         let (v, lo, hi) = (c.to_array(), self.min.to_array(), self.max.to_array());
         Controls::from_array(std::array::from_fn(|k| clamp_control(v[k], lo[k], hi[k])))

@@ -95,6 +95,7 @@ pub enum ModelError {
 
 /// Why a clip kernel could not be built.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum KernelError {
     /// The control vector has the wrong length.
     #[error("controls: expected {expected} values, found {found}")]
@@ -163,13 +164,30 @@ pub enum KernelError {
         /// The phase given.
         phase: f32,
     },
-    /// The kernel or scratch was preallocated for a different (smaller) model.
+    /// The kernel or scratch was preallocated for a different (smaller) model, or the kernel
+    /// was built by another model (its ranks or rows exceed those of this model's level).
     #[error("{what} was allocated for a different model ({detail})")]
     Capacity {
         /// `kernel` or `scratch`.
         what: &'static str,
         /// Which size does not fit.
         detail: String,
+    },
+    /// [`crate::LodModel::build_kernel`]: the model's values are so large that the clip for these
+    /// controls overflows (a kriging weight, an entry of `G(c)` that could make a pose infinite,
+    /// the clip's duration or its root motion is not finite). The model passed validation but
+    /// cannot animate these controls; the kernel is left unbuilt (it reads as
+    /// [`crate::ClipKernel::new`]'s does).
+    #[error(
+        "clip overflows: {what} at element {index} is {value} (the model's values are too large)"
+    )]
+    Overflow {
+        /// What overflowed: `kriging weights`, `G(c)`, `duration` or `root motion`.
+        what: &'static str,
+        /// Index of the first bad element.
+        index: usize,
+        /// Its value.
+        value: f64,
     },
 }
 
@@ -186,6 +204,7 @@ pub struct VariogramError {
 /// Why a [`crate::Rig`] could not be built, or forward kinematics could not run on the buffers
 /// given.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum RigError {
     /// A joint (or the rig as a whole) does not fit the rig's rules.
     #[error("joint {joint} ({name}): {reason}")]
@@ -221,4 +240,26 @@ pub enum RigError {
     /// The body scale is not a finite positive number.
     #[error("body scale {0} is not a finite positive number")]
     Scale(f32),
+    /// A pose row forward kinematics reads is NaN, infinite or larger in magnitude than
+    /// [`crate::MAX_POSE_VALUE`].
+    #[error(
+        "pose row {row} is {value}: the rows forward kinematics reads must be finite and at most 1e18 in magnitude"
+    )]
+    PoseValue {
+        /// The row.
+        row: usize,
+        /// Its value.
+        value: f32,
+    },
+    /// The root's distance from the origin plus the rig's longest chain of bones at the body
+    /// scale is so large that joint positions could overflow single precision.
+    #[error(
+        "root and bones reach {reach_m} m at body scale {scale}: joint positions would overflow"
+    )]
+    Overflow {
+        /// The body scale.
+        scale: f32,
+        /// The root's largest coordinate plus the longest chain of bones at `scale`, in metres.
+        reach_m: f64,
+    },
 }

@@ -398,8 +398,8 @@ impl FootLock {
     /// into `pose` (module documentation).
     ///
     /// Validates and then runs: a non-positive `dt`, a body scale that is not finite and positive,
-    /// feet that do not fit the rig, or a pose shorter than its active rows is an error and changes
-    /// nothing. No allocation for rigs of up to 128 joints (`STACK_JOINTS`).
+    /// feet that do not fit the rig, a pose shorter than its active rows or with a row among them
+    /// that is not finite (or beyond [`crate::MAX_POSE_VALUE`]) is an error and changes nothing. No allocation for rigs of up to 128 joints (`STACK_JOINTS`).
     #[allow(clippy::too_many_arguments)]
     pub fn apply(
         &mut self,
@@ -415,6 +415,8 @@ impl FootLock {
             return Err(FootLockError::FrameStep(dt));
         }
         let legs = feet.legs(rig).map_err(FootLockError::Feet)?;
+        // (Forward kinematics checks the pose too; a detail that evaluates no leg skips it.)
+        rig.check_pose(pose, active_joints)?;
         let active = active_joints.min(rig.rotating_joints().len());
         let leg_evaluated = |leg: &Leg| {
             [leg.thigh, leg.knee, leg.ankle]

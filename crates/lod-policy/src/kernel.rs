@@ -231,13 +231,35 @@ impl ClipKernel {
     /// such kernels in a few sizes and lends each walker one of the size its detail needs, so that
     /// a walker that comes near or goes far exchanges kernels instead of resizing one. Until it is
     /// built it reads as [`ClipKernel::new`]'s does.
+    ///
+    /// `entries` is capped at the most any build of `model` needs (`P x max R_T`), so that a
+    /// huge request neither overflows nor allocates more than the model can use.
     pub fn compact_holding(model: &LodModel, entries: usize) -> ClipKernel {
         let mut kernel = ClipKernel::compact(model);
+        let most = model.p().saturating_mul(model.max_ranks().t);
         kernel
             .g
-            .reserve_exact(entries.saturating_sub(kernel.g.len()));
+            .reserve_exact(entries.min(most).saturating_sub(kernel.g.len()));
         kernel.keeps = true;
         kernel
+    }
+
+    /// Puts a kernel whose build failed part-way back to the unbuilt state of
+    /// [`ClipKernel::new`] (the smallest level, `G = 0`, no time table), keeping its buffer.
+    fn reset_unbuilt(&mut self, model: &LodModel) {
+        let last = model.levels().len() - 1;
+        self.detail = model.root_only();
+        self.ranks = model.levels()[last].ranks;
+        self.rows = model.always_rows();
+        self.clamped = false;
+        self.frames_per_second = 0.0;
+        let need = self.rows * self.ranks.t;
+        if self.g.len() < need {
+            self.g.resize(need, 0.0);
+        }
+        self.g.fill(0.0);
+        self.times.clear();
+        self.root_motion = RootMotion::default();
     }
 
     /// Whether the kernel is sized per level ([`ClipKernel::compact`]).
@@ -339,7 +361,7 @@ impl ClipKernel {
             k += 1;
         }
         let (t0, t1) = (times[k], times[k + 1]);
-        let f = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+        let f = crate::time_table::interval_fraction(t, t0, t1);
         (k as u32 as f64 + f) as f32
     }
 }
@@ -783,7 +805,11 @@ impl LodModel {
     /// Controls outside the data's `[min, max]` are clamped (reported by
     /// [`ClipKernel::clamped`]); NaN or infinite controls, a model whose control space is not the
     /// walk's ([`Controls::COUNT`] dimensions) or an unknown accuracy level are errors. Active
-    /// joints above the model's count mean all joints. Cost
+    /// joints above the model's count are an error ([`KernelError::Joints`], as
+    /// [`LodModel::check_detail`] says). A model whose values are so large that the clip
+    /// overflows (a kriging weight, `G(c)`, the duration or the root motion would not be finite,
+    /// or a pose could be) is an error too ([`KernelError::Overflow`]; the kernel is then left
+    /// unbuilt). Cost
     /// `O((R_S + d) S + r_P r_T r_S + P' r_P r_T + T r_T)`, see [`LodModel::kernel_cost`].
     pub fn build_kernel(
         &self,
@@ -1122,6 +1148,15 @@ impl LodModel {
 
         // 1-4. The sample-mode kriging weights w (first r_S) into scratch.w.
         let clamped = self.weights_body::<AVX2>(controls, lv.key, r.s, scratch, column_order);
+        // (A weight that is not finite: the model's projections or variogram overflow for these
+        // controls. `O(r_S)`, before anything is written to `out`.)
+        if let Some(index) = scratch.w[..r.s].iter().position(|w| !w.is_finite()) {
+            return Err(KernelError::Overflow {
+                what: "kriging weights",
+                index,
+                value: f64::from(scratch.w[index]),
+            });
+        }
 
         // 5. K(c) = Z[:r_P, :r_T, :r_S] x_3 w, stored r_P x r_T column-major: each entry sums its
         //    `r_S` terms in order from 0. When the level keeps the key's whole `r_P x r_T` slab (a
@@ -1154,6 +1189,28 @@ impl LodModel {
             let kcol = &kmat[r.p * b..][..r.p];
             combine_columns(gcol, kcol, &key.u_p, p);
         }
+        // A pose sums `r_T` products of an entry of `G` with a time weight of at most the key's
+        // largest `|U_T|`: entries within `limit` keep every pose (and the difference of two, the
+        // root motion) finite. One pass over what was just written (building it took `r_P` times
+        // as long); NaN and infinity fail the test too.
+        let limit = 0.25 * f64::from(f32::MAX)
+            / (r.t.max(1) as f64 * f64::from(self.u_t_max(lv.key)).max(1.0));
+        let limit = limit as f32;
+        // (A branch-free fold, which the compiler vectorises; the position only on failure.)
+        let within = g.iter().fold(true, |ok, v| ok & (v.abs() <= limit));
+        if !within {
+            let index = g
+                .iter()
+                .position(|v| v.is_nan() || v.abs() > limit)
+                .unwrap_or(0);
+            let value = f64::from(g[index]);
+            out.reset_unbuilt(self);
+            return Err(KernelError::Overflow {
+                what: "G(c)",
+                index,
+                value,
+            });
+        }
 
         // 7. Time table from the time-increment row at every aligned frame:
         //    dt_j = G[6, :] . U_T[j, :r_T] / time_scale.
@@ -1170,7 +1227,16 @@ impl LodModel {
             }
         }
         out.times.fill_scaled(dt, inv_scale);
-        out.frames_per_second = ((t - 1) as f64 / out.times.duration()) as f32;
+        let duration = out.times.duration();
+        if !duration.is_finite() {
+            out.reset_unbuilt(self);
+            return Err(KernelError::Overflow {
+                what: "duration",
+                index: t - 1,
+                value: duration,
+            });
+        }
+        out.frames_per_second = ((t - 1) as f64 / duration) as f32;
 
         out.detail = detail;
         out.ranks = r;
@@ -1189,7 +1255,17 @@ impl LodModel {
             self.root_pose_body::<false>(out, phase, e)?;
         }
         let [start, end] = ends;
-        out.root_motion = self.controls().root_motion_of(controls, &start, &end);
+        let motion = self.controls().root_motion_of(controls, &start, &end);
+        let parts = [motion.dx, motion.dz, motion.turn];
+        if let Some(index) = parts.iter().position(|v| !v.is_finite()) {
+            out.reset_unbuilt(self);
+            return Err(KernelError::Overflow {
+                what: "root motion",
+                index,
+                value: f64::from(parts[index]),
+            });
+        }
+        out.root_motion = motion;
         Ok(())
     }
 
@@ -1316,8 +1392,23 @@ impl LodModel {
         if !phase.is_finite() {
             return Err(KernelError::NonFinitePhase { phase });
         }
-        let key_index = self.levels()[kernel.detail.accuracy].key;
-        Ok((key_index, blend_at(phase, self.t())))
+        let level = &self.levels()[kernel.detail.accuracy];
+        // A kernel another model built (the same `P` and `T`) may hold more ranks or rows than
+        // this model's level: its `G` would be read against rows of `U_T` that do not exist.
+        if !kernel.ranks.fits_in(&level.ranks) || kernel.rows > self.p() {
+            return Err(KernelError::Capacity {
+                what: "kernel",
+                detail: format!(
+                    "kernel built with ranks {:?} and {} rows; this model's level {} has ranks {:?}, P = {}",
+                    kernel.ranks,
+                    kernel.rows,
+                    kernel.detail.accuracy,
+                    level.ranks,
+                    self.p()
+                ),
+            });
+        }
+        Ok((level.key, blend_at(phase, self.t())))
     }
 
     /// The AVX2 build of [`LodModel::pose_rows_body`] (see [`Isa`]).

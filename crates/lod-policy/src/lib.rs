@@ -109,7 +109,7 @@ pub use policy::{
 // 4. Per frame: the pose at the clip's phase (`LodModel::pose`), then local rotations or model-space
 //    transforms (`Rig`), and the foot lock on the pose.
 pub use footlock::{Foot, FootLock, FootLockError, FootRig};
-pub use rig::{JointRole, JointTransform, Rig, RigJoint};
+pub use rig::{JointRole, JointTransform, MAX_OFFSET_M, MAX_POSE_VALUE, Rig, RigJoint};
 
 // 5. At a cycle's end: chain to the next cycle (the cycle frame moves by the clip's root motion),
 //    optionally with an inertialized seam.

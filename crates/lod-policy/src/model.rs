@@ -10,7 +10,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::chain::RootMotion;
-use crate::controls::{Controls, MAX_STYLES};
+use crate::controls::{Controls, MAX_STYLES, clamp_unchecked};
 
 /// The longest raw control vector of a walk model: the four controls and [`MAX_STYLES`] style
 /// weights ([`LodModel::control_vector`]).
@@ -136,7 +136,8 @@ impl ControlSpace {
     /// `end` (rows 0-5: root position and exponential map): the root's ground displacement, and
     /// the travel turn, the turn control as [`ControlSpace::implied`] reads it (the pelvis's yaw
     /// change for a control space without a turn dimension). The one rule every clip source
-    /// chains by ([`crate::CycleFrame::next`]).
+    /// chains by ([`crate::CycleFrame::next`]). `start` and `end` need at least 6 rows; with fewer,
+    /// or a hand-built control space whose vectors disagree in length, the motion is zero.
     pub fn root_motion(&self, controls: &Controls, start: &[f32], end: &[f32]) -> RootMotion {
         let (values, d) = self.values_lossy(controls);
         self.root_motion_of(&values[..d], start, end)
@@ -217,13 +218,27 @@ impl ControlSpace {
         }
     }
 
+    /// Whether the vectors of this control space agree in length (`offset`, `min` and `max` of
+    /// `scale`'s `d`, `samples` a multiple of `d`, `implied` empty or `d (d + 1)`), as
+    /// [`LodModel::new`] checks them: the readers of a hand-built control space that fails this
+    /// return their neutral values instead of indexing out of range.
+    fn lengths_agree(&self) -> bool {
+        let d = self.scale.len();
+        self.offset.len() == d
+            && self.min.len() == d
+            && self.max.len() == d
+            && (d == 0 || self.samples.len() % d == 0)
+            && (self.implied.is_empty() || Some(self.implied.len()) == d.checked_mul(d + 1))
+    }
+
     /// The data's mix of styles: each style dimension's raw sample mean (`scaled / scale + offset`,
-    /// each style's share of the samples), zeros beyond [`ControlSpace::style_count`].
+    /// each style's share of the samples), zeros beyond [`ControlSpace::style_count`] (all zeros for
+    /// a hand-built control space whose vectors disagree in length).
     pub fn data_style_mix(&self) -> [f32; MAX_STYLES] {
         let mut mix = [0.0f32; MAX_STYLES];
         let n = self.style_count();
         let d = self.scale.len();
-        if n == 0 || self.samples.is_empty() || self.samples.len() % d != 0 {
+        if n == 0 || self.samples.is_empty() || !self.lengths_agree() {
             return mix;
         }
         let s = self.samples.len() / d;
@@ -251,6 +266,9 @@ impl ControlSpace {
         end: &[f32],
     ) -> RootMotion {
         use crate::kernel::{TURN_CONTROL, yaw_of_exp_map};
+        if start.len() < 6 || end.len() < 6 || !self.lengths_agree() {
+            return RootMotion::default();
+        }
         let turn = if self.scale.len() > TURN_CONTROL && controls.len() > TURN_CONTROL {
             self.implied_of(TURN_CONTROL, controls)
         } else {
@@ -269,8 +287,8 @@ impl ControlSpace {
     /// ignores it) over `stature_m`, the rig's standing height measured the same way. The bones
     /// below the root then have the length of a performer of that height (the root's position is
     /// the pose's, kriged in metres). Exactly 1 when the data hold one height (the rig is theirs),
-    /// the control space has no height dimension, `stature_m` is `None`, or the ratio is not finite
-    /// and positive.
+    /// the control space has no height dimension, `stature_m` is `None`, the ratio is not finite
+    /// and positive, or a hand-built control space's vectors disagree in length.
     pub fn body_scale(&self, stature_m: Option<f32>, c: &Controls) -> f32 {
         let (values, d) = self.values_lossy(c);
         self.body_scale_of(stature_m, &values[..d])
@@ -282,7 +300,11 @@ impl ControlSpace {
         let Some(stature) = stature_m else {
             return 1.0;
         };
-        if self.scale.len() <= k || c.len() < self.scale.len() || self.min[k] == self.max[k] {
+        if self.scale.len() <= k
+            || c.len() < self.scale.len()
+            || !self.lengths_agree()
+            || self.min[k] == self.max[k]
+        {
             return 1.0;
         }
         let s = self.implied_of(k, c) / stature;
@@ -291,8 +313,9 @@ impl ControlSpace {
 
     /// The value of dimension `k` that the controls `c` (each clamped to the data's range here)
     /// imply: `c_k` itself for a kept dimension, else the least-squares prediction from the kept
-    /// ones ([`ControlSpace::implied`] field), clamped to the data's range of `c_k`. `k` must be a
-    /// dimension of the control space, which must be the walk's.
+    /// ones ([`ControlSpace::implied`] field), clamped to the data's range of `c_k`. `k` is a
+    /// dimension of the control space, which is the walk's: for a `k` beyond its dimensions, or a
+    /// hand-built control space whose vectors disagree in length, the result is 0.
     pub fn implied(&self, k: usize, c: &Controls) -> f32 {
         let (values, d) = self.values_lossy(c);
         self.implied_of(k, &values[..d])
@@ -307,8 +330,10 @@ impl ControlSpace {
 
     pub(crate) fn implied_of(&self, k: usize, c: &[f32]) -> f32 {
         let d = self.scale.len();
-        debug_assert!(k < d && c.len() >= d);
-        let clamp = |j: usize| c[j].clamp(self.min[j], self.max[j]);
+        if k >= d || c.len() < d || !self.lengths_agree() {
+            return 0.0;
+        }
+        let clamp = |j: usize| clamp_unchecked(c[j], self.min[j], self.max[j]);
         if self.scale[k] > 0.0 {
             return clamp(k);
         }
@@ -323,7 +348,7 @@ impl ControlSpace {
                 acc + beta[j] * clamp(j)
             }
         });
-        v.clamp(self.min[k], self.max[k])
+        clamp_unchecked(v, self.min[k], self.max[k])
     }
 }
 
@@ -497,6 +522,9 @@ pub struct LodModel {
     /// the two rows a pose blends are contiguous runs (derived by [`LodModel::new`]; not stored in
     /// the model file).
     time_rows: Vec<Vec<f32>>,
+    /// Each key's largest `|U_T|` entry: with it [`LodModel::build_kernel`] bounds the poses a
+    /// clip's `G(c)` can give (derived by [`LodModel::new`]; not stored in the model file).
+    u_t_max: Vec<f32>,
     /// The data's mix of styles: the mean of the samples' raw style dimensions (dimensions
     /// `Controls::COUNT..d`), each style's share of the samples; zeros beyond the model's styles
     /// (derived by [`LodModel::new`]; not stored in the model file).
@@ -740,12 +768,18 @@ impl LodModel {
                 rows
             })
             .collect();
+        let u_t_max = parts
+            .keys
+            .iter()
+            .map(|k| k.u_t.iter().fold(0.0f32, |m, &v| m.max(v.abs())))
+            .collect();
         let data_style_mix = parts.controls.data_style_mix();
         Ok(LodModel {
             parts,
             max_ranks,
             folded,
             time_rows,
+            u_t_max,
             data_style_mix,
         })
     }
@@ -1019,6 +1053,10 @@ impl LodModel {
     /// `U_T` of key `k` row-major, `T x R_T`, then eight zeros (derived by [`LodModel::new`]).
     pub(crate) fn time_rows(&self, k: usize) -> &[f32] {
         &self.time_rows[k]
+    }
+    /// Key `k`'s largest `|U_T|` entry.
+    pub(crate) fn u_t_max(&self, k: usize) -> f32 {
+        self.u_t_max[k]
     }
 
     /// Largest ranks over all keys, per mode.

@@ -99,6 +99,10 @@ pub enum PolicyError {
     /// The model has no measured error table for its accuracy levels.
     #[error("the model has no per-level error table (the screen-space policy needs one)")]
     NoErrorTable,
+    /// A deserialised policy is inconsistent (its tables disagree in length, hold NaN or negative
+    /// errors, or its costs overflow): deserialising re-runs the checks of the constructors.
+    #[error("policy data: {0}")]
+    Data(String),
 }
 
 /// Distances of the [`DistancePolicy`] (paper defaults, section 5.1).
@@ -155,7 +159,13 @@ impl Default for DistanceConfig {
 /// root-only walkers.
 ///
 /// [`LevelError::passes_quality`]: crate::model::LevelError::passes_quality
+///
+/// Serialises as its fields; deserialising re-runs the constructors' checks
+/// ([`PolicyError::Config`], [`PolicyError::Data`]). In a human-readable format (JSON) an infinite
+/// error is written as the string `"inf"` (JSON has no infinity; `null` also reads as infinity);
+/// binary formats keep the plain floats.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawDistancePolicy")]
 pub struct DistancePolicy {
     config: DistanceConfig,
     /// Fractional key-group position of each accuracy level (non-decreasing).
@@ -164,11 +174,223 @@ pub struct DistancePolicy {
     joints: usize,
     /// Visible error (m) per accuracy level (infinite for a level whose motion quality fails);
     /// empty without an error table or a screen check.
+    #[serde(with = "float_text")]
     level_err_m: Vec<f32>,
     /// Non-increasing visible error (m) per active joint count `0..=J` (empty likewise).
+    #[serde(with = "float_text")]
     joint_err_m: Vec<f32>,
     /// Cost of each detail (empty likewise).
     costs: DetailCosts,
+}
+
+/// [`DistancePolicy`]'s fields as stored (the same names and order, so the same bytes), checked
+/// by `TryFrom` before they become a policy.
+#[derive(Deserialize)]
+struct RawDistancePolicy {
+    config: DistanceConfig,
+    positions: Vec<f32>,
+    groups: usize,
+    joints: usize,
+    #[serde(with = "float_text")]
+    level_err_m: Vec<f32>,
+    #[serde(with = "float_text")]
+    joint_err_m: Vec<f32>,
+    costs: DetailCosts,
+}
+
+impl TryFrom<RawDistancePolicy> for DistancePolicy {
+    type Error = PolicyError;
+    fn try_from(raw: RawDistancePolicy) -> Result<Self, PolicyError> {
+        DistancePolicy::check(&raw.config)?;
+        let data = |m: String| PolicyError::Data(m);
+        let p = &raw.positions;
+        if p.is_empty()
+            || p.iter().any(|x| !(x.is_finite() && *x >= 0.0))
+            || p.windows(2).any(|w| w[1] < w[0])
+        {
+            return Err(data(
+                "positions must be a non-empty, non-decreasing list of finite values >= 0".into(),
+            ));
+        }
+        if raw.groups == 0 || p[p.len() - 1] >= raw.groups as f32 {
+            return Err(data(format!(
+                "groups = {} must exceed every position (the last is {})",
+                raw.groups,
+                p[p.len() - 1]
+            )));
+        }
+        if raw.level_err_m.is_empty() {
+            if !raw.joint_err_m.is_empty() {
+                return Err(data(
+                    "joint_err_m must be empty when level_err_m is (no screen check)".into(),
+                ));
+            }
+        } else {
+            if raw.level_err_m.len() != p.len() {
+                return Err(data(format!(
+                    "level_err_m holds {} levels, positions {}",
+                    raw.level_err_m.len(),
+                    p.len()
+                )));
+            }
+            check_tables(&raw.level_err_m, &raw.joint_err_m, raw.joints, &raw.costs)
+                .map_err(data)?;
+        }
+        Ok(DistancePolicy {
+            config: raw.config,
+            positions: raw.positions,
+            groups: raw.groups,
+            joints: raw.joints,
+            level_err_m: raw.level_err_m,
+            joint_err_m: raw.joint_err_m,
+            costs: raw.costs,
+        })
+    }
+}
+
+/// The error and cost tables of a deserialised policy: `level_err` and the costs one entry per
+/// level, `joint_err` one per joint count `0..=joints`, non-increasing, errors not NaN and `>= 0`
+/// (infinity allowed), and every cost computable without overflow.
+fn check_tables(
+    level_err: &[f32],
+    joint_err: &[f32],
+    joints: usize,
+    costs: &DetailCosts,
+) -> Result<(), String> {
+    let levels = level_err.len();
+    if levels == 0 {
+        return Err("level_err_m is empty".into());
+    }
+    if Some(joint_err.len()) != joints.checked_add(1) {
+        return Err(format!(
+            "joint_err_m holds {} entries for {joints} joints (one per joint count 0..=joints)",
+            joint_err.len()
+        ));
+    }
+    if let Some(e) = level_err
+        .iter()
+        .chain(joint_err)
+        .find(|e| e.is_nan() || **e < 0.0)
+    {
+        return Err(format!("an error is {e} (errors are >= 0, not NaN)"));
+    }
+    if joint_err.windows(2).any(|w| w[1] > w[0]) {
+        return Err("joint_err_m must not increase with the joint count".into());
+    }
+    if costs.level_base_cost.len() != levels || costs.level_row_cost.len() != levels {
+        return Err(format!(
+            "costs hold {} and {} levels, the error table {levels}",
+            costs.level_base_cost.len(),
+            costs.level_row_cost.len()
+        ));
+    }
+    // The largest cost of each level (every joint) fits, so every smaller one does.
+    for l in 0..levels {
+        if costs.checked_cost(l, joints).is_none() {
+            return Err(format!(
+                "the cost of level {l} with {joints} joints overflows"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Serde helper for the policies' error tables: in a human-readable format each entry is a
+/// number, or the string `"inf"`, `"-inf"` or `"NaN"` for a value JSON cannot hold (reading
+/// also takes `null` as infinity, what `serde_json` wrote before); in a binary format a plain
+/// sequence of `f32` (the same bytes as without this helper).
+mod float_text {
+    use serde::de::{self, Deserializer, SeqAccess, Visitor};
+    use serde::ser::Serializer;
+    use serde::{Deserialize, Serialize};
+
+    struct Text(f32);
+
+    impl Serialize for Text {
+        fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+            let v = self.0;
+            if v.is_finite() {
+                s.serialize_f32(v)
+            } else if v.is_nan() {
+                s.serialize_str("NaN")
+            } else if v > 0.0 {
+                s.serialize_str("inf")
+            } else {
+                s.serialize_str("-inf")
+            }
+        }
+    }
+
+    struct Entry(f32);
+
+    impl<'de> Deserialize<'de> for Entry {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Entry, D::Error> {
+            struct V;
+            impl Visitor<'_> for V {
+                type Value = Entry;
+                fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                    f.write_str("a number, \"inf\", \"-inf\", \"NaN\" or null")
+                }
+                fn visit_f64<E: de::Error>(self, v: f64) -> Result<Entry, E> {
+                    Ok(Entry(v as f32))
+                }
+                fn visit_f32<E: de::Error>(self, v: f32) -> Result<Entry, E> {
+                    Ok(Entry(v))
+                }
+                fn visit_i64<E: de::Error>(self, v: i64) -> Result<Entry, E> {
+                    Ok(Entry(v as f32))
+                }
+                fn visit_u64<E: de::Error>(self, v: u64) -> Result<Entry, E> {
+                    Ok(Entry(v as f32))
+                }
+                fn visit_str<E: de::Error>(self, v: &str) -> Result<Entry, E> {
+                    match v {
+                        "inf" | "+inf" | "Infinity" => Ok(Entry(f32::INFINITY)),
+                        "-inf" | "-Infinity" => Ok(Entry(f32::NEG_INFINITY)),
+                        "NaN" | "nan" => Ok(Entry(f32::NAN)),
+                        _ => Err(E::invalid_value(de::Unexpected::Str(v), &self)),
+                    }
+                }
+                fn visit_unit<E: de::Error>(self) -> Result<Entry, E> {
+                    Ok(Entry(f32::INFINITY))
+                }
+                fn visit_none<E: de::Error>(self) -> Result<Entry, E> {
+                    Ok(Entry(f32::INFINITY))
+                }
+            }
+            d.deserialize_any(V)
+        }
+    }
+
+    pub fn serialize<S: Serializer>(v: &[f32], s: S) -> Result<S::Ok, S::Error> {
+        if s.is_human_readable() {
+            s.collect_seq(v.iter().map(|&x| Text(x)))
+        } else {
+            v.serialize(s)
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f32>, D::Error> {
+        if d.is_human_readable() {
+            struct S;
+            impl<'de> Visitor<'de> for S {
+                type Value = Vec<f32>;
+                fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                    f.write_str("a sequence of errors")
+                }
+                fn visit_seq<A: SeqAccess<'de>>(self, mut a: A) -> Result<Vec<f32>, A::Error> {
+                    let mut out = Vec::with_capacity(a.size_hint().unwrap_or(0).min(4096));
+                    while let Some(Entry(v)) = a.next_element()? {
+                        out.push(v);
+                    }
+                    Ok(out)
+                }
+            }
+            d.deserialize_seq(S)
+        } else {
+            Vec::<f32>::deserialize(d)
+        }
+    }
 }
 
 impl DistancePolicy {
@@ -287,11 +509,9 @@ impl DistancePolicy {
         else {
             return detail;
         };
-        let mpp = view.metres_per_pixel(distance_m.max(0.0));
-        if !(mpp.is_finite() && mpp > 0.0) {
+        let Some(budget_m) = budget_m(budget_px, view, distance_m, false) else {
             return Detail::new(0, self.joints);
-        }
-        let budget_m = budget_px * mpp;
+        };
         let joints = detail.active_joints.min(self.joints);
         let level = detail.accuracy.min(self.level_err_m.len() - 1);
         if self.level_err_m[level] + self.joint_err_m[joints] <= budget_m {
@@ -351,6 +571,25 @@ impl LevelPolicy for DistancePolicy {
         };
         self.fit_screen(Detail::new(level, self.joints - dropped), distance_m, view)
     }
+}
+
+/// The budget in metres, `budget_px metres_per_pixel(distance)`, at most `f32::MAX`: `None` for a
+/// view whose metres per pixel are NaN, negative (or zero, unless `zero_ok`) at this distance. A
+/// valid view (finite positive metres per pixel at 1 m) at a distance so large that its metres
+/// per pixel overflow has the largest budget (it is that far away), not none.
+fn budget_m(budget_px: f32, view: &ViewParams, distance_m: f32, zero_ok: bool) -> Option<f32> {
+    let mut mpp = view.metres_per_pixel(distance_m.max(0.0));
+    if mpp == f32::INFINITY {
+        let unit = view.metres_per_pixel(1.0);
+        if unit.is_finite() && unit > 0.0 {
+            mpp = f32::MAX;
+        }
+    }
+    if !(mpp.is_finite() && (mpp > 0.0 || (zero_ok && mpp >= 0.0))) {
+        return None;
+    }
+    // (`min` is the identity for every finite product: the same bits.)
+    Some((budget_px * mpp).min(f32::MAX))
 }
 
 /// `v` made non-increasing by a running maximum from the end (an error that never decreases as
@@ -414,6 +653,18 @@ impl DetailCosts {
         }
     }
 
+    /// [`DetailCosts::cost`] with every step checked (`None` for a level it lacks or an
+    /// overflow): what deserialising checks once, so that `cost` never overflows.
+    fn checked_cost(&self, level: usize, joints: usize) -> Option<u64> {
+        let rows = self
+            .rows_per_joint
+            .checked_mul(joints)?
+            .checked_add(self.always_rows)?;
+        let rows = u64::try_from(rows).ok()?;
+        rows.checked_mul(*self.level_row_cost.get(level)?)?
+            .checked_add(*self.level_base_cost.get(level)?)
+    }
+
     /// Cost of level `level` (which must exist) with `joints` joints.
     fn cost(&self, level: usize, joints: usize) -> u64 {
         let rows = (self.always_rows + self.rows_per_joint * joints) as u64;
@@ -465,18 +716,64 @@ impl Default for ScreenConfig {
 /// with it.
 ///
 /// [`LevelError::passes_quality`]: crate::model::LevelError::passes_quality
+///
+/// Serialises as its fields; deserialising re-runs the constructor's checks, and infinite
+/// errors are written as in [`DistancePolicy`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawScreenSpacePolicy")]
 pub struct ScreenSpacePolicy {
     config: ScreenConfig,
     /// Per level: error in metres (infinite where the level's motion quality fails).
+    #[serde(with = "float_text")]
     level_err_m: Vec<f32>,
     /// Non-increasing error in metres per active joint count `0..=J`.
+    #[serde(with = "float_text")]
     joint_err_m: Vec<f32>,
     costs: DetailCosts,
     joints: usize,
 }
 
+/// [`ScreenSpacePolicy`]'s fields as stored (the same names and order), checked by `TryFrom`.
+#[derive(Deserialize)]
+struct RawScreenSpacePolicy {
+    config: ScreenConfig,
+    #[serde(with = "float_text")]
+    level_err_m: Vec<f32>,
+    #[serde(with = "float_text")]
+    joint_err_m: Vec<f32>,
+    costs: DetailCosts,
+    joints: usize,
+}
+
+impl TryFrom<RawScreenSpacePolicy> for ScreenSpacePolicy {
+    type Error = PolicyError;
+    fn try_from(raw: RawScreenSpacePolicy) -> Result<Self, PolicyError> {
+        ScreenSpacePolicy::check_config(&raw.config)?;
+        check_tables(&raw.level_err_m, &raw.joint_err_m, raw.joints, &raw.costs)
+            .map_err(PolicyError::Data)?;
+        Ok(ScreenSpacePolicy {
+            config: raw.config,
+            level_err_m: raw.level_err_m,
+            joint_err_m: raw.joint_err_m,
+            costs: raw.costs,
+            joints: raw.joints,
+        })
+    }
+}
+
 impl ScreenSpacePolicy {
+    fn check_config(config: &ScreenConfig) -> Result<(), PolicyError> {
+        if config.budget_px.is_finite() && config.budget_px > 0.0 {
+            Ok(())
+        } else {
+            Err(PolicyError::Config {
+                name: "budget_px",
+                value: config.budget_px,
+                rule: "finite and > 0",
+            })
+        }
+    }
+
     /// Default budget (1 px, shell error) for `model`; needs its per-level error table.
     pub fn for_model(model: &LodModel) -> Result<ScreenSpacePolicy, PolicyError> {
         Self::new(model, ScreenConfig::default())
@@ -484,13 +781,7 @@ impl ScreenSpacePolicy {
 
     /// A policy with `config` for `model`; `budget_px` must be finite and positive.
     pub fn new(model: &LodModel, config: ScreenConfig) -> Result<ScreenSpacePolicy, PolicyError> {
-        if !(config.budget_px.is_finite() && config.budget_px > 0.0) {
-            return Err(PolicyError::Config {
-                name: "budget_px",
-                value: config.budget_px,
-                rule: "finite and > 0",
-            });
-        }
+        Self::check_config(&config)?;
         if model.level_errors().len() != model.levels().len() {
             return Err(PolicyError::NoErrorTable);
         }
@@ -548,11 +839,9 @@ impl LevelPolicy for ScreenSpacePolicy {
             return Detail::new(self.level_err_m.len().saturating_sub(1), 0);
         }
         let full = Detail::new(0, self.joints);
-        let mpp = view.metres_per_pixel(distance_m.max(0.0));
-        if !(mpp.is_finite() && mpp >= 0.0) {
+        let Some(budget_m) = budget_m(self.config.budget_px, view, distance_m, true) else {
             return full;
-        }
-        let budget_m = self.config.budget_px * mpp;
+        };
         let mut best: Option<(u64, Detail)> = None;
         for (l, &e) in self.level_err_m.iter().enumerate() {
             if e > budget_m {

@@ -61,6 +61,15 @@ pub enum JointRole {
     Static,
 }
 
+/// Largest length of a joint's offset [`Rig::new`] accepts, in metres (a thousand kilometres: no
+/// body's bone comes near it, and any chain of such bones stays far inside single precision).
+pub const MAX_OFFSET_M: f32 = 1e6;
+
+/// Largest magnitude of a pose row forward kinematics reads (root position in metres, exponential
+/// maps in radians): far beyond any pose, and small enough that a rotation's length and the joint
+/// positions stay finite in single precision.
+pub const MAX_POSE_VALUE: f32 = 1e18;
+
 /// A body scale must be finite and positive.
 fn check_scale(scale: f32) -> Result<(), RigError> {
     if scale.is_finite() && scale > 0.0 {
@@ -101,6 +110,9 @@ pub struct JointTransform {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rig {
     joints: Vec<RigJoint>,
+    /// The longest chain of offsets from the root to a joint (metres, the sum of their lengths):
+    /// with it a forward-kinematics call bounds every position (derived by [`Rig::new`]).
+    reach_m: f64,
     root: usize,
     /// Rig index of rotating joint `k` of the row order.
     rotating: Vec<usize>,
@@ -143,8 +155,8 @@ impl FkOut for [JointTransform] {
 impl Rig {
     /// A validated rig: at least one joint and exactly one [`JointRole::Root`]; every joint's parent
     /// before it, and present for rotating and static joints; rotating joints numbered `0..n`, each
-    /// number once; finite offsets and unit rest rotations (within `1e-4`). Each failure names the
-    /// joint.
+    /// number once; finite offsets no longer than [`MAX_OFFSET_M`] and unit rest rotations (within
+    /// `1e-4`). Each failure names the joint.
     pub fn new(joints: Vec<RigJoint>) -> Result<Rig, RigError> {
         if joints.is_empty() {
             return Err(RigError::Structure("no joints".into()));
@@ -193,6 +205,12 @@ impl Rig {
             if !joint.offset.is_finite() {
                 return Err(bad(j, format!("offset {} is not finite", joint.offset)));
             }
+            if joint.offset.length() > MAX_OFFSET_M {
+                return Err(bad(
+                    j,
+                    format!("offset {} is longer than {MAX_OFFSET_M} m", joint.offset),
+                ));
+            }
             let q = joint.rest;
             if !q.is_finite() || (q.length() - 1.0).abs() > UNIT_TOLERANCE {
                 return Err(bad(
@@ -210,8 +228,16 @@ impl Rig {
             )));
         }
         let rotating = slots[..n].iter().flatten().copied().collect();
+        // Parents come first: each joint's chain length from its parent's.
+        let mut chain = vec![0.0f64; joints.len()];
+        for (j, joint) in joints.iter().enumerate() {
+            let up = joint.parent.map_or(0.0, |p| chain[p]);
+            chain[j] = up + f64::from(joint.offset.length());
+        }
+        let reach_m = chain.iter().copied().fold(0.0, f64::max);
         Ok(Rig {
             joints,
+            reach_m,
             root,
             rotating,
         })
@@ -282,7 +308,30 @@ impl Rig {
                 found: out,
             });
         }
+        check_rows(&pose[..needed])?;
         Ok(active)
+    }
+
+    /// [`Rig::check`] for a call that places joints at `scale`: the root's position plus the
+    /// longest chain of bones at that scale must stay well inside single precision.
+    fn check_reach(&self, pose: &[f32], scale: f32) -> Result<(), RigError> {
+        let root = (0..3).fold(0.0f64, |m, i| m.max(f64::from(pose[i].abs())));
+        let reach = root + self.reach_m * f64::from(scale);
+        if reach <= 0.25 * f64::from(f32::MAX) {
+            Ok(())
+        } else {
+            Err(RigError::Overflow {
+                scale,
+                reach_m: reach,
+            })
+        }
+    }
+
+    /// Checks that `pose` suits forward kinematics for `active_joints` (its length and its values,
+    /// as every forward-kinematics call checks them), without running it.
+    pub(crate) fn check_pose(&self, pose: &[f32], active_joints: usize) -> Result<(), RigError> {
+        self.check(pose, active_joints, self.joints.len())
+            .map(|_| ())
     }
 
     /// World positions in metres (the cycle frame of the pose) of every joint, into `out[..joint_count]`.
@@ -290,7 +339,9 @@ impl Rig {
     /// Only the first `active_joints` rotating joints are read from `pose` (which may be truncated
     /// to `7 + 3 * active_joints` rows, a level's `P'`; 6 rows with no active joint); the others
     /// take their rest rotation. No allocation for rigs of up to 128 joints (`STACK_JOINTS`). Errors: a
-    /// pose shorter than the active joints' rows, an output shorter than the joint count.
+    /// pose shorter than the active joints' rows, a row it reads that is not finite or larger than
+    /// [`MAX_POSE_VALUE`] ([`RigError::PoseValue`]), an output shorter than the joint count, a
+    /// root and bones so far out that a position could overflow ([`RigError::Overflow`]).
     pub fn joint_positions(
         &self,
         pose: &[f32],
@@ -314,6 +365,7 @@ impl Rig {
     ) -> Result<(), RigError> {
         check_scale(scale)?;
         let active = self.check(pose, active_joints, out.len())?;
+        self.check_reach(pose, scale)?;
         let nj = self.joints.len();
         let mut stack = [Quat::IDENTITY; STACK_JOINTS];
         let mut heap = Vec::new();
@@ -354,6 +406,7 @@ impl Rig {
     ) -> Result<(), RigError> {
         check_scale(scale)?;
         let active = self.check(pose, active_joints, out.len())?;
+        self.check_reach(pose, scale)?;
         self.forward(pose, active, scale, out, |_| true);
         Ok(())
     }
@@ -371,6 +424,7 @@ impl Rig {
     ) -> Result<(), RigError> {
         check_scale(scale)?;
         let active = self.check(pose, active_joints, out.len())?;
+        self.check_reach(pose, scale)?;
         self.forward(pose, active, scale, out, |j| needed[j]);
         Ok(())
     }
@@ -437,6 +491,20 @@ impl Rig {
                 }
             }
         }
+    }
+}
+
+/// The rows forward kinematics reads: each finite and at most [`MAX_POSE_VALUE`] in magnitude.
+fn check_rows(rows: &[f32]) -> Result<(), RigError> {
+    match rows
+        .iter()
+        .position(|v| v.is_nan() || v.abs() > MAX_POSE_VALUE)
+    {
+        None => Ok(()),
+        Some(row) => Err(RigError::PoseValue {
+            row,
+            value: rows[row],
+        }),
     }
 }
 

@@ -14,6 +14,8 @@ pub const MIN_INCREMENT: f64 = 1e-6;
 ///
 /// where `dt_k` is the increment from aligned frame `k` to `k + 1`. The last increment (from frame
 /// `T - 1` onwards) is not used: it is 0 in aligned data. [`TimeTable::phase_at`] inverts the table.
+/// A sum that would overflow saturates at `f64::MAX` (increments near `1e308`, which no data have),
+/// so every time is finite.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct TimeTable {
     times: Vec<f64>,
@@ -53,7 +55,8 @@ impl TimeTable {
         let mut pending: Option<f64> = None;
         for dt in increments {
             if let Some(prev) = pending {
-                t += clamp_increment(prev);
+                // (`min` is the identity for every finite sum: the same bits.)
+                t = (t + clamp_increment(prev)).min(f64::MAX);
             }
             self.times.push(t);
             pending = Some(dt);
@@ -70,6 +73,11 @@ impl TimeTable {
             *out = t;
             t += clamp_increment(scale * dt);
         }
+    }
+
+    /// Empties the table (keeping its buffer).
+    pub(crate) fn clear(&mut self) {
+        self.times.clear();
     }
 
     /// Number of entries `T`.
@@ -103,8 +111,7 @@ impl TimeTable {
         let t = t.max(0.0).min(self.duration());
         let k = self.times.partition_point(|&x| x <= t).clamp(1, n - 1) - 1;
         let (t0, t1) = (self.times[k], self.times[k + 1]);
-        let f = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
-        k as f64 + f
+        k as f64 + interval_fraction(t, t0, t1)
     }
 
     /// Playback time in seconds at fractional aligned frame `phi` (clamped to `[0, T - 1]`), the
@@ -118,7 +125,11 @@ impl TimeTable {
         if f == 0.0 {
             self.times[k]
         } else {
-            self.times[k] + f * (self.times[k + 1] - self.times[k])
+            let (t0, t1) = (self.times[k], self.times[k + 1]);
+            let step = t1 - t0;
+            // (A step that overflows, between times near `f64::MAX` of a hand-filled table: the
+            // interval's end, as the saturated table has it.)
+            if step.is_finite() { t0 + f * step } else { t1 }
         }
     }
 }
@@ -126,9 +137,8 @@ impl TimeTable {
 /// Splits a fractional frame position into `(k, f)` with `k + f = phase` clamped to
 /// `[0, frames - 1]`, `0 <= f < 1` and `k + 1 < frames` whenever `f > 0` (NaN gives `(0, 0)`).
 /// The rule by which [`TimeTable::time_at`] (and the offline crates' resampling) interpolate
-/// between frames. `frames` must be at least 1.
+/// between frames. `frames = 0` (no frame to land on) is read as 1: the result is `(0, 0)`.
 pub fn split_phase(phase: f64, frames: usize) -> (usize, f64) {
-    debug_assert!(frames >= 1);
     let n = frames.max(1);
     let last = (n - 1) as f64;
     // NaN maps to 0 through `max`.
@@ -139,6 +149,20 @@ pub fn split_phase(phase: f64, frames: usize) -> (usize, f64) {
         (k, 0.0)
     } else {
         (k, f)
+    }
+}
+
+/// Where `t` lies in the interval `[t0, t1]` of a table, in `[0, 1]`: `(t - t0) / (t1 - t0)`,
+/// clamped. An interval of length zero (times that no longer grow, near `f64::MAX`) gives 1 when
+/// `t` is at or past its end, else 0, instead of NaN. The same bits as the
+/// plain quotient wherever that is a number.
+#[inline]
+pub(crate) fn interval_fraction(t: f64, t0: f64, t1: f64) -> f64 {
+    let f = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+    if f.is_nan() {
+        if t >= t1 { 1.0 } else { 0.0 }
+    } else {
+        f
     }
 }
 

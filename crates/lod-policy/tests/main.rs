@@ -7,3 +7,4 @@ mod common;
 mod kernel;
 mod model;
 mod policy;
+mod robustness;

@@ -672,6 +672,10 @@ impl PoseLayout {
 
     /// Sets the rest rotation of each rotating joint to its mean over the pose vectors `poses`
     /// (`frames x dof`, sign-aligned quaternion average of the exp-maps).
+    ///
+    /// Errors: a shape that is not whole poses ([`PoseError::BadShape`]) or an exp-map row that is
+    /// not finite ([`PoseError::NonFinite`], `what: "exp-map"`, the index into `poses`); the rest
+    /// rotations are then unchanged.
     pub fn set_rest_from_poses(&mut self, poses: &[f64]) -> Result<(), PoseError> {
         let p = self.dof();
         if poses.is_empty() || poses.len() % p != 0 {
@@ -679,6 +683,9 @@ impl PoseLayout {
                 dof: p,
                 len: poses.len(),
             });
+        }
+        for (f, pose) in poses.chunks_exact(p).enumerate() {
+            check_exp_maps(pose, f * p)?;
         }
         for (k, &j) in self.order.iter().enumerate() {
             let mut sum = glam::DVec4::ZERO;

@@ -260,14 +260,48 @@ fn poses_of_non_finite_frames_are_errors() {
 }
 
 #[test]
+fn rest_rotations_from_non_finite_poses_are_errors_and_change_nothing() {
+    let m = parse_bvh(SMALL).unwrap();
+    let mut layout = PoseLayout::from_motions(&[&m], 100.0).unwrap();
+    let poses = layout.poses_from_motion(&m).unwrap();
+    let dof = layout.dof();
+    let before: Vec<DQuat> = (0..2).map(|j| layout.rest_rotation(j)).collect();
+    // A joint's exp-map row (the spine's first, row 7) and the root orientation (row 4), each in
+    // the second pose.
+    for row in [7, 4] {
+        for v in [f64::NAN, f64::INFINITY] {
+            let mut bad = poses.clone();
+            bad[dof + row] = v;
+            match layout.set_rest_from_poses(&bad) {
+                Err(PoseError::NonFinite { what, index }) => {
+                    assert_eq!(index, dof + row, "{v} at row {row}");
+                    assert_eq!(what, "exp-map");
+                }
+                other => panic!("{v} at row {row}: {other:?}"),
+            }
+            let after: Vec<DQuat> = (0..2).map(|j| layout.rest_rotation(j)).collect();
+            assert_eq!(after, before, "the rest rotations are unchanged");
+        }
+    }
+    // The same poses, finite, are a mean rest pose.
+    layout.set_rest_from_poses(&poses).unwrap();
+}
+
+#[test]
 fn poses_that_overflow_are_errors() {
     // Finite channels whose world position overflows: 1e308 along a chain of offsets.
     let m = parse_bvh(&SMALL.replace("1 90 2 10", "1.7e308 90 2 10")).unwrap();
-    let layout = PoseLayout::new(&m.skeleton, 1e-10).unwrap();
+    let layout = PoseLayout::new(&m.skeleton, 1e-4).unwrap();
     assert!(matches!(
         layout.poses_from_motion(&m),
         Err(PoseError::NonFinite { .. })
     ));
+    // Offsets that long (10 units at 1e-10 units a metre: 1e11 m) are refused by the runtime's
+    // rig before any pose, naming the joint.
+    match PoseLayout::new(&m.skeleton, 1e-10) {
+        Err(PoseError::BadLayout(why)) => assert!(why.contains("Spine"), "{why}"),
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]

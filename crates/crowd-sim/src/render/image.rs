@@ -38,19 +38,26 @@ impl Image {
         Ok(Self { width, height, rgb })
     }
 
-    /// Colour at `(x, y)`, or `None` outside.
+    /// Colour at `(x, y)`, or `None` outside the image (or beyond the end of `rgb`, for a
+    /// hand-built image whose buffer is shorter than `width * height * 3` bytes).
     pub fn pixel(&self, x: u32, y: u32) -> Option<Rgb> {
-        (x < self.width && y < self.height).then(|| {
+        if x < self.width && y < self.height {
             let i = 3 * (y as usize * self.width as usize + x as usize);
-            [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
-        })
+            if let Some(&[r, g, b]) = self.rgb.get(i..i + 3) {
+                return Some([r, g, b]);
+            }
+        }
+        None
     }
 
-    /// Sets `(x, y)` when inside the image.
+    /// Sets `(x, y)` when inside the image (and inside `rgb`, for a hand-built image whose buffer
+    /// is shorter than `width * height * 3` bytes: nothing is drawn beyond its end).
     pub fn put(&mut self, x: i64, y: i64, c: Rgb) {
-        if x >= 0 && y >= 0 && (x as u32) < self.width && (y as u32) < self.height {
+        if (0..i64::from(self.width)).contains(&x) && (0..i64::from(self.height)).contains(&y) {
             let i = 3 * (y as usize * self.width as usize + x as usize);
-            self.rgb[i..i + 3].copy_from_slice(&c);
+            if let Some(p) = self.rgb.get_mut(i..i + 3) {
+                p.copy_from_slice(&c);
+            }
         }
     }
 

@@ -23,8 +23,9 @@ fn write_atomic(
     })
 }
 
-/// Writes `img` as an 8-bit RGB PNG at `path`, atomically (temp file + rename).
-pub fn write_png_atomic(path: &Path, img: &Image) -> Result<(), RenderError> {
+/// [`RenderError::BadSize`] unless `img` has a non-zero size and `width * height * 3` bytes (its
+/// fields are public: a hand-built image may not).
+fn check_buffer(img: &Image) -> Result<(), RenderError> {
     if img.rgb.len() != img.width as usize * img.height as usize * 3
         || img.width == 0
         || img.height == 0
@@ -35,6 +36,15 @@ pub fn write_png_atomic(path: &Path, img: &Image) -> Result<(), RenderError> {
             what: "pixel buffer size mismatch",
         });
     }
+    Ok(())
+}
+
+/// Writes `img` as an 8-bit RGB PNG at `path`, atomically (temp file + rename).
+///
+/// Errors: an image of zero size or whose buffer is not `width * height * 3` bytes
+/// ([`RenderError::BadSize`]), the encoder's and the file system's.
+pub fn write_png_atomic(path: &Path, img: &Image) -> Result<(), RenderError> {
+    check_buffer(img)?;
     write_atomic(path, |w| {
         let png_err = |e: png::EncodingError| RenderError::Png {
             path: path.to_path_buf(),
@@ -51,6 +61,10 @@ pub fn write_png_atomic(path: &Path, img: &Image) -> Result<(), RenderError> {
 
 /// Writes `frames` (all the size of the first) as a looping animated GIF, `delay_cs`
 /// hundredths of a second per frame, each frame quantised to its own 256-colour palette.
+///
+/// Errors ([`RenderError::BadSize`]): no frame, frames of different sizes or of a side above
+/// 65535, a frame of zero size or whose buffer is not `width * height * 3` bytes (as
+/// [`write_png_atomic`]); the encoder's and the file system's.
 pub fn write_gif_atomic(path: &Path, frames: &[Image], delay_cs: u16) -> Result<(), RenderError> {
     let Some(first) = frames.first() else {
         return Err(RenderError::BadSize {
@@ -69,6 +83,9 @@ pub fn write_gif_atomic(path: &Path, frames: &[Image], delay_cs: u16) -> Result<
             height: h,
             what: "GIF frames must share a size below 65536",
         });
+    }
+    for f in frames {
+        check_buffer(f)?;
     }
     write_atomic(path, |out| {
         let gif_err = |e: gif::EncodingError| RenderError::Gif {
