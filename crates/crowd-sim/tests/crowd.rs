@@ -1,5 +1,6 @@
 //! End-to-end tests of the crowd with the procedural source.
 
+use crate::altered::Altered;
 use crowd_sim::testing::{ProceduralClip, ProceduralSource, paper_distance_policy};
 use crowd_sim::{
     Camera, CameraPath, ClipError, ClipSource, Crowd, CrowdConfig, CrowdError, Culling, Frustum,
@@ -25,52 +26,6 @@ fn orbit() -> CameraPath {
         radius: 25.0,
         height: 6.0,
         period_s: 12.0,
-    }
-}
-
-/// A source whose clips move 8 % less than asked and veer slightly right: the path controller
-/// must still keep walkers on their paths.
-struct BiasedSource(ProceduralSource);
-
-impl ClipSource for BiasedSource {
-    type Clip = ProceduralClip;
-    fn levels(&self) -> LevelTable {
-        self.0.levels()
-    }
-    fn control_range(&self) -> ControlRange {
-        self.0.control_range()
-    }
-    fn new_clip(&self) -> ProceduralClip {
-        self.0.new_clip()
-    }
-    fn build_clip(
-        &self,
-        c: &Controls,
-        d: Detail,
-        clip: &mut ProceduralClip,
-    ) -> Result<(), ClipError> {
-        let biased = Controls {
-            dz: 0.92 * c.dz,
-            turn: c.turn - 0.03,
-            dx: c.dx - 0.02,
-            ..*c
-        };
-        self.0.build_clip(&biased, d, clip)
-    }
-    fn clip_duration(&self, clip: &ProceduralClip) -> f32 {
-        self.0.clip_duration(clip)
-    }
-    fn clip_root_motion(&self, clip: &ProceduralClip) -> RootMotion {
-        self.0.clip_root_motion(clip)
-    }
-    fn pose(&self, clip: &ProceduralClip, t: f32, out: &mut [f32]) -> usize {
-        self.0.pose(clip, t, out)
-    }
-    fn joints(&self, clip: &ProceduralClip, pose: &[f32], out: &mut [Vec3]) -> usize {
-        self.0.joints(clip, pose, out)
-    }
-    fn bones(&self) -> &[(usize, usize)] {
-        self.0.bones()
     }
 }
 
@@ -105,7 +60,16 @@ fn walkers_stay_on_their_paths_and_inside_the_field() {
 
 #[test]
 fn path_controller_absorbs_a_biased_source() {
-    check_on_paths(&BiasedSource(ProceduralSource::new()));
+    // A source whose clips move 8 % less than asked and veer slightly right.
+    check_on_paths(&Altered {
+        controls: |c| Controls {
+            dz: 0.92 * c.dz,
+            turn: c.turn - 0.03,
+            dx: c.dx - 0.02,
+            ..*c
+        },
+        ..Altered::new(ProceduralSource::new())
+    });
 }
 
 #[test]
@@ -287,48 +251,6 @@ fn level_histogram_sums_to_walkers_and_matches_details() {
     assert!(report.fps_worst <= report.fps_mean && report.fps_mean <= report.fps_best);
 }
 
-/// A source that reports no accuracy level.
-struct NoLevels(ProceduralSource);
-
-impl ClipSource for NoLevels {
-    type Clip = ProceduralClip;
-    fn levels(&self) -> LevelTable {
-        LevelTable {
-            accuracy_levels: 0,
-            ..self.0.levels()
-        }
-    }
-    fn control_range(&self) -> ControlRange {
-        self.0.control_range()
-    }
-    fn new_clip(&self) -> ProceduralClip {
-        self.0.new_clip()
-    }
-    fn build_clip(
-        &self,
-        c: &Controls,
-        d: Detail,
-        clip: &mut ProceduralClip,
-    ) -> Result<(), ClipError> {
-        self.0.build_clip(c, d, clip)
-    }
-    fn clip_duration(&self, clip: &ProceduralClip) -> f32 {
-        self.0.clip_duration(clip)
-    }
-    fn clip_root_motion(&self, clip: &ProceduralClip) -> RootMotion {
-        self.0.clip_root_motion(clip)
-    }
-    fn pose(&self, clip: &ProceduralClip, t: f32, out: &mut [f32]) -> usize {
-        self.0.pose(clip, t, out)
-    }
-    fn joints(&self, clip: &ProceduralClip, pose: &[f32], out: &mut [Vec3]) -> usize {
-        self.0.joints(clip, pose, out)
-    }
-    fn bones(&self) -> &[(usize, usize)] {
-        self.0.bones()
-    }
-}
-
 #[test]
 fn bad_input_gives_clear_errors() {
     let source = ProceduralSource::new();
@@ -338,7 +260,16 @@ fn bad_input_gives_clear_errors() {
         Err(CrowdError::NoWalkers)
     ));
     assert!(matches!(
-        Crowd::new(&NoLevels(source.clone()), config(5, 50.0)),
+        Crowd::new(
+            &Altered::with_levels(
+                source.clone(),
+                LevelTable {
+                    accuracy_levels: 0,
+                    ..source.levels()
+                }
+            ),
+            config(5, 50.0)
+        ),
         Err(CrowdError::NoLevels { .. })
     ));
     // A field too small for the source's turn range is enlarged to fit the paths, and says so.

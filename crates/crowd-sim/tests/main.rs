@@ -2,6 +2,7 @@
 //! with `cargo test -p crowd-sim --test integration FILE::`). One binary links once instead of 2
 //! times (the workspace's first build, issue 36).
 
+mod altered;
 mod crowd;
 mod render;
 mod robustness;

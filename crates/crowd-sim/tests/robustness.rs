@@ -1,15 +1,16 @@
 //! Bad and extreme input to the crowd's public API: clear errors, no panic, no abort, no NaN in an
 //! `Ok` (the audit of the crate's API).
 
+use crate::altered::Altered;
 use crowd_sim::culling::WalkerAabbTree;
 use crowd_sim::render::{Image, render_frame, render_map, write_gif_atomic, write_png_atomic};
-use crowd_sim::testing::{ProceduralClip, ProceduralSource, paper_distance_policy};
+use crowd_sim::testing::{ProceduralSource, paper_distance_policy};
 use crowd_sim::{
-    Bounds, Camera, CameraPath, ClipError, ClipSource, Crowd, CrowdConfig, CrowdError, CrowdReport,
-    Culling, FrameTimes, Frustum, LevelTable, MAX_FIELD_M, MAX_WALKERS, RenderError, StageTimings,
+    Bounds, Camera, CameraPath, ClipSource, Crowd, CrowdConfig, CrowdError, CrowdReport, Culling,
+    FrameTimes, Frustum, LevelTable, MAX_FIELD_M, MAX_WALKERS, RenderError, StageTimings,
 };
 use glam::Vec3;
-use lod_policy::{ControlRange, Controls, Detail, RootMotion, ViewParams};
+use lod_policy::{Detail, ViewParams};
 use std::time::Duration;
 
 const DT: f32 = 1.0 / 30.0;
@@ -19,45 +20,6 @@ fn config(walkers: usize) -> CrowdConfig {
         walkers,
         field_size_m: 60.0,
         ..CrowdConfig::default()
-    }
-}
-
-/// The procedural source with another level table (what a source may report).
-struct Levels(ProceduralSource, LevelTable);
-
-impl ClipSource for Levels {
-    type Clip = ProceduralClip;
-    fn levels(&self) -> LevelTable {
-        self.1
-    }
-    fn control_range(&self) -> ControlRange {
-        self.0.control_range()
-    }
-    fn new_clip(&self) -> ProceduralClip {
-        self.0.new_clip()
-    }
-    fn build_clip(
-        &self,
-        c: &Controls,
-        d: Detail,
-        clip: &mut ProceduralClip,
-    ) -> Result<(), ClipError> {
-        self.0.build_clip(c, d, clip)
-    }
-    fn clip_duration(&self, clip: &ProceduralClip) -> f32 {
-        self.0.clip_duration(clip)
-    }
-    fn clip_root_motion(&self, clip: &ProceduralClip) -> RootMotion {
-        self.0.clip_root_motion(clip)
-    }
-    fn pose(&self, clip: &ProceduralClip, t: f32, out: &mut [f32]) -> usize {
-        self.0.pose(clip, t, out)
-    }
-    fn joints(&self, clip: &ProceduralClip, pose: &[f32], out: &mut [Vec3]) -> usize {
-        self.0.joints(clip, pose, out)
-    }
-    fn bones(&self) -> &[(usize, usize)] {
-        self.0.bones()
     }
 }
 
@@ -80,7 +42,7 @@ fn too_many_walkers_or_too_much_memory_are_errors() {
     // Pose vectors whose size overflows, or needs more than the address space.
     let levels = source.levels();
     for pose_len in [usize::MAX / 2, 1 << 45] {
-        let big = Levels(source.clone(), LevelTable { pose_len, ..levels });
+        let big = Altered::with_levels(source.clone(), LevelTable { pose_len, ..levels });
         let e = Crowd::new(&big, config(4)).err();
         assert!(
             matches!(
@@ -94,7 +56,7 @@ fn too_many_walkers_or_too_much_memory_are_errors() {
         );
     }
     // A level table too large for its histogram.
-    let big = Levels(
+    let big = Altered::with_levels(
         source.clone(),
         LevelTable {
             accuracy_levels: usize::MAX,
@@ -314,45 +276,10 @@ fn the_culling_tree_takes_any_boxes() {
 /// culled as the scan culls them.
 #[test]
 fn a_crowd_culled_by_the_tree_survives_nan_roots() {
-    struct NanRoots(ProceduralSource);
-    impl ClipSource for NanRoots {
-        type Clip = ProceduralClip;
-        fn levels(&self) -> LevelTable {
-            self.0.levels()
-        }
-        fn control_range(&self) -> ControlRange {
-            self.0.control_range()
-        }
-        fn new_clip(&self) -> ProceduralClip {
-            self.0.new_clip()
-        }
-        fn build_clip(
-            &self,
-            c: &Controls,
-            d: Detail,
-            clip: &mut ProceduralClip,
-        ) -> Result<(), ClipError> {
-            self.0.build_clip(c, d, clip)
-        }
-        fn clip_duration(&self, clip: &ProceduralClip) -> f32 {
-            self.0.clip_duration(clip)
-        }
-        fn clip_root_motion(&self, clip: &ProceduralClip) -> RootMotion {
-            self.0.clip_root_motion(clip)
-        }
-        fn pose(&self, clip: &ProceduralClip, t: f32, out: &mut [f32]) -> usize {
-            let rows = self.0.pose(clip, t, out);
-            out[0] = f32::NAN;
-            rows
-        }
-        fn joints(&self, clip: &ProceduralClip, pose: &[f32], out: &mut [Vec3]) -> usize {
-            self.0.joints(clip, pose, out)
-        }
-        fn bones(&self) -> &[(usize, usize)] {
-            self.0.bones()
-        }
-    }
-    let source = NanRoots(ProceduralSource::new());
+    let source = Altered {
+        pose: |out| out[0] = f32::NAN,
+        ..Altered::new(ProceduralSource::new())
+    };
     let policy = paper_distance_policy(source.levels());
     let mut flags = Vec::new();
     for culling in [Culling::Scan, Culling::Tree] {
