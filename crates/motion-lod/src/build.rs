@@ -94,7 +94,15 @@ pub enum BuildError {
 }
 
 impl TrainingSet {
-    /// Checks shapes and values: `P` matches the layout, one control row per sample, finite data.
+    /// Checks shapes and values: `P` matches the layout, one control row, one source and (with
+    /// styles) one style label per sample, every label naming one of the distinct style names,
+    /// finite controls and tensor values.
+    ///
+    /// # Errors
+    /// [`BuildError::Data`] naming the first fault: a count that does not match `S`, a style index
+    /// out of range or a repeated style name, the sample whose controls are not finite, or the DOF
+    /// row, frame and sample of the first non-finite tensor value; and fewer than [`MIN_SAMPLES`]
+    /// samples.
     pub fn validate(&self) -> Result<(), BuildError> {
         let [p, t, s] = self.tensor.dims();
         if p != self.layout.dof() {
@@ -122,6 +130,50 @@ impl TrainingSet {
             return Err(BuildError::Data(format!(
                 "controls of sample {i} are not finite: {:?}",
                 self.controls[i]
+            )));
+        }
+        if self.sources.len() != s {
+            return Err(BuildError::Data(format!(
+                "{} sources for {s} samples (one per sample)",
+                self.sources.len()
+            )));
+        }
+        if let Some(labels) = &self.styles {
+            if labels.of_sample.len() != s {
+                return Err(BuildError::Data(format!(
+                    "style labels for {} samples, the tensor has {s}",
+                    labels.of_sample.len()
+                )));
+            }
+            if labels.names.is_empty() {
+                return Err(BuildError::Data("style labels without style names".into()));
+            }
+            if let Some(i) =
+                (1..labels.names.len()).find(|&i| labels.names[..i].contains(&labels.names[i]))
+            {
+                return Err(BuildError::Data(format!(
+                    "style name {:?} appears twice (style {i})",
+                    labels.names[i]
+                )));
+            }
+            if let Some((i, &j)) = labels
+                .of_sample
+                .iter()
+                .enumerate()
+                .find(|(_, j)| **j >= labels.names.len())
+            {
+                return Err(BuildError::Data(format!(
+                    "sample {i} has style {j}, but there are only {} style names",
+                    labels.names.len()
+                )));
+            }
+        }
+        if let Some(i) = self.tensor.as_slice().iter().position(|v| !v.is_finite()) {
+            let (row, frame, sample) = (i % p, (i / p) % t, i / (p * t));
+            return Err(BuildError::Data(format!(
+                "tensor value {} at DOF row {row}, frame {frame}, sample {sample} ({}) is not finite",
+                self.tensor.as_slice()[i],
+                self.sources[sample]
             )));
         }
         if s < MIN_SAMPLES {
@@ -866,13 +918,38 @@ impl Analysis {
 
     /// Brings an aligned tensor in the training layout (`set_layout`, rows as `motion-lod cycles` writes
     /// them) into this analysis's row order and time scale, for comparison with its samples.
-    pub fn prepare(&self, set_layout: &PoseLayout, tensor: &Tensor3) -> Tensor3 {
+    ///
+    /// # Errors
+    /// [`BuildError::Data`] when `tensor`'s rows are not `set_layout`'s DOF, or `set_layout` lacks
+    /// a joint this analysis evaluates (it is not the layout the analysis was built from).
+    pub fn prepare(
+        &self,
+        set_layout: &PoseLayout,
+        tensor: &Tensor3,
+    ) -> Result<Tensor3, BuildError> {
+        let p = tensor.dims()[0];
+        if p != set_layout.dof() {
+            return Err(BuildError::Data(format!(
+                "tensor to prepare has {p} DOF rows, its pose layout {}",
+                set_layout.dof()
+            )));
+        }
+        if let Some(&j) = self
+            .layout
+            .joint_order()
+            .iter()
+            .find(|&&j| set_layout.joint_rows(j).is_none_or(|r| r.end > p))
+        {
+            return Err(BuildError::Data(format!(
+                "joint {j} of the analysis has no rows in the tensor's pose layout"
+            )));
+        }
         let mut out = permute_rows(set_layout, &self.layout, tensor);
         let p = out.dims()[0];
         for pose in out.as_mut_slice().chunks_exact_mut(p) {
             pose[TIME_ROW] *= self.time_scale;
         }
-        out
+        Ok(out)
     }
 
     /// An ALS (HOOI) Tucker model of `tensor` at `ranks`, decomposed exactly as the key levels are (rows

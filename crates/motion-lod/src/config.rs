@@ -142,11 +142,15 @@ pub enum RowWeights {
 
 impl BuildConfig {
     /// The rank bounds `(max, min)` of the key search for `p` DOF rows, `R_P` scaled by
-    /// [`BuildConfig::dof_rank_reference`] (before clamping to the data).
+    /// [`BuildConfig::dof_rank_reference`] (before clamping to the data). A product `R_P * p` past
+    /// `usize::MAX` is scaled in floating point and saturates at `usize::MAX` (then clamped to the
+    /// data) instead of wrapping.
     pub fn rank_bounds(&self, p: usize) -> ([usize; 3], [usize; 3]) {
         let scale = |r: usize| match self.dof_rank_reference {
             Some(reference) if reference > 0 => {
-                (((r * p) as f64 / reference as f64).round() as usize).max(1)
+                // Exact as the integer product whenever that fits (it is then the same value).
+                let product = r.checked_mul(p).map_or(r as f64 * p as f64, |rp| rp as f64);
+                ((product / reference as f64).round() as usize).max(1)
             }
             _ => r,
         };

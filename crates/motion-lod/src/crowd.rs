@@ -169,6 +169,11 @@ pub struct WalkerTrack {
 /// every walker starts at its own phase of its first cycle with a clip at the detail the policy
 /// gives it there, so frame 0 looks like frame 100 (no walker starts root-only and snaps into
 /// walking). The same tracks for any thread count. Walker indices beyond the crowd are ignored.
+///
+/// # Errors
+/// The crowd's errors ([`Crowd::new`], a frame's step); [`CrowdError::OutOfMemory`] (`what`:
+/// `"recorded tracks"`) when the tracks of `frames` frames do not fit in memory (their size past
+/// the address space, or the system refuses it), before any frame is run.
 pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
     model: &MotionModel,
     config: CrowdConfig,
@@ -188,19 +193,50 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
     let p = model.lod().p();
     let rest = model.layout.rest_pose();
     let mut placed = vec![0.0f32; p];
-    let mut tracks: Vec<WalkerTrack> = walkers
+    let recorded: Vec<usize> = walkers
         .iter()
-        .filter(|&&i| i < crowd.len())
-        .map(|&i| WalkerTrack {
-            walker: i,
-            poses: Vec::with_capacity(frames * p),
-            seams: Vec::new(),
-            levels: Vec::with_capacity(frames),
-            joints: Vec::with_capacity(frames),
-            body_scale: f64::from(model.body_scale(&crowd.controls(i))),
-            visible: Vec::with_capacity(frames),
-        })
+        .copied()
+        .filter(|&i| i < crowd.len())
         .collect();
+    let out_of_memory = || CrowdError::OutOfMemory {
+        what: "recorded tracks",
+        walkers: recorded.len(),
+    };
+    let mut tracks: Vec<WalkerTrack> = Vec::new();
+    tracks
+        .try_reserve_exact(recorded.len())
+        .map_err(|_| out_of_memory())?;
+    for &i in &recorded {
+        // The whole recording's buffers, reserved up front: a size past the address space or
+        // refused by the system is an error here, not an abort frames later.
+        let mut track = WalkerTrack {
+            walker: i,
+            poses: Vec::new(),
+            seams: Vec::new(),
+            levels: Vec::new(),
+            joints: Vec::new(),
+            body_scale: f64::from(model.body_scale(&crowd.controls(i))),
+            visible: Vec::new(),
+        };
+        let values = frames.checked_mul(p).ok_or_else(out_of_memory)?;
+        track
+            .poses
+            .try_reserve_exact(values)
+            .map_err(|_| out_of_memory())?;
+        track
+            .levels
+            .try_reserve_exact(frames)
+            .map_err(|_| out_of_memory())?;
+        track
+            .joints
+            .try_reserve_exact(frames)
+            .map_err(|_| out_of_memory())?;
+        track
+            .visible
+            .try_reserve_exact(frames)
+            .map_err(|_| out_of_memory())?;
+        tracks.push(track);
+    }
     let mut frames_of: Vec<Option<lod_policy::CycleFrame>> = vec![None; tracks.len()];
     let mut stats = FrameStats::default();
     for f in 0..frames {
@@ -270,6 +306,20 @@ pub enum CrowdQualityError {
     /// The simulated time is not a positive number of seconds.
     #[error("simulated time {0} s is not a positive number")]
     Seconds(f32),
+    /// The simulated time at the crowd's frame rate is more than
+    /// [`MAX_WALK_FRAMES`](crate::synth::MAX_WALK_FRAMES) frames (refused before anything is
+    /// allocated).
+    #[error(
+        "simulated time {seconds} s at {fps} fps is more than {} frames, the most a crowd's \
+         walkers are recorded for",
+        crate::synth::MAX_WALK_FRAMES
+    )]
+    TooLong {
+        /// The simulated seconds asked for.
+        seconds: f32,
+        /// The crowd's frame rate.
+        fps: f32,
+    },
     /// The meter refused a track.
     #[error("walker {walker}: {source}")]
     Quality {
@@ -288,6 +338,11 @@ pub enum CrowdQualityError {
 /// levels change clips with inertialized seams, those at the first `config.foot_lock_levels` plant
 /// their feet (by default every walker with joints), so the figures are the crowd's transitions as
 /// a viewer sees them.
+///
+/// # Errors
+/// [`CrowdQualityError::Seconds`] for a time that is not finite and positive,
+/// [`CrowdQualityError::TooLong`] for more than [`MAX_WALK_FRAMES`](crate::synth::MAX_WALK_FRAMES)
+/// frames, the crowd's errors ([`record_walkers`]) and the meter's for a walker.
 pub fn crowd_quality<P: LevelPolicy + Sync + ?Sized>(
     model: &MotionModel,
     config: CrowdConfig,
@@ -297,6 +352,15 @@ pub fn crowd_quality<P: LevelPolicy + Sync + ?Sized>(
 ) -> Result<Vec<WalkerQuality>, CrowdQualityError> {
     if !(seconds.is_finite() && seconds > 0.0) {
         return Err(CrowdQualityError::Seconds(seconds));
+    }
+    // A frame rate that is not finite is the crowd's to refuse (`Crowd::new`).
+    if config.fps.is_finite()
+        && f64::from(seconds) * f64::from(config.fps) > crate::synth::MAX_WALK_FRAMES as f64
+    {
+        return Err(CrowdQualityError::TooLong {
+            seconds,
+            fps: config.fps,
+        });
     }
     let frames = (seconds * config.fps).round().max(1.0) as usize;
     let all: Vec<usize> = (0..config.walkers).collect();

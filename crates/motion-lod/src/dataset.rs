@@ -148,6 +148,10 @@ const TIME_ROW_SECONDS: usize = lod_policy::TIME_ROW;
 /// [`CycleSet::failed`] and the file is skipped.
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
+    /// A subset of no cycles was asked for ([`DataSpec::samples`] = `Some(0)`); refused before
+    /// anything is read.
+    #[error("samples = 0: a subset needs at least 1 cycle (leave samples unset to use them all)")]
+    NoSamplesAsked,
     /// A subset larger than the data was asked for.
     #[error(
         "{asked} samples asked for, but the data has {available} usable cycles: ask for at most {available} (or build from all of them)"
@@ -1248,7 +1252,8 @@ pub struct DataSpec {
     pub align: AlignSpec,
     /// Contact detection preset.
     pub preset: Preset,
-    /// Build from a random subset of this many cycles (`None`: all).
+    /// Build from a random subset of this many cycles (`None`: all; `Some(0)` is refused,
+    /// [`DatasetError::NoSamplesAsked`]).
     pub samples: Option<usize>,
     /// Seed of the subset.
     pub seed: u64,
@@ -1382,6 +1387,9 @@ impl DataSpec {
         default_takes: &[(&str, &str)],
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<LoadedData, DatasetError> {
+        if self.samples == Some(0) {
+            return Err(DatasetError::NoSamplesAsked);
+        }
         let config = self.dataset_config();
         let cycles = if self.dirs.is_empty() {
             load_takes_in_memory(default_takes, &config, progress)?

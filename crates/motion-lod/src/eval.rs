@@ -41,8 +41,21 @@ use rayon::prelude::*;
 pub struct EvalConfig {
     /// Principal DOF directions kept by the PCA baseline (the paper: 40), clamped to `P`.
     pub pca_rank: usize,
-    /// Evaluate at most this many held-out samples (evenly strided); all when `None`.
+    /// Evaluate at most this many held-out samples (evenly strided); all when `None`. `Some(0)` is
+    /// refused ([`BuildError::Data`]).
     pub max_samples: Option<usize>,
+}
+
+impl EvalConfig {
+    /// Refuses `max_samples: Some(0)` (checked before any work by every evaluation).
+    fn check(&self) -> Result<(), BuildError> {
+        if self.max_samples == Some(0) {
+            return Err(BuildError::Data(
+                "max_samples = 0: evaluate at least 1 sample (None evaluates all)".into(),
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Default for EvalConfig {
@@ -442,6 +455,7 @@ pub fn leave_one_out(
     config: &EvalConfig,
     progress: &dyn Progress,
 ) -> Result<EvalReport, BuildError> {
+    config.check()?;
     let weights = Weights {
         kriging: loo_weights(analysis, None)?,
         rbf: loo_weights(analysis, Some(0.0))?,
@@ -475,6 +489,7 @@ pub fn held_out(
     config: &EvalConfig,
     progress: &dyn Progress,
 ) -> Result<EvalReport, BuildError> {
+    config.check()?;
     if targets.dims()[2] != controls.len() || targets.dims()[..2] != analysis.tensor.dims()[..2] {
         return Err(BuildError::Data(format!(
             "held-out tensor {:?} with {} control rows does not fit the model's {:?}",
@@ -572,6 +587,7 @@ pub fn k_fold(
     progress: &dyn Progress,
 ) -> Result<FoldReport, BuildError> {
     set.validate()?;
+    config.check()?;
     let fold = fold_of_samples(&set.sources, folds, by)?;
     // The folds are independent refits: they run in parallel and are pooled in fold order, so the
     // report is the same for any pool size.
@@ -590,7 +606,7 @@ pub fn k_fold(
                 .map(|k| model.lod().key_bytes(k, lod_policy::Precision::F64))
                 .collect();
             let model_bytes = crate::storage::Storage::of(&model).model_f64;
-            let targets = analysis.prepare(&set.layout, &held.tensor);
+            let targets = analysis.prepare(&set.layout, &held.tensor)?;
             let report = held_out(
                 &analysis,
                 &targets,

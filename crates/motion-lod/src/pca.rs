@@ -330,7 +330,10 @@ impl ClipSource for PcaSource<'_> {
         let k1 = (k + 1).min(t - 1);
         let a = (phase - k as f64) as f32;
         let r = clip.rank;
-        let out = &mut out[..clip.rows];
+        // A buffer shorter than the clip's rows is a clip fault (0 rows), not a panic.
+        let Some(out) = out.get_mut(..clip.rows) else {
+            return 0;
+        };
         out.fill(0.0);
         let mut y = [0.0f32; CHUNK];
         for first in (0..r).step_by(CHUNK) {

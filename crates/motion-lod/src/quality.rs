@@ -392,6 +392,15 @@ pub enum QualityError {
     /// The model carries no reference (built before format 4, or the feet were not found).
     #[error("the model has no motion-quality reference (its feet were not found in the data)")]
     NoReference,
+    /// A figure came out NaN or infinite: finite poses too large to measure (joint positions or
+    /// their differences past the range of `f64`).
+    #[error("the {figure} figure is not finite ({value}): the poses are too large to measure")]
+    NonFiniteFigure {
+        /// The figure (its field name in [`MotionQuality`]).
+        figure: &'static str,
+        /// Its value.
+        value: f64,
+    },
 }
 
 /// The frame step nearest 1/30 s for frames `dt` seconds apart.
@@ -435,6 +444,12 @@ fn stance_floors(heights: &[f64], half: usize) -> Vec<f64> {
 /// window rule, as the data's takes are measured); `cycle_s`: the gait cycle duration, the window of
 /// the stance floor and of the travel heading; `seams`: frames where one cycle hands over to the
 /// next. The pop, skate and contacts do not depend on `floor_m`.
+///
+/// # Errors
+/// [`QualityError::Shape`], [`QualityError::Bad`] (frame time or cycle duration not finite and
+/// positive), [`QualityError::Joints`], [`QualityError::TooShort`], [`QualityError::NonFinite`]
+/// (a pose value), and [`QualityError::NonFiniteFigure`] when finite poses are too large to give
+/// finite figures.
 pub fn measure(
     layout: &PoseLayout,
     feet: &FootJoints,
@@ -590,7 +605,7 @@ pub fn measure(
     let facing_min = window_means.iter().copied().fold(mean_facing, f64::min);
     let facing_max = window_means.iter().copied().fold(mean_facing, f64::max);
 
-    Ok(MotionQuality {
+    let quality = MotionQuality {
         frames: n,
         pop_cm: pop,
         seam_pop_cm: seam_pop,
@@ -607,7 +622,36 @@ pub fn measure(
         facing_deg: mean_facing.to_degrees(),
         facing_min_deg: facing_min.to_degrees(),
         facing_max_deg: facing_max.to_degrees(),
-    })
+    };
+    quality.check_finite()?;
+    Ok(quality)
+}
+
+impl MotionQuality {
+    /// Every figure with its field name, in declaration order (`frames` left out).
+    fn figures(&self) -> [(&'static str, f64); 11] {
+        [
+            ("pop_cm", self.pop_cm),
+            ("seam_pop_cm", self.seam_pop_cm),
+            ("skate_cm_s", self.skate_cm_s),
+            ("contact_share", self.contact_share),
+            ("floor_offset_cm", self.floor_offset_cm),
+            ("float_cm", self.float_cm),
+            ("sink_cm", self.sink_cm),
+            ("floating_cm", self.floating_cm),
+            ("facing_deg", self.facing_deg),
+            ("facing_min_deg", self.facing_min_deg),
+            ("facing_max_deg", self.facing_max_deg),
+        ]
+    }
+
+    /// [`QualityError::NonFiniteFigure`] naming the first figure that is NaN or infinite.
+    fn check_finite(&self) -> Result<(), QualityError> {
+        match self.figures().into_iter().find(|(_, v)| !v.is_finite()) {
+            Some((figure, value)) => Err(QualityError::NonFiniteFigure { figure, value }),
+            None => Ok(()),
+        }
+    }
 }
 
 /// The data's reference from per-take measurements (each `(figures, floor m, mean step length m)`,

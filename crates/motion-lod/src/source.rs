@@ -132,7 +132,8 @@ pub(crate) fn rest_rows_of(model: &MotionModel) -> Vec<f32> {
 /// Forward kinematics of `pose` into the crowd's joint list: the root, then the first `active` rotating
 /// joints in row order (more when `pose` holds more joint rows: joints a seam fades out) (cycle-frame positions in metres) of a body `scale` times the skeleton's size
 /// ([`lod_policy::Rig::joint_positions_scaled`]); returns how many were written (the root alone when
-/// the rig refuses the pose). Allocation-free for skeletons up to 128 joints.
+/// the rig refuses the pose; none, a clip fault, when `pose` lacks the root position or `out` is
+/// empty; at most `out.len() - 1` joints). Allocation-free for skeletons up to 128 joints.
 #[inline]
 pub(crate) fn write_joints(
     layout: &PoseLayout,
@@ -141,8 +142,14 @@ pub(crate) fn write_joints(
     scale: f32,
     out: &mut [Vec3],
 ) -> usize {
+    if pose.len() < 3 || out.is_empty() {
+        return 0;
+    }
     let shown = pose.len().saturating_sub(lod_policy::ALWAYS_ROWS) / lod_policy::ROWS_PER_JOINT;
-    let active = active.max(shown).min(layout.joint_count());
+    let active = active
+        .max(shown)
+        .min(layout.joint_count())
+        .min(out.len() - 1);
     if active == 0 {
         // Root only (most of a crowd): no call, no joint buffer.
         out[0] = Vec3::new(pose[0], pose[1], pose[2]);
@@ -318,10 +325,17 @@ impl ClipSource for LodSource<'_> {
         let lod = self.model.lod();
         let phase = clip.kernel.phase_at(f64::from(t_seconds));
         let rows = clip.kernel.rows();
+        // A buffer shorter than the rows written is a clip fault (0 rows), not a panic.
         let written = if self.compact {
-            lod.pose_rows(&clip.kernel, phase, &mut out[..rows])
+            match out.get_mut(..rows) {
+                Some(out) => lod.pose_rows(&clip.kernel, phase, out),
+                None => return 0,
+            }
         } else {
-            lod.pose(&clip.kernel, phase, &mut out[..lod.p()])
+            match out.get_mut(..lod.p()) {
+                Some(out) => lod.pose(&clip.kernel, phase, out),
+                None => return 0,
+            }
         };
         match written {
             Ok(()) => rows,

@@ -168,12 +168,22 @@ pub(crate) fn drawn_layout(model: &MotionModel, scale: f64) -> Result<PoseLayout
 /// Measures a synthesized walk ([`measure`]) with its cycle seams, at the body scale it is drawn
 /// at: its floating and window-rule figures against the data's floor
 /// ([`QualityReference::floor_m`]); its contacts and skate from its own feet. Without the model's
-/// reference, [`QualityError::NoReference`].
+/// reference, [`QualityError::NoReference`]; a frame time or cycle duration that is not finite and
+/// positive, [`QualityError::Bad`] (before anything is allocated); otherwise [`measure`]'s errors.
 pub fn measure_walk(model: &MotionModel, walk: &Walk) -> Result<MotionQuality, QualityError> {
     let reference = reference_of(model)?;
-    let cycles = ((walk.poses.len() / model.layout.dof()) as f64 * walk.frame_time
-        / walk.cycle_seconds)
-        .floor() as usize;
+    for (what, value) in [
+        ("frame time", walk.frame_time),
+        ("cycle duration", walk.cycle_seconds),
+    ] {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(QualityError::Bad { what, value });
+        }
+    }
+    let frames = walk.poses.len() / model.layout.dof().max(1);
+    // A seam per whole cycle; never more seams than frames (a cycle shorter than a frame).
+    let cycles =
+        ((frames as f64 * walk.frame_time / walk.cycle_seconds).floor() as usize).min(frames);
     let seams: Vec<usize> = (1..=cycles)
         .map(|c| (c as f64 * walk.cycle_seconds / walk.frame_time).round() as usize)
         .collect();

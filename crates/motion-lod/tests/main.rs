@@ -9,6 +9,7 @@ mod common;
 mod fk_probe;
 
 mod acceptance;
+mod api_defects;
 mod cli;
 mod crowd_cli;
 mod crowd_paths;

@@ -310,7 +310,9 @@ fn held_out_takes_are_predicted_from_the_training_takes() {
     let t = loaded.aligned.tensor.dims()[1];
     let aligned = align_cycles_to(&held, t, spec.align.method(), reference).unwrap();
     assert_eq!(aligned.tensor.dims()[1], t);
-    let targets = analysis.prepare(&loaded.aligned.layout, &aligned.tensor);
+    let targets = analysis
+        .prepare(&loaded.aligned.layout, &aligned.tensor)
+        .unwrap();
     let controls: Vec<[f64; 4]> = aligned.controls.iter().map(|c| c.to_array()).collect();
     let report = motion_lod::eval::held_out(
         &analysis,

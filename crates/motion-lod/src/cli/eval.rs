@@ -318,7 +318,9 @@ fn evaluate(
     let t = loaded.aligned.tensor.dims()[1];
     let aligned = align_cycles_to(&held, t, spec.align.method(), reference)
         .context("aligning the held-out cycles")?;
-    let targets = analysis.prepare(&loaded.aligned.layout, &aligned.tensor);
+    let targets = analysis
+        .prepare(&loaded.aligned.layout, &aligned.tensor)
+        .context("preparing the held-out cycles")?;
     let controls: Vec<[f64; 4]> = aligned.controls.iter().map(|c| c.to_array()).collect();
     // Held-out takes get their styles by the same rule, and must be styles of the model.
     let styles = match (style, &analysis.styles) {
