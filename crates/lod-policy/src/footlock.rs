@@ -999,4 +999,55 @@ mod tests {
         ));
         assert_eq!(lock, FootLock::new());
     }
+
+    // 13. Forward kinematics refuses rows that are not finite or absurdly large, and offsets.
+    #[test]
+    fn forward_kinematics_refuses_non_finite_rows() {
+        let (rig, feet) = legs();
+        let n = rig.joint_count();
+        let mut good = vec![0.0f32; rig.dof()];
+        good[1] = 0.9;
+        let mut pos = vec![Vec3::ZERO; n];
+        let mut tr = vec![JointTransform::default(); n];
+        let mut q = vec![Quat::IDENTITY; n];
+        rig.joint_positions(&good, usize::MAX, &mut pos).unwrap();
+        for (row, value) in [(0, f32::INFINITY), (8, f32::NAN), (9, 3e38), (4, -3e38)] {
+            let mut pose = good.clone();
+            pose[row] = value;
+            let e = rig
+                .joint_positions(&pose, usize::MAX, &mut pos)
+                .unwrap_err();
+            assert!(
+                matches!(e, RigError::PoseValue { row: r, .. } if r == row),
+                "{e}"
+            );
+            assert!(rig.joint_transforms(&pose, usize::MAX, &mut tr).is_err());
+            assert!(rig.local_rotations(&pose, usize::MAX, &mut q).is_err());
+            let mut lock = FootLock::new();
+            let before = pose.clone();
+            let r = lock.apply(
+                &rig,
+                &feet,
+                &Default::default(),
+                usize::MAX,
+                1.0,
+                1.0 / 30.0,
+                &mut pose,
+            );
+            assert!(r.is_err());
+            assert_eq!(pose.len(), before.len());
+        }
+        // A body scale that would overflow the positions.
+        let e = rig
+            .joint_positions_scaled(&good, usize::MAX, 3e38, &mut pos)
+            .unwrap_err();
+        assert!(matches!(e, RigError::Overflow { .. }), "{e}");
+        // Offsets of 3e38 are refused at construction.
+        let mut joints = rig.joints().to_vec();
+        joints[1].offset = Vec3::splat(3e38);
+        assert!(matches!(
+            Rig::new(joints),
+            Err(RigError::Joint { joint: 1, .. })
+        ));
+    }
 }

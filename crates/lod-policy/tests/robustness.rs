@@ -5,12 +5,11 @@
 use crate::common;
 
 use common::*;
-use lod_policy::glam::{Quat, Vec3};
 use lod_policy::{
     AccuracyLevel, ClipKernel, ControlRange, ControlSpace, Controls, Detail, DistancePolicy,
-    FootLock, FootRig, JointRole, JointTransform, KernelError, KernelScratch, LevelPolicy,
-    LodModel, PoseState, Rig, RigError, RigJoint, RootMotion, ScreenSpacePolicy, SeamScratch,
-    SeamTransition, StyleMix, TimeTable, Variogram, VariogramModel, ViewParams, clamp_control,
+    KernelError, KernelScratch, LevelPolicy, LodModel, PoseState, RootMotion, ScreenSpacePolicy,
+    SeamScratch, SeamTransition, StyleMix, TimeTable, Variogram, VariogramModel, ViewParams,
+    clamp_control,
 };
 
 fn model() -> LodModel {
@@ -441,103 +440,8 @@ fn screen_policy_far_away_is_cheap() {
     assert_eq!(p.detail(50.0, true, &bad), m.full_detail());
 }
 
-fn joint(name: &str, parent: Option<usize>, offset: [f32; 3], role: JointRole) -> RigJoint {
-    RigJoint {
-        name: name.into(),
-        parent,
-        offset: Vec3::from_array(offset),
-        rest: Quat::IDENTITY,
-        role,
-    }
-}
-
-/// Hips with two legs (thigh, knee, ankle rotating; toe static).
-fn legs() -> (Rig, FootRig) {
-    let mut joints = vec![joint("hips", None, [0.0; 3], JointRole::Root)];
-    for (k, x) in [0.1f32, -0.1].into_iter().enumerate() {
-        let base = joints.len();
-        joints.push(joint(
-            "thigh",
-            Some(0),
-            [x, 0.0, 0.0],
-            JointRole::Rotating(3 * k),
-        ));
-        let r = JointRole::Rotating(3 * k + 1);
-        joints.push(joint("knee", Some(base), [0.0, -0.42, 0.0], r));
-        let r = JointRole::Rotating(3 * k + 2);
-        joints.push(joint("ankle", Some(base + 1), [0.0, -0.42, 0.0], r));
-        joints.push(joint(
-            "toe",
-            Some(base + 2),
-            [0.0, -0.04, 0.12],
-            JointRole::Static,
-        ));
-    }
-    let rig = Rig::new(joints).unwrap();
-    let feet = FootRig {
-        left: lod_policy::Foot {
-            ankle: 3,
-            toe: Some(4),
-        },
-        right: lod_policy::Foot {
-            ankle: 7,
-            toe: Some(8),
-        },
-        floor_m: 0.0,
-    };
-    (rig, feet)
-}
-
-// 13. Forward kinematics refuses rows that are not finite or absurdly large, and offsets.
-#[test]
-fn forward_kinematics_refuses_non_finite_rows() {
-    let (rig, feet) = legs();
-    let n = rig.joint_count();
-    let mut good = vec![0.0f32; rig.dof()];
-    good[1] = 0.9;
-    let mut pos = vec![Vec3::ZERO; n];
-    let mut tr = vec![JointTransform::default(); n];
-    let mut q = vec![Quat::IDENTITY; n];
-    rig.joint_positions(&good, usize::MAX, &mut pos).unwrap();
-    for (row, value) in [(0, f32::INFINITY), (8, f32::NAN), (9, 3e38), (4, -3e38)] {
-        let mut pose = good.clone();
-        pose[row] = value;
-        let e = rig
-            .joint_positions(&pose, usize::MAX, &mut pos)
-            .unwrap_err();
-        assert!(
-            matches!(e, RigError::PoseValue { row: r, .. } if r == row),
-            "{e}"
-        );
-        assert!(rig.joint_transforms(&pose, usize::MAX, &mut tr).is_err());
-        assert!(rig.local_rotations(&pose, usize::MAX, &mut q).is_err());
-        let mut lock = FootLock::new();
-        let before = pose.clone();
-        let r = lock.apply(
-            &rig,
-            &feet,
-            &Default::default(),
-            usize::MAX,
-            1.0,
-            1.0 / 30.0,
-            &mut pose,
-        );
-        assert!(r.is_err());
-        assert_eq!(pose.len(), before.len());
-    }
-    // A body scale that would overflow the positions.
-    let e = rig
-        .joint_positions_scaled(&good, usize::MAX, 3e38, &mut pos)
-        .unwrap_err();
-    assert!(matches!(e, RigError::Overflow { .. }), "{e}");
-    // Offsets of 3e38 are refused at construction.
-    let mut joints = rig.joints().to_vec();
-    joints[1].offset = Vec3::splat(3e38);
-    assert!(matches!(
-        Rig::new(joints),
-        Err(RigError::Joint { joint: 1, .. })
-    ));
-}
+// 13. Forward kinematics refusing rows that are not finite: `footlock.rs`'s unit tests
+// (`forward_kinematics_refuses_non_finite_rows`, on their legs rig).
 
 // 14. Slices of mismatched lengths: no panic.
 #[test]

@@ -219,22 +219,13 @@ pub fn record_walkers<P: LevelPolicy + Sync + ?Sized>(
             visible: Vec::new(),
         };
         let values = frames.checked_mul(p).ok_or_else(out_of_memory)?;
-        track
-            .poses
-            .try_reserve_exact(values)
-            .map_err(|_| out_of_memory())?;
-        track
-            .levels
-            .try_reserve_exact(frames)
-            .map_err(|_| out_of_memory())?;
-        track
-            .joints
-            .try_reserve_exact(frames)
-            .map_err(|_| out_of_memory())?;
-        track
-            .visible
-            .try_reserve_exact(frames)
-            .map_err(|_| out_of_memory())?;
+        let reserved = track.poses.try_reserve_exact(values).is_ok()
+            && track.levels.try_reserve_exact(frames).is_ok()
+            && track.joints.try_reserve_exact(frames).is_ok()
+            && track.visible.try_reserve_exact(frames).is_ok();
+        if !reserved {
+            return Err(out_of_memory());
+        }
         tracks.push(track);
     }
     let mut frames_of: Vec<Option<lod_policy::CycleFrame>> = vec![None; tracks.len()];
