@@ -7,7 +7,6 @@ use crowd_sim::path::{PathPlan, WalkerStart};
 use crowd_sim::{Camera, CrowdConfig, CrowdStyle, Frustum, MAX_DT, check_control_range};
 use glam::Vec3;
 use lod_policy::{Detail, LevelPolicy, RuntimeModel, SplitMix64, StyleMix, ViewParams};
-use wgpu::util::DeviceExt;
 
 use crate::device::Gpu;
 use crate::error::GpuError;
@@ -23,7 +22,11 @@ const MAX_X: u32 = 65535;
 /// The counters' layout (the shaders' `C_*`).
 const C_BUILDS: usize = 3;
 const C_FREE_TOP: usize = 6;
-const C_HIST: usize = 8;
+/// Walkers whose root or joint positions came out NaN or infinite this frame, and the first of
+/// them (the shaders' `C_NONFINITE`, `C_NONFINITE_FIRST`).
+const C_NONFINITE: usize = 7;
+const C_NONFINITE_FIRST: usize = 8;
+const C_HIST: usize = 9;
 
 /// One walker as the shaders hold it (`struct Walker` of `crowd.wgsl`).
 #[repr(C)]
@@ -92,10 +95,14 @@ pub struct GpuOptions {
     /// Walkers that can hold a clip with joints at the same time (each such clip takes
     /// `4 (P max r_T + T)` bytes, plus `12 J` for its joint positions); `None` gives every walker
     /// one. A walker the policy wants with joints when every slot is taken is shown root only and
-    /// counted in [`GpuFrameStats::slot_faults`] until a slot frees.
+    /// counted in [`GpuFrameStats::slot_faults`] until a slot frees. Which of the walkers
+    /// competing for the last slots in a frame get them depends on the order of the GPU's
+    /// threads: with fewer slots than walkers wanting joints, runs are not repeatable bit for
+    /// bit (with `None`, or slots to spare, they are).
     pub joint_slots: Option<usize>,
     /// Walkers per page (the crowd is split into pages whose buffers each fit the adapter's
-    /// largest storage binding); `None` picks the largest that fits.
+    /// largest storage binding); `None` picks the largest that fits. `Some(0)` is an error
+    /// ([`GpuError::Config`]); small pages cost a dispatch chain and ten buffers each.
     pub page_walkers: Option<usize>,
 }
 
@@ -174,9 +181,19 @@ pub struct GpuCrowd {
     walkers: usize,
     config: CrowdConfig,
     field_enlarged_from: Option<f32>,
-    policy_cache: Option<(ViewParams, Vec<[u32; 4]>, u32, u32)>,
+    policy_cache: Option<PolicyCache>,
     frame: u64,
     bytes_per_slot: u64,
+}
+
+/// The policy table of the last frames, and what it was made for.
+#[derive(Debug)]
+struct PolicyCache {
+    view: ViewParams,
+    /// The policy's address and type (a policy passed by another reference is tabulated anew).
+    policy: (usize, &'static str),
+    table: PolicyTable,
+    entries: Vec<[u32; 4]>,
 }
 
 #[derive(Debug)]
@@ -224,13 +241,18 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
 /// Runs `f` inside a validation and an out-of-memory error scope; their errors become
 /// [`GpuError::Runtime`].
 fn scoped<R>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> R) -> Result<R, GpuError> {
+    scoped_raw(device, f).map_err(|e| GpuError::Runtime(format!("{what}: {e}")))
+}
+
+/// [`scoped`] giving the device's error (the out-of-memory error first).
+fn scoped_raw<R>(device: &wgpu::Device, f: impl FnOnce() -> R) -> Result<R, wgpu::Error> {
     device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     device.push_error_scope(wgpu::ErrorFilter::Validation);
     let r = f();
     let validation = pollster::block_on(device.pop_error_scope());
     let memory = pollster::block_on(device.pop_error_scope());
-    match validation.or(memory) {
-        Some(e) => Err(GpuError::Runtime(format!("{what}: {e}"))),
+    match memory.or(validation) {
+        Some(e) => Err(e),
         None => Ok(r),
     }
 }
@@ -242,8 +264,11 @@ impl GpuCrowd {
     ///
     /// Errors: a config the CPU crowd would refuse, or one asking for what the GPU crowd does not
     /// do (`seam_levels` or `foot_lock_levels` above 0: configure the CPU crowd you compare with the
-    /// same way); a model the shaders cannot take; buffers or workgroup memory beyond the adapter's
-    /// limits.
+    /// same way); a model the shaders cannot take, or one with a number single precision cannot
+    /// hold ([`GpuError::Model`]); [`GpuOptions::page_walkers`] of `Some(0)`
+    /// ([`GpuError::Config`]); buffers or workgroup memory beyond the adapter's limits
+    /// ([`GpuError::Limit`]), or buffers the device cannot allocate ([`GpuError::Memory`], with
+    /// the bytes asked for).
     pub fn new(
         gpu: &Gpu,
         model: &RuntimeModel,
@@ -437,6 +462,13 @@ impl GpuCrowd {
             .max(joints_per_slot);
         let fit =
             (max_binding / largest).min(u64::from(u32::MAX) / ((p * rt_max + 2 * t) as u64).max(1));
+        if options.page_walkers == Some(0) {
+            return Err(GpuError::Config(
+                "GpuOptions::page_walkers = Some(0): a page holds at least one walker (None picks \
+                 the largest page that fits)"
+                    .into(),
+            ));
+        }
         let page_walkers = options
             .page_walkers
             .unwrap_or(usize::MAX)
@@ -450,42 +482,88 @@ impl GpuCrowd {
                 adapter: gpu.adapter_name(),
             });
         }
-        let md = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("model"),
-            contents: bytemuck::cast_slice(&tables.md),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let mtab = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("model table"),
-            contents: bytemuck::cast_slice(&tables.mtab),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
         let counters_len = C_HIST + tables.levels + 1;
-        let mut pages = Vec::new();
-        let mut start = 0;
         let page_count = n.div_ceil(page_walkers);
-        let mut slots_left = slots_total;
-        let mut encoder = device.create_command_encoder(&Default::default());
-        let result = scoped(&device, "allocating the crowd's buffers", || {
+        // Each page's walkers and joint slots: slots shared in proportion (the last page takes
+        // what is left).
+        let page_slots = |k: usize, pn: usize, slots_left: usize| {
+            if k + 1 == page_count {
+                slots_left
+            } else {
+                ((slots_total as u128 * pn as u128) / n as u128) as usize
+            }
+        };
+        // The bytes of every buffer, before any is allocated (for the error when the device
+        // cannot hold them).
+        let frame_bytes = std::mem::size_of::<FrameUniform>() as u64;
+        let mut crowd_bytes = 4 * (counters_len * page_count) as u64;
+        {
+            let (mut start, mut slots_left) = (0, slots_total);
             for k in 0..page_count {
                 let pn = page_walkers.min(n - start);
-                // Slots shared in proportion (the last page takes what is left).
-                let slots = if k + 1 == page_count {
-                    slots_left
-                } else {
-                    ((slots_total as u128 * pn as u128) / n as u128) as usize
-                };
+                let slots = page_slots(k, pn, slots_left);
+                slots_left -= slots;
+                let (pn, sa) = (pn as u64, slots.max(1) as u64);
+                crowd_bytes += pn * (walker_bytes + 4)
+                    + 4 * sa
+                    + (small_per_walker * pn).max(4)
+                    + (big_per_slot * sa).max(4)
+                    + (joints_per_slot * sa).max(4)
+                    + frame_bytes
+                    + 4 * counters_len as u64;
+                start += pn as usize;
+            }
+        }
+        // Buffers made and filled inside the error scopes (a buffer the device cannot allocate
+        // is an error there, where a buffer mapped at creation would panic).
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: contents.len() as u64,
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            queue.write_buffer(&buffer, 0, contents);
+            buffer
+        };
+        let memory = |what: &'static str, bytes: u64, e: wgpu::Error| GpuError::Memory {
+            what,
+            bytes,
+            walkers: n,
+            adapter: gpu.adapter_name(),
+            reason: e.to_string(),
+        };
+        let model_bytes = 4 * (tables.md.len() + tables.mtab.len()) as u64;
+        let (md, mtab) = scoped_raw(&device, || {
+            (
+                init(
+                    "model",
+                    bytemuck::cast_slice(&tables.md),
+                    wgpu::BufferUsages::STORAGE,
+                ),
+                init(
+                    "model table",
+                    bytemuck::cast_slice(&tables.mtab),
+                    wgpu::BufferUsages::UNIFORM,
+                ),
+            )
+        })
+        .map_err(|e| memory("the model's buffers", model_bytes, e))?;
+        let mut pages = Vec::new();
+        let mut start = 0;
+        let mut slots_left = slots_total;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let result = scoped_raw(&device, || {
+            for k in 0..page_count {
+                let pn = page_walkers.min(n - start);
+                let slots = page_slots(k, pn, slots_left);
                 slots_left -= slots;
                 let slots_alloc = slots.max(1);
                 let ws = &walkers[start..start + pn];
                 let storage = wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::COPY_SRC
                     | wgpu::BufferUsages::COPY_DST;
-                let walkers_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("walkers"),
-                    contents: bytemuck::cast_slice(ws),
-                    usage: storage,
-                });
+                let walkers_buf = init("walkers", bytemuck::cast_slice(ws), storage);
                 let mut counters = vec![0u32; counters_len];
                 let (gx, gy) = (pn.min(MAX_X as usize) as u32, (pn as u32).div_ceil(MAX_X));
                 counters[0] = gx;
@@ -493,23 +571,15 @@ impl GpuCrowd {
                 counters[2] = 1;
                 counters[C_BUILDS] = pn as u32;
                 counters[C_FREE_TOP] = slots as u32;
-                let counters_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("counters"),
-                    contents: bytemuck::cast_slice(&counters),
-                    usage: storage | wgpu::BufferUsages::INDIRECT,
-                });
+                let counters_buf = init(
+                    "counters",
+                    bytemuck::cast_slice(&counters),
+                    storage | wgpu::BufferUsages::INDIRECT,
+                );
                 let list: Vec<u32> = (0..pn as u32).collect();
-                let build_list = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("build list"),
-                    contents: bytemuck::cast_slice(&list),
-                    usage: storage,
-                });
+                let build_list = init("build list", bytemuck::cast_slice(&list), storage);
                 let stack: Vec<u32> = (0..slots_alloc as u32).rev().collect();
-                let free_stack = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("free joint slots"),
-                    contents: bytemuck::cast_slice(&stack),
-                    usage: storage,
-                });
+                let free_stack = init("free joint slots", bytemuck::cast_slice(&stack), storage);
                 let make = |label: &str, size: u64| {
                     device.create_buffer(&wgpu::BufferDescriptor {
                         label: Some(label),
@@ -523,7 +593,7 @@ impl GpuCrowd {
                 let joints = make("joint positions", joints_per_slot * slots_alloc as u64);
                 let frame = device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("frame"),
-                    size: std::mem::size_of::<FrameUniform>() as u64,
+                    size: frame_bytes,
                     usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 });
@@ -585,14 +655,14 @@ impl GpuCrowd {
                 });
                 start += pn;
             }
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("counters read-back"),
+                size: (4 * counters_len * page_count) as u64,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
         });
-        result?;
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("counters read-back"),
-            size: (4 * counters_len * pages.len()) as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let staging = result.map_err(|e| memory("the crowd's buffers", crowd_bytes, e))?;
         let crowd = GpuCrowd {
             gpu_name: gpu.adapter_name(),
             device,
@@ -610,8 +680,9 @@ impl GpuCrowd {
             frame: 0,
             bytes_per_slot: big_per_slot + joints_per_slot,
         };
-        crowd.submit_and_wait(encoder)?;
-        let _ = small_per_walker;
+        scoped(&crowd.device, "building the first clips", || {
+            crowd.submit_and_wait(encoder)
+        })??;
         Ok(crowd)
     }
 
@@ -628,6 +699,17 @@ impl GpuCrowd {
 
     /// Advances the crowd by `dt` seconds seen from `camera` under `policy` (the stages of
     /// `crowd_sim::Crowd::step`, on the GPU) and waits for the frame to finish.
+    ///
+    /// The policy is tabulated over distance ([`PolicyTable`]) when the view, the policy or its
+    /// answers change, and the table kept otherwise.
+    ///
+    /// Errors: a `dt` outside `[0, crowd_sim::MAX_DT]` or a camera the CPU crowd refuses
+    /// ([`GpuError::Crowd`]); a policy giving a detail the model does not have
+    /// ([`GpuError::Policy`]) or changing detail more often than tabulated
+    /// ([`GpuError::Config`]); joint positions that came out NaN or infinite
+    /// ([`GpuError::NonFinite`]: a model whose values overflow single precision, which the CPU
+    /// runtime refuses with `lod_policy::KernelError::Overflow`); the device's
+    /// ([`GpuError::Runtime`]).
     pub fn step<P: LevelPolicy + ?Sized>(
         &mut self,
         policy: &P,
@@ -640,18 +722,33 @@ impl GpuCrowd {
         }
         let frustum = Frustum::from_camera(camera)?;
         let view = camera.view();
-        let stale = self.policy_cache.as_ref().is_none_or(|c| c.0 != view);
+        // The table is kept while the view, the policy and its answers stay the same: another
+        // policy, or the same one changed (other thresholds, at the same address), is tabulated
+        // anew (`PolicyTable::matches` asks it at the table's boundaries and along the sweep).
+        let id = (
+            policy as *const P as *const () as usize,
+            std::any::type_name::<P>(),
+        );
+        let stale = self
+            .policy_cache
+            .as_ref()
+            .is_none_or(|c| c.view != view || c.policy != id || !c.table.matches(policy, &view));
         if stale {
+            self.policy_cache = None;
             let table = PolicyTable::new(policy, &view, self.levels, self.joints)?;
-            let entries = table.entries();
-            self.policy_cache = Some((
+            self.policy_cache = Some(PolicyCache {
                 view,
-                entries,
-                table.visible().len() as u32,
-                table.hidden().len() as u32,
-            ));
+                policy: id,
+                entries: table.entries(),
+                table,
+            });
         }
-        let (_, entries, vis, hid) = self.policy_cache.as_ref().expect("tabulated");
+        let cache = self.policy_cache.as_ref().expect("tabulated");
+        let (entries, vis, hid) = (
+            &cache.entries,
+            cache.table.visible().len() as u32,
+            cache.table.hidden().len() as u32,
+        );
         let mut uniform = FrameUniform::zeroed();
         for (dst, src) in uniform.planes.iter_mut().zip(frustum.planes()) {
             *dst = src.to_array();
@@ -659,8 +756,8 @@ impl GpuCrowd {
         uniform.eye = camera.position.extend(0.0).to_array();
         uniform.dt = dt;
         uniform.margin = self.config.cull_margin_m;
-        uniform.vis_entries = *vis;
-        uniform.hid_entries = *hid;
+        uniform.vis_entries = vis;
+        uniform.hid_entries = hid;
         uniform.policy[..entries.len()].copy_from_slice(entries);
         let zeros = vec![0u32; self.levels + 1];
         let mut encoder = self.device.create_command_encoder(&Default::default());
@@ -675,6 +772,13 @@ impl GpuCrowd {
                 &page.counters,
                 4 * C_BUILDS as u64,
                 bytemuck::cast_slice(&[0u32; 3]),
+            );
+            // The frame's walkers with positions that are not finite: none yet, the first at
+            // u32::MAX (the shaders' atomicMin).
+            self.queue.write_buffer(
+                &page.counters,
+                4 * C_NONFINITE as u64,
+                bytemuck::cast_slice(&[0u32, u32::MAX]),
             );
             self.queue.write_buffer(
                 &page.counters,
@@ -708,7 +812,13 @@ impl GpuCrowd {
             gpu,
             ..GpuFrameStats::default()
         };
-        for c in counters.chunks_exact(self.counters_len) {
+        let (mut nonfinite, mut first, mut start) = (0u64, None, 0usize);
+        for (c, page) in counters.chunks_exact(self.counters_len).zip(&self.pages) {
+            if c[C_NONFINITE] > 0 {
+                nonfinite += u64::from(c[C_NONFINITE]);
+                first.get_or_insert(start + c[C_NONFINITE_FIRST] as usize);
+            }
+            start += page.n;
             stats.kernels_built += u64::from(c[C_BUILDS]);
             stats.visible += u64::from(c[4]);
             stats.slot_faults += u64::from(c[5]);
@@ -717,6 +827,13 @@ impl GpuCrowd {
             }
         }
         self.frame += 1;
+        if let Some(first) = first {
+            return Err(GpuError::NonFinite {
+                frame: self.frame,
+                walkers: nonfinite,
+                first,
+            });
+        }
         stats.wall = started.elapsed();
         Ok(stats)
     }
@@ -741,12 +858,21 @@ impl GpuCrowd {
 
     /// Copies `buffer` into a new read-back buffer and returns its contents.
     fn read_buffer<T: Pod>(&self, buffer: &wgpu::Buffer) -> Result<Vec<T>, GpuError> {
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("read-back"),
-            size: buffer.size(),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let staging = scoped_raw(&self.device, || {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("read-back"),
+                size: buffer.size(),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })
+        .map_err(|e| GpuError::Memory {
+            what: "a read-back buffer",
+            bytes: buffer.size(),
+            walkers: self.walkers,
+            adapter: self.gpu_name.clone(),
+            reason: e.to_string(),
+        })?;
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
         self.submit_and_wait(encoder)?;
@@ -755,6 +881,10 @@ impl GpuCrowd {
 
     /// Every walker's detail and world joint positions after the last step, read back from the
     /// GPU (slow: for tests, exports and inspection, not per frame).
+    ///
+    /// Errors: [`GpuError::NonFinite`] when a position is NaN or infinite (a model whose values
+    /// overflow, as [`GpuCrowd::step`] says); [`GpuError::Memory`] and [`GpuError::Runtime`]
+    /// from the device.
     pub fn read_walkers(&self) -> Result<Vec<WalkerJoints>, GpuError> {
         let mut out = Vec::with_capacity(self.walkers);
         for page in &self.pages {
@@ -765,6 +895,15 @@ impl GpuCrowd {
                 let mut positions = vec![Vec3::from_array(w.root)];
                 if w.cur_joints > 0 && w.slot != NONE {
                     let s = w.slot as usize;
+                    if s >= ns || w.cur_joints as usize > self.joints {
+                        return Err(GpuError::Runtime(format!(
+                            "walker {}: joint slot {s} of {ns} with {} joints of {}: the \
+                             walkers read back are corrupt",
+                            out.len(),
+                            w.cur_joints,
+                            self.joints
+                        )));
+                    }
                     for k in 0..w.cur_joints as usize {
                         let at = |c: usize| joints[(3 * k + c) * ns + s];
                         positions.push(Vec3::new(at(0), at(1), at(2)));
@@ -775,6 +914,14 @@ impl GpuCrowd {
                     positions,
                 });
             }
+        }
+        let bad = |w: &WalkerJoints| !w.positions.iter().all(|p| p.is_finite());
+        if let Some(first) = out.iter().position(bad) {
+            return Err(GpuError::NonFinite {
+                frame: self.frame,
+                walkers: out.iter().filter(|w| bad(w)).count() as u64,
+                first,
+            });
         }
         Ok(out)
     }

@@ -100,15 +100,22 @@ fn describe(info: &wgpu::AdapterInfo) -> String {
 
 /// The message of [`GpuError::NoAdapter`]: the backends tried and what to install.
 fn no_adapter_hint(backends: wgpu::Backends, reason: &str) -> String {
-    let compiled: Vec<&str> = [
-        (cfg!(feature = "vulkan"), "Vulkan"),
-        (cfg!(feature = "metal"), "Metal"),
-        (cfg!(feature = "dx12"), "DirectX 12"),
-    ]
-    .iter()
-    .filter(|(on, _)| *on)
-    .map(|(_, n)| *n)
-    .collect();
+    let built = [
+        (cfg!(feature = "vulkan"), wgpu::Backends::VULKAN, "Vulkan"),
+        (cfg!(feature = "metal"), wgpu::Backends::METAL, "Metal"),
+        (cfg!(feature = "dx12"), wgpu::Backends::DX12, "DirectX 12"),
+    ];
+    let compiled: Vec<&str> = built
+        .iter()
+        .filter(|(on, _, _)| *on)
+        .map(|(_, _, n)| *n)
+        .collect();
+    // The backends compiled in that the instance was allowed to try.
+    let tried: Vec<&str> = built
+        .iter()
+        .filter(|(on, b, _)| *on && backends.contains(*b))
+        .map(|(_, _, n)| *n)
+        .collect();
     let icd = std::env::var(ICD_ENV)
         .ok()
         .or_else(|| std::env::var("VK_DRIVER_FILES").ok());
@@ -120,15 +127,31 @@ fn no_adapter_hint(backends: wgpu::Backends, reason: &str) -> String {
         Some(path) => format!("; the Vulkan loader was pointed at {path}"),
         None => String::new(),
     };
+    let compiled_list = if compiled.is_empty() {
+        "none".to_string()
+    } else {
+        compiled.join(", ")
+    };
+    if tried.is_empty() {
+        // Nothing was tried: no driver is missing, the backends allowed are not compiled in.
+        return format!(
+            "{reason} (backends compiled in: {compiled_list}{env}). None of the backends \
+             compiled in was allowed: unset WGPU_BACKEND, or set it to one of them (vulkan, \
+             metal, dx12), or build gpu-crowd with the feature of the backend wanted"
+        );
+    }
+    if !tried.contains(&"Vulkan") {
+        return format!(
+            "{reason} (backends compiled in: {compiled_list}{env}). No {} adapter was found: \
+             install the GPU's driver",
+            tried.join(" or ")
+        );
+    }
     format!(
-        "{reason} (backends compiled in: {}{env}{icd_note}). No Vulkan driver was found: install \
-         the GPU driver's Vulkan ICD and the Vulkan loader (Debian/Ubuntu: libvulkan1; Mesa's \
-         software driver: mesa-vulkan-drivers), or point {ICD_ENV} (VK_DRIVER_FILES for newer \
-         loaders) at the driver's ICD json (NVIDIA: /usr/share/vulkan/icd.d/nvidia_icd.json)",
-        if compiled.is_empty() {
-            "none".to_string()
-        } else {
-            compiled.join(", ")
-        }
+        "{reason} (backends compiled in: {compiled_list}{env}{icd_note}). No Vulkan driver was \
+         found: install the GPU driver's Vulkan ICD and the Vulkan loader (Debian/Ubuntu: \
+         libvulkan1; Mesa's software driver: mesa-vulkan-drivers), or point {ICD_ENV} \
+         (VK_DRIVER_FILES for newer loaders) at the driver's ICD json (NVIDIA: \
+         /usr/share/vulkan/icd.d/nvidia_icd.json)"
     )
 }

@@ -59,4 +59,38 @@ pub enum GpuError {
     /// shader validation).
     #[error("GPU device error: {0}")]
     Runtime(String),
+    /// The device could not allocate buffers the crowd needs (out of memory, or a size it
+    /// refuses): `what` says which, `bytes` how much.
+    #[error(
+        "allocating {what} ({bytes} bytes of GPU memory, {walkers} walkers) failed on {adapter}: \
+         {reason}; use fewer walkers, or fewer joint slots (GpuOptions::joint_slots)"
+    )]
+    Memory {
+        /// What was being allocated (the crowd's buffers, the model's, a read-back buffer).
+        what: &'static str,
+        /// The bytes asked for.
+        bytes: u64,
+        /// The crowd's walkers.
+        walkers: usize,
+        /// The adapter's name.
+        adapter: String,
+        /// The device's error.
+        reason: String,
+    },
+    /// Joint positions came out of a frame NaN or infinite: the model's values overflow single
+    /// precision for these walkers (as the CPU runtime's `lod_policy::KernelError::Overflow`,
+    /// which refuses to build such a clip). The walkers keep their state, so later frames give
+    /// this error too.
+    #[error(
+        "after frame {frame}, {walkers} walker(s) have joint positions that are NaN or infinite \
+         (the first: walker {first}); the model's values overflow single precision"
+    )]
+    NonFinite {
+        /// Frames stepped, this one included.
+        frame: u64,
+        /// Walkers with a root or a joint position that is not finite.
+        walkers: u64,
+        /// The first such walker (index in the crowd).
+        first: usize,
+    },
 }

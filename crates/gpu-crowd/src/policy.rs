@@ -46,12 +46,18 @@ fn sweep() -> impl Iterator<Item = f32> {
     })
 }
 
-fn runs(f: impl Fn(f32) -> Detail) -> Vec<(f32, Detail)> {
+/// The runs of `f` over the sweep, or `None` once there are more than `cap` (a policy whose
+/// detail changes at nearly every distance, or one that answers differently each time it is
+/// asked, would otherwise grow the list without bound).
+fn runs(f: impl Fn(f32) -> Detail, cap: usize) -> Option<Vec<(f32, Detail)>> {
     let mut out = vec![(0.0f32, f(0.0))];
     let mut prev = 0.0f32;
     for x in sweep().skip(1).chain([f32::MAX]) {
         // Every change between `prev` and `x`, each at its first f32.
         while f(x) != out.last().expect("one run").1 {
+            if out.len() >= cap {
+                return None;
+            }
             let cur = out.last().expect("one run").1;
             let (mut lo, mut hi) = (prev.to_bits(), x.to_bits());
             while hi - lo > 1 {
@@ -68,22 +74,43 @@ fn runs(f: impl Fn(f32) -> Detail) -> Vec<(f32, Detail)> {
         }
         prev = x;
     }
-    out
+    Some(out)
 }
+
+/// Every this many points of the sweep [`PolicyTable::matches`] asks the policy again.
+const PROBE_EVERY: usize = 97;
 
 impl PolicyTable {
     /// Tabulates `policy` for `view`, each detail checked against a model of `levels` accuracy
     /// levels and `joints` joints ([`Detail::fits`]).
+    ///
+    /// Errors: [`GpuError::Policy`] for a detail the model does not have (with the distance it
+    /// was given at); [`GpuError::Config`] for a policy whose detail changes more than the GPU
+    /// crowd tabulates (256 runs, visible and hidden together), found as soon as it does: a
+    /// policy that changes at nearly every distance, or answers differently each time it is
+    /// asked, costs bounded time and memory.
     pub fn new<P: LevelPolicy + ?Sized>(
         policy: &P,
         view: &ViewParams,
         levels: usize,
         joints: usize,
     ) -> Result<PolicyTable, GpuError> {
-        let table = PolicyTable {
-            visible: runs(|d| policy.detail(d, true, view)),
-            hidden: runs(|d| policy.detail(d, false, view)),
+        let too_many = || {
+            GpuError::Config(format!(
+                "the level-of-detail policy changes detail more than {POLICY_MAX} times over \
+                 distance (or gives a different detail each time it is asked); the GPU crowd \
+                 tabulates at most {POLICY_MAX}"
+            ))
         };
+        // (The hidden runs take at least one entry.)
+        let visible =
+            runs(|d| policy.detail(d, true, view), POLICY_MAX - 1).ok_or_else(too_many)?;
+        let hidden = runs(
+            |d| policy.detail(d, false, view),
+            POLICY_MAX - visible.len(),
+        )
+        .ok_or_else(too_many)?;
+        let table = PolicyTable { visible, hidden };
         for &(distance_m, d) in table.visible.iter().chain(&table.hidden) {
             if !d.fits(levels, joints) {
                 return Err(GpuError::Policy {
@@ -95,14 +122,22 @@ impl PolicyTable {
                 });
             }
         }
-        let n = table.visible.len() + table.hidden.len();
-        if n > POLICY_MAX {
-            return Err(GpuError::Config(format!(
-                "the level-of-detail policy changes detail {n} times over distance; the GPU crowd \
-                 tabulates at most {POLICY_MAX}"
-            )));
-        }
         Ok(table)
+    }
+
+    /// Whether `policy` still gives this table's details for `view`: at every run's first
+    /// distance and the `f32` below it, and at every [`PROBE_EVERY`]-th point of the sweep. A
+    /// policy that changed (another policy, or the same one with other settings) is caught
+    /// unless its changes all fall between those points.
+    pub(crate) fn matches<P: LevelPolicy + ?Sized>(&self, policy: &P, view: &ViewParams) -> bool {
+        [(true, &self.visible), (false, &self.hidden)]
+            .into_iter()
+            .all(|(visible, runs)| {
+                let at = |d: f32| policy.detail(d, visible, view) == self.detail(d, visible);
+                runs.iter().all(|&(start, _)| {
+                    at(start) && (start == 0.0 || at(f32::from_bits(start.to_bits() - 1)))
+                }) && sweep().step_by(PROBE_EVERY).all(at)
+            })
     }
 
     /// Runs for walkers in view: the detail of entry `k` holds from its distance (m) up to the

@@ -163,6 +163,30 @@ impl Tables {
             VariogramModel::Exponential => 3,
             VariogramModel::Gaussian => 4,
         };
+        // The model's numbers that become the shaders' f32 constants must be finite as f32 (an
+        // overflowing one would read `inf` in the source, which does not compile).
+        // (The range and the exponent only where the variogram's model reads them; elsewhere
+        // an unused value is written as 1.)
+        let inv_time_scale = 1.0 / parts.time_scale;
+        let stature = f64::from(model.stature_m().unwrap_or(0.0));
+        let range_used = model_id >= 2;
+        let exponent_used = model_id == 1;
+        let fits = |x: f64| (x as f32).is_finite();
+        for (what, x, used) in [
+            ("the variogram's nugget", v.nugget, true),
+            ("the variogram's sill", v.sill, true),
+            ("the variogram's range", v.range, range_used),
+            ("the variogram's exponent", v.exponent, exponent_used),
+            ("1 / the time scale", inv_time_scale, true),
+            ("the stature (m)", stature, true),
+        ] {
+            if used && !fits(x) {
+                return Err(GpuError::Model(format!(
+                    "{what} is {x:e}, beyond single precision (the shaders compute in f32 and \
+                     pairs of f32)"
+                )));
+            }
+        }
         let lit = |x: f64| format!("{:?}", x as f32);
         // A double-float constant: the f64 value as a high and a low f32.
         let df = |x: f64| {
@@ -188,8 +212,18 @@ impl Tables {
             ("VG_MODEL", format!("{model_id}u")),
             ("VG_NUGGET", df(v.nugget)),
             ("VG_SILL", df(v.sill)),
-            ("VG_RANGE", df(if v.range > 0.0 { v.range } else { 1.0 })),
-            ("VG_EXPONENT", df(v.exponent)),
+            (
+                "VG_RANGE",
+                df(if v.range > 0.0 && fits(v.range) {
+                    v.range
+                } else {
+                    1.0
+                }),
+            ),
+            (
+                "VG_EXPONENT",
+                df(if fits(v.exponent) { v.exponent } else { 1.0 }),
+            ),
             ("CS_MIN", format!("{cs_min}u")),
             ("CS_MAX", format!("{cs_max}u")),
             ("CS_SCALE", format!("{cs_scale}u")),
@@ -200,9 +234,9 @@ impl Tables {
             ("STYLE_OFF", format!("{style_off}u")),
             ("LEVELS", format!("{levels_off}u")),
             ("KEYS", format!("{keys_off}u")),
-            ("INV_TIME_SCALE", df(1.0 / parts.time_scale)),
+            ("INV_TIME_SCALE", df(inv_time_scale)),
             ("MIN_INCREMENT", df(lod_policy::MIN_INCREMENT)),
-            ("STATURE", lit(f64::from(model.stature_m().unwrap_or(0.0)))),
+            ("STATURE", lit(stature)),
             ("LAST_LEVEL", format!("{last}u")),
             ("LEVEL_COUNT", format!("{}u", levels.len())),
             ("HIST_BINS", format!("{}u", levels.len() + 1)),

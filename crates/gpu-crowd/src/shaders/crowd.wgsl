@@ -31,13 +31,15 @@ struct Frame {
     policy: array<vec4<u32>, POLICY_MAX>,
 }
 
-// Counters: [0..3] indirect build dispatch, then the frame's counts, the free-stack top and the
-// level histogram.
+// Counters: [0..3] indirect build dispatch, then the frame's counts, the free-stack top, the
+// walkers whose positions came out NaN or infinite (how many, the first) and the level histogram.
 const C_BUILDS: u32 = 3u;
 const C_VISIBLE: u32 = 4u;
 const C_SLOT_FAULTS: u32 = 5u;
 const C_FREE_TOP: u32 = 6u;
-const C_HIST: u32 = 8u;
+const C_NONFINITE: u32 = 7u;
+const C_NONFINITE_FIRST: u32 = 8u;
+const C_HIST: u32 = 9u;
 
 const NONE: u32 = 0xffffffffu;
 const MODE_CYCLE: u32 = 0u;
@@ -689,6 +691,13 @@ fn exp_to_quat(v: vec3<f32>) -> vec4<f32> {
 
 var<workgroup> wg_hist: array<atomic<u32>, HIST_BINS>;
 
+// Whether a coordinate of `v` is NaN or infinite (all exponent bits set: a test on the bits,
+// which a compiler that assumes finite floats cannot fold away as it may `v != v`).
+fn not_finite(v: vec3<f32>) -> bool {
+    let e = bitcast<vec3<u32>>(v) & vec3<u32>(0x7f800000u);
+    return any(e == vec3<u32>(0x7f800000u));
+}
+
 @compute @workgroup_size(64)
 fn pose_fk(@builtin(global_invocation_id) gid: vec3<u32>,
            @builtin(num_workgroups) nw: vec3<u32>,
@@ -796,6 +805,7 @@ fn pose_one(i: u32) {
     let bx = vec2<f32>(w.base_x, w.base_lo_x);
     let bz = vec2<f32>(w.base_z, w.base_lo_z);
     var root = vec3<f32>(pose[0], pose[1], pose[2]);
+    var bad = false;
     if (joints > 0u) {
         // Forward kinematics over the rig (Rig::joint_positions_scaled).
         var pos: array<vec3<f32>, NJ>;
@@ -830,6 +840,7 @@ fn pose_one(i: u32) {
         for (var k = 0u; k < joints; k++) {
             let q = pos[mi(ROTATING + k)];
             let world = vec3<f32>(place(bx, q.x * ch + q.z * sh), q.y, place(bz, -q.x * sh + q.z * ch));
+            bad = bad || not_finite(world);
             joints_out[(3u * k) * ns + slot] = world.x;
             joints_out[(3u * k + 1u) * ns + slot] = world.y;
             joints_out[(3u * k + 2u) * ns + slot] = world.z;
@@ -839,6 +850,11 @@ fn pose_one(i: u32) {
     w.root_y = root.y;
     w.root_z = place(bz, -root.x * sh + root.z * ch);
     walkers[i] = w;
+    if (bad || not_finite(vec3<f32>(w.root_x, w.root_y, w.root_z))) {
+        // The model overflows for this walker's clip (the CPU runtime's KernelError::Overflow).
+        atomicAdd(&counters[C_NONFINITE], 1u);
+        atomicMin(&counters[C_NONFINITE_FIRST], i);
+    }
     var bin = LEVEL_COUNT;
     if (joints > 0u) {
         bin = min(w.cur_acc, LEVEL_COUNT - 1u);
