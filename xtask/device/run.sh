@@ -7,7 +7,8 @@
 #    under the distance policy, with GPU memory a walker, and the CPU crowd at 1,000,000, full
 #    detail, on every core beside it (`gpu.txt`);
 # 2. issue 32 item 3 on real hardware: gpu-crowd's test `cpu_match` (1,000 walkers, 300 frames,
-#    both scenes, every joint against the CPU crowd's), run on this GPU (`cpu-match.txt`);
+#    both scenes, seams off and on, every joint against the CPU crowd's), run on this GPU
+#    (`cpu-match.txt`);
 # 3. issue 35 item 2: the per-walker costs by the criterion bench `model_file` on this machine's
 #    CPU (a root-only walker-frame at 100,000 and 2,000 walkers on one thread; a root-only and a
 #    level-0 clip build, kriging weights and pose) (`per-walker.txt`);

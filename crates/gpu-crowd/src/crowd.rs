@@ -11,7 +11,7 @@ use lod_policy::{Detail, LevelPolicy, RuntimeModel, SplitMix64, StyleMix, ViewPa
 use crate::device::Gpu;
 use crate::error::GpuError;
 use crate::policy::PolicyTable;
-use crate::tables::{POLICY_MAX, Tables, style_row};
+use crate::tables::{POLICY_MAX, SeamParams, Tables, style_row};
 
 const NONE: u32 = u32::MAX;
 const MODE_INIT: u32 = 2;
@@ -26,7 +26,9 @@ const C_FREE_TOP: usize = 6;
 /// them (the shaders' `C_NONFINITE`, `C_NONFINITE_FIRST`).
 const C_NONFINITE: usize = 7;
 const C_NONFINITE_FIRST: usize = 8;
-const C_HIST: usize = 9;
+/// Walkers inside a running seam transition this frame (the shaders' `C_SEAMS`).
+const C_SEAMS: usize = 9;
+const C_HIST: usize = 10;
 
 /// One walker as the shaders hold it (`struct Walker` of `crowd.wgsl`).
 #[repr(C)]
@@ -59,7 +61,8 @@ struct GpuWalker {
     heading_lo: f32,
     /// The path parameter is a double-float too: `s + s_lo` (the CPU's f64 `s`).
     s_lo: f32,
-    pad: f32,
+    /// Joints drawn at the last frame: the clip's, or more while a seam fades joints out.
+    shown: u32,
     cur_acc: u32,
     cur_joints: u32,
     pend_acc: u32,
@@ -93,9 +96,10 @@ struct FrameUniform {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct GpuOptions {
     /// Walkers that can hold a clip with joints at the same time (each such clip takes
-    /// `4 (P max r_T + T)` bytes, plus `12 J` for its joint positions); `None` gives every walker
-    /// one. A walker the policy wants with joints when every slot is taken is shown root only and
-    /// counted in [`GpuFrameStats::slot_faults`] until a slot frees. Which of the walkers
+    /// `4 (P max r_T + 2 T)` bytes, plus `12 J` for its joint positions and, with seams on,
+    /// `4 (3 P + 3)` for its seam transition: [`GpuCrowd::bytes_per_joint_slot`]); `None` gives
+    /// every walker one. A walker the policy wants with joints when every slot is taken is shown
+    /// root only and counted in [`GpuFrameStats::slot_faults`] until a slot frees. Which of the walkers
     /// competing for the last slots in a frame get them depends on the order of the GPU's
     /// threads: with fewer slots than walkers wanting joints, runs are not repeatable bit for
     /// bit (with `None`, or slots to spare, they are).
@@ -115,6 +119,9 @@ pub struct GpuFrameStats {
     pub kernels_built: u64,
     /// Walkers shown root only because no joint slot was free ([`GpuOptions::joint_slots`]).
     pub slot_faults: u64,
+    /// Walkers inside a seam transition after the frame (as `crowd_sim::FrameStats`; 0 with
+    /// `seam_levels = 0`).
+    pub in_transition: u64,
     /// Walkers per accuracy level, then root-only walkers last (as `crowd_sim::FrameStats`).
     pub level_histogram: Vec<u32>,
     /// Wall time from the frame's submission to its completion on the device, including the
@@ -157,13 +164,27 @@ struct Page {
 /// moved by the clip's root motion, the next controls from the path ahead), mid-cycle refinement
 /// when the policy wants a finer detail (after the spread of first builds), the clip build at the
 /// detail the model evaluates (kriging weights, core, `G(c)`, time table, root motion, body
-/// scale), the pose at the clip's phase and forward kinematics of the active joints.
+/// scale), the pose at the clip's phase and forward kinematics of the active joints; and with
+/// `seam_levels > 0` the inertialized seams (`lod_policy::SeamTransition`, as the CPU walker
+/// starts, applies and ends them): at a clip change between two clips with joints, the new one at
+/// one of the first `seam_levels` levels, the displayed pose of the outgoing clip and its velocity
+/// (by a finite difference over `lod_policy::SEAM_STEP_S`, in the next cycle frame at a cycle
+/// end) start offsets that decay with a critically damped spring of half-life
+/// `seam_halflife_s`, the root orientation's composed as a rotation, joints only one side shows
+/// fading from or to their rest rotations (drawn beyond the clip's while they fade out).
 ///
-/// What it does not do (yet): inertialized seams and the foot lock. [`GpuCrowd::new`] refuses a
-/// config with `seam_levels` or `foot_lock_levels` above 0, so that a comparison with the CPU
-/// crowd is always against one configured the same way. A cycle end whose new clip is shorter
-/// than the time already past it waits for the next frame (the CPU crowd loops at once; with
-/// frames far shorter than cycles it does not happen).
+/// Seam state lives in the walker's joint slot, after its clip: offset, velocity and base rows and
+/// three scalars, `4 (3 P + 3)` bytes a slot (with seams on only; walkers without joints hold no
+/// slot and pay nothing). Per frame two passes around the clip build run when seams are on:
+/// `seam_capture` (the outgoing clip's displayed state, before the build overwrites the clip) and
+/// `seam_start` (the transition to the incoming clip); the pose pass applies the running
+/// transition and ends it once decayed.
+///
+/// What it does not do (yet): the foot lock. [`GpuCrowd::new`] refuses a config with
+/// `foot_lock_levels` above 0, so that a comparison with the CPU crowd is always against one
+/// configured the same way. A cycle end whose new clip is shorter than the time already past it
+/// waits for the next frame (the CPU crowd loops at once; with frames far shorter than cycles it
+/// does not happen).
 ///
 /// Walker state lives on the GPU; per frame the host uploads the frame's uniform (camera planes,
 /// time step, the policy table) and resets a few counters, and reads back the counters.
@@ -203,6 +224,8 @@ struct Pipelines {
     build: wgpu::ComputePipeline,
     fix_free: wgpu::ComputePipeline,
     pose_fk: wgpu::ComputePipeline,
+    /// The seam passes `seam_capture` and `seam_start`, made and run when `seam_levels > 0`.
+    seam: Option<(wgpu::ComputePipeline, wgpu::ComputePipeline)>,
 }
 
 /// Workgroups for `n` walkers: `(x, y)` with `x y WG >= n`.
@@ -262,9 +285,13 @@ impl GpuCrowd {
     /// (the same paths, phases, strides, heights and styles; the field enlarged likewise), uploads
     /// them and builds every walker's first, root-only clip on the GPU.
     ///
+    /// Seams are inertialized as the CPU crowd's at the first `config.seam_levels` levels (any
+    /// value; `usize::MAX`, the CPU crowd's default, is every level), which costs each joint slot
+    /// `4 (3 P + 3)` more bytes ([`GpuCrowd::bytes_per_joint_slot`]); `seam_levels = 0` runs no
+    /// seam pass and allocates nothing for them.
+    ///
     /// Errors: a config the CPU crowd would refuse, or one asking for what the GPU crowd does not
-    /// do (`seam_levels` or `foot_lock_levels` above 0: configure the CPU crowd you compare with the
-    /// same way); a model the shaders cannot take, or one with a number single precision cannot
+    /// do (`foot_lock_levels` above 0: configure the CPU crowd you compare with the same way); a model the shaders cannot take, or one with a number single precision cannot
     /// hold ([`GpuError::Model`]); [`GpuOptions::page_walkers`] of `Some(0)`
     /// ([`GpuError::Config`]); buffers or workgroup memory beyond the adapter's limits
     /// ([`GpuError::Limit`]), or buffers the device cannot allocate ([`GpuError::Memory`], with
@@ -296,7 +323,8 @@ impl GpuCrowd {
                 CrowdStyle::DataMix => StyleMix::DATA_MIX,
             },
         )?);
-        let tables = Tables::new(model, &styles)?;
+        let seam = SeamParams::new(config.seam_levels, config.seam_halflife_s);
+        let tables = Tables::new(model, &styles, seam)?;
         let limits = &gpu.limits;
         if tables.workgroup_bytes > u64::from(limits.max_compute_workgroup_storage_size) {
             return Err(GpuError::Limit {
@@ -382,7 +410,7 @@ impl GpuCrowd {
                 base_lo: [0.0; 2],
                 heading_lo: 0.0,
                 s_lo: 0.0,
-                pad: 0.0,
+                shown: 0,
                 cur_acc: last as u32,
                 cur_joints: 0,
                 pend_acc: last as u32,
@@ -438,6 +466,7 @@ impl GpuCrowd {
             build: pipeline("build"),
             fix_free: pipeline("fix_free"),
             pose_fk: pipeline("pose_fk"),
+            seam: (seam.levels > 0).then(|| (pipeline("seam_capture"), pipeline("seam_start"))),
         })?;
 
         // Pages: each buffer of a page within the adapter's largest storage binding.
@@ -451,7 +480,11 @@ impl GpuCrowd {
             tables.joints,
         );
         let small_per_walker = 4 * (7 * rt_last + 2 * t) as u64;
-        let big_per_slot = 4 * (p * rt_max + 2 * t) as u64;
+        // A joint slot's clip, then its seam state when seams are on (`crowd.wgsl`'s `SB_*`:
+        // offset, velocity and base rows, the rows, start and captured rows of the transition).
+        let seam_floats = if seam.levels > 0 { 3 * p + 3 } else { 0 };
+        let big_floats = p * rt_max + 2 * t + seam_floats;
+        let big_per_slot = 4 * big_floats as u64;
         let joints_per_slot = 12 * j.max(1) as u64;
         let walker_bytes = std::mem::size_of::<GpuWalker>() as u64;
         let max_binding =
@@ -460,8 +493,7 @@ impl GpuCrowd {
             .max(small_per_walker)
             .max(big_per_slot)
             .max(joints_per_slot);
-        let fit =
-            (max_binding / largest).min(u64::from(u32::MAX) / ((p * rt_max + 2 * t) as u64).max(1));
+        let fit = (max_binding / largest).min(u64::from(u32::MAX) / (big_floats as u64).max(1));
         if options.page_walkers == Some(0) {
             return Err(GpuError::Config(
                 "GpuOptions::page_walkers = Some(0): a page holds at least one walker (None picks \
@@ -766,8 +798,8 @@ impl GpuCrowd {
             uniform.n_slots = page.slots as u32;
             self.queue
                 .write_buffer(&page.frame, 0, bytemuck::bytes_of(&uniform));
-            // Reset the frame's counters (builds, visible, slot faults) and the histogram; the
-            // free-slot stack's top stays.
+            // Reset the frame's counters (builds, visible, slot faults, seams) and the histogram;
+            // the free-slot stack's top stays.
             self.queue.write_buffer(
                 &page.counters,
                 4 * C_BUILDS as u64,
@@ -782,6 +814,11 @@ impl GpuCrowd {
             );
             self.queue.write_buffer(
                 &page.counters,
+                4 * C_SEAMS as u64,
+                bytemuck::cast_slice(&[0u32]),
+            );
+            self.queue.write_buffer(
+                &page.counters,
                 4 * C_HIST as u64,
                 bytemuck::cast_slice(&zeros),
             );
@@ -792,8 +829,17 @@ impl GpuCrowd {
             pass.dispatch_workgroups(gx, gy, 1);
             pass.set_pipeline(&self.pipelines.build_args);
             pass.dispatch_workgroups(1, 1, 1);
+            if let Some((capture, _)) = &self.pipelines.seam {
+                // The outgoing clips' displayed states, before `build` overwrites them.
+                pass.set_pipeline(capture);
+                pass.dispatch_workgroups_indirect(&page.counters, 0);
+            }
             pass.set_pipeline(&self.pipelines.build);
             pass.dispatch_workgroups_indirect(&page.counters, 0);
+            if let Some((_, start)) = &self.pipelines.seam {
+                pass.set_pipeline(start);
+                pass.dispatch_workgroups_indirect(&page.counters, 0);
+            }
             pass.set_pipeline(&self.pipelines.fix_free);
             pass.dispatch_workgroups(1, 1, 1);
             pass.set_pipeline(&self.pipelines.pose_fk);
@@ -822,6 +868,7 @@ impl GpuCrowd {
             stats.kernels_built += u64::from(c[C_BUILDS]);
             stats.visible += u64::from(c[4]);
             stats.slot_faults += u64::from(c[5]);
+            stats.in_transition += u64::from(c[C_SEAMS]);
             for (h, v) in stats.level_histogram.iter_mut().zip(&c[C_HIST..]) {
                 *h += v;
             }
@@ -895,16 +942,16 @@ impl GpuCrowd {
                 let mut positions = vec![Vec3::from_array(w.root)];
                 if w.cur_joints > 0 && w.slot != NONE {
                     let s = w.slot as usize;
-                    if s >= ns || w.cur_joints as usize > self.joints {
+                    if s >= ns || w.shown as usize > self.joints {
                         return Err(GpuError::Runtime(format!(
                             "walker {}: joint slot {s} of {ns} with {} joints of {}: the \
                              walkers read back are corrupt",
                             out.len(),
-                            w.cur_joints,
+                            w.shown,
                             self.joints
                         )));
                     }
-                    for k in 0..w.cur_joints as usize {
+                    for k in 0..w.shown as usize {
                         let at = |c: usize| joints[(3 * k + c) * ns + s];
                         positions.push(Vec3::new(at(0), at(1), at(2)));
                     }
@@ -956,7 +1003,8 @@ impl GpuCrowd {
         self.pages.iter().map(|p| p.bytes).sum()
     }
 
-    /// Bytes of one joint slot (a clip with joints and its joint positions).
+    /// Bytes of one joint slot: a clip with joints (`4 (P max r_T + 2 T)`), its joint positions
+    /// (`12 J`) and, with seams on (`seam_levels > 0`), its seam transition (`4 (3 P + 3)`).
     pub fn bytes_per_joint_slot(&self) -> u64 {
         self.bytes_per_slot
     }
@@ -991,12 +1039,11 @@ fn check_config(c: &CrowdConfig) -> Result<(), GpuError> {
     // Also the walker cap, `crowd_sim::MAX_WALKERS` (2^31 - 1: walker indices and counts in 32
     // bits, as the shaders keep them).
     c.validate()?;
-    if c.seam_levels > 0 || c.foot_lock_levels > 0 {
+    if c.foot_lock_levels > 0 {
         return Err(GpuError::Config(format!(
-            "seam_levels = {} and foot_lock_levels = {}: the GPU crowd has no seam \
-             inertialization and no foot lock yet; set both to 0 (and the CPU crowd it is \
-             compared with likewise)",
-            c.seam_levels, c.foot_lock_levels
+            "foot_lock_levels = {}: the GPU crowd has no foot lock yet; set it to 0 (and the CPU \
+             crowd it is compared with likewise)",
+            c.foot_lock_levels
         )));
     }
     Ok(())

@@ -15,6 +15,25 @@ pub(crate) const POLICY_MAX: usize = 256;
 /// Largest rig the shaders take (joints held in registers per walker).
 const MAX_RIG_JOINTS: usize = 256;
 
+/// What the shaders' seam inertialization takes from the crowd's config.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SeamParams {
+    /// Accuracy levels whose clip changes are inertialized (`CrowdConfig::seam_levels`, at most
+    /// `u32::MAX`); 0: none, and the seam passes are not run.
+    pub levels: u32,
+    /// The spring's decay rate `2 ln 2 / halflife` (1/s), as `lod_policy::SeamTransition::new`.
+    pub decay: f32,
+}
+
+impl SeamParams {
+    pub fn new(seam_levels: usize, halflife_s: f32) -> SeamParams {
+        SeamParams {
+            levels: u32::try_from(seam_levels).unwrap_or(u32::MAX),
+            decay: 2.0 * std::f32::consts::LN_2 / halflife_s.max(1e-3),
+        }
+    }
+}
+
 /// The packed model and the shader source for it.
 #[derive(Debug, Clone)]
 pub(crate) struct Tables {
@@ -42,7 +61,12 @@ fn push(md: &mut Vec<f32>, v: &[f32]) -> usize {
 impl Tables {
     /// Packs `model` with the style rows `styles` (each `d - 4` values: the normalised style part of
     /// the control vector of a walker of that style id).
-    pub fn new(model: &RuntimeModel, styles: &[Vec<f32>]) -> Result<Tables, GpuError> {
+    /// `seam` sets the seam constants of the shaders.
+    pub fn new(
+        model: &RuntimeModel,
+        styles: &[Vec<f32>],
+        seam: SeamParams,
+    ) -> Result<Tables, GpuError> {
         let lod = model.lod();
         let rig = model.rig();
         let parts = lod.parts();
@@ -88,6 +112,20 @@ impl Tables {
         for j in rig.joints() {
             md.extend_from_slice(&j.offset.to_array());
             md.extend_from_slice(&j.rest.to_array());
+        }
+        // The rest rows joints fade to and from at seams (what `motion_lod`'s sources give as
+        // `ClipSource::rest_rows`: each rotating joint's rest rotation as an exponential map,
+        // computed in f64, here from the rig's f32 rest rotation).
+        let rest_rows = md.len();
+        md.resize(rest_rows + p, 0.0);
+        for j in rig.joints() {
+            if let JointRole::Rotating(k) = j.role {
+                let r = lod_policy::ALWAYS_ROWS + 3 * k;
+                if r + 3 <= p {
+                    let e = quat_to_exp(j.rest.as_dquat());
+                    md[rest_rows + r..rest_rows + r + 3].copy_from_slice(&e.as_vec3().to_array());
+                }
+            }
         }
         let mut mtab: Vec<u32> = Vec::new();
         let levels_off = 0usize;
@@ -245,6 +283,10 @@ impl Tables {
             ("RIG", format!("{rig_off}u")),
             ("ROOT_JOINT", format!("{}u", rig.root())),
             ("ROTATING", format!("{rotating_off}u")),
+            ("REST_ROWS", format!("{rest_rows}u")),
+            ("SEAM_LEVELS", format!("{}u", seam.levels)),
+            ("SEAM_DECAY", format!("{:?}", seam.decay)),
+            ("SEAM_STEP", format!("{:?}", lod_policy::SEAM_STEP_S)),
         ];
         let mut source = String::from("// Model constants (gpu-crowd tables.rs).\n");
         for (name, value) in consts {
@@ -274,6 +316,18 @@ impl Tables {
             workgroup_bytes,
         })
     }
+}
+
+/// The exponential map of a unit quaternion, `theta` in `[0, pi]` (`motion_io`'s `quat_to_exp`,
+/// which gives the CPU sources' rest rows).
+fn quat_to_exp(q: glam::DQuat) -> glam::DVec3 {
+    let q = if q.w < 0.0 { -q } else { q };
+    let v = glam::DVec3::new(q.x, q.y, q.z);
+    let s = v.length();
+    if s < 1e-12 {
+        return 2.0 * v;
+    }
+    v * (2.0 * s.atan2(q.w) / s)
 }
 
 /// The style part (`d - 4` values, normalised) of the control vector of a walker of `style`.

@@ -3,10 +3,14 @@
 // bounded by those constants.
 //
 // Passes per frame: `advance` (cull, detail from the tabulated policy, clock, cycle ends with the
-// path controller, clip builds scheduled), `build_args` (indirect dispatch size), `build` (one
-// workgroup per scheduled clip: kriging weights, core, G(c), time table, root motion), `fix_free`
-// (the joint-slot stack after its pops), `pose_fk` (pose at the clip's phase, forward kinematics,
-// placement in the world).
+// path controller, clip builds scheduled), `build_args` (indirect dispatch size), `seam_capture`
+// (with seams on: one workgroup per scheduled clip, the outgoing clip's displayed state before the
+// build overwrites it), `build` (one workgroup per scheduled clip: kriging weights, core, G(c),
+// time table, root motion), `seam_start` (with seams on: the seam transition into the new clip),
+// `fix_free` (the joint-slot stack after its pops), `pose_fk` (pose at the clip's phase with the
+// running seam, forward kinematics, placement in the world). Seam state lives in each joint slot
+// after its clip (see "Seam inertialization" below); with SEAM_LEVELS = 0 the host runs neither
+// seam pass and allocates no seam state.
 
 struct Walker {
     t: f32, cur_dur: f32, hold_s: f32, pend_u: f32,
@@ -17,7 +21,7 @@ struct Walker {
     path_rot: f32, path_dir: f32, c_dx: f32, c_dz: f32,
     c_turn: f32, c_height: f32, m_dx: f32, m_dz: f32,
     m_turn: f32, init_phase: f32, init_hold: f32, base_lo_x: f32,
-    base_lo_z: f32, heading_lo: f32, s_lo: f32, pad1: f32,
+    base_lo_z: f32, heading_lo: f32, s_lo: f32, shown: u32,
     cur_acc: u32, cur_joints: u32, pend_acc: u32, pend_joints: u32,
     style: u32, slot: u32, mode: u32, flags: u32,
 }
@@ -32,14 +36,16 @@ struct Frame {
 }
 
 // Counters: [0..3] indirect build dispatch, then the frame's counts, the free-stack top, the
-// walkers whose positions came out NaN or infinite (how many, the first) and the level histogram.
+// walkers whose positions came out NaN or infinite (how many, the first), the walkers inside a
+// running seam transition and the level histogram.
 const C_BUILDS: u32 = 3u;
 const C_VISIBLE: u32 = 4u;
 const C_SLOT_FAULTS: u32 = 5u;
 const C_FREE_TOP: u32 = 6u;
 const C_NONFINITE: u32 = 7u;
 const C_NONFINITE_FIRST: u32 = 8u;
-const C_HIST: u32 = 9u;
+const C_SEAMS: u32 = 9u;
+const C_HIST: u32 = 10u;
 
 const NONE: u32 = 0xffffffffu;
 const MODE_CYCLE: u32 = 0u;
@@ -690,6 +696,8 @@ fn exp_to_quat(v: vec3<f32>) -> vec4<f32> {
 }
 
 var<workgroup> wg_hist: array<atomic<u32>, HIST_BINS>;
+// Walkers of the workgroup inside a seam transition after the frame.
+var<workgroup> wg_seams: atomic<u32>;
 
 // Whether a coordinate of `v` is NaN or infinite (all exponent bits set: a test on the bits,
 // which a compiler that assumes finite floats cannot fold away as it may `v != v`).
@@ -705,6 +713,9 @@ fn pose_fk(@builtin(global_invocation_id) gid: vec3<u32>,
     for (var b = lid; b < HIST_BINS; b += WG) {
         atomicStore(&wg_hist[b], 0u);
     }
+    if (lid == 0u) {
+        atomicStore(&wg_seams, 0u);
+    }
     workgroupBarrier();
     let i = walker_index(gid, nw);
     if (i < frame.n) {
@@ -717,6 +728,12 @@ fn pose_fk(@builtin(global_invocation_id) gid: vec3<u32>,
             atomicAdd(&counters[C_HIST + b], v);
         }
     }
+    if (lid == 0u) {
+        let v = atomicLoad(&wg_seams);
+        if (v > 0u) {
+            atomicAdd(&counters[C_SEAMS], v);
+        }
+    }
 }
 
 fn clip_at(big: bool, e: u32) -> f32 {
@@ -724,6 +741,50 @@ fn clip_at(big: bool, e: u32) -> f32 {
         return big_clips[e];
     }
     return small_clips[e];
+}
+
+// Playback time -> phase (ClipKernel::phase_at, in f32) of the clip whose double-float time
+// table starts at element `tt` (high parts, then low parts; `stride`, `base` as in `clip_at`).
+fn clip_phase(big: bool, tt: u32, stride: u32, base: u32, t: f32) -> f32 {
+    let duration = vec2<f32>(clip_at(big, (tt + T - 1u) * stride + base), clip_at(big, (tt + 2u * T - 1u) * stride + base));
+    var phase = 0.0;
+    if (T >= 2u && duration.x > 0.0) {
+        let tq = min(max(t, 0.0), duration.x + duration.y);
+        var k = min(u32(tq / duration.x * f32(T - 1u)), T - 2u);
+        loop {
+            if (k == 0u) { break; }
+            let tk = vec2<f32>(clip_at(big, (tt + k) * stride + base), clip_at(big, (tt + T + k) * stride + base));
+            if (tk.x < tq || (tk.x == tq && tk.y <= 0.0)) { break; }
+            k -= 1u;
+        }
+        loop {
+            if (k + 2u >= T) { break; }
+            let tk1 = vec2<f32>(clip_at(big, (tt + k + 1u) * stride + base), clip_at(big, (tt + T + k + 1u) * stride + base));
+            if (tk1.x > tq || (tk1.x == tq && tk1.y > 0.0)) { break; }
+            k += 1u;
+        }
+        let t0 = vec2<f32>(clip_at(big, (tt + k) * stride + base), clip_at(big, (tt + T + k) * stride + base));
+        let t1 = vec2<f32>(clip_at(big, (tt + k + 1u) * stride + base), clip_at(big, (tt + T + k + 1u) * stride + base));
+        let num = df_add(vec2<f32>(tq, 0.0), -t0);
+        let den = df_add(t1, -t0);
+        let f = clamp((num.x + num.y) / (den.x + den.y), 0.0, 1.0);
+        phase = f32(k) + f;
+    }
+    return phase;
+}
+
+// The time weights w_T (eq. 5) at `phase` of a level's `rt` time factors (`big_t` columns from
+// `off_ut`).
+fn time_weights(phase: f32, rt: u32, big_t: u32, off_ut: u32) -> array<f32, RT_MAX> {
+    let ph = clamp(phase, 0.0, f32(T - 1u));
+    let i0 = min(u32(floor(ph)), T - 2u);
+    let i1 = min(i0 + 1u, T - 1u);
+    let a = ph - f32(i0);
+    var wt: array<f32, RT_MAX>;
+    for (var b = 0u; b < rt; b++) {
+        wt[b] = (1.0 - a) * md[off_ut + i0 * big_t + b] + a * md[off_ut + i1 * big_t + b];
+    }
+    return wt;
 }
 
 fn pose_one(i: u32) {
@@ -756,39 +817,9 @@ fn pose_one(i: u32) {
         tt = 7u * RT_LAST;
     }
     let big = joints > 0u;
-    let duration = vec2<f32>(clip_at(big, (tt + T - 1u) * stride + base), clip_at(big, (tt + 2u * T - 1u) * stride + base));
-    var phase = 0.0;
-    if (T >= 2u && duration.x > 0.0) {
-        let tq = min(max(w.t, 0.0), duration.x + duration.y);
-        var k = min(u32(tq / duration.x * f32(T - 1u)), T - 2u);
-        loop {
-            if (k == 0u) { break; }
-            let tk = vec2<f32>(clip_at(big, (tt + k) * stride + base), clip_at(big, (tt + T + k) * stride + base));
-            if (tk.x < tq || (tk.x == tq && tk.y <= 0.0)) { break; }
-            k -= 1u;
-        }
-        loop {
-            if (k + 2u >= T) { break; }
-            let tk1 = vec2<f32>(clip_at(big, (tt + k + 1u) * stride + base), clip_at(big, (tt + T + k + 1u) * stride + base));
-            if (tk1.x > tq || (tk1.x == tq && tk1.y > 0.0)) { break; }
-            k += 1u;
-        }
-        let t0 = vec2<f32>(clip_at(big, (tt + k) * stride + base), clip_at(big, (tt + T + k) * stride + base));
-        let t1 = vec2<f32>(clip_at(big, (tt + k + 1u) * stride + base), clip_at(big, (tt + T + k + 1u) * stride + base));
-        let num = df_add(vec2<f32>(tq, 0.0), -t0);
-        let den = df_add(t1, -t0);
-        let f = clamp((num.x + num.y) / (den.x + den.y), 0.0, 1.0);
-        phase = f32(k) + f;
-    }
+    let phase = clip_phase(big, tt, stride, base, w.t);
     // Time weights w_T (eq. 5).
-    let ph = clamp(phase, 0.0, f32(T - 1u));
-    let i0 = min(u32(floor(ph)), T - 2u);
-    let i1 = min(i0 + 1u, T - 1u);
-    let a = ph - f32(i0);
-    var wt: array<f32, RT_MAX>;
-    for (var b = 0u; b < rt; b++) {
-        wt[b] = (1.0 - a) * md[off_ut + i0 * big_t + b] + a * md[off_ut + i1 * big_t + b];
-    }
+    let wt = time_weights(phase, rt, big_t, off_ut);
     // The pose rows: G w_T.
     var pose: array<f32, P>;
     for (var r = 0u; r < rows; r++) {
@@ -800,6 +831,37 @@ fn pose_one(i: u32) {
         }
         pose[r] = acc;
     }
+    // The running seam (the CPU walker's `displayed`, then its pose stage's `finish_after`):
+    // joints it fades out are drawn beyond the clip's.
+    var shown = joints;
+    if (SEAM_LEVELS > 0u && joints > 0u) {
+        let sr = u32(seam_get(SB_ROWS, slot));
+        if (sr > 0u) {
+            let clock = w.t - seam_get(SB_START, slot);
+            for (var r = rows; r < sr; r++) {
+                pose[r] = seam_get(SB_BASE + r, slot);
+            }
+            let ab = seam_coeffs(clock);
+            for (var r = 0u; r < sr; r++) {
+                if (r < 3u || r > 6u) {
+                    pose[r] += seam_row(slot, r, ab);
+                }
+            }
+            let v = seam_root(slot, ab, vec3<f32>(pose[3], pose[4], pose[5]));
+            pose[3] = v.x;
+            pose[4] = v.y;
+            pose[5] = v.z;
+            shown = max(joints, (sr - 7u) / 3u);
+            let x = SEAM_DECAY * clock;
+            if (x > F32_MAX || (1.0 + x) * exp(-x) < 1e-4) {
+                seam_set(SB_ROWS, slot, 0.0);
+                seam_set(SB_START, slot, 0.0);
+            } else {
+                atomicAdd(&wg_seams, 1u);
+            }
+        }
+    }
+    w.shown = shown;
     let sh = w.sin_h;
     let ch = w.cos_h;
     let bx = vec2<f32>(w.base_x, w.base_lo_x);
@@ -825,7 +887,7 @@ fn pose_one(i: u32) {
                 rot[j] = exp_to_quat(vec3<f32>(pose[3], pose[4], pose[5]));
             } else {
                 var local = rest;
-                if (role == 2u && k < joints) {
+                if (role == 2u && k < shown) {
                     let r = 7u + 3u * k;
                     local = exp_to_quat(vec3<f32>(pose[r], pose[r + 1u], pose[r + 2u]));
                 }
@@ -837,7 +899,7 @@ fn pose_one(i: u32) {
             }
         }
         root = pos[ROOT_JOINT];
-        for (var k = 0u; k < joints; k++) {
+        for (var k = 0u; k < shown; k++) {
             let q = pos[mi(ROTATING + k)];
             let world = vec3<f32>(place(bx, q.x * ch + q.z * sh), q.y, place(bz, -q.x * sh + q.z * ch));
             bad = bad || not_finite(world);
@@ -860,4 +922,412 @@ fn pose_one(i: u32) {
         bin = min(w.cur_acc, LEVEL_COUNT - 1u);
     }
     atomicAdd(&wg_hist[bin], 1u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Seam inertialization (lod_policy::SeamTransition and SeamScratch, as crowd_sim's walker uses
+// them): a clip change at one of the first SEAM_LEVELS levels between two clips with joints starts
+// offsets, decaying with a critically damped spring, from the displayed state of the outgoing clip
+// (its pose and its velocity by a finite difference over SEAM_STEP, re-expressed in the next cycle
+// frame at a cycle end) to the incoming clip's. Their state lives in the walker's joint slot,
+// after its clip in `big_clips` (same stride, `frame.n_slots`): offset, velocity and base rows
+// (3 P), then the transition's rows (0: none runs), its start in clip time and the captured rows
+// (0: none captured), these counts as f32 values. `seam_capture` (before `build` overwrites the clip) writes the captured
+// state's pose and velocity into the offset and velocity rows, `seam_start` (after `build`) turns
+// them into the transition; `pose_one` applies it and ends it.
+
+const SB_OFF: u32 = P * RT_MAX + 2u * T;
+const SB_VEL: u32 = SB_OFF + P;
+const SB_BASE: u32 = SB_OFF + 2u * P;
+const SB_ROWS: u32 = SB_OFF + 3u * P;
+const SB_START: u32 = SB_ROWS + 1u;
+const SB_CAPT: u32 = SB_ROWS + 2u;
+const F32_MAX: f32 = 3.4028235e38;
+const TAU: f32 = 6.2831855;
+
+fn seam_get(k: u32, slot: u32) -> f32 {
+    return big_clips[k * frame.n_slots + slot];
+}
+
+fn seam_set(k: u32, slot: u32, v: f32) {
+    big_clips[k * frame.n_slots + slot] = v;
+}
+
+// The spring's weights of the offset and its velocity `clock` seconds after the seam:
+// ((1 + d t) e^{-d t}, t e^{-d t}) (SeamTransition::apply).
+fn seam_coeffs(clock: f32) -> vec2<f32> {
+    let t = max(clock, 0.0);
+    let e = exp(-SEAM_DECAY * t);
+    return vec2<f32>((1.0 + SEAM_DECAY * t) * e, t * e);
+}
+
+// The offset of row `r` (not a root orientation or time row) at the spring's weights `ab`.
+fn seam_row(slot: u32, r: u32, ab: vec2<f32>) -> f32 {
+    return ab.x * seam_get(SB_OFF + r, slot) + ab.y * seam_get(SB_VEL + r, slot);
+}
+
+// The root orientation `v` (rows 3..6) with the offset rotation at the spring's weights `ab`
+// applied on the left, on the branch nearest `v`.
+fn seam_root(slot: u32, ab: vec2<f32>, v: vec3<f32>) -> vec3<f32> {
+    let x = vec3<f32>(seam_get(SB_OFF + 3u, slot), seam_get(SB_OFF + 4u, slot), seam_get(SB_OFF + 5u, slot));
+    let u = vec3<f32>(seam_get(SB_VEL + 3u, slot), seam_get(SB_VEL + 4u, slot), seam_get(SB_VEL + 5u, slot));
+    let o = ab.x * x + ab.y * u;
+    let q = quat_mul(exp_map_quat(o), exp_map_quat(v));
+    return nearest_branch(quat_exp_map(q), v);
+}
+
+// lod_policy::exp_map_to_quat: Quat::from_axis_angle(v / |v|, |v|), the identity below 1e-12.
+fn exp_map_quat(v: vec3<f32>) -> vec4<f32> {
+    let angle = length(v);
+    if (angle > 1e-12) {
+        let axis = v / angle;
+        let hf = angle * 0.5;
+        return vec4<f32>(axis * sin(hf), cos(hf));
+    }
+    return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+}
+
+// lod_policy::quat_to_exp_map (glam's to_axis_angle).
+fn quat_exp_map(q_in: vec4<f32>) -> vec3<f32> {
+    var q = q_in;
+    if (q.w < 0.0) {
+        q = -q;
+    }
+    let len = length(q.xyz);
+    if (len >= 1e-8) {
+        let angle = 2.0 * atan2(len, q.w);
+        if (abs(angle) >= 1e-12) {
+            return (q.xyz / len) * angle;
+        }
+    }
+    return vec3<f32>(0.0, 0.0, 0.0);
+}
+
+fn quat_conj(q: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(-q.xyz, q.w);
+}
+
+// f32::round: halves away from zero.
+fn round_away(x: f32) -> f32 {
+    return sign(x) * floor(abs(x) + 0.5);
+}
+
+// lod_policy::nearest_branch: the exponential map of the rotation `v` on the branch nearest
+// `reference`.
+fn nearest_branch(v: vec3<f32>, reference: vec3<f32>) -> vec3<f32> {
+    let angle = length(v);
+    if (angle < 1e-6) {
+        return v;
+    }
+    let axis = v / angle;
+    let k = round_away((dot(axis, reference) - angle) / TAU);
+    let w = axis * (angle + k * TAU);
+    if (length(w - reference) <= length(v - reference)) {
+        return w;
+    }
+    return v;
+}
+
+// The two times whose poses give the velocity at `t` of a clip of `dur` seconds (lod_policy's
+// difference_window): backward when there is room, else forward.
+fn seam_window(t: f32, dur: f32) -> vec2<f32> {
+    let h = max(min(SEAM_STEP, 0.25 * dur), 1e-4);
+    if (t - h >= 0.0) {
+        return vec2<f32>(t - h, t);
+    }
+    return vec2<f32>(t, t + h);
+}
+
+// Per seam workgroup: [0] slot, [1] clip rows, [2] other rows (the running seam's at a capture,
+// the captured at a start), [3] r_T of the clip's level, [4] 1 when the state's pose is the later
+// sample, [5] 1 at a cycle end (capture).
+var<workgroup> ws_u: array<u32, 6>;
+// [0], [1] the two sample times, [2] the running seam's start (capture), [3..6] the outgoing
+// clip's root motion (capture).
+var<workgroup> ws_f: array<f32, 6>;
+var<workgroup> ws_rows: u32;
+var<workgroup> ws_wt0: array<f32, RT_MAX>;
+var<workgroup> ws_wt1: array<f32, RT_MAX>;
+
+// Sets the workgroup's two samples of the clip with joints in `slot` at level `lvl`: the times of
+// the difference window at `t` of `dur`, their time weights; returns r_T.
+fn seam_samples(slot: u32, lvl: u32, t: f32, dur: f32) -> u32 {
+    let key = mi(LEVELS + 4u * lvl);
+    let rt = mi(LEVELS + 4u * lvl + 2u);
+    let kb = KEYS + 8u * key;
+    let big_t = mi(kb + 1u);
+    let off_ut = mi(kb + 5u);
+    let win = seam_window(t, dur);
+    let tt = P * RT_MAX;
+    let ns = frame.n_slots;
+    ws_wt0 = time_weights(clip_phase(true, tt, ns, slot, win.x), rt, big_t, off_ut);
+    ws_wt1 = time_weights(clip_phase(true, tt, ns, slot, win.y), rt, big_t, off_ut);
+    ws_f[0] = win.x;
+    ws_f[1] = win.y;
+    ws_u[4] = select(0u, 1u, win.y == t);
+    return rt;
+}
+
+// Row `r` of the clip in `slot` at the workgroup's sample `which` (its pose, G w_T).
+fn sample_row(slot: u32, r: u32, rt: u32, which: u32) -> f32 {
+    var acc = 0.0;
+    for (var b = 0u; b < rt; b++) {
+        let g = big_clips[(r * RT_MAX + b) * frame.n_slots + slot];
+        if (which == 0u) {
+            acc = acc + ws_wt0[b] * g;
+        } else {
+            acc = acc + ws_wt1[b] * g;
+        }
+    }
+    return acc;
+}
+
+// The velocity from sample `a` to `b` over `h` seconds (PoseState::set; zero for an `h` that is
+// not finite and positive).
+fn finite_difference(a: f32, b: f32, h: f32) -> f32 {
+    if (h > 0.0 && h <= F32_MAX) {
+        return (b - a) / h;
+    }
+    return 0.0;
+}
+
+// The root's angular velocity from orientation `a` to `b` over `h` seconds (PoseState::set).
+fn angular_velocity(a: vec3<f32>, b: vec3<f32>, h: f32) -> vec3<f32> {
+    if (h > 0.0 && h <= F32_MAX) {
+        return quat_exp_map(quat_mul(exp_map_quat(b), quat_conj(exp_map_quat(a)))) / h;
+    }
+    return vec3<f32>(0.0, 0.0, 0.0);
+}
+
+// SeamScratch::capture for one build: the displayed state (the clip's pose with the running seam,
+// the joints it fades out included) of the outgoing clip at the time it is left, written into the
+// slot's offset (pose) and velocity rows; one workgroup per scheduled build (those that start no
+// seam return at once).
+@compute @workgroup_size(64)
+fn seam_capture(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let entry = wid.y * MAX_X + wid.x;
+    if (lid == 0u) {
+        ws_rows = 0u;
+        if (entry < atomicLoad(&counters[C_BUILDS])) {
+            let w = walkers[build_list[entry]];
+            // Walker::seams: both clips with joints, the incoming one at a seamed level.
+            if (w.pend_acc < SEAM_LEVELS && w.pend_joints > 0u && w.cur_joints > 0u && w.slot != NONE) {
+                let slot = w.slot;
+                let rows = 7u + 3u * w.cur_joints;
+                let sr = u32(seam_get(SB_ROWS, slot));
+                // A cycle end leaves the clip at its end, a refinement at the walker's clock.
+                var t = w.t;
+                if (w.mode == MODE_CYCLE) {
+                    t = w.cur_dur;
+                }
+                ws_u[0] = slot;
+                ws_u[1] = rows;
+                ws_u[2] = sr;
+                ws_u[3] = seam_samples(slot, w.cur_acc, t, w.cur_dur);
+                ws_u[5] = select(0u, 1u, w.mode == MODE_CYCLE);
+                ws_f[2] = seam_get(SB_START, slot);
+                ws_f[3] = w.m_dx;
+                ws_f[4] = w.m_dz;
+                ws_f[5] = w.m_turn;
+                ws_rows = max(rows, sr);
+            }
+        }
+    }
+    let shown = workgroupUniformLoad(&ws_rows);
+    if (shown == 0u) {
+        return;
+    }
+    let slot = ws_u[0];
+    let rows = ws_u[1];
+    let sr = ws_u[2];
+    let rt = ws_u[3];
+    let later = ws_u[4] == 1u;
+    let t0 = ws_f[0];
+    let t1 = ws_f[1];
+    let h = t1 - t0;
+    let ab0 = seam_coeffs(t0 - ws_f[2]);
+    let ab1 = seam_coeffs(t1 - ws_f[2]);
+    for (var u = lid; u < 1u + (shown - 7u) / 3u; u += WG) {
+        if (u == 0u) {
+            // The root rows.
+            var p0: array<f32, 7>;
+            var p1: array<f32, 7>;
+            for (var r = 0u; r < 7u; r++) {
+                p0[r] = sample_row(slot, r, rt, 0u);
+                p1[r] = sample_row(slot, r, rt, 1u);
+            }
+            var o0 = vec3<f32>(p0[3], p0[4], p0[5]);
+            var o1 = vec3<f32>(p1[3], p1[4], p1[5]);
+            if (sr > 0u) {
+                for (var r = 0u; r < 3u; r++) {
+                    p0[r] += seam_row(slot, r, ab0);
+                    p1[r] += seam_row(slot, r, ab1);
+                }
+                o0 = seam_root(slot, ab0, o0);
+                o1 = seam_root(slot, ab1, o1);
+            }
+            var pos = vec3<f32>(p0[0], p0[1], p0[2]);
+            var orient = o0;
+            if (later) {
+                pos = vec3<f32>(p1[0], p1[1], p1[2]);
+                orient = o1;
+            }
+            var vel = vec3<f32>(finite_difference(p0[0], p1[0], h), finite_difference(p0[1], p1[1], h),
+                finite_difference(p0[2], p1[2], h));
+            var ang = angular_velocity(o0, o1, h);
+            if (ws_u[5] == 1u) {
+                // PoseState::into_next_frame: into the cycle frame after the clip's root motion.
+                let hf = -ws_f[5] * 0.5;
+                let q = vec4<f32>(0.0, sin(hf), 0.0, cos(hf));
+                pos = quat_rotate(q, pos - vec3<f32>(ws_f[3], 0.0, ws_f[4]));
+                orient = quat_exp_map(quat_mul(q, exp_map_quat(orient)));
+                vel = quat_rotate(q, vel);
+                ang = quat_rotate(q, ang);
+            }
+            for (var c = 0u; c < 3u; c++) {
+                seam_set(SB_OFF + c, slot, pos[c]);
+                seam_set(SB_VEL + c, slot, vel[c]);
+                seam_set(SB_OFF + 3u + c, slot, orient[c]);
+                seam_set(SB_VEL + 3u + c, slot, ang[c]);
+            }
+            seam_set(SB_OFF + 6u, slot, select(p0[6], p1[6], later));
+            seam_set(SB_VEL + 6u, slot, finite_difference(p0[6], p1[6], h));
+        } else {
+            let r0 = 7u + 3u * (u - 1u);
+            for (var r = r0; r < r0 + 3u; r++) {
+                var a = 0.0;
+                var b = 0.0;
+                if (r < rows) {
+                    a = sample_row(slot, r, rt, 0u);
+                    b = sample_row(slot, r, rt, 1u);
+                } else {
+                    // A joint the running seam fades out (SeamTransition::fill_beyond).
+                    a = seam_get(SB_BASE + r, slot);
+                    b = a;
+                }
+                if (r < sr) {
+                    a += seam_row(slot, r, ab0);
+                    b += seam_row(slot, r, ab1);
+                }
+                seam_set(SB_OFF + r, slot, select(a, b, later));
+                seam_set(SB_VEL + r, slot, finite_difference(a, b, h));
+            }
+        }
+    }
+    if (lid == 0u) {
+        seam_set(SB_CAPT, slot, f32(shown));
+    }
+}
+
+// SeamScratch::start_from_rest for one build: the transition from the captured state to the
+// incoming clip at its start (a cycle end) or at the phase it is shown from (a refinement); joints
+// only one side shows fade from or to their rest rotations (on the branch nearest the other
+// side's). A build with joints that captured nothing ends the slot's transition (a clip change
+// without a seam); one workgroup per scheduled build.
+@compute @workgroup_size(64)
+fn seam_start(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let entry = wid.y * MAX_X + wid.x;
+    if (lid == 0u) {
+        ws_rows = 0u;
+        if (entry < atomicLoad(&counters[C_BUILDS])) {
+            let w = walkers[build_list[entry]];
+            let slot = w.slot;
+            if (w.cur_joints > 0u && slot != NONE) {
+                let captured = u32(seam_get(SB_CAPT, slot));
+                if (captured == 0u) {
+                    seam_set(SB_ROWS, slot, 0.0);
+                    seam_set(SB_START, slot, 0.0);
+                } else {
+                    let rows = 7u + 3u * w.cur_joints;
+                    var t_in = 0.0;
+                    if (w.mode == MODE_REFINE) {
+                        t_in = w.pend_u * w.cur_dur;
+                    }
+                    ws_u[0] = slot;
+                    ws_u[1] = rows;
+                    ws_u[2] = captured;
+                    ws_u[3] = seam_samples(slot, w.cur_acc, t_in, w.cur_dur);
+                    let wide = max(rows, captured);
+                    seam_set(SB_ROWS, slot, f32(wide));
+                    seam_set(SB_START, slot, t_in);
+                    seam_set(SB_CAPT, slot, 0.0);
+                    ws_rows = wide;
+                }
+            }
+        }
+    }
+    let wide = workgroupUniformLoad(&ws_rows);
+    if (wide == 0u) {
+        return;
+    }
+    let slot = ws_u[0];
+    let rows = ws_u[1];
+    let captured = ws_u[2];
+    let rt = ws_u[3];
+    let later = ws_u[4] == 1u;
+    let h = ws_f[1] - ws_f[0];
+    for (var u = lid; u < 1u + (wide - 7u) / 3u; u += WG) {
+        if (u == 0u) {
+            var p0: array<f32, 7>;
+            var p1: array<f32, 7>;
+            for (var r = 0u; r < 7u; r++) {
+                p0[r] = sample_row(slot, r, rt, 0u);
+                p1[r] = sample_row(slot, r, rt, 1u);
+            }
+            let o0 = vec3<f32>(p0[3], p0[4], p0[5]);
+            let o1 = vec3<f32>(p1[3], p1[4], p1[5]);
+            let ang = angular_velocity(o0, o1, h);
+            for (var r = 0u; r < 7u; r++) {
+                let next = select(p0[r], p1[r], later);
+                if (r < 3u) {
+                    let v = finite_difference(p0[r], p1[r], h);
+                    seam_set(SB_OFF + r, slot, seam_get(SB_OFF + r, slot) - next);
+                    seam_set(SB_VEL + r, slot, seam_get(SB_VEL + r, slot) - v);
+                }
+                seam_set(SB_BASE + r, slot, next);
+            }
+            let on = select(o0, o1, later);
+            let op = vec3<f32>(seam_get(SB_OFF + 3u, slot), seam_get(SB_OFF + 4u, slot), seam_get(SB_OFF + 5u, slot));
+            let vp = vec3<f32>(seam_get(SB_VEL + 3u, slot), seam_get(SB_VEL + 4u, slot), seam_get(SB_VEL + 5u, slot));
+            let x = quat_exp_map(quat_mul(exp_map_quat(op), quat_conj(exp_map_quat(on))));
+            let v = vp - ang;
+            for (var c = 0u; c < 3u; c++) {
+                seam_set(SB_OFF + 3u + c, slot, x[c]);
+                seam_set(SB_VEL + 3u + c, slot, v[c]);
+            }
+            seam_set(SB_OFF + 6u, slot, 0.0);
+            seam_set(SB_VEL + 6u, slot, 0.0);
+        } else {
+            let r0 = 7u + 3u * (u - 1u);
+            let rest = vec3<f32>(md[REST_ROWS + r0], md[REST_ROWS + r0 + 1u], md[REST_ROWS + r0 + 2u]);
+            var np = vec3<f32>(0.0, 0.0, 0.0);
+            var nv = vec3<f32>(0.0, 0.0, 0.0);
+            var pp = vec3<f32>(0.0, 0.0, 0.0);
+            var pv = vec3<f32>(0.0, 0.0, 0.0);
+            if (r0 < captured) {
+                pp = vec3<f32>(seam_get(SB_OFF + r0, slot), seam_get(SB_OFF + r0 + 1u, slot), seam_get(SB_OFF + r0 + 2u, slot));
+                pv = vec3<f32>(seam_get(SB_VEL + r0, slot), seam_get(SB_VEL + r0 + 1u, slot), seam_get(SB_VEL + r0 + 2u, slot));
+            }
+            if (r0 < rows) {
+                let a = vec3<f32>(sample_row(slot, r0, rt, 0u), sample_row(slot, r0 + 1u, rt, 0u), sample_row(slot, r0 + 2u, rt, 0u));
+                let b = vec3<f32>(sample_row(slot, r0, rt, 1u), sample_row(slot, r0 + 1u, rt, 1u), sample_row(slot, r0 + 2u, rt, 1u));
+                np = select(a, b, later);
+                nv = vec3<f32>(finite_difference(a.x, b.x, h), finite_difference(a.y, b.y, h), finite_difference(a.z, b.z, h));
+            } else {
+                // A joint the incoming clip drops: it fades out to its rest rotation.
+                np = nearest_branch(rest, pp);
+            }
+            if (r0 >= captured) {
+                // A joint the incoming clip adds: it fades in from its rest rotation.
+                pp = nearest_branch(rest, np);
+            }
+            let x = pp - np;
+            let v = pv - nv;
+            for (var c = 0u; c < 3u; c++) {
+                seam_set(SB_OFF + r0 + c, slot, x[c]);
+                seam_set(SB_VEL + r0 + c, slot, v[c]);
+                seam_set(SB_BASE + r0 + c, slot, np[c]);
+            }
+        }
+    }
 }
