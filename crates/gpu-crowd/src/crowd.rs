@@ -11,7 +11,7 @@ use lod_policy::{Detail, LevelPolicy, RuntimeModel, SplitMix64, StyleMix, ViewPa
 use crate::device::Gpu;
 use crate::error::GpuError;
 use crate::policy::PolicyTable;
-use crate::tables::{POLICY_MAX, SeamParams, Tables, style_row};
+use crate::tables::{LOCK_FLOATS, POLICY_MAX, SeamParams, Tables, style_row};
 
 const NONE: u32 = u32::MAX;
 const MODE_INIT: u32 = 2;
@@ -28,7 +28,9 @@ const C_NONFINITE: usize = 7;
 const C_NONFINITE_FIRST: usize = 8;
 /// Walkers inside a running seam transition this frame (the shaders' `C_SEAMS`).
 const C_SEAMS: usize = 9;
-const C_HIST: usize = 10;
+/// Walkers whose foot lock corrected a leg this frame (the shaders' `C_LOCKS`).
+const C_LOCKS: usize = 10;
+const C_HIST: usize = 11;
 
 /// One walker as the shaders hold it (`struct Walker` of `crowd.wgsl`).
 #[repr(C)]
@@ -96,8 +98,9 @@ struct FrameUniform {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct GpuOptions {
     /// Walkers that can hold a clip with joints at the same time (each such clip takes
-    /// `4 (P max r_T + 2 T)` bytes, plus `12 J` for its joint positions and, with seams on,
-    /// `4 (3 P + 3)` for its seam transition: [`GpuCrowd::bytes_per_joint_slot`]); `None` gives
+    /// `4 (P max r_T + 2 T)` bytes, plus `12 J` for its joint positions, with seams on
+    /// `4 (3 P + 3)` for its seam transition and with the foot lock on 216 for its lock state:
+    /// [`GpuCrowd::bytes_per_joint_slot`]); `None` gives
     /// every walker one. A walker the policy wants with joints when every slot is taken is shown
     /// root only and counted in [`GpuFrameStats::slot_faults`] until a slot frees. Which of the walkers
     /// competing for the last slots in a frame get them depends on the order of the GPU's
@@ -122,6 +125,10 @@ pub struct GpuFrameStats {
     /// Walkers inside a seam transition after the frame (as `crowd_sim::FrameStats`; 0 with
     /// `seam_levels = 0`).
     pub in_transition: u64,
+    /// Walkers whose foot lock moved a leg this frame by at least 1e-6 m (a planted foot held,
+    /// lowered or lifted, a swing foot lifted, or a correction easing out; 0 with
+    /// `foot_lock_levels = 0` or a model without feet).
+    pub feet_locked: u64,
     /// Walkers per accuracy level, then root-only walkers last (as `crowd_sim::FrameStats`).
     pub level_histogram: Vec<u32>,
     /// Wall time from the frame's submission to its completion on the device, including the
@@ -171,18 +178,28 @@ struct Page {
 /// (by a finite difference over `lod_policy::SEAM_STEP_S`, in the next cycle frame at a cycle
 /// end) start offsets that decay with a critically damped spring of half-life
 /// `seam_halflife_s`, the root orientation's composed as a rotation, joints only one side shows
-/// fading from or to their rest rotations (drawn beyond the clip's while they fade out).
+/// fading from or to their rest rotations (drawn beyond the clip's while they fade out); and with
+/// `foot_lock_levels > 0` and a model with feet, the foot lock (`lod_policy::FootLock`, as the
+/// CPU walker's pose stage runs it through the model source): each visible walker at one of the
+/// first `foot_lock_levels` levels with joints plants its feet (per foot the pivot placed in the
+/// world by its double-float cycle frame, contact, the horizontal correction and the lowering
+/// with the onset's easing, release, clearance and the ground's margin, then two-bone IK that
+/// writes the thigh, knee and ankle rows before forward kinematics); any other walker lets go at
+/// once (out of view, at a coarser level, root only).
 ///
 /// Seam state lives in the walker's joint slot, after its clip: offset, velocity and base rows and
 /// three scalars, `4 (3 P + 3)` bytes a slot (with seams on only; walkers without joints hold no
 /// slot and pay nothing). Per frame two passes around the clip build run when seams are on:
 /// `seam_capture` (the outgoing clip's displayed state, before the build overwrites the clip) and
 /// `seam_start` (the transition to the incoming clip); the pose pass applies the running
-/// transition and ends it once decayed.
+/// transition and ends it once decayed. Foot lock state lives in the joint slot too, after the
+/// seam state: 27 floats a foot (the previous frame's ground points as double-floats, flags,
+/// clocks, the correction, its rate and both at lift-off, the lifts), 216 bytes a slot, with the
+/// lock on only (nothing with `foot_lock_levels = 0` or a model without feet). It needs no pass of
+/// its own: the pose pass runs it between the seam and forward kinematics, and `advance` clears
+/// it when it gives a slot back.
 ///
-/// What it does not do (yet): the foot lock. [`GpuCrowd::new`] refuses a config with
-/// `foot_lock_levels` above 0, so that a comparison with the CPU crowd is always against one
-/// configured the same way. A cycle end whose new clip is shorter than the time already past it
+/// What it does not do: a cycle end whose new clip is shorter than the time already past it
 /// waits for the next frame (the CPU crowd loops at once; with frames far shorter than cycles it
 /// does not happen).
 ///
@@ -288,10 +305,14 @@ impl GpuCrowd {
     /// Seams are inertialized as the CPU crowd's at the first `config.seam_levels` levels (any
     /// value; `usize::MAX`, the CPU crowd's default, is every level), which costs each joint slot
     /// `4 (3 P + 3)` more bytes ([`GpuCrowd::bytes_per_joint_slot`]); `seam_levels = 0` runs no
-    /// seam pass and allocates nothing for them.
+    /// seam pass and allocates nothing for them. Feet are locked as the CPU crowd's at the first
+    /// `config.foot_lock_levels` levels (any value; `usize::MAX`, the CPU crowd's default, is
+    /// every level), which costs each joint slot 216 more bytes; `foot_lock_levels = 0` allocates
+    /// nothing for it. A model without feet (`RuntimeModel::feet` is `None`) is locked by neither
+    /// crowd: the config is taken, nothing is locked and nothing allocated, as the CPU source.
     ///
-    /// Errors: a config the CPU crowd would refuse, or one asking for what the GPU crowd does not
-    /// do (`foot_lock_levels` above 0: configure the CPU crowd you compare with the same way); a model the shaders cannot take, or one with a number single precision cannot
+    /// Errors: a config the CPU crowd would refuse; a model the shaders cannot take (feet that do
+    /// not fit its rig among them), or one with a number single precision cannot
     /// hold ([`GpuError::Model`]); [`GpuOptions::page_walkers`] of `Some(0)`
     /// ([`GpuError::Config`]); buffers or workgroup memory beyond the adapter's limits
     /// ([`GpuError::Limit`]), or buffers the device cannot allocate ([`GpuError::Memory`], with
@@ -324,7 +345,7 @@ impl GpuCrowd {
             },
         )?);
         let seam = SeamParams::new(config.seam_levels, config.seam_halflife_s);
-        let tables = Tables::new(model, &styles, seam)?;
+        let tables = Tables::new(model, &styles, seam, config.foot_lock_levels)?;
         let limits = &gpu.limits;
         if tables.workgroup_bytes > u64::from(limits.max_compute_workgroup_storage_size) {
             return Err(GpuError::Limit {
@@ -481,9 +502,15 @@ impl GpuCrowd {
         );
         let small_per_walker = 4 * (7 * rt_last + 2 * t) as u64;
         // A joint slot's clip, then its seam state when seams are on (`crowd.wgsl`'s `SB_*`:
-        // offset, velocity and base rows, the rows, start and captured rows of the transition).
+        // offset, velocity and base rows, the rows, start and captured rows of the transition),
+        // then its foot lock state when the lock is on (`LOCK_OFF`, two feet of `FOOT_FLOATS`).
         let seam_floats = if seam.levels > 0 { 3 * p + 3 } else { 0 };
-        let big_floats = p * rt_max + 2 * t + seam_floats;
+        let lock_floats = if tables.lock_levels > 0 {
+            LOCK_FLOATS
+        } else {
+            0
+        };
+        let big_floats = p * rt_max + 2 * t + seam_floats + lock_floats;
         let big_per_slot = 4 * big_floats as u64;
         let joints_per_slot = 12 * j.max(1) as u64;
         let walker_bytes = std::mem::size_of::<GpuWalker>() as u64;
@@ -798,8 +825,8 @@ impl GpuCrowd {
             uniform.n_slots = page.slots as u32;
             self.queue
                 .write_buffer(&page.frame, 0, bytemuck::bytes_of(&uniform));
-            // Reset the frame's counters (builds, visible, slot faults, seams) and the histogram;
-            // the free-slot stack's top stays.
+            // Reset the frame's counters (builds, visible, slot faults, seams, locks) and the
+            // histogram; the free-slot stack's top stays.
             self.queue.write_buffer(
                 &page.counters,
                 4 * C_BUILDS as u64,
@@ -815,7 +842,7 @@ impl GpuCrowd {
             self.queue.write_buffer(
                 &page.counters,
                 4 * C_SEAMS as u64,
-                bytemuck::cast_slice(&[0u32]),
+                bytemuck::cast_slice(&[0u32, 0u32]),
             );
             self.queue.write_buffer(
                 &page.counters,
@@ -869,6 +896,7 @@ impl GpuCrowd {
             stats.visible += u64::from(c[4]);
             stats.slot_faults += u64::from(c[5]);
             stats.in_transition += u64::from(c[C_SEAMS]);
+            stats.feet_locked += u64::from(c[C_LOCKS]);
             for (h, v) in stats.level_histogram.iter_mut().zip(&c[C_HIST..]) {
                 *h += v;
             }
@@ -1004,7 +1032,8 @@ impl GpuCrowd {
     }
 
     /// Bytes of one joint slot: a clip with joints (`4 (P max r_T + 2 T)`), its joint positions
-    /// (`12 J`) and, with seams on (`seam_levels > 0`), its seam transition (`4 (3 P + 3)`).
+    /// (`12 J`), with seams on (`seam_levels > 0`) its seam transition (`4 (3 P + 3)`) and with
+    /// the foot lock on (`foot_lock_levels > 0` and a model with feet) its lock state (216).
     pub fn bytes_per_joint_slot(&self) -> u64 {
         self.bytes_per_slot
     }
@@ -1039,13 +1068,6 @@ fn check_config(c: &CrowdConfig) -> Result<(), GpuError> {
     // Also the walker cap, `crowd_sim::MAX_WALKERS` (2^31 - 1: walker indices and counts in 32
     // bits, as the shaders keep them).
     c.validate()?;
-    if c.foot_lock_levels > 0 {
-        return Err(GpuError::Config(format!(
-            "foot_lock_levels = {}: the GPU crowd has no foot lock yet; set it to 0 (and the CPU \
-             crowd it is compared with likewise)",
-            c.foot_lock_levels
-        )));
-    }
     Ok(())
 }
 

@@ -5,8 +5,10 @@
 //! level-of-detail policy) with every per-walker job on the GPU: per clip the kriging weights, the
 //! blended core, `G(c)`, the time table and the root motion (`lod-policy`'s
 //! `LodModel::build_kernel`), per frame the pose at the clip's phase (`LodModel::pose_rows`), the
-//! seam inertialization between clips (`SeamTransition`, with `seam_levels > 0`) and the forward
-//! kinematics of the active joints (`Rig::joint_positions_scaled`), from the same model file. Walker state lives on the GPU; per frame the host uploads the camera, the time step and
+//! seam inertialization between clips (`SeamTransition`, with `seam_levels > 0`), the foot lock of
+//! near walkers (`FootLock` on the model's `FootRig`, with `foot_lock_levels > 0`) and the forward
+//! kinematics of the active joints (`Rig::joint_positions_scaled`), from the same model file.
+//! Walker state lives on the GPU; per frame the host uploads the camera, the time step and
 //! the policy (tabulated over distance, [`PolicyTable`]) and reads back a few counters. What the
 //! CPU runtime computes in f64 (the kriging weights, the time table, the walkers' cycle frames and
 //! their steering along their paths) the shaders compute in double-float arithmetic (two f32 a
@@ -14,9 +16,9 @@
 //! Vulkan (default feature `vulkan`), Metal (`metal`) and DirectX 12 (`dx12`) through wgpu, and on
 //! Mesa's software Vulkan (lavapipe) where there is no GPU, which is how CI checks it against the
 //! CPU crowd. It is not for: rendering (it computes joint positions; drawing them is the engine's),
-//! the foot lock (not implemented yet: [`GpuCrowd::new`] refuses a configuration that asks for
-//! it), or building models (see `motion-lod`). Seam state costs each joint slot `4 (3 P + 3)`
-//! bytes, and nothing with `seam_levels = 0` ([`GpuCrowd::bytes_per_joint_slot`]).
+//! or building models (see `motion-lod`). Seam state costs each joint slot `4 (3 P + 3)` bytes,
+//! and nothing with `seam_levels = 0`; foot lock state 216 bytes, and nothing with
+//! `foot_lock_levels = 0` or a model without feet ([`GpuCrowd::bytes_per_joint_slot`]).
 //!
 //! ```no_run
 //! use crowd_sim::{Camera, CrowdConfig};
@@ -26,10 +28,8 @@
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let model = RuntimeModel::load(std::path::Path::new("walk.mlod"))?;
 //! let gpu = Gpu::new()?; // GpuError::NoAdapter names what is missing
-//! let config = CrowdConfig {
-//!     foot_lock_levels: 0, // not on the GPU yet; seams stay on, the CPU crowd's default
-//!     ..CrowdConfig::with_density(100_000, 0.01)
-//! };
+//! // The CPU crowd's defaults: seams and the foot lock at every level.
+//! let config = CrowdConfig::with_density(100_000, 0.01);
 //! let mut crowd = GpuCrowd::new(&gpu, &model, config, GpuOptions::default())?;
 //! let policy = DistancePolicy::for_model(model.lod());
 //! let stats = crowd.step(&policy, &Camera::default(), 1.0 / 30.0)?;

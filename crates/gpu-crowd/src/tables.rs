@@ -2,7 +2,9 @@
 //! factors, rig), one table of integers (levels, keys, rig structure) and the WGSL constants that
 //! size the shaders' arrays.
 
-use lod_policy::{ControlRange, Controls, JointRole, RuntimeModel, StyleMix, VariogramModel};
+use lod_policy::{
+    ControlRange, Controls, JointRole, RuntimeModel, StyleMix, VariogramModel, offline,
+};
 
 use crate::error::GpuError;
 
@@ -34,6 +36,12 @@ impl SeamParams {
     }
 }
 
+/// Floats of foot lock state in a joint slot (`crowd.wgsl`'s `2 FOOT_FLOATS`): per foot the previous
+/// ground points (8, double-floats), flags, the contact's clock and lowest height, the correction
+/// and its rate, both at lift-off (12), the clock since lift-off, the lift, the lift at touchdown and
+/// the clock since touchdown.
+pub(crate) const LOCK_FLOATS: usize = 2 * 27;
+
 /// The packed model and the shader source for it.
 #[derive(Debug, Clone)]
 pub(crate) struct Tables {
@@ -48,6 +56,10 @@ pub(crate) struct Tables {
     /// Rotating joints.
     pub joints: usize,
     pub levels: usize,
+    /// Accuracy levels whose visible walkers lock their feet (`CrowdConfig::foot_lock_levels`,
+    /// at most `u32::MAX`): 0 when the config asks for none or the model has no feet (as the CPU
+    /// source, which locks nothing then); with 0 the shaders hold no lock state.
+    pub lock_levels: u32,
     /// Bytes of workgroup memory the build pass declares.
     pub workgroup_bytes: u64,
 }
@@ -61,11 +73,13 @@ fn push(md: &mut Vec<f32>, v: &[f32]) -> usize {
 impl Tables {
     /// Packs `model` with the style rows `styles` (each `d - 4` values: the normalised style part of
     /// the control vector of a walker of that style id).
-    /// `seam` sets the seam constants of the shaders.
+    /// `seam` sets the seam constants of the shaders, `foot_lock_levels` the foot lock's
+    /// (`CrowdConfig::foot_lock_levels`; no lock when the model has no feet).
     pub fn new(
         model: &RuntimeModel,
         styles: &[Vec<f32>],
         seam: SeamParams,
+        foot_lock_levels: usize,
     ) -> Result<Tables, GpuError> {
         let lod = model.lod();
         let rig = model.rig();
@@ -288,7 +302,61 @@ impl Tables {
             ("SEAM_DECAY", format!("{:?}", seam.decay)),
             ("SEAM_STEP", format!("{:?}", lod_policy::SEAM_STEP_S)),
         ];
+        // The foot lock: the legs of the model's feet (thigh, knee, ankle, toe or the ankle; the
+        // thigh, knee and ankle's rotating indices and the thigh's parent), the joints up to the
+        // last one its forward kinematics needs, and its state after the clip and the seam state.
+        let lock = if foot_lock_levels > 0 {
+            model.feet().map(|feet| lock_legs(rig, feet)).transpose()?
+        } else {
+            None
+        };
+        let lock_levels = if lock.is_some() {
+            u32::try_from(foot_lock_levels).unwrap_or(u32::MAX)
+        } else {
+            0
+        };
+        let (legs, leg_rows, lock_nj) =
+            lock.map_or(([[0; 4]; 2], [[0; 4]; 2], 0), |l| (l.legs, l.rows, l.nj));
+        let seam_floats = if seam.levels > 0 { 3 * p + 3 } else { 0 };
+        let lock_off = p * rt_max + 2 * t + seam_floats;
+        let floor = model.feet().map_or(0.0, |f| f.floor_m);
+        let release_g = 2.0 * std::f32::consts::LN_2 / (0.25 * offline::RELEASE_S);
+        let consts_lock = [
+            ("LOCK_LEVELS", format!("{lock_levels}u")),
+            ("LOCK_OFF", format!("{lock_off}u")),
+            ("LOCK_NJ", format!("{lock_nj}u")),
+            ("LOCK_FLOOR", format!("{floor:?}")),
+            ("LOCK_HEIGHT", format!("{:?}", offline::LOCK_HEIGHT_M)),
+            ("LOCK_SPEED", format!("{:?}", offline::LOCK_SPEED_M_S)),
+            ("LOCK_RELEASE", format!("{:?}", offline::RELEASE_S)),
+            ("LOCK_RELEASE_G", format!("{release_g:?}")),
+            ("LOCK_ONSET", format!("{:?}", offline::ONSET_S)),
+            (
+                "LOCK_TELEPORT",
+                format!("{:?}", offline::TELEPORT_SPEED_M_S),
+            ),
+            ("LOCK_SOFT_REACH", format!("{:?}", offline::SOFT_REACH)),
+            ("LOCK_MAX_REACH", format!("{:?}", offline::MAX_REACH)),
+            ("LOCK_POLE_WEIGHT", format!("{:?}", offline::POLE_WEIGHT)),
+            (
+                "LOCK_GROUND_MARGIN",
+                format!("{:?}", offline::GROUND_MARGIN_M),
+            ),
+        ];
+        let vec4s = |rows: [[u32; 4]; 2]| {
+            let v = rows.map(|r| format!("vec4<u32>({}u, {}u, {}u, {}u)", r[0], r[1], r[2], r[3]));
+            format!("array<vec4<u32>, 2>({}, {})", v[0], v[1])
+        };
         let mut source = String::from("// Model constants (gpu-crowd tables.rs).\n");
+        source.push_str(&format!(
+            "const LOCK_LEGS: array<vec4<u32>, 2> = {};\n",
+            vec4s(legs)
+        ));
+        source.push_str(&format!(
+            "const LOCK_LEG_ROWS: array<vec4<u32>, 2> = {};\n",
+            vec4s(leg_rows)
+        ));
+        let consts = consts.into_iter().chain(consts_lock);
         for (name, value) in consts {
             let ty = if value.ends_with('u') {
                 "u32"
@@ -313,6 +381,7 @@ impl Tables {
             rt_last,
             joints: lod.joints(),
             levels: levels.len(),
+            lock_levels,
             workgroup_bytes,
         })
     }
@@ -339,4 +408,51 @@ pub(crate) fn style_row(model: &RuntimeModel, style: StyleMix) -> Result<Vec<f32
         .control_vector(&c, &mut values)
         .map_err(|e| GpuError::Config(format!("style: {e}")))?;
     Ok(values[Controls::COUNT..d].to_vec())
+}
+
+/// The legs of a foot rig as the shaders' foot lock takes them (`LOCK_LEGS`, `LOCK_LEG_ROWS`,
+/// `LOCK_NJ`).
+struct LockLegs {
+    /// Per leg (left, right) the joints: thigh, knee, ankle, toe (the ankle again without one).
+    legs: [[u32; 4]; 2],
+    /// Per leg the rotating indices of thigh, knee and ankle, and the thigh's parent joint
+    /// (`u32::MAX`: none).
+    rows: [[u32; 4]; 2],
+    /// The joints up to the last one the lock's forward kinematics needs (the feet's points and
+    /// their ancestors, the root).
+    nj: usize,
+}
+
+/// The legs of `feet` on `rig` for the shaders' foot lock. Feet that do not fit the rig are refused
+/// ([`lod_policy::FootRig::check`]; a loaded model's always fit).
+fn lock_legs(rig: &lod_policy::Rig, feet: &lod_policy::FootRig) -> Result<LockLegs, GpuError> {
+    feet.check(rig).map_err(GpuError::Model)?;
+    let joints = rig.joints();
+    let mut legs = [[0u32; 4]; 2];
+    let mut rows = [[0u32; 4]; 2];
+    let mut last = rig.root();
+    for (f, foot) in [feet.left, feet.right].iter().enumerate() {
+        let ankle = foot.ankle;
+        // `check` found both parents and the three rotating.
+        let knee = joints[ankle].parent.unwrap_or(0);
+        let thigh = joints[knee].parent.unwrap_or(0);
+        let toe = foot.toe.unwrap_or(ankle);
+        legs[f] = [thigh, knee, ankle, toe].map(|j| j as u32);
+        let k = |j: usize| match joints[j].role {
+            JointRole::Rotating(k) => k as u32,
+            _ => u32::MAX,
+        };
+        rows[f] = [
+            k(thigh),
+            k(knee),
+            k(ankle),
+            joints[thigh].parent.map_or(u32::MAX, |p| p as u32),
+        ];
+        last = last.max(ankle).max(toe);
+    }
+    Ok(LockLegs {
+        legs,
+        rows,
+        nj: last + 1,
+    })
 }

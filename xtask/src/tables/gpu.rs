@@ -13,8 +13,8 @@ const DENSITY: f32 = 0.01;
 pub fn section(model: &MotionModel) -> String {
     let head = format!(
         "\n### GPU crowd (`gpu-crowd`, wgpu compute shaders)\n\n{WALKERS} walkers at {DENSITY} per m², \
-         ground camera, distance policy, {FRAMES} frames after a 1 s warm-up; seams off (the GPU crowd \
-         inertializes them too, but this row is timed without), foot lock off (not on the GPU yet). \
+         ground camera, distance policy, {FRAMES} frames after a 1 s warm-up; seams and foot lock off \
+         (the GPU crowd inertializes seams and locks feet too, but this row is timed without). \
          A frame is the whole step: upload, compute, read-back of its counters.\n\n\
          | adapter | ms a frame (mean) | median | GPU memory a walker |\n|---|---:|---:|---:|\n"
     );

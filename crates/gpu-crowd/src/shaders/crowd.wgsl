@@ -8,9 +8,10 @@
 // build overwrites it), `build` (one workgroup per scheduled clip: kriging weights, core, G(c),
 // time table, root motion), `seam_start` (with seams on: the seam transition into the new clip),
 // `fix_free` (the joint-slot stack after its pops), `pose_fk` (pose at the clip's phase with the
-// running seam, forward kinematics, placement in the world). Seam state lives in each joint slot
-// after its clip (see "Seam inertialization" below); with SEAM_LEVELS = 0 the host runs neither
-// seam pass and allocates no seam state.
+// running seam and the foot lock, forward kinematics, placement in the world). Seam state lives in
+// each joint slot after its clip (see "Seam inertialization" below), foot lock state after it (see
+// "Foot lock"); with SEAM_LEVELS = 0 the host runs neither seam pass and allocates no seam state,
+// with LOCK_LEVELS = 0 the lock does not run and has no state.
 
 struct Walker {
     t: f32, cur_dur: f32, hold_s: f32, pend_u: f32,
@@ -37,7 +38,7 @@ struct Frame {
 
 // Counters: [0..3] indirect build dispatch, then the frame's counts, the free-stack top, the
 // walkers whose positions came out NaN or infinite (how many, the first), the walkers inside a
-// running seam transition and the level histogram.
+// running seam transition, the walkers whose foot lock corrected a leg and the level histogram.
 const C_BUILDS: u32 = 3u;
 const C_VISIBLE: u32 = 4u;
 const C_SLOT_FAULTS: u32 = 5u;
@@ -45,7 +46,8 @@ const C_FREE_TOP: u32 = 6u;
 const C_NONFINITE: u32 = 7u;
 const C_NONFINITE_FIRST: u32 = 8u;
 const C_SEAMS: u32 = 9u;
-const C_HIST: u32 = 10u;
+const C_LOCKS: u32 = 10u;
+const C_HIST: u32 = 11u;
 
 const NONE: u32 = 0xffffffffu;
 const MODE_CYCLE: u32 = 0u;
@@ -362,7 +364,9 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
             w.pend_acc = d.x;
             w.pend_joints = d.y;
             if (d.y == 0u && w.slot != NONE) {
-                // A root-only clip lives in the walker's own small clip: give the slot back.
+                // A root-only clip lives in the walker's own small clip: give the slot back, its
+                // foot lock released (the CPU walker's, as it leaves the levels with joints).
+                lock_clear(w.slot);
                 let top = atomicAdd(&counters[C_FREE_TOP], 1u);
                 free_stack[top] = w.slot;
                 w.slot = NONE;
@@ -698,6 +702,8 @@ fn exp_to_quat(v: vec3<f32>) -> vec4<f32> {
 var<workgroup> wg_hist: array<atomic<u32>, HIST_BINS>;
 // Walkers of the workgroup inside a seam transition after the frame.
 var<workgroup> wg_seams: atomic<u32>;
+// Walkers of the workgroup whose foot lock corrected a leg this frame.
+var<workgroup> wg_locks: atomic<u32>;
 
 // Whether a coordinate of `v` is NaN or infinite (all exponent bits set: a test on the bits,
 // which a compiler that assumes finite floats cannot fold away as it may `v != v`).
@@ -715,6 +721,7 @@ fn pose_fk(@builtin(global_invocation_id) gid: vec3<u32>,
     }
     if (lid == 0u) {
         atomicStore(&wg_seams, 0u);
+        atomicStore(&wg_locks, 0u);
     }
     workgroupBarrier();
     let i = walker_index(gid, nw);
@@ -732,6 +739,10 @@ fn pose_fk(@builtin(global_invocation_id) gid: vec3<u32>,
         let v = atomicLoad(&wg_seams);
         if (v > 0u) {
             atomicAdd(&counters[C_SEAMS], v);
+        }
+        let l = atomicLoad(&wg_locks);
+        if (l > 0u) {
+            atomicAdd(&counters[C_LOCKS], l);
         }
     }
 }
@@ -866,6 +877,17 @@ fn pose_one(i: u32) {
     let ch = w.cos_h;
     let bx = vec2<f32>(w.base_x, w.base_lo_x);
     let bz = vec2<f32>(w.base_z, w.base_lo_z);
+    // The foot lock (the CPU walker's pose stage): a visible walker at one of the first
+    // LOCK_LEVELS levels with joints plants its feet; any other lets go.
+    if (LOCK_LEVELS > 0u && joints > 0u) {
+        if ((w.flags & 1u) != 0u && w.cur_acc < LOCK_LEVELS) {
+            if (foot_lock(&pose, slot, joints, w.body_scale, bx, bz, w.heading)) {
+                atomicAdd(&wg_locks, 1u);
+            }
+        } else {
+            lock_clear(slot);
+        }
+    }
     var root = vec3<f32>(pose[0], pose[1], pose[2]);
     var bad = false;
     if (joints > 0u) {
@@ -1330,4 +1352,426 @@ fn seam_start(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_i
             }
         }
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Foot lock (lod_policy::FootLock, as crowd_sim's walker runs it through the model source's
+// plant_feet): for a visible walker at one of the first LOCK_LEVELS levels with joints, per foot
+// the pivot (the lower of ankle and toe) placed in the world by the double-float cycle frame,
+// contact (low and slow), the horizontal correction and the lowering onto the floor with the
+// onset's easing, the release's easing after lift-off, the clearance lift in the air and the
+// ground's soft floor, then two-bone IK that writes the thigh, knee and ankle rows of the pose.
+// Its state lives in the walker's joint slot after the clip (and after the seam state when seams
+// are on), FOOT_FLOATS floats a foot from LOCK_OFF: the previous frame's ground points (world x
+// and z of ankle and toe, double-floats), flags, the contact's clock and lowest height, the
+// correction and its rate, both at lift-off, the clock since lift-off, the lift, the lift at
+// touchdown and the clock since touchdown. FS_HELD (foot 0's flags) marks a slot whose state is
+// not the released one (the CPU walker's lock borrowed); a walker that is not near lets go at once
+// (the state returns to zeros), and so does a slot given back. With LOCK_LEVELS = 0 none of it
+// runs and the host allocates no lock state.
+
+struct FootState {
+    // World x, z of the ankle, then of the toe, as double-floats (FootState::prev).
+    prev: array<vec2<f32>, 4>,
+    flags: u32,
+    since_contact: f32,
+    contact_low: f32,
+    offset: vec3<f32>,
+    velocity: vec3<f32>,
+    lo_off: vec3<f32>,
+    lo_vel: vec3<f32>,
+    since_lift: f32,
+    lift: f32,
+    landing_lift: f32,
+    since_landing: f32,
+}
+
+const FS_PREV: u32 = 1u;
+const FS_PLANTED: u32 = 2u;
+const FS_AIR: u32 = 4u;
+const FS_HELD: u32 = 8u;
+const FOOT_FLOATS: u32 = 27u;
+const ONE_MINUS_2EPS: f32 = 0.99999976;
+const HALF_PI: f32 = 1.5707964;
+
+fn foot_base(foot: u32) -> u32 {
+    return LOCK_OFF + FOOT_FLOATS * foot;
+}
+
+fn foot_vec3(slot: u32, k: u32) -> vec3<f32> {
+    return vec3<f32>(seam_get(k, slot), seam_get(k + 1u, slot), seam_get(k + 2u, slot));
+}
+
+fn foot_set3(slot: u32, k: u32, v: vec3<f32>) {
+    seam_set(k, slot, v.x);
+    seam_set(k + 1u, slot, v.y);
+    seam_set(k + 2u, slot, v.z);
+}
+
+fn foot_load(slot: u32, foot: u32) -> FootState {
+    let b = foot_base(foot);
+    var s: FootState;
+    for (var k = 0u; k < 4u; k++) {
+        s.prev[k] = vec2<f32>(seam_get(b + 2u * k, slot), seam_get(b + 2u * k + 1u, slot));
+    }
+    s.flags = u32(seam_get(b + 8u, slot));
+    s.since_contact = seam_get(b + 9u, slot);
+    s.contact_low = seam_get(b + 10u, slot);
+    s.offset = foot_vec3(slot, b + 11u);
+    s.velocity = foot_vec3(slot, b + 14u);
+    s.lo_off = foot_vec3(slot, b + 17u);
+    s.lo_vel = foot_vec3(slot, b + 20u);
+    s.since_lift = seam_get(b + 23u, slot);
+    s.lift = seam_get(b + 24u, slot);
+    s.landing_lift = seam_get(b + 25u, slot);
+    s.since_landing = seam_get(b + 26u, slot);
+    return s;
+}
+
+fn foot_store(slot: u32, foot: u32, s: FootState) {
+    let b = foot_base(foot);
+    for (var k = 0u; k < 4u; k++) {
+        seam_set(b + 2u * k, slot, s.prev[k].x);
+        seam_set(b + 2u * k + 1u, slot, s.prev[k].y);
+    }
+    seam_set(b + 8u, slot, f32(s.flags));
+    seam_set(b + 9u, slot, s.since_contact);
+    seam_set(b + 10u, slot, s.contact_low);
+    foot_set3(slot, b + 11u, s.offset);
+    foot_set3(slot, b + 14u, s.velocity);
+    foot_set3(slot, b + 17u, s.lo_off);
+    foot_set3(slot, b + 20u, s.lo_vel);
+    seam_set(b + 23u, slot, s.since_lift);
+    seam_set(b + 24u, slot, s.lift);
+    seam_set(b + 25u, slot, s.landing_lift);
+    seam_set(b + 26u, slot, s.since_landing);
+}
+
+// Lets go of both feet at once (FootLock::release, the lock given back): the slot's lock state
+// returns to zeros, when it holds any.
+fn lock_clear(slot: u32) {
+    if (LOCK_LEVELS > 0u && (u32(seam_get(LOCK_OFF + 8u, slot)) & FS_HELD) != 0u) {
+        for (var k = 0u; k < 2u * FOOT_FLOATS; k++) {
+            seam_set(LOCK_OFF + k, slot, 0.0);
+        }
+    }
+}
+
+// lod_policy::ease_in_out.
+fn ease_in_out(u: f32) -> f32 {
+    let v = clamp(u, 0.0, 1.0);
+    return v * v * (3.0 - 2.0 * v);
+}
+
+fn is_nan(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7fffffffu) > 0x7f800000u;
+}
+
+fn is_finite_f(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}
+
+// footlock's `released`: the correction `t` seconds after lift-off.
+fn foot_released(x0: vec3<f32>, v0: vec3<f32>, t: f32) -> vec3<f32> {
+    if (t >= LOCK_RELEASE) {
+        return vec3<f32>(0.0);
+    }
+    let g = LOCK_RELEASE_G;
+    return (x0 + (v0 + g * x0) * t) * exp(-g * t) * ease_in_out(1.0 - t / LOCK_RELEASE);
+}
+
+fn soft_max(h: f32, level: f32, m: f32) -> f32 {
+    if (h >= level + m) {
+        return h;
+    } else if (h <= level - m) {
+        return level;
+    }
+    let u = h - level + m;
+    return level + u * u / (4.0 * m);
+}
+
+fn foot_release(s: ptr<function, FootState>, dt: f32) {
+    if (((*s).flags & FS_PLANTED) != 0u) {
+        (*s).flags &= ~FS_PLANTED;
+        (*s).lo_off = (*s).offset;
+        (*s).lo_vel = (*s).velocity;
+        (*s).since_lift = 0.0;
+    }
+    (*s).since_lift += dt;
+    (*s).offset = foot_released((*s).lo_off, (*s).lo_vel, (*s).since_lift);
+}
+
+fn foot_land(s: ptr<function, FootState>) {
+    if (((*s).flags & FS_AIR) != 0u) {
+        (*s).flags &= ~FS_AIR;
+        (*s).landing_lift = (*s).lift;
+        (*s).since_landing = 0.0;
+    }
+}
+
+fn foot_ease_lift(s: ptr<function, FootState>, dt: f32) {
+    (*s).since_landing += dt;
+    if ((*s).since_landing >= LOCK_RELEASE) {
+        (*s).lift = 0.0;
+    } else {
+        (*s).lift = (*s).landing_lift * ease_in_out(1.0 - (*s).since_landing / LOCK_RELEASE);
+    }
+}
+
+fn foot_clear(s: ptr<function, FootState>, height: f32, shown: f32, contact: bool, dt: f32) {
+    if (contact) {
+        foot_land(s);
+    } else if (height >= LOCK_HEIGHT) {
+        (*s).flags |= FS_AIR;
+    }
+    if (((*s).flags & FS_AIR) != 0u) {
+        (*s).lift = soft_max(shown, LOCK_HEIGHT, 0.5 * LOCK_HEIGHT) - shown;
+    } else {
+        foot_ease_lift(s, dt);
+        (*s).lift = max((*s).lift, soft_max(shown, 0.0, LOCK_GROUND_MARGIN) - shown);
+    }
+}
+
+// FootState::let_go.
+fn foot_let_go(s: ptr<function, FootState>, dt: f32) {
+    (*s).flags &= ~FS_PREV;
+    foot_land(s);
+    foot_ease_lift(s, dt);
+    let before = (*s).offset;
+    foot_release(s, dt);
+    (*s).velocity = ((*s).offset - before) / dt;
+}
+
+// FootState::step with the foot's world points: ground (x, z double-floats of ankle then toe) and
+// heights `ys` (ankle, toe); returns the world correction.
+fn foot_step(s: ptr<function, FootState>, ground: array<vec2<f32>, 4>, ys: vec2<f32>, dt: f32) -> vec3<f32> {
+    var pivot = 0u;
+    if (ys.y < ys.x) {
+        pivot = 1u;
+    }
+    let had = ((*s).flags & FS_PREV) != 0u;
+    var moved = vec3<f32>(0.0);
+    if (had) {
+        let mx = df_add(ground[2u * pivot], -(*s).prev[2u * pivot]);
+        let mz = df_add(ground[2u * pivot + 1u], -(*s).prev[2u * pivot + 1u]);
+        moved = vec3<f32>(mx.x + mx.y, 0.0, mz.x + mz.y);
+    }
+    (*s).prev = ground;
+    (*s).flags |= FS_PREV;
+    let speed = length(moved) / dt;
+    if (had && (is_nan(speed) || speed >= LOCK_TELEPORT)) {
+        let held = (*s).flags & FS_HELD;
+        var fresh: FootState;
+        fresh.prev = ground;
+        fresh.flags = FS_PREV | held;
+        *s = fresh;
+        return vec3<f32>(0.0);
+    }
+    let height = select(ys.x, ys.y, pivot == 1u) - LOCK_FLOOR;
+    let contact = height < LOCK_HEIGHT && had && speed < LOCK_SPEED;
+    let before = (*s).offset;
+    if (contact) {
+        if (((*s).flags & FS_PLANTED) == 0u) {
+            (*s).flags |= FS_PLANTED;
+            (*s).since_contact = 0.0;
+            (*s).contact_low = height;
+        }
+        (*s).since_contact += dt;
+        (*s).contact_low = min((*s).contact_low, height);
+        let w = ease_in_out(min((*s).since_contact / LOCK_ONSET, 1.0));
+        (*s).offset = (*s).offset - w * moved;
+        (*s).offset.y = (*s).offset.y + w * (-max((*s).contact_low, 0.0) - (*s).offset.y);
+    } else {
+        foot_release(s, dt);
+    }
+    (*s).velocity = ((*s).offset - before) / dt;
+    foot_clear(s, height, height + (*s).offset.y, contact, dt);
+    return (*s).offset + vec3<f32>(0.0, (*s).lift, 0.0);
+}
+
+// glam's Vec3::normalize_or: `v` times its length's reciprocal, `fallback` when that is not finite
+// and positive.
+fn normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let rcp = 1.0 / length(v);
+    if (is_finite_f(rcp) && rcp > 0.0) {
+        return v * rcp;
+    }
+    return fallback;
+}
+
+// glam's Quat::normalize (SSE2: divided by the length).
+fn quat_normalize(q: vec4<f32>) -> vec4<f32> {
+    return q / length(q);
+}
+
+// glam's Quat::from_rotation_arc(a, b) for unit vectors.
+fn rotation_arc(a: vec3<f32>, b: vec3<f32>) -> vec4<f32> {
+    let d = dot(a, b);
+    if (d > ONE_MINUS_2EPS) {
+        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+    }
+    if (d < -ONE_MINUS_2EPS) {
+        // Half a turn about any vector orthogonal to `a` (Vec3::any_orthonormal_vector).
+        let sg = select(-1.0, 1.0, a.z >= 0.0);
+        let k = -1.0 / (sg + a.z);
+        let m = a.x * a.y * k;
+        let axis = vec3<f32>(m, sg + a.y * a.y * k, -a.y);
+        return vec4<f32>(axis * sin(HALF_PI), cos(HALF_PI));
+    }
+    let c = cross(a, b);
+    return quat_normalize(vec4<f32>(c, 1.0 + d));
+}
+
+// lod_policy's soft_reach.
+fn soft_reach(reach: f32, current: f32, len: f32) -> f32 {
+    let start = max(LOCK_SOFT_REACH * len, current);
+    if (reach <= start) {
+        return reach;
+    }
+    let span = len - start;
+    if (span <= 0.0) {
+        return start;
+    }
+    return min(start + span * (1.0 - exp(-(reach - start) / span)), max(LOCK_MAX_REACH * len, current));
+}
+
+struct TwoBone {
+    thigh: vec4<f32>,
+    knee: vec4<f32>,
+}
+
+// lod_policy's two_bone: the world rotations of thigh (about the hip) and shin (about the moved
+// knee) that bring the ankle to `target` at the soft reach.
+fn two_bone(hip: vec3<f32>, knee: vec3<f32>, ankle: vec3<f32>, goal_at: vec3<f32>, pole: vec3<f32>) -> TwoBone {
+    let id = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+    let l1 = length(knee - hip);
+    let l2 = length(ankle - knee);
+    let to_target = goal_at - hip;
+    let reach = length(to_target);
+    if (l1 < 1e-5 || l2 < 1e-5 || reach < 1e-5) {
+        return TwoBone(id, id);
+    }
+    let d = max(soft_reach(reach, length(ankle - hip), l1 + l2), abs(l1 - l2) + 1e-4);
+    let u = to_target / reach;
+    let kh = knee - hip;
+    let side = kh + LOCK_POLE_WEIGHT * l1 * pole;
+    var w = side - dot(side, u) * u;
+    if (dot(w, w) < 1e-10) {
+        w = cross(cross(ankle - hip, vec3<f32>(0.0, 1.0, 0.0)), u);
+    }
+    w = normalize_or(w, vec3<f32>(0.0));
+    let cos_a = clamp((l1 * l1 + d * d - l2 * l2) / (2.0 * l1 * d), -1.0, 1.0);
+    let new_knee = hip + l1 * (cos_a * u + sqrt(max(1.0 - cos_a * cos_a, 0.0)) * w);
+    let r_thigh = rotation_arc(kh / l1, (new_knee - hip) / l1);
+    let shin = quat_rotate(r_thigh, ankle - knee);
+    let goal = hip + d * u - new_knee;
+    let r_knee = rotation_arc(normalize_or(shin, vec3<f32>(0.0)), normalize_or(goal, vec3<f32>(0.0)));
+    return TwoBone(r_thigh, r_knee);
+}
+
+// Writes rotation `q` as rotating joint `k`'s rows of `pose`, on the branch nearest the rows there.
+fn write_joint_rows(pose: ptr<function, array<f32, P>>, k: u32, q: vec4<f32>) {
+    let r = 7u + 3u * k;
+    let old = vec3<f32>((*pose)[r], (*pose)[r + 1u], (*pose)[r + 2u]);
+    let v = nearest_branch(quat_exp_map(quat_normalize(q)), old);
+    (*pose)[r] = v.x;
+    (*pose)[r + 1u] = v.y;
+    (*pose)[r + 2u] = v.z;
+}
+
+// Plants the feet of the pose of a walker at a lock level (FootLock::apply with the clip's
+// `joints` active joints, body scale `scale`, the cycle frame's origin `bx`, `bz` and heading `h`);
+// returns whether a leg was corrected.
+fn foot_lock(pose: ptr<function, array<f32, P>>, slot: u32, joints: u32, scale: f32, bx: vec2<f32>, bz: vec2<f32>, h: f32) -> bool {
+    let dt = frame.dt;
+    if (!(dt > 0.0)) {
+        return false;
+    }
+    var legs = LOCK_LEGS;
+    var ks = LOCK_LEG_ROWS;
+    var any_leg = false;
+    var evaluated: array<bool, 2>;
+    for (var f = 0u; f < 2u; f++) {
+        evaluated[f] = ks[f].x < joints && ks[f].y < joints && ks[f].z < joints;
+        any_leg = any_leg || evaluated[f];
+    }
+    var corrected = false;
+    // Forward kinematics of the joints up to the legs' last (Rig::joint_transforms_of: the clip's
+    // active joints, the body scale), when a leg is evaluated.
+    var pos: array<vec3<f32>, NJ>;
+    var rot: array<vec4<f32>, NJ>;
+    if (any_leg) {
+        let root = vec3<f32>((*pose)[0], (*pose)[1], (*pose)[2]);
+        let ground = vec3<f32>(root.x, 0.0, root.z);
+        for (var j = 0u; j < LOCK_NJ; j++) {
+            let role = mi(RIG + 4u * j);
+            let k = mi(RIG + 4u * j + 1u);
+            let parent = mi(RIG + 4u * j + 2u);
+            let rest = vec4<f32>(md[RIG_F + 7u * j + 3u], md[RIG_F + 7u * j + 4u], md[RIG_F + 7u * j + 5u], md[RIG_F + 7u * j + 6u]);
+            if (role == 0u) {
+                pos[j] = ground;
+                rot[j] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+            } else if (role == 1u) {
+                pos[j] = root;
+                rot[j] = exp_to_quat(vec3<f32>((*pose)[3], (*pose)[4], (*pose)[5]));
+            } else {
+                var local = rest;
+                if (role == 2u && k < joints) {
+                    let r = 7u + 3u * k;
+                    local = exp_to_quat(vec3<f32>((*pose)[r], (*pose)[r + 1u], (*pose)[r + 2u]));
+                }
+                let off = vec3<f32>(md[RIG_F + 7u * j], md[RIG_F + 7u * j + 1u], md[RIG_F + 7u * j + 2u]);
+                let pp = pos[parent];
+                let pr = rot[parent];
+                pos[j] = pp + quat_rotate(pr, off * scale);
+                rot[j] = quat_mul(pr, local);
+            }
+        }
+    }
+    // CycleFrame::rotation (single precision) and to_world (the origin added in double).
+    let hf = 0.5 * h;
+    let fq = vec4<f32>(0.0, sin(hf), 0.0, cos(hf));
+    for (var f = 0u; f < 2u; f++) {
+        var state = foot_load(slot, f);
+        if (f == 0u) {
+            state.flags |= FS_HELD;
+        }
+        if (!evaluated[f]) {
+            foot_let_go(&state, dt);
+            foot_store(slot, f, state);
+            continue;
+        }
+        let leg = legs[f];
+        let ankle = quat_rotate(fq, pos[leg.z]);
+        let toe = quat_rotate(fq, pos[leg.w]);
+        var pts: array<vec2<f32>, 4>;
+        pts[0] = df_add(bx, vec2<f32>(ankle.x, 0.0));
+        pts[1] = df_add(bz, vec2<f32>(ankle.z, 0.0));
+        pts[2] = df_add(bx, vec2<f32>(toe.x, 0.0));
+        pts[3] = df_add(bz, vec2<f32>(toe.z, 0.0));
+        let corr = foot_step(&state, pts, vec2<f32>(ankle.y, toe.y), dt);
+        foot_store(slot, f, state);
+        let d = quat_rotate(quat_conj(fq), corr);
+        if (dot(d, d) < 1e-12) {
+            continue;
+        }
+        corrected = true;
+        // bend_leg: the ankle moved by `d` with the hip fixed and the foot's orientation kept.
+        let th = leg.x;
+        let kn = leg.y;
+        let an = leg.z;
+        var parent_rot = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        if (ks[f].w != NONE) {
+            parent_rot = rot[ks[f].w];
+        }
+        let rz = quat_rotate(rot[ROOT_JOINT], vec3<f32>(0.0, 0.0, 1.0));
+        let pole = normalize_or(vec3<f32>(rz.x, 0.0, rz.z), vec3<f32>(0.0, 0.0, 1.0));
+        let tb = two_bone(pos[th], pos[kn], pos[an], pos[an] + d, pole);
+        let thigh_rot = quat_normalize(quat_mul(tb.thigh, rot[th]));
+        let knee_rot = quat_normalize(quat_mul(quat_mul(tb.knee, tb.thigh), rot[kn]));
+        write_joint_rows(pose, ks[f].x, quat_mul(quat_conj(parent_rot), thigh_rot));
+        write_joint_rows(pose, ks[f].y, quat_mul(quat_conj(thigh_rot), knee_rot));
+        write_joint_rows(pose, ks[f].z, quat_mul(quat_conj(knee_rot), rot[an]));
+    }
+    return corrected;
 }

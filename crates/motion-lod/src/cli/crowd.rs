@@ -144,8 +144,8 @@ pub struct CrowdArgs {
     #[arg(long, default_value_t = 3.0, value_parser = super::ranges::export_seconds, requires = "export")]
     pub export_seconds: f32,
     /// Run the crowd on the GPU (crate `gpu-crowd`, wgpu compute shaders; Vulkan by default) and
-    /// time its frames; needs a build with `--features gpu`. Seams are inertialized as on the CPU;
-    /// the foot lock is off on the GPU (not implemented there yet).
+    /// time its frames; needs a build with `--features gpu`. Seams are inertialized and feet locked
+    /// as on the CPU (its defaults: at every level).
     #[arg(long, conflicts_with_all = ["naive", "pca", "compare_naive", "compare_pca", "render", "export"])]
     pub gpu: bool,
 }

@@ -28,9 +28,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     let config = CrowdConfig {
         seed: args.seed,
         fps: args.fps,
-        // Seams as the CPU crowd's (its default, inertialized at every level); the foot lock is not
-        // on the GPU yet: off, and said so below.
-        foot_lock_levels: 0,
+        // Seams and the foot lock as the CPU crowd's (its defaults: at every level).
         style: super::crowd::crowd_style(&model, args.style.as_deref())?,
         ..CrowdConfig::with_density(args.walkers, args.density)
     };
@@ -100,9 +98,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     if gpu.is_software() {
         out!("note: a software adapter (it runs on the CPU): its timings say nothing about a GPU");
     }
-    out!(
-        "not on the GPU yet: the foot lock (off in this run); seams inertialized as the CPU crowd's"
-    );
+    out!("seams inertialized and feet locked as the CPU crowd's");
     out!(
         "set-up {:.0} ms (walkers placed, first clips built); GPU memory {:.1} MB ({:.0} bytes a walker)",
         setup.as_secs_f64() * 1e3,
