@@ -5,7 +5,8 @@
 #
 # 1. issue 32: `h100` times the GPU crowd at 1,000,000 walkers at full detail and 10,000,000
 #    under the distance policy, with GPU memory a walker, and the CPU crowd at 1,000,000, full
-#    detail, on every core beside it (`gpu.txt`);
+#    detail, on every core beside it; then the 10,000,000 again with seams and the foot lock on
+#    (`gpu.txt`);
 # 2. issue 32 item 3 on real hardware: gpu-crowd's test `cpu_match` (1,000 walkers, 300 frames,
 #    both scenes, seams off and on, every joint against the CPU crowd's), run on this GPU
 #    (`cpu-match.txt`);

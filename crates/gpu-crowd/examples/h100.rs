@@ -1,6 +1,9 @@
 //! The device check of issue 32, for a machine with a GPU (an H100): milliseconds a frame for
 //! 1,000,000 walkers at full detail and 10,000,000 under the distance policy (ground camera,
-//! density 0.01), and GPU memory a walker, with the CPU crowd's figure for the first beside them.
+//! density 0.01), seams and the foot lock off as in the issue's figures, and GPU memory a walker,
+//! with the CPU crowd's figure for the first beside them; then the second crowd again with the CPU
+//! crowd's defaults, seams inertialized and feet locked at every level (last, so that a time limit
+//! cuts it before the others).
 //!
 //! `cargo run --release -p gpu-crowd --example h100 -- [MODEL.mlod] [--full N] [--lod N] [--frames N]`
 //! (without a model, the fixture model is built from `fixtures/`).
@@ -27,10 +30,12 @@ fn time_gpu(
     policy: &dyn LevelPolicy,
     options: GpuOptions,
     frames: usize,
+    seams_and_lock: bool,
 ) -> Result<(f64, f64, u64), Box<dyn std::error::Error>> {
+    let levels = if seams_and_lock { usize::MAX } else { 0 };
     let config = CrowdConfig {
-        seam_levels: 0,
-        foot_lock_levels: 0,
+        seam_levels: levels,
+        foot_lock_levels: levels,
         ..CrowdConfig::with_density(walkers, 0.01)
     };
     let mut crowd = GpuCrowd::new(gpu, model.runtime(), config, options)?;
@@ -81,6 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &FullDetail::for_model(lod),
         GpuOptions::default(),
         frames,
+        false,
     )?;
     println!(
         "GPU, {full_n} walkers, full detail: {mean:.2} ms a frame (median {median:.2}), {:.0} bytes a walker",
@@ -98,6 +104,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &DistancePolicy::for_model(lod),
         options,
         frames,
+        false,
     )?;
     println!(
         "GPU, {lod_n} walkers, distance policy: {mean:.2} ms a frame (median {median:.2}), {:.0} bytes a walker",
@@ -130,6 +137,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "CPU ({} threads), {full_n} walkers, full detail: {:.1} ms a frame",
         rayon_threads(),
         ms.iter().sum::<f64>() / ms.len() as f64
+    );
+    drop(cpu);
+    // The same crowd as the second with the CPU crowd's defaults: seams and the foot lock on.
+    let (mean, median, bytes) = time_gpu(
+        &gpu,
+        &model,
+        lod_n,
+        &DistancePolicy::for_model(lod),
+        options,
+        frames,
+        true,
+    )?;
+    println!(
+        "GPU, {lod_n} walkers, distance policy, seams and foot lock on: {mean:.2} ms a frame (median {median:.2}), {:.0} bytes a walker",
+        bytes as f64 / lod_n as f64
     );
     Ok(())
 }
