@@ -383,3 +383,42 @@ fn a_backend_restriction_excluding_every_backend_says_so() {
         "{e}"
     );
 }
+
+/// A model without feet (one rebuilt from its parts without a `FootRig`) with the foot lock asked:
+/// the CPU source locks nothing there, and so does the GPU crowd. It runs, its joint slots hold no
+/// lock state (the bytes of a crowd with the lock off), and no frame reports a locked leg, where
+/// the same crowd over the model with feet locks legs and pays for the state.
+#[test]
+fn a_model_without_feet_runs_with_the_lock_asked_and_locks_nothing() {
+    let Some(gpu) = gpu() else {
+        return;
+    };
+    let feetless = edited(model(), |_| {});
+    assert!(feetless.feet().is_none() && model().feet().is_some());
+    let lock = CrowdConfig {
+        foot_lock_levels: usize::MAX,
+        ..config(300)
+    };
+    let slot_bytes = |m: &RuntimeModel, c: CrowdConfig| {
+        GpuCrowd::new(gpu, m, c, GpuOptions::default())
+            .expect("crowd")
+            .bytes_per_joint_slot()
+    };
+    assert_eq!(
+        slot_bytes(&feetless, lock),
+        slot_bytes(&feetless, config(300))
+    );
+    assert!(slot_bytes(model(), lock) > slot_bytes(model(), config(300)));
+    let locked = |m: &RuntimeModel| {
+        let mut crowd = GpuCrowd::new(gpu, m, lock, GpuOptions::default()).expect("crowd");
+        let policy = FullDetail::for_model(m.lod());
+        (0..30)
+            .map(|f| {
+                let camera = camera(&crowd, Scene::Ground, f);
+                crowd.step(&policy, &camera, DT).expect("step").feet_locked
+            })
+            .sum::<u64>()
+    };
+    assert_eq!(locked(&feetless), 0);
+    assert!(locked(model()) > 0);
+}
