@@ -23,7 +23,10 @@ fn arg(args: &[String], name: &str, default: usize) -> usize {
         .unwrap_or(default)
 }
 
+/// Times `walkers` on the GPU and prints the row `GPU, {walkers} walkers, {label}: ...`.
+#[allow(clippy::too_many_arguments)]
 fn time_gpu(
+    label: &str,
     gpu: &Gpu,
     model: &MotionModel,
     walkers: usize,
@@ -31,7 +34,7 @@ fn time_gpu(
     options: GpuOptions,
     frames: usize,
     seams_and_lock: bool,
-) -> Result<(f64, f64, u64), Box<dyn std::error::Error>> {
+) -> Result<(), Box<dyn std::error::Error>> {
     let levels = if seams_and_lock { usize::MAX } else { 0 };
     let config = CrowdConfig {
         seam_levels: levels,
@@ -54,7 +57,12 @@ fn time_gpu(
     }
     let mean = ms.iter().sum::<f64>() / ms.len() as f64;
     ms.sort_by(f64::total_cmp);
-    Ok((mean, ms[ms.len() / 2], crowd.gpu_bytes()))
+    println!(
+        "GPU, {walkers} walkers, {label}: {mean:.2} ms a frame (median {:.2}), {:.0} bytes a walker",
+        ms[ms.len() / 2],
+        crowd.gpu_bytes() as f64 / walkers as f64
+    );
+    Ok(())
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -79,7 +87,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let gpu = Gpu::new()?;
     println!("adapter: {}", gpu.adapter_name());
     let lod = model.lod();
-    let (mean, median, bytes) = time_gpu(
+    time_gpu(
+        "full detail",
         &gpu,
         &model,
         full_n,
@@ -88,16 +97,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         frames,
         false,
     )?;
-    println!(
-        "GPU, {full_n} walkers, full detail: {mean:.2} ms a frame (median {median:.2}), {:.0} bytes a walker",
-        bytes as f64 / full_n as f64
-    );
     // Under the policy few walkers hold joints: 2% of them get a joint slot.
     let options = GpuOptions {
         joint_slots: Some((lod_n / 50).max(1)),
         ..GpuOptions::default()
     };
-    let (mean, median, bytes) = time_gpu(
+    time_gpu(
+        "distance policy",
         &gpu,
         &model,
         lod_n,
@@ -106,10 +112,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         frames,
         false,
     )?;
-    println!(
-        "GPU, {lod_n} walkers, distance policy: {mean:.2} ms a frame (median {median:.2}), {:.0} bytes a walker",
-        bytes as f64 / lod_n as f64
-    );
     // The CPU crowd on the same machine, same scene, full detail (all threads).
     let source = LodSource::new(&model);
     let config = CrowdConfig {
@@ -140,7 +142,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     drop(cpu);
     // The same crowd as the second with the CPU crowd's defaults: seams and the foot lock on.
-    let (mean, median, bytes) = time_gpu(
+    time_gpu(
+        "distance policy, seams and foot lock on",
         &gpu,
         &model,
         lod_n,
@@ -149,10 +152,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         frames,
         true,
     )?;
-    println!(
-        "GPU, {lod_n} walkers, distance policy, seams and foot lock on: {mean:.2} ms a frame (median {median:.2}), {:.0} bytes a walker",
-        bytes as f64 / lod_n as f64
-    );
     Ok(())
 }
 

@@ -214,6 +214,10 @@ pub struct GpuCrowd {
     pages: Vec<Page>,
     staging: wgpu::Buffer,
     counters_len: usize,
+    /// What `step` writes over the counters from [`C_NONFINITE`] to the end before each frame:
+    /// no walker not finite (the first at `u32::MAX`, the shaders' `atomicMin`), no seam, no
+    /// lock, an empty histogram. Made once (no allocation per frame).
+    counters_reset: Vec<u32>,
     levels: usize,
     joints: usize,
     walkers: usize,
@@ -730,6 +734,11 @@ impl GpuCrowd {
             pages,
             staging,
             counters_len,
+            counters_reset: {
+                let mut reset = vec![0u32; counters_len - C_NONFINITE];
+                reset[C_NONFINITE_FIRST - C_NONFINITE] = u32::MAX;
+                reset
+            },
             levels: tables.levels,
             joints: j,
             walkers: n,
@@ -818,36 +827,23 @@ impl GpuCrowd {
         uniform.vis_entries = vis;
         uniform.hid_entries = hid;
         uniform.policy[..entries.len()].copy_from_slice(entries);
-        let zeros = vec![0u32; self.levels + 1];
         let mut encoder = self.device.create_command_encoder(&Default::default());
         for page in &self.pages {
             uniform.n = page.n as u32;
             uniform.n_slots = page.slots as u32;
             self.queue
                 .write_buffer(&page.frame, 0, bytemuck::bytes_of(&uniform));
-            // Reset the frame's counters (builds, visible, slot faults, seams, locks) and the
-            // histogram; the free-slot stack's top stays.
+            // Reset the frame's counters (builds, visible, slot faults; then those from the walkers
+            // not finite to the histogram's end); the free-slot stack's top between them stays.
             self.queue.write_buffer(
                 &page.counters,
                 4 * C_BUILDS as u64,
                 bytemuck::cast_slice(&[0u32; 3]),
             );
-            // The frame's walkers with positions that are not finite: none yet, the first at
-            // u32::MAX (the shaders' atomicMin).
             self.queue.write_buffer(
                 &page.counters,
                 4 * C_NONFINITE as u64,
-                bytemuck::cast_slice(&[0u32, u32::MAX]),
-            );
-            self.queue.write_buffer(
-                &page.counters,
-                4 * C_SEAMS as u64,
-                bytemuck::cast_slice(&[0u32, 0u32]),
-            );
-            self.queue.write_buffer(
-                &page.counters,
-                4 * C_HIST as u64,
-                bytemuck::cast_slice(&zeros),
+                bytemuck::cast_slice(&self.counters_reset),
             );
             let (gx, gy) = groups(page.n);
             let mut pass = encoder.begin_compute_pass(&Default::default());

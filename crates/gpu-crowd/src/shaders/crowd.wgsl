@@ -1104,6 +1104,15 @@ fn sample_row(slot: u32, r: u32, rt: u32, which: u32) -> f32 {
     return acc;
 }
 
+// The seven root rows (root position, orientation, time increment) at sample `which`.
+fn sample_root(slot: u32, rt: u32, which: u32) -> array<f32, 7> {
+    var p: array<f32, 7>;
+    for (var r = 0u; r < 7u; r++) {
+        p[r] = sample_row(slot, r, rt, which);
+    }
+    return p;
+}
+
 // The velocity from sample `a` to `b` over `h` seconds (PoseState::set; zero for an `h` that is
 // not finite and positive).
 fn finite_difference(a: f32, b: f32, h: f32) -> f32 {
@@ -1172,12 +1181,8 @@ fn seam_capture(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
     for (var u = lid; u < 1u + (shown - 7u) / 3u; u += WG) {
         if (u == 0u) {
             // The root rows.
-            var p0: array<f32, 7>;
-            var p1: array<f32, 7>;
-            for (var r = 0u; r < 7u; r++) {
-                p0[r] = sample_row(slot, r, rt, 0u);
-                p1[r] = sample_row(slot, r, rt, 1u);
-            }
+            var p0 = sample_root(slot, rt, 0u);
+            var p1 = sample_root(slot, rt, 1u);
             var o0 = vec3<f32>(p0[3], p0[4], p0[5]);
             var o1 = vec3<f32>(p1[3], p1[4], p1[5]);
             if (sr > 0u) {
@@ -1290,12 +1295,8 @@ fn seam_start(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_i
     let h = ws_f[1] - ws_f[0];
     for (var u = lid; u < 1u + (wide - 7u) / 3u; u += WG) {
         if (u == 0u) {
-            var p0: array<f32, 7>;
-            var p1: array<f32, 7>;
-            for (var r = 0u; r < 7u; r++) {
-                p0[r] = sample_row(slot, r, rt, 0u);
-                p1[r] = sample_row(slot, r, rt, 1u);
-            }
+            let p0 = sample_root(slot, rt, 0u);
+            let p1 = sample_root(slot, rt, 1u);
             let o0 = vec3<f32>(p0[3], p0[4], p0[5]);
             let o1 = vec3<f32>(p1[3], p1[4], p1[5]);
             let ang = angular_velocity(o0, o1, h);
