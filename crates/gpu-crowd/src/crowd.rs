@@ -35,7 +35,7 @@ const C_HIST: usize = 11;
 /// One walker as the shaders hold it (`struct Walker` of `crowd.wgsl`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
-struct GpuWalker {
+pub(crate) struct GpuWalker {
     t: f32,
     cur_dur: f32,
     hold_s: f32,
@@ -150,13 +150,13 @@ pub struct WalkerJoints {
 
 /// One page of walkers: its buffers and bind group.
 #[derive(Debug)]
-struct Page {
-    n: usize,
-    slots: usize,
+pub(crate) struct Page {
+    pub(crate) n: usize,
+    pub(crate) slots: usize,
     frame: wgpu::Buffer,
-    walkers: wgpu::Buffer,
+    pub(crate) walkers: wgpu::Buffer,
     counters: wgpu::Buffer,
-    joints: wgpu::Buffer,
+    pub(crate) joints: wgpu::Buffer,
     bind: wgpu::BindGroup,
     bytes: u64,
 }
@@ -208,10 +208,10 @@ struct Page {
 #[derive(Debug)]
 pub struct GpuCrowd {
     gpu_name: String,
-    device: wgpu::Device,
-    queue: wgpu::Queue,
+    pub(crate) device: wgpu::Device,
+    pub(crate) queue: wgpu::Queue,
     pipelines: Pipelines,
-    pages: Vec<Page>,
+    pub(crate) pages: Vec<Page>,
     staging: wgpu::Buffer,
     counters_len: usize,
     /// What `step` writes over the counters from [`C_NONFINITE`] to the end before each frame:
@@ -284,7 +284,11 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
 
 /// Runs `f` inside a validation and an out-of-memory error scope; their errors become
 /// [`GpuError::Runtime`].
-fn scoped<R>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> R) -> Result<R, GpuError> {
+pub(crate) fn scoped<R>(
+    device: &wgpu::Device,
+    what: &str,
+    f: impl FnOnce() -> R,
+) -> Result<R, GpuError> {
     scoped_raw(device, f).map_err(|e| GpuError::Runtime(format!("{what}: {e}")))
 }
 

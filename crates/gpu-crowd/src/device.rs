@@ -5,6 +5,11 @@ use crate::error::GpuError;
 /// The environment variable that points the Vulkan loader at a driver's ICD file (older loaders).
 pub const ICD_ENV: &str = "VK_ICD_FILENAMES";
 
+/// Storage buffers the crowd's compute passes bind (`crowd.wgsl`'s bindings 2 to 9).
+const STORAGE_BUFFERS: u32 = 8;
+/// Uniform buffers they bind (bindings 0 and 1).
+const UNIFORM_BUFFERS: u32 = 2;
+
 /// An open GPU: adapter, device and queue. One per process is enough; crowds borrow it.
 #[derive(Debug)]
 pub struct Gpu {
@@ -58,6 +63,61 @@ impl Gpu {
             info,
             limits,
         })
+    }
+
+    /// The crowd on a device the caller already has (an engine's, to draw the crowd from its
+    /// buffers in the engine's own passes: [`crate::GpuCrowd::draw_pages`]): `info` names the
+    /// adapter (`wgpu::Adapter::get_info`), `device` and `queue` are the engine's (wgpu's handles
+    /// are shared, not copied). The crowd's limits are the device's (`wgpu::Device::limits`):
+    /// pages are sized to its largest storage binding.
+    ///
+    /// Errors: [`GpuError::Limit`] when the device offers fewer than the
+    /// 8 storage buffers a compute shader stage the crowd's passes bind (`wgpu::Limits::default`
+    /// offers 8) or fewer than its 2 uniform buffers.
+    pub fn from_wgpu(
+        info: wgpu::AdapterInfo,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Gpu, GpuError> {
+        let limits = device.limits();
+        let needs = [
+            (
+                "storage buffers per shader stage",
+                STORAGE_BUFFERS,
+                limits.max_storage_buffers_per_shader_stage,
+            ),
+            (
+                "uniform buffers per shader stage",
+                UNIFORM_BUFFERS,
+                limits.max_uniform_buffers_per_shader_stage,
+            ),
+        ];
+        for (what, needed, limit) in needs {
+            if limit < needed {
+                return Err(GpuError::Limit {
+                    what,
+                    needed: u64::from(needed),
+                    limit: u64::from(limit),
+                    adapter: describe(&info),
+                });
+            }
+        }
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+            limits,
+        })
+    }
+
+    /// The device the crowds on this GPU run on (for an engine's passes that read their buffers).
+    pub fn device(&self) -> &wgpu::Device {
+        &self.device
+    }
+
+    /// The queue the crowds on this GPU submit to.
+    pub fn queue(&self) -> &wgpu::Queue {
+        &self.queue
     }
 
     /// The adapter's name, device type and backend, e.g.

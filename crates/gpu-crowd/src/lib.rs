@@ -15,8 +15,13 @@
 //! value, `shaders/df.wgsl`), so that both crowds walk the same walks. It runs on
 //! Vulkan (default feature `vulkan`), Metal (`metal`) and DirectX 12 (`dx12`) through wgpu, and on
 //! Mesa's software Vulkan (lavapipe) where there is no GPU, which is how CI checks it against the
-//! CPU crowd. It is not for: rendering (it computes joint positions; drawing them is the engine's),
-//! or building models (see `motion-lod`). Seam state costs each joint slot `4 (3 P + 3)` bytes,
+//! CPU crowd. An engine draws the crowd where it lives: [`GpuCrowd::draw_pages`] gives the buffers
+//! its shaders read the walkers' roots and joints from after each step, [`DRAW_WGSL`] the
+//! declarations they include, [`Gpu::from_wgpu`] runs the crowd on the engine's own device, and
+//! [`Preview`] is such a reader: a render pass that draws the stick figures from the buffers into
+//! an image (`motion-lod crowd --gpu --render`). It is not for: an engine's rendering (meshes,
+//! skinning, materials are the engine's; `Preview` draws lines for checks and previews), or
+//! building models (see `motion-lod`). Seam state costs each joint slot `4 (3 P + 3)` bytes,
 //! and nothing with `seam_levels = 0`; foot lock state 216 bytes, and nothing with
 //! `foot_lock_levels = 0` or a model without feet ([`GpuCrowd::bytes_per_joint_slot`]).
 //!
@@ -43,14 +48,18 @@
 mod crowd;
 mod device;
 mod df;
+mod draw;
 mod error;
 mod policy;
+mod preview;
 mod tables;
 
 pub use crowd::{GpuCrowd, GpuFrameStats, GpuOptions, WalkerJoints};
 pub use device::{Gpu, ICD_ENV};
+pub use draw::{DRAW_WGSL, DrawPage};
 pub use error::GpuError;
 pub use policy::PolicyTable;
+pub use preview::Preview;
 
 /// The environment variable that makes a missing GPU adapter an error in the tests (CI sets it:
 /// lavapipe is installed there) instead of a skip.

@@ -141,12 +141,20 @@ impl Recorder {
     /// Renders and writes the current frame of `crowd` seen by `camera`; returns the PNG path.
     pub fn record<C>(&mut self, crowd: &Crowd<C>, camera: &Camera) -> Result<PathBuf, RenderError> {
         let img = render_frame(crowd, camera, &self.style)?;
-        let path = self.dir.join(format!("frame_{:05}.png", self.index));
-        write_png_atomic(&path, &img)?;
         if self.style.map {
             let m = render_map(crowd, camera, &self.style, self.style.map_size_px)?;
             write_png_atomic(&self.dir.join(format!("map_{:05}.png", self.index)), &m)?;
         }
+        self.record_image(img)
+    }
+
+    /// Writes a frame rendered elsewhere (a GPU renderer's, say) as the next `frame_NNNNN.png`
+    /// and collects it for the GIF as [`Recorder::record`] does; draws no map (a recorder of
+    /// such frames is made with [`RenderStyle::map`] off, so that [`Recorder::finish`] removes an
+    /// earlier run's maps). Returns the PNG path.
+    pub fn record_image(&mut self, img: Image) -> Result<PathBuf, RenderError> {
+        let path = self.dir.join(format!("frame_{:05}.png", self.index));
+        write_png_atomic(&path, &img)?;
         let every = self.style.gif_every as usize;
         if every > 0 && self.index % every == 0 && self.gif_frames.len() < self.style.gif_max_frames
         {

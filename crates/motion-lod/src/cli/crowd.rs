@@ -145,8 +145,9 @@ pub struct CrowdArgs {
     pub export_seconds: f32,
     /// Run the crowd on the GPU (crate `gpu-crowd`, wgpu compute shaders; Vulkan by default) and
     /// time its frames; needs a build with `--features gpu`. Seams are inertialized and feet locked
-    /// as on the CPU (its defaults: at every level).
-    #[arg(long, conflicts_with_all = ["naive", "pca", "compare_naive", "compare_pca", "render", "export"])]
+    /// as on the CPU (its defaults: at every level). With `--render`, frames are drawn on the GPU
+    /// straight from the crowd's buffers (`gpu_crowd::Preview`; no top-down maps).
+    #[arg(long, conflicts_with_all = ["naive", "pca", "compare_naive", "compare_pca", "export"])]
     pub gpu: bool,
 }
 

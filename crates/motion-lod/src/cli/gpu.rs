@@ -16,8 +16,9 @@ pub fn run(_args: &CrowdArgs) -> anyhow::Result<()> {
 #[cfg(feature = "gpu")]
 pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     use anyhow::Context as _;
+    use crowd_sim::render::{Recorder, RenderStyle};
     use crowd_sim::{CrowdConfig, LevelTable, Scene};
-    use gpu_crowd::{Gpu, GpuCrowd, GpuOptions};
+    use gpu_crowd::{Gpu, GpuCrowd, GpuOptions, Preview};
     use lod_policy::{DistancePolicy, FullDetail, LevelPolicy, ScreenSpacePolicy};
 
     use super::crowd::PolicyArg;
@@ -30,6 +31,9 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         fps: args.fps,
         // Seams and the foot lock as the CPU crowd's (its defaults: at every level).
         style: super::crowd::crowd_style(&model, args.style.as_deref())?,
+        // A crowd that is watched starts mid-stride (the CPU crowd's `prime`): every walker
+        // takes its detail at the first frame instead of over its first cycle.
+        spread_first_builds: args.render.is_none(),
         ..CrowdConfig::with_density(args.walkers, args.density)
     };
     let lod = model.lod();
@@ -53,14 +57,49 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     let path = scene.path(field);
     let frames = ((args.seconds * args.fps).round() as usize).max(1);
     let dt = 1.0 / args.fps;
+    // `--render`: frames drawn on the GPU from the crowd's buffers, written as the CPU crowd's.
+    let mut render = match &args.render {
+        Some(dir) => {
+            let style = RenderStyle {
+                gif_every: 1,
+                ..RenderStyle::default()
+            };
+            let bones = crowd_sim::ClipSource::bones(&motion_lod::LodSource::new(&model)).to_vec();
+            let preview = Preview::new(
+                &crowd,
+                &bones,
+                lod.levels().len(),
+                &style,
+                lens.image_width,
+                lens.image_height,
+            )
+            .context("--render on the GPU")?;
+            let recorder = Recorder::new(dir, style)
+                .with_context(|| format!("render folder {}", dir.display()))?;
+            Some((preview, recorder))
+        }
+        None => None,
+    };
     let mut times = Vec::with_capacity(frames);
     let mut last = None;
+    let mut rendered = 0;
     for f in 0..frames {
         let camera = path.camera_at(f as f32 * dt, &lens);
         let stats = crowd.step(policy.as_ref(), &camera, dt)?;
         times.push(stats.wall.as_secs_f64() * 1e3);
         last = Some(stats);
+        if let Some((preview, recorder)) = render.as_mut()
+            && f % args.render_every.max(1) == 0
+        {
+            let img = preview.render(&crowd, &camera)?;
+            recorder.record_image(img)?;
+            rendered += 1;
+        }
     }
+    let finished = match render {
+        Some((_, recorder)) => Some(recorder.finish()?),
+        None => None,
+    };
     let last = last.expect("at least one frame");
     let warmup = ((f64::from(args.fps)).round() as usize).min(frames.saturating_sub(1));
     let mut after: Vec<f64> = times[warmup..].to_vec();
@@ -119,5 +158,18 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         last.kernels_built,
         last.level_histogram
     );
+    if let (Some(dir), Some(done)) = (&args.render, finished) {
+        out!(
+            "rendered {rendered} frames on the GPU from the crowd's buffers into {} (frame_*.png){}{}",
+            dir.display(),
+            done.gif
+                .as_ref()
+                .map_or(String::new(), |g| format!(" and {}", g.display())),
+            match done.stale_removed {
+                0 => String::new(),
+                n => format!("; removed {n} files an earlier run had left there under these names"),
+            }
+        );
+    }
     Ok(())
 }

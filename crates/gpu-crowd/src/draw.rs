@@ -1,0 +1,101 @@
+//! Drawing the crowd where it lives: the buffers an engine's shaders read the walkers' roots and
+//! joint positions from after [`GpuCrowd::step`], with no read-back ([`GpuCrowd::draw_pages`],
+//! [`DRAW_WGSL`]), and the device they live on ([`GpuCrowd::device`], [`Gpu::from_wgpu`] to run
+//! the crowd on an engine's own device).
+
+use crate::crowd::GpuCrowd;
+#[cfg(doc)]
+use crate::device::Gpu;
+
+/// WGSL declarations for an engine's shaders that read the crowd's buffers: the walker struct
+/// (`CrowdWalker`, as the crowd's shaders lay it out) and the functions `crowd_visible`,
+/// `crowd_root`, `crowd_height`, `crowd_joint_count`, `crowd_joint` (the index of a joint's `x`
+/// in a page's joint buffer; `y` and `z` follow at `+ slots` and `+ 2 slots`) and `crowd_level`.
+/// Prepend it to a shader module's source; the file's head comment shows the loop that reads a
+/// walker's joints.
+///
+/// Joint `k` is the `k`-th position after the root in `crowd_sim::Crowd::joint_positions`'s
+/// order, so that a bone `(a, b)` of `crowd_sim::ClipSource::bones` joins position `a` and `b`
+/// (0 the root, `1 + k` joint `k`). The layout is this crate version's: shaders that include this
+/// text stay in step with it.
+pub const DRAW_WGSL: &str = include_str!("shaders/draw.wgsl");
+
+/// One page of the crowd's walkers as an engine's shaders bind them ([`GpuCrowd::draw_pages`]).
+///
+/// Both buffers are storage buffers of the crowd's device, written by [`GpuCrowd::step`] and
+/// valid until the next step: bind them read-only (`var<storage, read>`) in a render or compute
+/// pass submitted after the step, on the same queue.
+#[derive(Debug, Clone, Copy)]
+pub struct DrawPage<'a> {
+    /// Index of the page's first walker in the crowd (`crowd_sim::Crowd`'s walker order).
+    pub first: usize,
+    /// Walkers in the page: indices `0..walkers` of `walker_buffer` (the buffer may be longer).
+    pub walkers: usize,
+    /// Joint slots of the page: the `slots` argument of `DRAW_WGSL`'s `crowd_joint`.
+    pub joint_slots: usize,
+    /// The walkers, `array<CrowdWalker>` of [`DRAW_WGSL`].
+    pub walker_buffer: &'a wgpu::Buffer,
+    /// The joint positions, `array<f32>`, indexed by `DRAW_WGSL`'s `crowd_joint`.
+    pub joint_buffer: &'a wgpu::Buffer,
+}
+
+impl GpuCrowd {
+    /// The crowd's pages as an engine's shaders read them after [`GpuCrowd::step`]: each page's
+    /// walker and joint buffers and its walker range (see [`DRAW_WGSL`]). One draw or dispatch
+    /// per page covers the crowd.
+    pub fn draw_pages(&self) -> impl ExactSizeIterator<Item = DrawPage<'_>> + '_ {
+        let mut first = 0;
+        self.pages.iter().map(move |page| {
+            let out = DrawPage {
+                first,
+                walkers: page.n,
+                joint_slots: page.slots,
+                walker_buffer: &page.walkers,
+                joint_buffer: &page.joints,
+            };
+            first += page.n;
+            out
+        })
+    }
+
+    /// The device the crowd's buffers live on: make the pipelines and bind groups that read
+    /// [`GpuCrowd::draw_pages`] with it.
+    pub fn device(&self) -> &wgpu::Device {
+        &self.device
+    }
+
+    /// The queue the crowd submits its frames to: submit passes that read its buffers here, after
+    /// [`GpuCrowd::step`].
+    pub fn queue(&self) -> &wgpu::Queue {
+        &self.queue
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The fields of `struct NAME { ... }` in `src`, in order, whitespace removed.
+    fn fields(src: &str, name: &str) -> Vec<String> {
+        let start = src
+            .find(&format!("struct {name} {{"))
+            .unwrap_or_else(|| panic!("struct {name} in the shader"));
+        let body = &src[start..];
+        let body = &body[body.find('{').unwrap() + 1..body.find('}').unwrap()];
+        body.split(',')
+            .map(|f| f.split_whitespace().collect::<String>())
+            .filter(|f| !f.is_empty())
+            .collect()
+    }
+
+    #[test]
+    fn the_draw_struct_is_the_crowd_shaders_walker_field_for_field() {
+        let crowd = fields(include_str!("shaders/crowd.wgsl"), "Walker");
+        let draw = fields(super::DRAW_WGSL, "CrowdWalker");
+        assert!(crowd.len() > 40, "{crowd:?}");
+        assert_eq!(crowd, draw);
+        // And the host's mirror of it, by size: 4 bytes a field.
+        assert_eq!(
+            std::mem::size_of::<crate::crowd::GpuWalker>(),
+            4 * crowd.len()
+        );
+    }
+}
