@@ -19,18 +19,47 @@ const MODE_INIT: u32 = 2;
 const WG: u32 = 64;
 /// Largest workgroup count in one dimension of a dispatch.
 const MAX_X: u32 = 65535;
-/// The counters' layout (the shaders' `C_*`).
+/// The counters' layout (the shaders' `C_*`): the round's builds, the walkers in view, the slot
+/// faults, the free-slot stack's top.
 const C_BUILDS: usize = 3;
+const C_VISIBLE: usize = 4;
+const C_SLOT_FAULTS: usize = 5;
 const C_FREE_TOP: usize = 6;
+/// The shortest clip duration built since the crowd was made, as its f32 bits (the shaders'
+/// `C_MIN_DUR`, an `atomicMin` in the build pass; never reset).
+const C_MIN_DUR: usize = 7;
 /// Walkers whose root or joint positions came out NaN or infinite this frame, and the first of
 /// them (the shaders' `C_NONFINITE`, `C_NONFINITE_FIRST`).
-const C_NONFINITE: usize = 7;
-const C_NONFINITE_FIRST: usize = 8;
+const C_NONFINITE: usize = 8;
+const C_NONFINITE_FIRST: usize = 9;
 /// Walkers inside a running seam transition this frame (the shaders' `C_SEAMS`).
-const C_SEAMS: usize = 9;
+const C_SEAMS: usize = 10;
 /// Walkers whose foot lock corrected a leg this frame (the shaders' `C_LOCKS`).
-const C_LOCKS: usize = 10;
-const C_HIST: usize = 11;
+const C_LOCKS: usize = 11;
+/// Rounds of cycle ends and builds run this frame (the shaders' `C_ROUND`, which `fix_free`
+/// counts).
+const C_ROUND: usize = 12;
+/// Walkers whose clock is past the end of the clip the last round built (the shaders' `C_BEHIND`).
+const C_BEHIND: usize = 13;
+/// Clips built this frame, every round's (the shaders' `C_BUILT`).
+const C_BUILT: usize = 14;
+const C_HIST: usize = 15;
+
+/// A frame is split into rounds (see [`GpuCrowd::step`]) when its `dt` is at least this fraction
+/// of the shortest clip the crowd has built. A walker can end more than one cycle in a frame only
+/// when a clip built in that frame is shorter than `dt` (the clock left past a cycle end is below
+/// `dt`), so a frame that is not split can leave a walker behind only through a clip shorter than
+/// half the shortest of every clip built before it. At 30 or 60 fps (`dt` of 33 or 17 ms against
+/// clips of about a second) no frame is split and none pays the round trip.
+const SPLIT_MARGIN: f32 = 0.5;
+/// Most rounds encoded in one submission of a split frame (the rounds expected, `1 + dt /` the
+/// shortest clip, are encoded at once; rounds without a walker behind cost one light `advance`
+/// dispatch).
+const MAX_ROUNDS_PER_SUBMIT: u32 = 32;
+/// Rounds after which a split frame gives up ([`GpuError::Runtime`]): each cycle end takes at
+/// least a clip's shortest duration, 1 ms, off a clock at most `MAX_DT` past its clip's end, so
+/// more rounds than this mean a fault, not a long frame.
+const MAX_ROUNDS: u32 = (MAX_DT * 1000.0) as u32 + 2;
 
 /// One walker as the shaders hold it (`struct Walker` of `crowd.wgsl`).
 #[repr(C)]
@@ -131,8 +160,17 @@ pub struct GpuFrameStats {
     pub feet_locked: u64,
     /// Walkers per accuracy level, then root-only walkers last (as `crowd_sim::FrameStats`).
     pub level_histogram: Vec<u32>,
-    /// Wall time from the frame's submission to its completion on the device, including the
-    /// read-back of these statistics.
+    /// Rounds of cycle ends and clip builds run this frame, the most of any page: 1, or more when
+    /// the frame was split because its `dt` may hold several cycle ends of a walker (see
+    /// [`GpuCrowd::step`]).
+    pub rounds: u32,
+    /// Walkers whose clock is still past the end of their clip after the frame: cycle ends the
+    /// CPU crowd would have made in this frame and the GPU crowd makes later (0 unless a clip
+    /// built in a frame that was not split is shorter than the time left past the previous
+    /// clip's end; see [`GpuCrowd::step`]).
+    pub behind: u64,
+    /// Wall time from the frame's first submission to its completion on the device, including
+    /// the read-back of these statistics (and, in a split frame, the waits between its rounds).
     pub gpu: Duration,
     /// Wall time of the whole step on the host (upload, encode, submit, wait, read back).
     pub wall: Duration,
@@ -199,12 +237,22 @@ pub(crate) struct Page {
 /// its own: the pose pass runs it between the seam and forward kinematics, and `advance` clears
 /// it when it gives a slot back.
 ///
-/// What it does not do: a cycle end whose new clip is shorter than the time already past it
-/// waits for the next frame (the CPU crowd loops at once; with frames far shorter than cycles it
-/// does not happen).
+/// A frame step `dt` longer than a clip holds several cycle ends of a walker, which the CPU walker
+/// makes in one loop; on the GPU each cycle end needs the clip the previous one built (its
+/// duration and root motion), so they run in rounds of `advance` and the build passes, all before
+/// the pose pass: [`GpuCrowd::step`] splits such a frame (when `dt` is at least half the shortest
+/// clip the crowd has built) and runs catch-up rounds until no walker's clock is past its clip's
+/// end. Frames that are not split (at 30 or 60 fps, every frame: clips last about a second) run
+/// as one submission, as before. What remains ([`GpuFrameStats::behind`]): a walker whose clip,
+/// built in a frame that was not split, is shorter than the clock left past the previous clip's
+/// end — possible only for a clip shorter than half the shortest of all clips built before that
+/// frame — shows that clip's last pose in that frame and makes the cycle ends it owes in the next
+/// frames, at their detail (all of them in the next split frame; one a frame otherwise), so that
+/// it may walk on apart from the CPU's walker.
 ///
 /// Walker state lives on the GPU; per frame the host uploads the frame's uniform (camera planes,
-/// time step, the policy table) and resets a few counters, and reads back the counters.
+/// time step, the policy table) and resets a few counters, and reads back the counters (a split
+/// frame reads them back after its rounds too).
 #[derive(Debug)]
 pub struct GpuCrowd {
     gpu_name: String,
@@ -226,6 +274,9 @@ pub struct GpuCrowd {
     policy_cache: Option<PolicyCache>,
     frame: u64,
     bytes_per_slot: u64,
+    /// The shortest clip duration (s) built so far, from the counters read back after the
+    /// crowd's first builds and after each frame (`C_MIN_DUR`).
+    min_dur: f32,
 }
 
 /// The policy table of the last frames, and what it was made for.
@@ -241,6 +292,12 @@ struct PolicyCache {
 #[derive(Debug)]
 struct Pipelines {
     advance: wgpu::ComputePipeline,
+    /// `advance` with `CATCH_UP` set: the rounds of a split frame after its first (see
+    /// [`GpuCrowd::step`]), made from `module` and `layout` at the first split frame (a crowd
+    /// never split does not compile it).
+    catch_up: Option<wgpu::ComputePipeline>,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
     build_args: wgpu::ComputePipeline,
     build: wgpu::ComputePipeline,
     fix_free: wgpu::ComputePipeline,
@@ -280,6 +337,27 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
         },
         count: None,
     }
+}
+
+/// The compute pipeline of `entry` in `module`, with its pipeline-overridable `constants`.
+fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
 }
 
 /// Runs `f` inside a validation and an out-of-memory error scope; their errors become
@@ -479,23 +557,17 @@ impl GpuCrowd {
             bind_group_layouts: &[&layout],
             push_constant_ranges: &[],
         });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pl),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let pipeline = |entry: &str| compute_pipeline(&device, &module, &pl, entry, &[]);
         let pipelines = scoped(&device, "creating the crowd pipelines", || Pipelines {
             advance: pipeline("advance"),
+            catch_up: None,
             build_args: pipeline("build_args"),
             build: pipeline("build"),
             fix_free: pipeline("fix_free"),
             pose_fk: pipeline("pose_fk"),
             seam: (seam.levels > 0).then(|| (pipeline("seam_capture"), pipeline("seam_start"))),
+            module: module.clone(),
+            layout: pl.clone(),
         })?;
 
         // Pages: each buffer of a page within the adapter's largest storage binding.
@@ -638,6 +710,7 @@ impl GpuCrowd {
                 counters[2] = 1;
                 counters[C_BUILDS] = pn as u32;
                 counters[C_FREE_TOP] = slots as u32;
+                counters[C_MIN_DUR] = f32::INFINITY.to_bits();
                 let counters_buf = init(
                     "counters",
                     bytemuck::cast_slice(&counters),
@@ -730,7 +803,7 @@ impl GpuCrowd {
             })
         });
         let staging = result.map_err(|e| memory("the crowd's buffers", crowd_bytes, e))?;
-        let crowd = GpuCrowd {
+        let mut crowd = GpuCrowd {
             gpu_name: gpu.adapter_name(),
             device,
             queue,
@@ -751,11 +824,91 @@ impl GpuCrowd {
             policy_cache: None,
             frame: 0,
             bytes_per_slot: big_per_slot + joints_per_slot,
+            min_dur: f32::INFINITY,
         };
-        scoped(&crowd.device, "building the first clips", || {
-            crowd.submit_and_wait(encoder)
+        // The first clips' shortest duration, which the first frame's split needs.
+        let counters = scoped(&crowd.device, "building the first clips", || {
+            crowd.submit_and_read(encoder)
         })??;
+        crowd.min_dur = crowd.shortest_clip(&counters);
         Ok(crowd)
+    }
+
+    /// Appends the copy of every page's counters to the read-back buffer to `encoder`, submits
+    /// it, waits and returns the counters (a row of `counters_len` per page).
+    fn submit_and_read(&self, mut encoder: wgpu::CommandEncoder) -> Result<Vec<u32>, GpuError> {
+        let row = (4 * self.counters_len) as u64;
+        for (k, page) in self.pages.iter().enumerate() {
+            encoder.copy_buffer_to_buffer(&page.counters, 0, &self.staging, k as u64 * row, row);
+        }
+        self.submit_and_wait(encoder)?;
+        self.read_mapped(&self.staging)
+    }
+
+    /// The shortest clip duration any page has built, from counters read back.
+    fn shortest_clip(&self, counters: &[u32]) -> f32 {
+        counters
+            .chunks_exact(self.counters_len)
+            .map(|c| f32::from_bits(c[C_MIN_DUR]))
+            .fold(f32::INFINITY, f32::min)
+    }
+
+    /// The `advance` pipeline of catch-up rounds, made at the first call.
+    fn catch_up_pipeline(&mut self) -> Result<wgpu::ComputePipeline, GpuError> {
+        if let Some(made) = &self.pipelines.catch_up {
+            return Ok(made.clone());
+        }
+        let p = &self.pipelines;
+        let made = scoped(&self.device, "creating the catch-up pipeline", || {
+            compute_pipeline(
+                &self.device,
+                &p.module,
+                &p.layout,
+                "advance",
+                &[("CATCH_UP", 1.0)],
+            )
+        })?;
+        self.pipelines.catch_up = Some(made.clone());
+        Ok(made)
+    }
+
+    /// Records one round of cycle ends and clip builds of `page` into `pass`: `advance` (the
+    /// frame's first round, or with the catch-up pipeline a catch-up round), `build_args`, with
+    /// seams on `seam_capture`, `build`, with seams on `seam_start`, and `fix_free`, which ends
+    /// the round.
+    fn record_round(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        page: &Page,
+        advance: &wgpu::ComputePipeline,
+    ) {
+        let (gx, gy) = groups(page.n);
+        pass.set_bind_group(0, &page.bind, &[]);
+        pass.set_pipeline(advance);
+        pass.dispatch_workgroups(gx, gy, 1);
+        pass.set_pipeline(&self.pipelines.build_args);
+        pass.dispatch_workgroups(1, 1, 1);
+        if let Some((capture, _)) = &self.pipelines.seam {
+            // The outgoing clips' displayed states, before `build` overwrites them.
+            pass.set_pipeline(capture);
+            pass.dispatch_workgroups_indirect(&page.counters, 0);
+        }
+        pass.set_pipeline(&self.pipelines.build);
+        pass.dispatch_workgroups_indirect(&page.counters, 0);
+        if let Some((_, start)) = &self.pipelines.seam {
+            pass.set_pipeline(start);
+            pass.dispatch_workgroups_indirect(&page.counters, 0);
+        }
+        pass.set_pipeline(&self.pipelines.fix_free);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// Records the pose pass of `page` into `pass`.
+    fn record_pose(&self, pass: &mut wgpu::ComputePass<'_>, page: &Page) {
+        let (gx, gy) = groups(page.n);
+        pass.set_bind_group(0, &page.bind, &[]);
+        pass.set_pipeline(&self.pipelines.pose_fk);
+        pass.dispatch_workgroups(gx, gy, 1);
     }
 
     fn submit_and_wait(&self, encoder: wgpu::CommandEncoder) -> Result<(), GpuError> {
@@ -772,6 +925,17 @@ impl GpuCrowd {
     /// Advances the crowd by `dt` seconds seen from `camera` under `policy` (the stages of
     /// `crowd_sim::Crowd::step`, on the GPU) and waits for the frame to finish.
     ///
+    /// A walker makes every cycle end the CPU crowd's makes in the frame, however long `dt`: the
+    /// passes up to the clip build make one cycle end per walker and round, and a frame whose
+    /// `dt` is at least half the shortest clip the crowd has built so far (read back with each
+    /// frame's counters; the builds of `new` included) is split: its rounds are submitted first
+    /// (as many as `dt` over that clip suggests, at most 32 a submission) and, while a walker's
+    /// clock is still past its new clip's end, more catch-up rounds (no time added, the spread of
+    /// first builds not counted down, no mid-cycle refinement, nothing counted twice), then the
+    /// pose pass. Such a frame pays a host round trip or two; any other frame is one submission.
+    /// [`GpuFrameStats::rounds`] says how many rounds ran, [`GpuFrameStats::behind`] the walkers
+    /// left behind by a frame that was not split (see [`GpuCrowd`]).
+    ///
     /// The policy is tabulated over distance ([`PolicyTable`]) when the view, the policy or its
     /// answers change, and the table kept otherwise.
     ///
@@ -781,7 +945,8 @@ impl GpuCrowd {
     /// ([`GpuError::Config`]); joint positions that came out NaN or infinite
     /// ([`GpuError::NonFinite`]: a model whose values overflow single precision, which the CPU
     /// runtime refuses with `lod_policy::KernelError::Overflow`); the device's
-    /// ([`GpuError::Runtime`]).
+    /// ([`GpuError::Runtime`]), also for walkers still behind after more rounds than 1 ms clips
+    /// could need (a fault).
     pub fn step<P: LevelPolicy + ?Sized>(
         &mut self,
         policy: &P,
@@ -831,6 +996,21 @@ impl GpuCrowd {
         uniform.vis_entries = vis;
         uniform.hid_entries = hid;
         uniform.policy[..entries.len()].copy_from_slice(entries);
+        // A frame whose `dt` may hold more than one cycle end of a walker is split (see
+        // `SPLIT_MARGIN`): its rounds first, as many as expected in one submission, then, once
+        // every walker is caught up, the pose pass. Any other frame is one submission, as always.
+        let split = dt >= SPLIT_MARGIN * self.min_dur;
+        let per_submit = if split {
+            let expected = (dt / self.min_dur.max(1e-3)).ceil() as u32;
+            expected.saturating_add(1).min(MAX_ROUNDS_PER_SUBMIT)
+        } else {
+            1
+        };
+        let catch_up = if split {
+            Some(self.catch_up_pipeline()?)
+        } else {
+            None
+        };
         let mut encoder = self.device.create_command_encoder(&Default::default());
         for page in &self.pages {
             uniform.n = page.n as u32;
@@ -838,7 +1018,8 @@ impl GpuCrowd {
             self.queue
                 .write_buffer(&page.frame, 0, bytemuck::bytes_of(&uniform));
             // Reset the frame's counters (builds, visible, slot faults; then those from the walkers
-            // not finite to the histogram's end); the free-slot stack's top between them stays.
+            // not finite to the histogram's end, the round counter among them); the free-slot
+            // stack's top and the shortest clip between them stay.
             self.queue.write_buffer(
                 &page.counters,
                 4 * C_BUILDS as u64,
@@ -849,36 +1030,55 @@ impl GpuCrowd {
                 4 * C_NONFINITE as u64,
                 bytemuck::cast_slice(&self.counters_reset),
             );
-            let (gx, gy) = groups(page.n);
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_bind_group(0, &page.bind, &[]);
-            pass.set_pipeline(&self.pipelines.advance);
-            pass.dispatch_workgroups(gx, gy, 1);
-            pass.set_pipeline(&self.pipelines.build_args);
-            pass.dispatch_workgroups(1, 1, 1);
-            if let Some((capture, _)) = &self.pipelines.seam {
-                // The outgoing clips' displayed states, before `build` overwrites them.
-                pass.set_pipeline(capture);
-                pass.dispatch_workgroups_indirect(&page.counters, 0);
+            self.record_round(&mut pass, page, &self.pipelines.advance);
+            match &catch_up {
+                Some(advance) => {
+                    for _ in 1..per_submit {
+                        self.record_round(&mut pass, page, advance);
+                    }
+                }
+                None => self.record_pose(&mut pass, page),
             }
-            pass.set_pipeline(&self.pipelines.build);
-            pass.dispatch_workgroups_indirect(&page.counters, 0);
-            if let Some((_, start)) = &self.pipelines.seam {
-                pass.set_pipeline(start);
-                pass.dispatch_workgroups_indirect(&page.counters, 0);
-            }
-            pass.set_pipeline(&self.pipelines.fix_free);
-            pass.dispatch_workgroups(1, 1, 1);
-            pass.set_pipeline(&self.pipelines.pose_fk);
-            pass.dispatch_workgroups(gx, gy, 1);
-        }
-        let row = (4 * self.counters_len) as u64;
-        for (k, page) in self.pages.iter().enumerate() {
-            encoder.copy_buffer_to_buffer(&page.counters, 0, &self.staging, k as u64 * row, row);
         }
         let submitted = Instant::now();
-        self.submit_and_wait(encoder)?;
-        let counters: Vec<u32> = self.read_mapped(&self.staging)?;
+        let mut counters = self.submit_and_read(encoder)?;
+        if let Some(advance) = &catch_up {
+            let mut rounds = per_submit;
+            loop {
+                let behind: Vec<&Page> = counters
+                    .chunks_exact(self.counters_len)
+                    .zip(&self.pages)
+                    .filter(|(c, _)| c[C_BEHIND] > 0)
+                    .map(|(_, page)| page)
+                    .collect();
+                if behind.is_empty() {
+                    break;
+                }
+                if rounds >= MAX_ROUNDS {
+                    return Err(GpuError::Runtime(format!(
+                        "frame {}: walkers still behind their clips after {rounds} rounds of \
+                         cycle ends (dt = {dt} s)",
+                        self.frame + 1
+                    )));
+                }
+                let mut encoder = self.device.create_command_encoder(&Default::default());
+                for page in behind {
+                    let mut pass = encoder.begin_compute_pass(&Default::default());
+                    for _ in 0..per_submit {
+                        self.record_round(&mut pass, page, advance);
+                    }
+                }
+                rounds += per_submit;
+                counters = self.submit_and_read(encoder)?;
+            }
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            for page in &self.pages {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                self.record_pose(&mut pass, page);
+            }
+            counters = self.submit_and_read(encoder)?;
+        }
         let gpu = submitted.elapsed();
         let mut stats = GpuFrameStats {
             level_histogram: vec![0; self.levels + 1],
@@ -892,15 +1092,18 @@ impl GpuCrowd {
                 first.get_or_insert(start + c[C_NONFINITE_FIRST] as usize);
             }
             start += page.n;
-            stats.kernels_built += u64::from(c[C_BUILDS]);
-            stats.visible += u64::from(c[4]);
-            stats.slot_faults += u64::from(c[5]);
+            stats.kernels_built += u64::from(c[C_BUILT]);
+            stats.visible += u64::from(c[C_VISIBLE]);
+            stats.slot_faults += u64::from(c[C_SLOT_FAULTS]);
             stats.in_transition += u64::from(c[C_SEAMS]);
             stats.feet_locked += u64::from(c[C_LOCKS]);
+            stats.rounds = stats.rounds.max(c[C_ROUND]);
+            stats.behind += u64::from(c[C_BEHIND]);
             for (h, v) in stats.level_histogram.iter_mut().zip(&c[C_HIST..]) {
                 *h += v;
             }
         }
+        self.min_dur = self.shortest_clip(&counters);
         self.frame += 1;
         if let Some(first) = first {
             return Err(GpuError::NonFinite {

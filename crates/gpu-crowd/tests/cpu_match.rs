@@ -11,7 +11,9 @@
 //! whose lock moved a leg are counted on both sides: the GPU's [`GpuFrameStats::feet_locked`] and,
 //! on the CPU, a twin crowd with the lock off stepped alongside, whose joints must differ from the
 //! locked crowd's by more than [`LOCK_MOVED_M`] in many walker-frames (else the run would not test
-//! the lock). Without any adapter the test prints `skipped: no GPU adapter (...)`, or fails when
+//! the lock). A fourth test steps 300 walkers by 2.5 s and `crowd_sim::MAX_DT` among frames at 30
+//! fps ([`LONG_STEPS`]), several cycle ends of a walker in one frame, and requires the same clips
+//! built frame by frame besides the same joints. Without any adapter the test prints `skipped: no GPU adapter (...)`, or fails when
 //! `MOTION_LOD_REQUIRE_GPU=1` (CI).
 //!
 //! [`GpuFrameStats::feet_locked`]: gpu_crowd::GpuFrameStats::feet_locked
@@ -390,4 +392,198 @@ fn gpu_crowd_matches_the_cpu_crowd_with_seams() {
 #[test]
 fn gpu_crowd_matches_the_cpu_crowd_with_seams_and_foot_lock() {
     both_scenes(true, true);
+}
+
+/// Time steps of [`long_steps`]: frames at 30 fps between steps of 2.5 s and of
+/// `crowd_sim::MAX_DT` (10 s), each several of the fixture's clips (about a second) long.
+const LONG_STEPS: [f32; 12] = [
+    1.0 / 30.0,
+    2.5,
+    1.0 / 30.0,
+    1.0 / 30.0,
+    crowd_sim::MAX_DT,
+    1.0 / 30.0,
+    crowd_sim::MAX_DT,
+    crowd_sim::MAX_DT,
+    2.5,
+    1.0 / 30.0,
+    2.5,
+    1.0 / 30.0,
+];
+
+/// What [`long_steps`] measured in one scene.
+#[derive(Debug, Clone, Copy)]
+struct LongSteps {
+    /// The largest joint distance (m), the lock's threshold frames left out.
+    worst: f32,
+    /// Walker-frames with joints.
+    with_joints: usize,
+    /// The fewest clips the CPU crowd built per walker in a frame of 2.5 s and in one of
+    /// `MAX_DT` (all of them at cycle ends: a walker refines mid-cycle only in a frame without
+    /// one).
+    fewest_builds_per_walker: [f64; 2],
+    /// The most rounds of cycle ends in a GPU frame.
+    most_rounds: u32,
+    /// Walker-frames beyond [`TOLERANCE_M`] but within [`LOCK_FLIP_M`] with the lock on, and
+    /// their largest joint distance (m).
+    lock_flips: usize,
+    flip_worst: f32,
+}
+
+/// Both crowds stepped by [`LONG_STEPS`] in `scene` (300 walkers, seams on, the foot lock on or
+/// off, the GPU crowd over `pages` pages): every frame the same walkers in view, the same detail
+/// for every walker, the same level histogram, the same walkers in a seam transition, the same
+/// clips built (the CPU's `kernels_built`: a clip at every cycle end of the frame, however many a
+/// walker makes), no GPU walker left behind its clip, the long frames split and the others not,
+/// and every joint within [`TOLERANCE_M`] (the lock's threshold frames within [`LOCK_FLIP_M`],
+/// at most one in [`LOCK_FLIPS_PER`], as [`compare`] allows).
+fn long_steps(gpu: &Gpu, model: &MotionModel, scene: Scene, pages: usize, lock: bool) -> LongSteps {
+    let walkers = 300;
+    let config = CrowdConfig {
+        walkers,
+        field_size_m: (walkers as f32 / 0.2).sqrt(),
+        ..config(true, lock)
+    };
+    let source = LodSource::new(model);
+    let policy = DistancePolicy::for_model(model.lod());
+    let mut cpu = Crowd::new(&source, config).expect("CPU crowd");
+    let options = GpuOptions {
+        page_walkers: Some(walkers.div_ceil(pages)),
+        ..GpuOptions::default()
+    };
+    let mut gpu_crowd = GpuCrowd::new(gpu, model.runtime(), config, options).expect("GPU crowd");
+    assert_eq!(gpu_crowd.pages(), pages);
+    let field = cpu.config().field_size_m;
+    let path = scene.path(field);
+    let lens = scene.lens(Camera::default(), field);
+    // A hardware GPU may move a clip's duration by an ulp (see SEAM_SIDE_M): there a walker-frame
+    // may show the other side of a seam, and a frame's builds differ by such a walker's.
+    let exact = gpu.is_software();
+    let (mut worst, mut with_joints, mut seam_sides) = (0.0f32, 0usize, 0usize);
+    let (mut lock_flips, mut flip_worst) = (0usize, 0.0f32);
+    let (mut fewest, mut most_rounds, mut time) = ([f64::INFINITY; 2], 0u32, 0.0f32);
+    for (f, &dt) in LONG_STEPS.iter().enumerate() {
+        let camera = path.camera_at(time, &lens);
+        time += dt;
+        let cpu_stats = cpu.step(&source, &policy, &camera, dt).expect("CPU step");
+        let gpu_stats = gpu_crowd.step(&policy, &camera, dt).expect("GPU step");
+        let what = format!("{scene:?} frame {f} (dt = {dt} s)");
+        assert_eq!(
+            gpu_stats.visible as usize, cpu_stats.visible,
+            "{what}: walkers in view"
+        );
+        let (g, c) = (gpu_stats.kernels_built, cpu_stats.kernels_built as u64);
+        assert!(
+            g == c || (!exact && g.abs_diff(c) <= 2),
+            "{what}: {g} clips built on the GPU, {c} on the CPU"
+        );
+        assert_eq!(
+            gpu_stats.behind, 0,
+            "{what}: GPU walkers behind their clips"
+        );
+        if dt >= 2.5 {
+            let k = usize::from(dt == crowd_sim::MAX_DT);
+            fewest[k] = fewest[k].min(c as f64 / walkers as f64);
+            assert!(gpu_stats.rounds > 1, "{what}: the frame was not split");
+        } else {
+            assert_eq!(gpu_stats.rounds, 1, "{what}: a frame at 30 fps was split");
+        }
+        most_rounds = most_rounds.max(gpu_stats.rounds);
+        let read = gpu_crowd.read_walkers().expect("read back");
+        for (i, w) in read.iter().enumerate() {
+            assert_eq!(w.detail, cpu.detail(i), "{what} walker {i}: detail");
+            let want = cpu.joint_positions(i);
+            assert_eq!(w.positions.len(), want.len(), "{what} walker {i}: joints");
+            let far = w
+                .positions
+                .iter()
+                .zip(want)
+                .map(|(g, c)| g.distance(*c))
+                .fold(0.0f32, f32::max);
+            with_joints += usize::from(w.detail.active_joints > 0);
+            if far > TOLERANCE_M && lock && far <= LOCK_FLIP_M {
+                lock_flips += 1;
+                flip_worst = flip_worst.max(far);
+                continue;
+            }
+            if far > TOLERANCE_M && !exact && far <= SEAM_SIDE_M {
+                seam_sides += 1;
+                continue;
+            }
+            assert!(
+                far <= TOLERANCE_M,
+                "{what} walker {i}: {far} m from the CPU's joints, more than {TOLERANCE_M} m"
+            );
+            worst = worst.max(far);
+        }
+        assert_eq!(
+            gpu_stats.level_histogram, cpu_stats.level_histogram,
+            "{what}: levels"
+        );
+        let (g, c) = (gpu_stats.in_transition as usize, cpu_stats.in_transition);
+        assert!(
+            g == c || (!exact && g.abs_diff(c) <= 1 + c / 100),
+            "{what}: {g} walkers in a seam transition on the GPU, {c} on the CPU"
+        );
+    }
+    assert!(
+        seam_sides <= 1 + with_joints / SEAM_FRAMES_PER,
+        "{scene:?}: {seam_sides} walker-frames showed two sides of a seam in {with_joints}"
+    );
+    assert!(
+        lock_flips * LOCK_FLIPS_PER <= with_joints.max(1),
+        "{scene:?}: {lock_flips} walker-frames beyond {TOLERANCE_M} m with the foot lock (at most \
+         {flip_worst} m) in {with_joints}"
+    );
+    LongSteps {
+        worst,
+        with_joints,
+        fewest_builds_per_walker: fewest,
+        most_rounds,
+        lock_flips,
+        flip_worst,
+    }
+}
+
+/// Frame steps of 2.5 s and `crowd_sim::MAX_DT` (10 s), several clips long, among frames at 30
+/// fps: the GPU crowd makes every cycle end the CPU crowd makes in such a frame (in catch-up
+/// rounds before the pose pass), with seams, whose captures chain from one cycle end to the next
+/// inside the frame: in the ground scene with the foot lock too (the CPU crowd's defaults) on one
+/// page, in the overview without it over three pages (each page catching up on its own). The long
+/// frames must hold several cycle ends per walker, or the test would not test them.
+#[test]
+fn gpu_crowd_matches_the_cpu_crowd_with_long_time_steps() {
+    let Some(gpu) = Gpu::open_or_skip() else {
+        return;
+    };
+    let model = fixture_model();
+    for (scene, pages, lock) in [(Scene::Ground, 1, true), (Scene::Overview, 3, false)] {
+        let c = long_steps(&gpu, &model, scene, pages, lock);
+        println!(
+            "{scene:?}, long steps, seams on, foot lock {}: 300 walkers x {} frames on {} ({pages} \
+             page(s)): largest joint distance {:.3e} m, {} walker-frames with joints, at least \
+             {:.2} and {:.2} clips built per walker in a frame of 2.5 and 10 s, at most {} rounds \
+             a frame, {} beyond {TOLERANCE_M} m at a lock threshold (at most {:.3e} m)",
+            if lock { "on" } else { "off" },
+            LONG_STEPS.len(),
+            gpu.adapter_name(),
+            c.worst,
+            c.with_joints,
+            c.fewest_builds_per_walker[0],
+            c.fewest_builds_per_walker[1],
+            c.most_rounds,
+            c.lock_flips,
+            c.flip_worst
+        );
+        let [at_2_5, at_10] = c.fewest_builds_per_walker;
+        assert!(
+            at_2_5 >= 2.0 && at_10 >= 5.0,
+            "{scene:?}: {at_2_5:.2} and {at_10:.2} clips built per walker in a frame of 2.5 and \
+             10 s: too few cycle ends to test"
+        );
+        assert!(
+            c.with_joints > 1000,
+            "{scene:?}: too few walkers with joints"
+        );
+    }
 }

@@ -7,8 +7,13 @@
 // (with seams on: one workgroup per scheduled clip, the outgoing clip's displayed state before the
 // build overwrites it), `build` (one workgroup per scheduled clip: kriging weights, core, G(c),
 // time table, root motion), `seam_start` (with seams on: the seam transition into the new clip),
-// `fix_free` (the joint-slot stack after its pops), `pose_fk` (pose at the clip's phase with the
-// running seam and the foot lock, forward kinematics, placement in the world). Seam state lives in
+// `fix_free` (the joint-slot stack after its pops, the end of a round), `pose_fk` (pose at the
+// clip's phase with the running seam and the foot lock, forward kinematics, placement in the
+// world). The passes from `advance` to `fix_free` are one round of cycle ends and clip builds; a
+// frame whose step is long enough that a walker may end several cycles in it (the host decides,
+// from the shortest clip built so far, `C_MIN_DUR`) runs more rounds before `pose_fk`, catch-up
+// rounds (`advance` with `CATCH_UP`), until no walker's clock is past its clip's end
+// (`C_BEHIND`), as the CPU walker's loop over its cycle ends in one frame. Seam state lives in
 // each joint slot after its clip (see "Seam inertialization" below), foot lock state after it (see
 // "Foot lock"); with SEAM_LEVELS = 0 the host runs neither seam pass and allocates no seam state,
 // with LOCK_LEVELS = 0 the lock does not run and has no state.
@@ -36,18 +41,29 @@ struct Frame {
     policy: array<vec4<u32>, POLICY_MAX>,
 }
 
-// Counters: [0..3] indirect build dispatch, then the frame's counts, the free-stack top, the
+// Counters: [0..3] indirect build dispatch, then the round's builds, the frame's counts, the
+// free-stack top, the shortest clip duration ever built (its f32 bits: kept across frames), the
 // walkers whose positions came out NaN or infinite (how many, the first), the walkers inside a
-// running seam transition, the walkers whose foot lock corrected a leg and the level histogram.
+// running seam transition, the walkers whose foot lock corrected a leg, the rounds run this frame,
+// the walkers whose clock is still past their clip's end after the last round, the builds of the
+// frame (every round's) and the level histogram. The host resets the frame's counts before each
+// frame (all but the free-stack top and the shortest duration).
 const C_BUILDS: u32 = 3u;
 const C_VISIBLE: u32 = 4u;
 const C_SLOT_FAULTS: u32 = 5u;
 const C_FREE_TOP: u32 = 6u;
-const C_NONFINITE: u32 = 7u;
-const C_NONFINITE_FIRST: u32 = 8u;
-const C_SEAMS: u32 = 9u;
-const C_LOCKS: u32 = 10u;
-const C_HIST: u32 = 11u;
+const C_MIN_DUR: u32 = 7u;
+const C_NONFINITE: u32 = 8u;
+const C_NONFINITE_FIRST: u32 = 9u;
+const C_SEAMS: u32 = 10u;
+const C_LOCKS: u32 = 11u;
+const C_ROUND: u32 = 12u;
+const C_BEHIND: u32 = 13u;
+const C_BUILT: u32 = 14u;
+const C_HIST: u32 = 15u;
+// Walker flags: in view (set by a frame's first round), slot fault counted this frame.
+const F_VISIBLE: u32 = 1u;
+const F_SLOT_FAULT: u32 = 2u;
 
 const NONE: u32 = 0xffffffffu;
 const MODE_CYCLE: u32 = 0u;
@@ -280,6 +296,18 @@ fn walker_index(gid: vec3<u32>, nw: vec3<u32>) -> u32 {
 
 var<workgroup> wg_visible: atomic<u32>;
 
+// Whether `advance` runs a catch-up round: the host makes a second pipeline of `advance` with it
+// set, so that the frame's first round compiles to the pass it always was.
+override CATCH_UP: bool = false;
+
+// One round's clocks and cycle ends (the CPU walker's `advance`). The frame's first round adds the
+// time step, decrements the spread of first builds, makes one cycle end or starts a mid-cycle
+// refinement, and counts the walkers in view. A catch-up round (any after the first, `CATCH_UP`)
+// takes only the walkers whose clock is still past the end of the clip the last round built and
+// makes their next cycle end, as the CPU walker's loop does: no time added, the hold clock left
+// (a cycle end has zeroed it), no refinement (the CPU refines only in a frame without a cycle
+// end), nothing counted again (the culling and the policy's detail, from the root placed at the
+// last frame, are the first round's).
 @compute @workgroup_size(64)
 fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
            @builtin(num_workgroups) nw: vec3<u32>,
@@ -289,14 +317,17 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
     }
     workgroupBarrier();
     let i = walker_index(gid, nw);
-    if (i < frame.n) {
+    let catch_up = CATCH_UP;
+    if (i < frame.n && (!catch_up || walkers[i].t >= walkers[i].cur_dur)) {
         var w = walkers[i];
         let vis = visible_of(w);
         let eye = frame.eye.xyz;
         let dist = length(vec3<f32>(w.root_x, w.root_y, w.root_z) - eye);
         let d = policy_detail(dist, vis);
         let dt = frame.dt;
-        w.t += dt;
+        if (!catch_up) {
+            w.t += dt;
+        }
         var build = false;
         if (w.t >= w.cur_dur) {
             let end = w.cur_dur;
@@ -350,11 +381,11 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
             build = true;
             w.hold_s = 0.0;
         }
-        if (w.hold_s > 0.0) {
+        if (!catch_up && w.hold_s > 0.0) {
             w.hold_s -= dt;
         }
         let finer = d.x < w.cur_acc || d.y > w.cur_joints;
-        if (!build && w.hold_s <= 0.0 && finer) {
+        if (!catch_up && !build && w.hold_s <= 0.0 && finer) {
             w.hold_s = 0.0;
             w.pend_u = w.t / w.cur_dur;
             w.mode = MODE_REFINE;
@@ -374,11 +405,13 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
             let k = atomicAdd(&counters[C_BUILDS], 1u);
             build_list[k] = i;
         }
-        w.flags = select(0u, 1u, vis);
-        walkers[i] = w;
-        if (vis) {
-            atomicAdd(&wg_visible, 1u);
+        if (!catch_up) {
+            w.flags = select(0u, F_VISIBLE, vis);
+            if (vis) {
+                atomicAdd(&wg_visible, 1u);
+            }
         }
+        walkers[i] = w;
     }
     workgroupBarrier();
     if (lid == 0u) {
@@ -389,20 +422,28 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
     }
 }
 
+// The round's build dispatch, its builds added to the frame's; the walkers left behind are
+// counted afresh by this round's builds.
 @compute @workgroup_size(1)
 fn build_args() {
     let n = atomicLoad(&counters[C_BUILDS]);
     atomicStore(&counters[0], min(n, MAX_X));
     atomicStore(&counters[1], (n + MAX_X - 1u) / MAX_X);
     atomicStore(&counters[2], 1u);
+    atomicAdd(&counters[C_BUILT], n);
+    atomicStore(&counters[C_BEHIND], 0u);
 }
 
+// The end of a round: the joint-slot stack after its pops, the build list emptied for the next
+// round, the round counted.
 @compute @workgroup_size(1)
 fn fix_free() {
     let top = bitcast<i32>(atomicLoad(&counters[C_FREE_TOP]));
     if (top < 0) {
         atomicStore(&counters[C_FREE_TOP], 0u);
     }
+    atomicStore(&counters[C_BUILDS], 0u);
+    atomicAdd(&counters[C_ROUND], 1u);
 }
 
 
@@ -491,8 +532,12 @@ fn build(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index)
             if (top >= 0) {
                 w.slot = free_stack[u32(top)];
             } else {
-                // No joint slot left: a root-only clip, and a retry when slots free up.
-                atomicAdd(&counters[C_SLOT_FAULTS], 1u);
+                // No joint slot left: a root-only clip, and a retry when slots free up (the
+                // walker counted once a frame, however many rounds it retries in).
+                if ((w.flags & F_SLOT_FAULT) == 0u) {
+                    atomicAdd(&counters[C_SLOT_FAULTS], 1u);
+                    w.flags |= F_SLOT_FAULT;
+                }
                 acc = LAST_LEVEL;
                 joints = 0u;
                 w.pend_acc = LAST_LEVEL;
@@ -665,6 +710,16 @@ fn build(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index)
     } else if (w.mode == MODE_INIT) {
         w.t = w.init_phase * dur;
         w.hold_s = w.init_hold * dur;
+    }
+    // The shortest clip built so far (the bits of positive f32 values order as the values; read
+    // first, so that the builds of a frame rarely contend for the atomic), and the walkers whose
+    // clock is still past the new clip's end: another cycle end is due in this frame.
+    let bits = bitcast<u32>(dur);
+    if (dur > 0.0 && bits < atomicLoad(&counters[C_MIN_DUR])) {
+        atomicMin(&counters[C_MIN_DUR], bits);
+    }
+    if (w.t >= dur) {
+        atomicAdd(&counters[C_BEHIND], 1u);
     }
     walkers[wi] = w;
 }
@@ -880,7 +935,7 @@ fn pose_one(i: u32) {
     // The foot lock (the CPU walker's pose stage): a visible walker at one of the first
     // LOCK_LEVELS levels with joints plants its feet; any other lets go.
     if (LOCK_LEVELS > 0u && joints > 0u) {
-        if ((w.flags & 1u) != 0u && w.cur_acc < LOCK_LEVELS) {
+        if ((w.flags & F_VISIBLE) != 0u && w.cur_acc < LOCK_LEVELS) {
             if (foot_lock(&pose, slot, joints, w.body_scale, bx, bz, w.heading)) {
                 atomicAdd(&wg_locks, 1u);
             }
