@@ -368,6 +368,8 @@ impl Tables {
             source.push_str(&format!("const {name}: {ty} = {value};\n"));
         }
         source.push_str(crate::df::DF_WGSL);
+        // The walker struct is the one engines' shaders read (`CrowdWalker`, `Walker` here).
+        source.push_str(crate::DRAW_WGSL);
         source.push_str(SHADER);
         let workgroup_bytes = 4
             * (12 + 1 + d + 2 * (d + 1) + 2 * (s + 1) + rs_max + k_max + 7 * rt_max + 2 * t) as u64;

@@ -18,19 +18,9 @@
 // "Foot lock"); with SEAM_LEVELS = 0 the host runs neither seam pass and allocates no seam state,
 // with LOCK_LEVELS = 0 the lock does not run and has no state.
 
-struct Walker {
-    t: f32, cur_dur: f32, hold_s: f32, pend_u: f32,
-    root_x: f32, root_y: f32, root_z: f32, height: f32,
-    base_x: f32, base_z: f32, heading: f32, sin_h: f32,
-    cos_h: f32, s: f32, stride: f32, body_scale: f32,
-    path_cx: f32, path_cz: f32, path_a: f32, path_b: f32,
-    path_rot: f32, path_dir: f32, c_dx: f32, c_dz: f32,
-    c_turn: f32, c_height: f32, m_dx: f32, m_dz: f32,
-    m_turn: f32, init_phase: f32, init_hold: f32, base_lo_x: f32,
-    base_lo_z: f32, heading_lo: f32, s_lo: f32, shown: u32,
-    cur_acc: u32, cur_joints: u32, pend_acc: u32, pend_joints: u32,
-    style: u32, slot: u32, mode: u32, flags: u32,
-}
+// One walker: `CrowdWalker` of `draw.wgsl` (`gpu_crowd::DRAW_WGSL`, prepended to this source), the
+// layout engines' shaders read, so that there is one definition of it.
+alias Walker = CrowdWalker;
 
 struct Frame {
     planes: array<vec4<f32>, 6>,

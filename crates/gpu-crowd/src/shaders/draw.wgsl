@@ -15,7 +15,8 @@
 // (the clip's active joints in row order), so that the bones of `crowd_sim::ClipSource::bones`
 // index `0` for the root and `1 + k` for joint k. `slots` is `DrawPage::joint_slots`.
 
-// One walker (`struct Walker` of the crowd's shaders, field for field; a test holds them equal).
+// One walker, as the crowd's shaders hold it (they include this file: `Walker` there is this
+// struct).
 struct CrowdWalker {
     t: f32, cur_dur: f32, hold_s: f32, pend_u: f32,
     root_x: f32, root_y: f32, root_z: f32, height: f32,
