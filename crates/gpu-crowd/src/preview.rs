@@ -55,7 +55,15 @@ pub struct Preview {
     accuracy_levels: u32,
     walker_pipeline: wgpu::RenderPipeline,
     grid_pipeline: wgpu::RenderPipeline,
-    bone_buffer: wgpu::Buffer,
+    /// The crowd's walker buffers, page by page: the crowd this preview draws.
+    pages: Vec<wgpu::Buffer>,
+    /// Per page its bind group (its uniform block, walkers, joints and the bones) and walkers.
+    binds: Vec<(wgpu::BindGroup, u32)>,
+    /// One uniform block a page, `block` bytes apart.
+    uniform: wgpu::Buffer,
+    block: u64,
+    /// The ground grid's lines, and their vertex count (none with a grid step of 0).
+    grid: Option<(wgpu::Buffer, u32)>,
     color: wgpu::Texture,
     depth: wgpu::TextureView,
     readback: wgpu::Buffer,
@@ -180,6 +188,63 @@ impl Preview {
             crowd
                 .queue()
                 .write_buffer(&bone_buffer, 0, bytemuck::cast_slice(&pairs));
+            // One uniform block a page (its joint slots differ), at offsets the device allows.
+            let align = u64::from(device.limits().min_uniform_buffer_offset_alignment);
+            let block = (std::mem::size_of::<ViewUniform>() as u64).div_ceil(align) * align;
+            let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("preview views"),
+                size: block * crowd.pages().max(1) as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let binds = crowd
+                .draw_pages()
+                .enumerate()
+                .map(|(k, page)| {
+                    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("preview page"),
+                        layout: &layout,
+                        entries: &[
+                            wgpu::BindGroupEntry {
+                                binding: 0,
+                                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                    buffer: &uniform,
+                                    offset: block * k as u64,
+                                    size: wgpu::BufferSize::new(
+                                        std::mem::size_of::<ViewUniform>() as u64
+                                    ),
+                                }),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 1,
+                                resource: page.walker_buffer.as_entire_binding(),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 2,
+                                resource: page.joint_buffer.as_entire_binding(),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 3,
+                                resource: bone_buffer.as_entire_binding(),
+                            },
+                        ],
+                    });
+                    (bind, page.walkers as u32)
+                })
+                .collect();
+            let lines = grid_lines(style, crowd.config().field_size_m);
+            let grid = (!lines.is_empty()).then(|| {
+                let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("preview grid"),
+                    size: 4 * lines.len() as u64,
+                    usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                crowd
+                    .queue()
+                    .write_buffer(&buffer, 0, bytemuck::cast_slice(&lines));
+                (buffer, (lines.len() / 3) as u32)
+            });
             let extent = wgpu::Extent3d {
                 width,
                 height,
@@ -224,7 +289,14 @@ impl Preview {
                 accuracy_levels: accuracy_levels.min(u32::MAX as usize) as u32,
                 walker_pipeline,
                 grid_pipeline,
-                bone_buffer,
+                pages: crowd
+                    .draw_pages()
+                    .map(|p| p.walker_buffer.clone())
+                    .collect(),
+                binds,
+                uniform,
+                block,
+                grid,
                 color,
                 depth,
                 readback,
@@ -234,13 +306,24 @@ impl Preview {
     }
 
     /// Draws `crowd` as `camera` sees it after its last [`GpuCrowd::step`] and returns the image
-    /// (`camera`'s aspect and field of view; the image is this preview's size). `crowd` must be
-    /// the crowd this preview was made for (another on the same device draws with its bones).
+    /// (`camera`'s aspect and field of view; the image is this preview's size). The buffers,
+    /// bind groups and grid were made once by [`Preview::new`]; a frame writes the camera into the
+    /// uniforms, draws, and copies the image back.
     ///
-    /// Errors: a camera `crowd_sim` refuses ([`GpuError::Crowd`]); [`GpuError::Runtime`] from
-    /// the device.
+    /// Errors: a camera `crowd_sim` refuses ([`GpuError::Crowd`]); another crowd than the one
+    /// this preview was made for ([`GpuError::Config`]: its bind groups hold that crowd's
+    /// buffers); [`GpuError::Runtime`] from the device.
     pub fn render(&self, crowd: &GpuCrowd, camera: &Camera) -> Result<Image, GpuError> {
         camera.validate()?;
+        if !crowd
+            .draw_pages()
+            .map(|p| p.walker_buffer)
+            .eq(self.pages.iter())
+        {
+            return Err(GpuError::Config(
+                "a preview draws the crowd it was made for; make one for this crowd".into(),
+            ));
+        }
         let device = crowd.device();
         let queue = crowd.queue();
         let colors = &self.style.level_colors;
@@ -252,21 +335,9 @@ impl Preview {
         }
         // The shader cycles over its 16 colours; a style with more keeps its first 16.
         let color_count = colors.len().min(MAX_COLORS) as f32;
-        let grid = self.grid_lines(crowd.config().field_size_m);
         let mut encoder = device.create_command_encoder(&Default::default());
-        let grid_buffer = (!grid.is_empty()).then(|| {
-            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("preview grid"),
-                size: 4 * grid.len() as u64,
-                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            queue.write_buffer(&buffer, 0, bytemuck::cast_slice(&grid));
-            buffer
-        });
-        let uniforms: Vec<ViewUniform> = crowd
-            .draw_pages()
-            .map(|page| ViewUniform {
+        for (k, page) in crowd.draw_pages().enumerate() {
+            let u = ViewUniform {
                 view_proj: camera.view_projection().to_cols_array_2d(),
                 eye: camera.position.extend(1.0).to_array(),
                 size: [
@@ -279,56 +350,9 @@ impl Preview {
                 root_only: rgba(self.style.root_only),
                 grid: rgba(self.style.grid),
                 level_colors,
-            })
-            .collect();
-        // One uniform block a page (its joint slots differ), at offsets the device allows.
-        let align = u64::from(device.limits().min_uniform_buffer_offset_alignment);
-        let block = (std::mem::size_of::<ViewUniform>() as u64).div_ceil(align) * align;
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("preview views"),
-            size: block * uniforms.len().max(1) as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        for (k, u) in uniforms.iter().enumerate() {
-            queue.write_buffer(&uniform, block * k as u64, bytemuck::bytes_of(u));
+            };
+            queue.write_buffer(&self.uniform, self.block * k as u64, bytemuck::bytes_of(&u));
         }
-        let layout = self.walker_pipeline.get_bind_group_layout(0);
-        let binds: Vec<(wgpu::BindGroup, u32)> = crowd
-            .draw_pages()
-            .enumerate()
-            .map(|(k, page)| {
-                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("preview page"),
-                    layout: &layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                buffer: &uniform,
-                                offset: block * k as u64,
-                                size: wgpu::BufferSize::new(
-                                    std::mem::size_of::<ViewUniform>() as u64
-                                ),
-                            }),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: page.walker_buffer.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: page.joint_buffer.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: self.bone_buffer.as_entire_binding(),
-                        },
-                    ],
-                });
-                (bind, page.walkers as u32)
-            })
-            .collect();
         {
             let view = self.color.create_view(&Default::default());
             let bg = self.style.background;
@@ -359,14 +383,14 @@ impl Preview {
                 timestamp_writes: None,
                 occlusion_query_set: None,
             });
-            if let (Some(buffer), Some((bind, _))) = (&grid_buffer, binds.first()) {
+            if let (Some((buffer, vertices)), Some((bind, _))) = (&self.grid, self.binds.first()) {
                 pass.set_pipeline(&self.grid_pipeline);
                 pass.set_bind_group(0, bind, &[]);
                 pass.set_vertex_buffer(0, buffer.slice(..));
-                pass.draw(0..(grid.len() / 3) as u32, 0..1);
+                pass.draw(0..*vertices, 0..1);
             }
             pass.set_pipeline(&self.walker_pipeline);
-            for (bind, walkers) in &binds {
+            for (bind, walkers) in &self.binds {
                 pass.set_bind_group(0, bind, &[]);
                 pass.draw(0..6 * self.bones, 0..*walkers);
             }
@@ -416,24 +440,24 @@ impl Preview {
         self.readback.unmap();
         Ok(img)
     }
+}
 
-    /// The ground grid's lines (x, y, z per end) over a field of side `field_m`, as the CPU
-    /// renderer draws it (at most 10,001 lines a direction).
-    fn grid_lines(&self, field_m: f32) -> Vec<f32> {
-        let step = self.style.grid_step_m;
-        let mut out = Vec::new();
-        if !(step > 0.0 && step.is_finite()) {
-            return out;
-        }
-        let half = 0.5 * field_m;
-        let n = (2.0 * half / step).floor() as i64;
-        for k in 0..=n.min(10_000) {
-            let v = -half + k as f32 * step;
-            out.extend_from_slice(&[v, 0.0, -half, v, 0.0, half]);
-            out.extend_from_slice(&[-half, 0.0, v, half, 0.0, v]);
-        }
-        out
+/// The ground grid's lines (x, y, z per end) over a field of side `field_m`, as the CPU renderer
+/// draws it (at most 10,001 lines a direction).
+fn grid_lines(style: &RenderStyle, field_m: f32) -> Vec<f32> {
+    let step = style.grid_step_m;
+    let mut out = Vec::new();
+    if !(step > 0.0 && step.is_finite()) {
+        return out;
     }
+    let half = 0.5 * field_m;
+    let n = (2.0 * half / step).floor() as i64;
+    for k in 0..=n.min(10_000) {
+        let v = -half + k as f32 * step;
+        out.extend_from_slice(&[v, 0.0, -half, v, 0.0, half]);
+        out.extend_from_slice(&[-half, 0.0, v, half, 0.0, v]);
+    }
+    out
 }
 
 fn entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {

@@ -368,4 +368,17 @@ fn the_preview_draws_the_gpu_crowd_as_the_cpu_renderer_draws_the_cpu_crowd() {
             );
         }
     }
+    // A preview is made for one crowd (its bind groups hold that crowd's buffers): another
+    // crowd, even on the same model and device, is an error rather than a picture of the first.
+    let other = GpuCrowd::new(
+        &gpu,
+        model(),
+        CrowdConfig::with_density(50, 0.2),
+        GpuOptions::default(),
+    )
+    .expect("another crowd");
+    match preview.render(&other, &Camera::default()) {
+        Err(e @ GpuError::Config(_)) => println!("{e}"),
+        other => panic!("expected a config error, got {other:?}"),
+    }
 }
