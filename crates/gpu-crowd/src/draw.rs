@@ -18,6 +18,36 @@ use crate::device::Gpu;
 /// order, so that a bone `(a, b)` of `crowd_sim::ClipSource::bones` joins position `a` and `b`
 /// (0 the root, `1 + k` joint `k`). The layout is this crate version's: shaders that include this
 /// text stay in step with it.
+///
+/// An engine's pass over the crowd, page by page (a vertex shader of its own that includes this
+/// text and binds `walkers`, `joints` and its uniforms at bindings 0 to 2):
+///
+/// ```no_run
+/// # fn draw(crowd: &gpu_crowd::GpuCrowd, pipeline: &wgpu::RenderPipeline,
+/// #         uniforms: &wgpu::Buffer, pass: &mut wgpu::RenderPass<'_>, vertices_per_walker: u32) {
+/// // The module: `format!("{}\n{}", gpu_crowd::DRAW_WGSL, my_shader)`, whose vertex stage reads
+/// // `var<storage, read> walkers: array<CrowdWalker>` and `var<storage, read> joints: array<f32>`
+/// // and takes the page's joint slots from its uniforms (`DrawPage::joint_slots`).
+/// // (The bind groups can be made once: the buffers live as long as the crowd.)
+/// for page in crowd.draw_pages() {
+///     let bind = crowd.device().create_bind_group(&wgpu::BindGroupDescriptor {
+///         label: Some("crowd page"),
+///         layout: &pipeline.get_bind_group_layout(0),
+///         entries: &[
+///             wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() },
+///             wgpu::BindGroupEntry { binding: 1, resource: page.walker_buffer.as_entire_binding() },
+///             wgpu::BindGroupEntry { binding: 2, resource: page.joint_buffer.as_entire_binding() },
+///         ],
+///     });
+///     pass.set_pipeline(pipeline);
+///     pass.set_bind_group(0, &bind, &[]);
+///     // One instance a walker: `instance_index` is the walker's index in `walkers`.
+///     pass.draw(0..vertices_per_walker, 0..page.walkers as u32);
+/// }
+/// # }
+/// ```
+///
+/// [`crate::Preview`] is such a pass, whole (its shader is `src/shaders/preview.wgsl`).
 pub const DRAW_WGSL: &str = include_str!("shaders/draw.wgsl");
 
 /// One page of the crowd's walkers as an engine's shaders bind them ([`GpuCrowd::draw_pages`]).

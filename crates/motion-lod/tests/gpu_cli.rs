@@ -1,5 +1,5 @@
-//! `motion-lod crowd --gpu` (with the feature `gpu`; CI runs this file with it, after the
-//! workspace's tests): without a usable adapter, one clear error naming what is missing, and a
+//! `motion-lod crowd --gpu` (with the feature `gpu`, which `cargo test --workspace` turns on
+//! through gpu-crowd's dev-dependency on motion-lod): without a usable adapter, one clear error naming what is missing, and a
 //! non-zero exit (the Vulkan loader pointed at a driver file that does not exist, or the backends
 //! restricted to Metal, which this build does not compile in: no adapter exists whatever the
 //! machine has); with one, `--render` draws the frames on the GPU.
