@@ -101,6 +101,14 @@ const LOCK_FLIP_M: f32 = 0.02;
 /// See [`LOCK_FLIP_M`].
 const LOCK_FLIPS_PER: usize = 1000;
 
+/// The largest distance (m) between two walkers' joints, pair by pair.
+fn farthest(gpu: &[glam::Vec3], cpu: &[glam::Vec3]) -> f32 {
+    gpu.iter()
+        .zip(cpu)
+        .map(|(g, c)| g.distance(*c))
+        .fold(0.0f32, f32::max)
+}
+
 /// What one comparison measured.
 #[derive(Debug, Clone, Copy)]
 struct Compared {
@@ -188,11 +196,7 @@ fn compare(
                     b.len(),
                     "{scene:?} frame {f} walker {i}: twin joints"
                 );
-                let moved = a
-                    .iter()
-                    .zip(b)
-                    .map(|(p, q)| p.distance(*q))
-                    .fold(0.0f32, f32::max);
+                let moved = farthest(a, b);
                 cpu_locked += usize::from(moved > LOCK_MOVED_M);
                 lock_moved = lock_moved.max(moved);
             }
@@ -227,12 +231,7 @@ fn compare(
                 want.len(),
                 "{scene:?} frame {f} walker {i}: joints"
             );
-            let far = w
-                .positions
-                .iter()
-                .zip(want)
-                .map(|(g, c)| g.distance(*c))
-                .fold(0.0f32, f32::max);
+            let far = farthest(&w.positions, want);
             if far > TOLERANCE_M && lock && far <= LOCK_FLIP_M {
                 // A foot lock decision on the two sides of one of its thresholds (see
                 // LOCK_FLIP_M), counted and bounded below.
@@ -494,12 +493,7 @@ fn long_steps(gpu: &Gpu, model: &MotionModel, scene: Scene, pages: usize, lock: 
             assert_eq!(w.detail, cpu.detail(i), "{what} walker {i}: detail");
             let want = cpu.joint_positions(i);
             assert_eq!(w.positions.len(), want.len(), "{what} walker {i}: joints");
-            let far = w
-                .positions
-                .iter()
-                .zip(want)
-                .map(|(g, c)| g.distance(*c))
-                .fold(0.0f32, f32::max);
+            let far = farthest(&w.positions, want);
             with_joints += usize::from(w.detail.active_joints > 0);
             if far > TOLERANCE_M && lock && far <= LOCK_FLIP_M {
                 lock_flips += 1;

@@ -843,6 +843,40 @@ fn time_weights(phase: f32, rt: u32, big_t: u32, off_ut: u32) -> array<f32, RT_M
     return wt;
 }
 
+// Forward kinematics of the rig's first `count` joints (Rig::joint_transforms_of, scaled): the
+// ground point under the root, the root at the pose's root rows, then each joint at its parent's
+// transform times its offset scaled by `scale`, turned by its pose rows when it is one of the
+// first `posed` rotating joints, else by its rest rotation.
+fn rig_fk(pose: ptr<function, array<f32, P>>, count: u32, posed: u32, scale: f32,
+          pos: ptr<function, array<vec3<f32>, NJ>>, rot: ptr<function, array<vec4<f32>, NJ>>) {
+    let root = vec3<f32>((*pose)[0], (*pose)[1], (*pose)[2]);
+    let ground = vec3<f32>(root.x, 0.0, root.z);
+    for (var j = 0u; j < count; j++) {
+        let role = mi(RIG + 4u * j);
+        let k = mi(RIG + 4u * j + 1u);
+        let parent = mi(RIG + 4u * j + 2u);
+        let rest = vec4<f32>(md[RIG_F + 7u * j + 3u], md[RIG_F + 7u * j + 4u], md[RIG_F + 7u * j + 5u], md[RIG_F + 7u * j + 6u]);
+        if (role == 0u) {
+            (*pos)[j] = ground;
+            (*rot)[j] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        } else if (role == 1u) {
+            (*pos)[j] = root;
+            (*rot)[j] = exp_to_quat(vec3<f32>((*pose)[3], (*pose)[4], (*pose)[5]));
+        } else {
+            var local = rest;
+            if (role == 2u && k < posed) {
+                let r = 7u + 3u * k;
+                local = exp_to_quat(vec3<f32>((*pose)[r], (*pose)[r + 1u], (*pose)[r + 2u]));
+            }
+            let off = vec3<f32>(md[RIG_F + 7u * j], md[RIG_F + 7u * j + 1u], md[RIG_F + 7u * j + 2u]);
+            let pp = (*pos)[parent];
+            let pr = (*rot)[parent];
+            (*pos)[j] = pp + quat_rotate(pr, off * scale);
+            (*rot)[j] = quat_mul(pr, local);
+        }
+    }
+}
+
 fn pose_one(i: u32) {
     var w = walkers[i];
     let joints = w.cur_joints;
@@ -939,32 +973,7 @@ fn pose_one(i: u32) {
         // Forward kinematics over the rig (Rig::joint_positions_scaled).
         var pos: array<vec3<f32>, NJ>;
         var rot: array<vec4<f32>, NJ>;
-        let ground = vec3<f32>(root.x, 0.0, root.z);
-        let scale = w.body_scale;
-        for (var j = 0u; j < NJ; j++) {
-            let role = mi(RIG + 4u * j);
-            let k = mi(RIG + 4u * j + 1u);
-            let parent = mi(RIG + 4u * j + 2u);
-            let rest = vec4<f32>(md[RIG_F + 7u * j + 3u], md[RIG_F + 7u * j + 4u], md[RIG_F + 7u * j + 5u], md[RIG_F + 7u * j + 6u]);
-            if (role == 0u) {
-                pos[j] = ground;
-                rot[j] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-            } else if (role == 1u) {
-                pos[j] = root;
-                rot[j] = exp_to_quat(vec3<f32>(pose[3], pose[4], pose[5]));
-            } else {
-                var local = rest;
-                if (role == 2u && k < shown) {
-                    let r = 7u + 3u * k;
-                    local = exp_to_quat(vec3<f32>(pose[r], pose[r + 1u], pose[r + 2u]));
-                }
-                let off = vec3<f32>(md[RIG_F + 7u * j], md[RIG_F + 7u * j + 1u], md[RIG_F + 7u * j + 2u]);
-                let pp = pos[parent];
-                let pr = rot[parent];
-                pos[j] = pp + quat_rotate(pr, off * scale);
-                rot[j] = quat_mul(pr, local);
-            }
-        }
+        rig_fk(&pose, NJ, shown, w.body_scale, &pos, &rot);
         root = pos[ROOT_JOINT];
         for (var k = 0u; k < shown; k++) {
             let q = pos[mi(ROTATING + k)];
@@ -1747,32 +1756,7 @@ fn foot_lock(pose: ptr<function, array<f32, P>>, slot: u32, joints: u32, scale: 
     var pos: array<vec3<f32>, NJ>;
     var rot: array<vec4<f32>, NJ>;
     if (any_leg) {
-        let root = vec3<f32>((*pose)[0], (*pose)[1], (*pose)[2]);
-        let ground = vec3<f32>(root.x, 0.0, root.z);
-        for (var j = 0u; j < LOCK_NJ; j++) {
-            let role = mi(RIG + 4u * j);
-            let k = mi(RIG + 4u * j + 1u);
-            let parent = mi(RIG + 4u * j + 2u);
-            let rest = vec4<f32>(md[RIG_F + 7u * j + 3u], md[RIG_F + 7u * j + 4u], md[RIG_F + 7u * j + 5u], md[RIG_F + 7u * j + 6u]);
-            if (role == 0u) {
-                pos[j] = ground;
-                rot[j] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-            } else if (role == 1u) {
-                pos[j] = root;
-                rot[j] = exp_to_quat(vec3<f32>((*pose)[3], (*pose)[4], (*pose)[5]));
-            } else {
-                var local = rest;
-                if (role == 2u && k < joints) {
-                    let r = 7u + 3u * k;
-                    local = exp_to_quat(vec3<f32>((*pose)[r], (*pose)[r + 1u], (*pose)[r + 2u]));
-                }
-                let off = vec3<f32>(md[RIG_F + 7u * j], md[RIG_F + 7u * j + 1u], md[RIG_F + 7u * j + 2u]);
-                let pp = pos[parent];
-                let pr = rot[parent];
-                pos[j] = pp + quat_rotate(pr, off * scale);
-                rot[j] = quat_mul(pr, local);
-            }
-        }
+        rig_fk(pose, LOCK_NJ, joints, scale, &pos, &rot);
     }
     // CycleFrame::rotation (single precision) and to_world (the origin added in double).
     let hf = 0.5 * h;

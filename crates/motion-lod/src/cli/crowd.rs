@@ -479,19 +479,34 @@ pub fn run(args: CrowdArgs) -> anyhow::Result<()> {
     }
     if let Some(dir) = &args.render {
         out!(
-            "rendered {} frames into {} (frame_*.png, map_*.png){}{}",
-            main.rendered,
-            dir.display(),
-            main.gif
-                .as_ref()
-                .map_or(String::new(), |g| format!(" and {}", g.display())),
-            match main.stale_removed {
-                0 => String::new(),
-                n => format!("; removed {n} files an earlier run had left there under these names"),
-            }
+            "{}",
+            rendered_line(
+                &format!("rendered {} frames into {}", main.rendered, dir.display()),
+                "frame_*.png, map_*.png",
+                main.gif.as_deref(),
+                main.stale_removed
+            )
         );
     }
     Ok(())
+}
+
+/// The line `crowd --render` ends with: `what` (frames and folder), the files' patterns, the GIF
+/// and the files an earlier run left there that were removed.
+pub(super) fn rendered_line(
+    what: &str,
+    patterns: &str,
+    gif: Option<&std::path::Path>,
+    stale_removed: usize,
+) -> String {
+    format!(
+        "{what} ({patterns}){}{}",
+        gif.map_or(String::new(), |g| format!(" and {}", g.display())),
+        match stale_removed {
+            0 => String::new(),
+            n => format!("; removed {n} files an earlier run had left there under these names"),
+        }
+    )
 }
 
 /// Records `--export-seconds` of the crowd of `run` (the model's source, the chosen policy, or full

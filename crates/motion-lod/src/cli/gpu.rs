@@ -17,7 +17,7 @@ pub fn run(_args: &CrowdArgs) -> anyhow::Result<()> {
 pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     use anyhow::Context as _;
     use crowd_sim::render::{Recorder, RenderStyle};
-    use crowd_sim::{CrowdConfig, LevelTable, Scene};
+    use crowd_sim::{CrowdConfig, Scene};
     use gpu_crowd::{Gpu, GpuCrowd, GpuOptions, Preview};
     use lod_policy::{DistancePolicy, FullDetail, LevelPolicy, ScreenSpacePolicy};
 
@@ -106,12 +106,6 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     after.sort_by(f64::total_cmp);
     let pct = |q: f64| after[((after.len() - 1) as f64 * q).round() as usize];
     let mean = times.iter().sum::<f64>() / times.len() as f64;
-    let levels = LevelTable {
-        accuracy_levels: lod.levels().len(),
-        joints: lod.joints(),
-        pose_len: lod.p(),
-    };
-    let _ = levels;
     if args.json {
         out!(
             "{{\"gpu\":{:?},\"walkers\":{},\"frames\":{},\"ms_mean\":{mean:.4},\"ms_p50\":{:.4},\"ms_p99\":{:.4},\"ms_worst\":{:.4},\"gpu_bytes\":{},\"levels\":{:?}}}",
@@ -160,15 +154,16 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     );
     if let (Some(dir), Some(done)) = (&args.render, finished) {
         out!(
-            "rendered {rendered} frames on the GPU from the crowd's buffers into {} (frame_*.png){}{}",
-            dir.display(),
-            done.gif
-                .as_ref()
-                .map_or(String::new(), |g| format!(" and {}", g.display())),
-            match done.stale_removed {
-                0 => String::new(),
-                n => format!("; removed {n} files an earlier run had left there under these names"),
-            }
+            "{}",
+            super::crowd::rendered_line(
+                &format!(
+                    "rendered {rendered} frames on the GPU from the crowd's buffers into {}",
+                    dir.display()
+                ),
+                "frame_*.png",
+                done.gif.as_deref(),
+                done.stale_removed
+            )
         );
     }
     Ok(())
