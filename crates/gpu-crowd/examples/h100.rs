@@ -49,18 +49,27 @@ fn time_gpu(
     );
     let dt = 1.0 / config.fps;
     let mut ms = Vec::new();
+    let mut last = None;
     for f in 0..30 + frames {
         let stats = crowd.step(policy, &path.camera_at(f as f32 * dt, &lens), dt)?;
         if f >= 30 {
             ms.push(stats.wall.as_secs_f64() * 1e3);
         }
+        last = Some(stats);
     }
     let mean = ms.iter().sum::<f64>() / ms.len() as f64;
     ms.sort_by(f64::total_cmp);
+    let last = last.expect("a frame");
+    let hist = &last.level_histogram;
     println!(
-        "GPU, {walkers} walkers, {label}: {mean:.2} ms a frame (median {:.2}), {:.0} bytes a walker",
+        "GPU, {walkers} walkers, {label}: {mean:.2} ms a frame (median {:.2}), {:.0} bytes a \
+         walker; last frame: {} with joints, {} shown root only for want of a joint slot, {} \
+         clips built",
         ms[ms.len() / 2],
-        crowd.gpu_bytes() as f64 / walkers as f64
+        crowd.gpu_bytes() as f64 / walkers as f64,
+        hist[..hist.len() - 1].iter().map(|&c| u64::from(c)).sum::<u64>(),
+        last.slot_faults,
+        last.kernels_built
     );
     Ok(())
 }

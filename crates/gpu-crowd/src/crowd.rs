@@ -43,7 +43,11 @@ const C_ROUND: usize = 12;
 const C_BEHIND: usize = 13;
 /// Clips built this frame, every round's (the shaders' `C_BUILT`).
 const C_BUILT: usize = 14;
-const C_HIST: usize = 15;
+/// The round's joint-slot grant threshold, a key's high and low words (the shaders'
+/// `C_GRANT_HI`, `C_GRANT_LO`, written by `grant` before `build` reads them).
+const C_GRANT_HI: usize = 15;
+const C_GRANT_LO: usize = 16;
+const C_HIST: usize = 17;
 
 /// A frame is split into rounds (see [`GpuCrowd::step`]) when its `dt` is at least this fraction
 /// of the shortest clip the crowd has built. A walker can end more than one cycle in a frame only
@@ -130,11 +134,18 @@ pub struct GpuOptions {
     /// `4 (P max r_T + 2 T)` bytes, plus `12 J` for its joint positions, with seams on
     /// `4 (3 P + 3)` for its seam transition and with the foot lock on 216 for its lock state:
     /// [`GpuCrowd::bytes_per_joint_slot`]); `None` gives
-    /// every walker one. A walker the policy wants with joints when every slot is taken is shown
-    /// root only and counted in [`GpuFrameStats::slot_faults`] until a slot frees. Which of the walkers
-    /// competing for the last slots in a frame get them depends on the order of the GPU's
-    /// threads: with fewer slots than walkers wanting joints, runs are not repeatable bit for
-    /// bit (with `None`, or slots to spare, they are).
+    /// every walker one; a page's slots are its share of them, in proportion to its walkers.
+    ///
+    /// A walker competes for a slot at each clip build with joints: one that holds a slot (its
+    /// cycle end, or a refinement) and one that asks for one (a walker shown root only whose
+    /// policy wants joints asks again every frame). When a round's builds ask for more slots than
+    /// are free, the competing walkers of the page get them nearest first: walkers in view before
+    /// walkers out of view, then by distance from the eye, then by walker index. A holder that
+    /// loses gives its slot back and is shown root only, as a walker the policy wants with
+    /// joints and that gets no slot; both are counted in [`GpuFrameStats::slot_faults`]. A far
+    /// walker keeps its slot until its next build, so the slots move to the nearest walkers
+    /// within a cycle. Which walkers win does not depend on the order of the GPU's threads: runs
+    /// are repeatable with any number of slots.
     pub joint_slots: Option<usize>,
     /// Walkers per page (the crowd is split into pages whose buffers each fit the adapter's
     /// largest storage binding); `None` picks the largest that fits. `Some(0)` is an error
@@ -300,6 +311,8 @@ struct Pipelines {
     layout: wgpu::PipelineLayout,
     build_args: wgpu::ComputePipeline,
     build: wgpu::ComputePipeline,
+    /// Which of the walkers competing for too few joint slots get them (nearest first).
+    grant: wgpu::ComputePipeline,
     fix_free: wgpu::ComputePipeline,
     pose_fk: wgpu::ComputePipeline,
     /// The seam passes `seam_capture` and `seam_start`, made and run when `seam_levels > 0`.
@@ -563,6 +576,7 @@ impl GpuCrowd {
             catch_up: None,
             build_args: pipeline("build_args"),
             build: pipeline("build"),
+            grant: pipeline("grant"),
             fix_free: pipeline("fix_free"),
             pose_fk: pipeline("pose_fk"),
             seam: (seam.levels > 0).then(|| (pipeline("seam_capture"), pipeline("seam_start"))),
@@ -643,7 +657,7 @@ impl GpuCrowd {
                 let slots = page_slots(k, pn, slots_left);
                 slots_left -= slots;
                 let (pn, sa) = (pn as u64, slots.max(1) as u64);
-                crowd_bytes += pn * (walker_bytes + 4)
+                crowd_bytes += pn * (walker_bytes + 8)
                     + 4 * sa
                     + (small_per_walker * pn).max(4)
                     + (big_per_slot * sa).max(4)
@@ -711,12 +725,15 @@ impl GpuCrowd {
                 counters[C_BUILDS] = pn as u32;
                 counters[C_FREE_TOP] = slots as u32;
                 counters[C_MIN_DUR] = f32::INFINITY.to_bits();
+                counters[C_GRANT_HI] = NONE;
+                counters[C_GRANT_LO] = NONE;
                 let counters_buf = init(
                     "counters",
                     bytemuck::cast_slice(&counters),
                     storage | wgpu::BufferUsages::INDIRECT,
                 );
-                let list: Vec<u32> = (0..pn as u32).collect();
+                // The first builds' walker indices, then room for the grant keys.
+                let list: Vec<u32> = (0..pn as u32).chain(std::iter::repeat_n(0, pn)).collect();
                 let build_list = init("build list", bytemuck::cast_slice(&list), storage);
                 let stack: Vec<u32> = (0..slots_alloc as u32).rev().collect();
                 let free_stack = init("free joint slots", bytemuck::cast_slice(&stack), storage);
@@ -874,8 +891,8 @@ impl GpuCrowd {
 
     /// Records one round of cycle ends and clip builds of `page` into `pass`: `advance` (the
     /// frame's first round, or with the catch-up pipeline a catch-up round), `build_args`, with
-    /// seams on `seam_capture`, `build`, with seams on `seam_start`, and `fix_free`, which ends
-    /// the round.
+    /// `grant`, with seams on `seam_capture`, `build`, with seams on `seam_start`, and `fix_free`,
+    /// which ends the round.
     fn record_round(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
@@ -887,6 +904,10 @@ impl GpuCrowd {
         pass.set_pipeline(advance);
         pass.dispatch_workgroups(gx, gy, 1);
         pass.set_pipeline(&self.pipelines.build_args);
+        pass.dispatch_workgroups(1, 1, 1);
+        // Which walkers competing for joint slots get them, before a losing holder's outgoing
+        // clip would be captured for a seam.
+        pass.set_pipeline(&self.pipelines.grant);
         pass.dispatch_workgroups(1, 1, 1);
         if let Some((capture, _)) = &self.pipelines.seam {
             // The outgoing clips' displayed states, before `build` overwrites them.

@@ -108,3 +108,54 @@ fn crowd_gpu_render_draws_the_frames_on_the_gpu() {
         assert!(inked > 2000, "{}: {inked} pixels drawn", path.display());
     }
 }
+
+/// `crowd --gpu --joint-slots 5%`: 20 slots for 400 walkers all wanting joints (`--no-lod`), the
+/// others shown root only and counted; the option is refused without `--gpu` and out of range.
+#[test]
+fn crowd_gpu_joint_slots_are_a_share_of_the_walkers() {
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_motion-lod"))
+            .args(["crowd", "--walkers", "400", "--density", "0.2"])
+            // Two seconds: past the spread of the first builds, every walker asks for joints.
+            .args(["--seconds", "2", "--no-lod", "--json"])
+            .args(extra)
+            .output()
+            .expect("run motion-lod")
+    };
+    let out = run(&["--joint-slots", "5%"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "needs --gpu");
+    assert!(
+        stderr.contains("--joint-slots") && stderr.contains("--gpu"),
+        "{stderr}"
+    );
+    let out = run(&["--gpu", "--joint-slots", "150%"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("--joint-slots") && stderr.contains("150 is not in [0, 100]"),
+        "{stderr}"
+    );
+    if gpu_crowd::Gpu::open_or_skip().is_none() {
+        return;
+    }
+    let out = run(&["--gpu", "--joint-slots", "5%"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
+    assert_eq!(json["joint_slots"], 20, "{stdout}");
+    let faults = json["slot_faults"].as_u64().expect("slot_faults");
+    let levels: Vec<u64> = json["levels"]
+        .as_array()
+        .expect("levels")
+        .iter()
+        .map(|v| v.as_u64().expect("a count"))
+        .collect();
+    let with_joints: u64 = levels[..levels.len() - 1].iter().sum();
+    assert_eq!(with_joints, 20, "{stdout}");
+    assert_eq!(faults, 380, "{stdout}");
+}

@@ -7,6 +7,7 @@
 // (with seams on: one workgroup per scheduled clip, the outgoing clip's displayed state before the
 // build overwrites it), `build` (one workgroup per scheduled clip: kriging weights, core, G(c),
 // time table, root motion), `seam_start` (with seams on: the seam transition into the new clip),
+// `grant` (with fewer joint slots free than walkers asking for one: which get one, nearest first),
 // `fix_free` (the joint-slot stack after its pops, the end of a round), `pose_fk` (pose at the
 // clip's phase with the running seam and the foot lock, forward kinematics, placement in the
 // world). The passes from `advance` to `fix_free` are one round of cycle ends and clip builds; a
@@ -36,7 +37,8 @@ struct Frame {
 // walkers whose positions came out NaN or infinite (how many, the first), the walkers inside a
 // running seam transition, the walkers whose foot lock corrected a leg, the rounds run this frame,
 // the walkers whose clock is still past their clip's end after the last round, the builds of the
-// frame (every round's) and the level histogram. The host resets the frame's counts before each
+// frame (every round's), the round's grant threshold (`grant`: a key, high and low word) and the
+// level histogram. The host resets the frame's counts before each
 // frame (all but the free-stack top and the shortest duration).
 const C_BUILDS: u32 = 3u;
 const C_VISIBLE: u32 = 4u;
@@ -50,7 +52,9 @@ const C_LOCKS: u32 = 11u;
 const C_ROUND: u32 = 12u;
 const C_BEHIND: u32 = 13u;
 const C_BUILT: u32 = 14u;
-const C_HIST: u32 = 15u;
+const C_GRANT_HI: u32 = 15u;
+const C_GRANT_LO: u32 = 16u;
+const C_HIST: u32 = 17u;
 // Walker flags: in view (set by a frame's first round), slot fault counted this frame.
 const F_VISIBLE: u32 = 1u;
 const F_SLOT_FAULT: u32 = 2u;
@@ -66,6 +70,8 @@ const MAX_X: u32 = 65535u;
 @group(0) @binding(1) var<uniform> mtab: array<vec4<u32>, META_VEC4>;
 @group(0) @binding(2) var<storage, read_write> walkers: array<Walker>;
 @group(0) @binding(3) var<storage, read_write> counters: array<atomic<u32>>;
+// The round's scheduled builds: walker indices in [0, n), each one's grant key at the same entry
+// plus n.
 @group(0) @binding(4) var<storage, read_write> build_list: array<u32>;
 @group(0) @binding(5) var<storage, read_write> free_stack: array<u32>;
 @group(0) @binding(6) var<storage, read> md: array<f32>;
@@ -394,6 +400,7 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
             }
             let k = atomicAdd(&counters[C_BUILDS], 1u);
             build_list[k] = i;
+            build_list[frame.n + k] = grant_key(dist, vis);
         }
         if (!catch_up) {
             w.flags = select(0u, F_VISIBLE, vis);
@@ -422,6 +429,151 @@ fn build_args() {
     atomicStore(&counters[2], 1u);
     atomicAdd(&counters[C_BUILT], n);
     atomicStore(&counters[C_BEHIND], 0u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Joint-slot grants. A walker whose scheduled build has joints competes for a joint slot: one that
+// holds a slot for it, and one that asks for one. When the slots free after `advance` (its
+// releases done) are at least the walkers asking, every one gets a slot and nothing is decided
+// here. Otherwise the slots go to the competing walkers nearest first, by their grant key: walkers
+// in view before walkers out of view, then by distance from the eye (the policy's distance), then
+// by walker index. The keys are all different (the index), so the winners are exactly those whose
+// key is below the key ranked `holders + free` (from 0), found by a radix select over the 64-bit
+// keys in one workgroup. A holder that loses gives its slot back (its build made root only, as a
+// walker leaving the levels with joints), and `build` gives a slot to exactly the askers that win.
+// The same walkers win whatever the order of the GPU's threads.
+
+// The key of a walker at `dist` metres from the eye, in view or not (high word; the low word is
+// the walker's index): the distance's bits (ordered like the non-negative floats they are; the
+// sign bit of a NaN cleared), with the top bit set out of view.
+fn grant_key(dist: f32, vis: bool) -> u32 {
+    return (bitcast<u32>(dist) & 0x7fffffffu) | select(0x80000000u, 0u, vis);
+}
+
+// Whether key (hi, lo) is below the round's threshold (C_GRANT_HI, C_GRANT_LO).
+fn grant_wins(hi: u32, lo: u32) -> bool {
+    let thr_hi = atomicLoad(&counters[C_GRANT_HI]);
+    let thr_lo = atomicLoad(&counters[C_GRANT_LO]);
+    return hi < thr_hi || (hi == thr_hi && lo < thr_lo);
+}
+
+const GRANT_WG: u32 = 256u;
+var<workgroup> gr_holders: atomic<u32>;
+var<workgroup> gr_askers: atomic<u32>;
+var<workgroup> gr_hist: array<atomic<u32>, 256>;
+// Selection state: [0] whether to select, [1] the rank still sought among the keys matching the
+// prefix, [2] the prefix's high word, [3] its low word.
+var<workgroup> gr_sel: array<u32, 4>;
+
+// The round's grant threshold: (u32::MAX, u32::MAX), above every key, when the free slots cover
+// the walkers asking; otherwise the key ranked `holders + free`, the losing holders' slots given
+// back. One workgroup (per page).
+@compute @workgroup_size(256)
+fn grant(@builtin(local_invocation_index) lid: u32) {
+    if (lid == 0u) {
+        atomicStore(&gr_holders, 0u);
+        atomicStore(&gr_askers, 0u);
+    }
+    workgroupBarrier();
+    let count = atomicLoad(&counters[C_BUILDS]);
+    for (var e = lid; e < count; e += GRANT_WG) {
+        let w = walkers[build_list[e]];
+        if (w.pend_joints > 0u) {
+            if (w.slot != NONE) {
+                atomicAdd(&gr_holders, 1u);
+            } else {
+                atomicAdd(&gr_askers, 1u);
+            }
+        }
+    }
+    workgroupBarrier();
+    if (lid == 0u) {
+        let free = u32(max(bitcast<i32>(atomicLoad(&counters[C_FREE_TOP])), 0));
+        let askers = atomicLoad(&gr_askers);
+        gr_sel[0] = select(0u, 1u, askers > free);
+        gr_sel[1] = atomicLoad(&gr_holders) + free;
+        gr_sel[2] = 0u;
+        gr_sel[3] = 0u;
+        if (askers <= free) {
+            atomicStore(&counters[C_GRANT_HI], NONE);
+            atomicStore(&counters[C_GRANT_LO], NONE);
+        }
+    }
+    if (workgroupUniformLoad(&gr_sel[0]) == 0u) {
+        return;
+    }
+    // Eight passes of eight bits, from the top: the keys matching the prefix found so far are
+    // counted by their next digit, and the digit holding the rank sought extends the prefix.
+    for (var round_digit = 0u; round_digit < 8u; round_digit++) {
+        atomicStore(&gr_hist[lid], 0u);
+        workgroupBarrier();
+        let shift = 24u - 8u * (round_digit % 4u);
+        // The bits above the digit: of the high word in the first four passes, then all of the
+        // high word and those of the low word.
+        let above = ~((2u << (shift + 7u)) - 1u);
+        let hi_mask = select(0xffffffffu, select(0u, above, shift < 24u), round_digit < 4u);
+        let lo_mask = select(0u, select(0u, above, shift < 24u), round_digit >= 4u);
+        let p_hi = gr_sel[2];
+        let p_lo = gr_sel[3];
+        for (var e = lid; e < count; e += GRANT_WG) {
+            let i = build_list[e];
+            if (walkers[i].pend_joints > 0u) {
+                let hi = build_list[frame.n + e];
+                if ((hi & hi_mask) == p_hi && (i & lo_mask) == p_lo) {
+                    let word = select(i, hi, round_digit < 4u);
+                    atomicAdd(&gr_hist[(word >> shift) & 0xffu], 1u);
+                }
+            }
+        }
+        workgroupBarrier();
+        if (lid == 0u) {
+            var rank = gr_sel[1];
+            var digit = 255u;
+            for (var b = 0u; b < 256u; b++) {
+                let c = atomicLoad(&gr_hist[b]);
+                if (rank < c) {
+                    digit = b;
+                    break;
+                }
+                rank -= c;
+            }
+            gr_sel[1] = rank;
+            if (round_digit < 4u) {
+                gr_sel[2] |= digit << shift;
+            } else {
+                gr_sel[3] |= digit << shift;
+            }
+        }
+        workgroupBarrier();
+    }
+    if (lid == 0u) {
+        atomicStore(&counters[C_GRANT_HI], gr_sel[2]);
+        atomicStore(&counters[C_GRANT_LO], gr_sel[3]);
+    }
+    // Every thread reads the threshold from the workgroup (the stores above are not visible to
+    // the other threads through the storage buffer before the next round_digit).
+    let thr_hi = gr_sel[2];
+    let thr_lo = gr_sel[3];
+    for (var e = lid; e < count; e += GRANT_WG) {
+        let i = build_list[e];
+        var w = walkers[i];
+        let hi = build_list[frame.n + e];
+        let wins = hi < thr_hi || (hi == thr_hi && i < thr_lo);
+        if (w.pend_joints > 0u && w.slot != NONE && !wins) {
+            // A holder that loses: root only until its policy asks again (as `advance` releases).
+            lock_clear(w.slot);
+            let top = atomicAdd(&counters[C_FREE_TOP], 1u);
+            free_stack[top] = w.slot;
+            w.slot = NONE;
+            w.pend_acc = LAST_LEVEL;
+            w.pend_joints = 0u;
+            if ((w.flags & F_SLOT_FAULT) == 0u) {
+                atomicAdd(&counters[C_SLOT_FAULTS], 1u);
+                w.flags |= F_SLOT_FAULT;
+            }
+            walkers[i] = w;
+        }
+    }
 }
 
 // The end of a round: the joint-slot stack after its pops, the build list emptied for the next
@@ -513,16 +665,21 @@ fn build(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index)
     if (lid == 0u) {
         let i = build_list[entry];
         var w = walkers[i];
+        wb_info[4] = 0u;
         var acc = w.pend_acc;
         var joints = w.pend_joints;
         if (joints == 0u) {
             acc = LAST_LEVEL;
         } else if (w.slot == NONE) {
-            let top = bitcast<i32>(atomicSub(&counters[C_FREE_TOP], 1u)) - 1;
+            // An asker: a slot if `grant` let it win (there is then one on the stack for it).
+            var top = -1;
+            if (grant_wins(build_list[frame.n + entry], i)) {
+                top = bitcast<i32>(atomicSub(&counters[C_FREE_TOP], 1u)) - 1;
+            }
             if (top >= 0) {
                 w.slot = free_stack[u32(top)];
             } else {
-                // No joint slot left: a root-only clip, and a retry when slots free up (the
+                // No joint slot for it: a root-only clip, and a retry when slots free up (the
                 // walker counted once a frame, however many rounds it retries in).
                 if ((w.flags & F_SLOT_FAULT) == 0u) {
                     atomicAdd(&counters[C_SLOT_FAULTS], 1u);
@@ -532,6 +689,13 @@ fn build(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index)
                 joints = 0u;
                 w.pend_acc = LAST_LEVEL;
                 w.pend_joints = 0u;
+                if (w.mode == MODE_REFINE && w.cur_joints == 0u) {
+                    // Its retry, shown root only already: the root-only clip it has is the one
+                    // this build would make (a refinement keeps the controls), so none is made
+                    // and none counted.
+                    wb_info[4] = 1u;
+                    atomicSub(&counters[C_BUILT], 1u);
+                }
             }
         }
         walkers[i] = w;
@@ -547,7 +711,9 @@ fn build(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index)
             wb_raw[k] = md[STYLE_OFF + w.style * (D - 4u) + (k - 4u)];
         }
     }
-    workgroupBarrier();
+    if (workgroupUniformLoad(&wb_info[4]) == 1u) {
+        return;
+    }
     let lvl = wb_info[1];
     let joints = wb_info[2];
     let key = mi(LEVELS + 4u * lvl);

@@ -149,6 +149,12 @@ pub struct CrowdArgs {
     /// straight from the crowd's buffers (`gpu_crowd::Preview`; no top-down maps).
     #[arg(long, conflicts_with_all = ["naive", "pca", "compare_naive", "compare_pca", "export"])]
     pub gpu: bool,
+    /// With `--gpu`: walkers that can hold joints at once (`gpu_crowd::GpuOptions::joint_slots`),
+    /// a count (`20000`, up to 1000000) or a share of the walkers (`2%`, 0 to 100); the GPU
+    /// allocates only these slots' clips, and when more walkers want joints the slots go to those
+    /// in view nearest the camera, the others shown root only. Default: one a walker.
+    #[arg(long, value_parser = super::ranges::joint_slots, requires = "gpu")]
+    pub joint_slots: Option<super::ranges::JointSlots>,
 }
 
 #[derive(Debug, Serialize)]

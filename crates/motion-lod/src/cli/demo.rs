@@ -49,6 +49,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         export_walkers: 24,
         export_seconds: 3.0,
         gpu: false,
+        joint_slots: None,
     })?;
     out!(
         "the crowd as a 3D file: {} (glTF 2.0, any engine or viewer); in a browser: motion-lod view {}",

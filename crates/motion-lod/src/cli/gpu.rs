@@ -48,8 +48,13 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         }
     };
     let started = std::time::Instant::now();
-    let mut crowd = GpuCrowd::new(&gpu, model.runtime(), config, GpuOptions::default())
-        .context("starting the GPU crowd")?;
+    let options = GpuOptions {
+        joint_slots: args.joint_slots.map(|s| s.of(args.walkers)),
+        ..GpuOptions::default()
+    };
+    let mut crowd =
+        GpuCrowd::new(&gpu, model.runtime(), config, options).context("starting the GPU crowd")?;
+    let slots = options.joint_slots.unwrap_or(args.walkers);
     let setup = started.elapsed();
     let field = crowd.config().field_size_m;
     let scene: Scene = args.camera.into();
@@ -108,7 +113,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
     let mean = times.iter().sum::<f64>() / times.len() as f64;
     if args.json {
         out!(
-            "{{\"gpu\":{:?},\"walkers\":{},\"frames\":{},\"ms_mean\":{mean:.4},\"ms_p50\":{:.4},\"ms_p99\":{:.4},\"ms_worst\":{:.4},\"gpu_bytes\":{},\"levels\":{:?}}}",
+            "{{\"gpu\":{:?},\"walkers\":{},\"frames\":{},\"ms_mean\":{mean:.4},\"ms_p50\":{:.4},\"ms_p99\":{:.4},\"ms_worst\":{:.4},\"gpu_bytes\":{},\"joint_slots\":{slots},\"slot_faults\":{},\"levels\":{:?}}}",
             crowd.adapter_name(),
             args.walkers,
             frames,
@@ -116,6 +121,7 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
             pct(0.99),
             after.last().copied().unwrap_or(0.0),
             crowd.gpu_bytes(),
+            last.slot_faults,
             last.level_histogram
         );
         return Ok(());
@@ -152,6 +158,14 @@ pub fn run(args: &CrowdArgs) -> anyhow::Result<()> {
         last.kernels_built,
         last.level_histogram
     );
+    if slots < args.walkers {
+        out!(
+            "joint slots: {slots} ({:.1}% of the walkers, nearest in view first); last frame: {} \
+             walkers wanting joints shown root only for want of a slot",
+            100.0 * slots as f64 / args.walkers as f64,
+            last.slot_faults
+        );
+    }
     if let (Some(dir), Some(done)) = (&args.render, finished) {
         out!(
             "{}",

@@ -128,9 +128,61 @@ pub fn density(s: &str) -> Result<f32, String> {
     within(s, DENSITY).map(|v| v as f32)
 }
 
+/// `--joint-slots` of `crowd --gpu`: how many walkers can hold joints at once, as a count or as a
+/// share of the walkers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum JointSlots {
+    /// This many slots (at most [`WALKERS`]'s largest).
+    Count(usize),
+    /// This percentage of the walkers, in [0, 100], rounded up to whole slots.
+    Percent(f64),
+}
+
+impl JointSlots {
+    /// The slots for `walkers` walkers (never more than one a walker).
+    pub fn of(self, walkers: usize) -> usize {
+        match self {
+            JointSlots::Count(n) => n.min(walkers),
+            JointSlots::Percent(p) => ((walkers as f64 * p / 100.0).ceil() as usize).min(walkers),
+        }
+    }
+}
+
+/// `--joint-slots`: a count in `0..=` [`WALKERS`]'s largest, or a percentage `P%` with `P` in
+/// [0, 100].
+pub fn joint_slots(s: &str) -> Result<JointSlots, String> {
+    match s.trim().strip_suffix('%') {
+        Some(p) => within(p, (0.0, 100.0))
+            .map(JointSlots::Percent)
+            .map_err(|e| format!("{e} (a percentage of the walkers)")),
+        None => match s.trim().parse::<u64>() {
+            Ok(n) if n <= WALKERS.1 => Ok(JointSlots::Count(n as usize)),
+            _ => Err(format!(
+                "`{s}` is not a count in 0..={} nor a percentage such as `2%`",
+                WALKERS.1
+            )),
+        },
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn joint_slots_are_a_count_or_a_percentage_of_the_walkers() {
+        assert_eq!(joint_slots("2000"), Ok(JointSlots::Count(2000)));
+        assert_eq!(joint_slots("0"), Ok(JointSlots::Count(0)));
+        assert_eq!(joint_slots("2.5%"), Ok(JointSlots::Percent(2.5)));
+        assert_eq!(JointSlots::Percent(2.5).of(1000), 25);
+        assert_eq!(JointSlots::Percent(0.01).of(1000), 1, "rounded up");
+        assert_eq!(JointSlots::Percent(100.0).of(7), 7);
+        assert_eq!(JointSlots::Count(50).of(10), 10, "one a walker at most");
+        for bad in ["150%", "-1%", "NaN%", "%", "-3", "2.5", "1000001", "x"] {
+            let e = joint_slots(bad).unwrap_err();
+            assert!(e.contains(bad.trim_end_matches('%')), "{bad}: {e}");
+        }
+    }
 
     #[test]
     fn floats_outside_their_range_are_refused_with_the_range() {
