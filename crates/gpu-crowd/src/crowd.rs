@@ -47,7 +47,11 @@ const C_BUILT: usize = 14;
 /// `C_GRANT_HI`, `C_GRANT_LO`, written by `grant` before `build` reads them).
 const C_GRANT_HI: usize = 15;
 const C_GRANT_LO: usize = 16;
-const C_HIST: usize = 17;
+/// The round's builds with joints of walkers without a slot (the shaders' `C_ASKERS`).
+const C_ASKERS: usize = 17;
+const C_HIST: usize = 18;
+// The frame's reset (`counters_reset`, from `C_NONFINITE` on) clears the grant's counters too.
+const _: () = assert!(C_NONFINITE < C_GRANT_HI && C_GRANT_LO < C_ASKERS && C_ASKERS < C_HIST);
 
 /// A frame is split into rounds (see [`GpuCrowd::step`]) when its `dt` is at least this fraction
 /// of the shortest clip the crowd has built. A walker can end more than one cycle in a frame only
@@ -271,7 +275,12 @@ pub struct GpuCrowd {
     pub(crate) queue: wgpu::Queue,
     pipelines: Pipelines,
     pub(crate) pages: Vec<Page>,
-    staging: wgpu::Buffer,
+    /// Read-back buffers of the counters: `step` uses the first; frames of `submit` alternate,
+    /// so that one can be in flight while the next is recorded.
+    staging: [wgpu::Buffer; 2],
+    /// The frame `submit` left in flight, or a frame it ran to the end whose statistics the next
+    /// call returns.
+    pending: Option<Pending>,
     counters_len: usize,
     /// What `step` writes over the counters from [`C_NONFINITE`] to the end before each frame:
     /// no walker not finite (the first at `u32::MAX`, the shaders' `atomicMin`), no seam, no
@@ -288,6 +297,34 @@ pub struct GpuCrowd {
     /// The shortest clip duration (s) built so far, from the counters read back after the
     /// crowd's first builds and after each frame (`C_MIN_DUR`).
     min_dur: f32,
+}
+
+/// A frame of [`GpuCrowd::submit`] not yet returned.
+#[derive(Debug)]
+enum Pending {
+    /// Submitted; its counters are copied into `staging[buffer]`, mapped once `mapped` is set.
+    InFlight {
+        buffer: usize,
+        submission: wgpu::SubmissionIndex,
+        mapped: MapSignal,
+        submitted: Instant,
+        wall: Duration,
+        frame: u64,
+    },
+    /// Run to the end (a split frame), its statistics or error kept for the next call.
+    Done(Result<GpuFrameStats, GpuError>),
+}
+
+/// Set by a read-back buffer's `map_async` callback (shared with it; `Sync`, unlike a channel's
+/// receiver, so that the crowd stays `Sync`).
+type MapSignal = std::sync::Arc<std::sync::Mutex<Option<Result<(), wgpu::BufferAsyncError>>>>;
+
+/// A frame's work recorded by [`GpuCrowd::encode_frame`], and, for a frame split into rounds, the
+/// catch-up pipeline and the rounds a submission.
+struct Encoded {
+    encoder: wgpu::CommandEncoder,
+    split: Option<(wgpu::ComputePipeline, u32)>,
+    dt: f32,
 }
 
 /// The policy table of the last frames, and what it was made for.
@@ -812,11 +849,13 @@ impl GpuCrowd {
                 });
                 start += pn;
             }
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("counters read-back"),
-                size: (4 * counters_len * page_count) as u64,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
+            [0, 1].map(|_| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("counters read-back"),
+                    size: (4 * counters_len * page_count) as u64,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
             })
         });
         let staging = result.map_err(|e| memory("the crowd's buffers", crowd_bytes, e))?;
@@ -827,6 +866,7 @@ impl GpuCrowd {
             pipelines,
             pages,
             staging,
+            pending: None,
             counters_len,
             counters_reset: {
                 let mut reset = vec![0u32; counters_len - C_NONFINITE];
@@ -854,12 +894,23 @@ impl GpuCrowd {
     /// Appends the copy of every page's counters to the read-back buffer to `encoder`, submits
     /// it, waits and returns the counters (a row of `counters_len` per page).
     fn submit_and_read(&self, mut encoder: wgpu::CommandEncoder) -> Result<Vec<u32>, GpuError> {
+        self.copy_counters(&mut encoder, 0);
+        self.submit_and_wait(encoder)?;
+        self.read_mapped(&self.staging[0])
+    }
+
+    /// Appends the copy of every page's counters into `staging[buffer]` to `encoder`.
+    fn copy_counters(&self, encoder: &mut wgpu::CommandEncoder, buffer: usize) {
         let row = (4 * self.counters_len) as u64;
         for (k, page) in self.pages.iter().enumerate() {
-            encoder.copy_buffer_to_buffer(&page.counters, 0, &self.staging, k as u64 * row, row);
+            encoder.copy_buffer_to_buffer(
+                &page.counters,
+                0,
+                &self.staging[buffer],
+                k as u64 * row,
+                row,
+            );
         }
-        self.submit_and_wait(encoder)?;
-        self.read_mapped(&self.staging)
     }
 
     /// The shortest clip duration any page has built, from counters read back.
@@ -974,7 +1025,151 @@ impl GpuCrowd {
         camera: &Camera,
         dt: f32,
     ) -> Result<GpuFrameStats, GpuError> {
+        // A frame `submit` left in flight ends first (its statistics are not returned).
+        self.finish()?;
         let started = Instant::now();
+        let encoded = self.encode_frame(policy, camera, dt)?;
+        let submitted = Instant::now();
+        let counters = self.run_frame(encoded)?;
+        let mut stats = self.frame_stats(&counters, submitted.elapsed(), self.frame)?;
+        stats.wall = started.elapsed();
+        Ok(stats)
+    }
+
+    /// Advances the crowd as [`GpuCrowd::step`] does but does not wait for the frame: it is
+    /// submitted to the crowd's queue and left in flight, and the statistics of the frame
+    /// submitted before it are returned (`None` at the first call, or after [`GpuCrowd::finish`]
+    /// or `step`). An engine calls it, then records the passes that draw the crowd from
+    /// [`GpuCrowd::draw_pages`] on the same queue (they run after the frame), and prepares its
+    /// next frame on the host while the GPU computes this one; a call waits only for the frame
+    /// before, so at most one frame is in flight. The walkers walk exactly as under `step` (the
+    /// same passes in the same order; tested bit for bit).
+    ///
+    /// A frame whose `dt` is long enough to be split into rounds (see `step`) needs the counters
+    /// between its rounds: it waits for the frame in flight, runs as `step` does, and its
+    /// statistics come with the next call. The shortest clip that decides it is known up to the
+    /// frame before the one in flight.
+    ///
+    /// The returned frame's [`GpuFrameStats::wall`] is the host time of the call that submitted
+    /// it (recording and submitting), and [`GpuFrameStats::gpu`] the time from its submission to
+    /// its completion as this call saw it (at most that; the host's own work between the calls
+    /// included).
+    ///
+    /// Errors: those of `step`. A frame refused before it is submitted (a bad `dt`, camera or
+    /// policy) is the error of this call, the frame in flight left as it was; so is any error of
+    /// a split frame, whose statistics the frame before's then wait for the next call. An error
+    /// the GPU's counters show (`GpuError::NonFinite`) is that of the call that returns the
+    /// frame's statistics, the next frame being already submitted.
+    pub fn submit<P: LevelPolicy + ?Sized>(
+        &mut self,
+        policy: &P,
+        camera: &Camera,
+        dt: f32,
+    ) -> Result<Option<GpuFrameStats>, GpuError> {
+        if dt.is_finite() && dt >= SPLIT_MARGIN * self.min_dur {
+            let before = self.finish()?;
+            match self.step(policy, camera, dt) {
+                Ok(stats) => {
+                    self.pending = Some(Pending::Done(Ok(stats)));
+                    return Ok(before);
+                }
+                Err(e) => {
+                    // The frame before comes with the next call.
+                    self.pending = before.map(|s| Pending::Done(Ok(s)));
+                    return Err(e);
+                }
+            }
+        }
+        let started = Instant::now();
+        let Encoded { mut encoder, .. } = self.encode_frame(policy, camera, dt)?;
+        let buffer = (self.frame % 2) as usize;
+        self.copy_counters(&mut encoder, buffer);
+        let submission = self.queue.submit([encoder.finish()]);
+        let submitted = Instant::now();
+        let mapped: MapSignal = Default::default();
+        let signal = mapped.clone();
+        self.staging[buffer]
+            .slice(..)
+            .map_async(wgpu::MapMode::Read, move |r| {
+                if let Ok(mut slot) = signal.lock() {
+                    *slot = Some(r);
+                }
+            });
+        let before = self.pending.replace(Pending::InFlight {
+            buffer,
+            submission,
+            mapped,
+            submitted,
+            wall: started.elapsed(),
+            frame: self.frame,
+        });
+        self.resolve(before)
+    }
+
+    /// Waits for the frame [`GpuCrowd::submit`] left in flight and returns its statistics (`None`
+    /// when there is none). Call it before reading results that must include that frame's
+    /// counters on the host; [`GpuCrowd::step`] and [`GpuCrowd::read_walkers`] need no call
+    /// (the device runs the queue in order).
+    ///
+    /// Errors: the frame's, as `step` reports them.
+    pub fn finish(&mut self) -> Result<Option<GpuFrameStats>, GpuError> {
+        let pending = self.pending.take();
+        self.resolve(pending)
+    }
+
+    /// The statistics of `pending`, waiting for it when in flight.
+    fn resolve(&mut self, pending: Option<Pending>) -> Result<Option<GpuFrameStats>, GpuError> {
+        let (buffer, submission, mapped, submitted, wall, frame) = match pending {
+            None => return Ok(None),
+            Some(Pending::Done(stats)) => return stats.map(Some),
+            Some(Pending::InFlight {
+                buffer,
+                submission,
+                mapped,
+                submitted,
+                wall,
+                frame,
+            }) => (buffer, submission, mapped, submitted, wall, frame),
+        };
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(submission),
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Runtime(e.to_string()))?;
+        let gpu = submitted.elapsed();
+        let state = mapped
+            .lock()
+            .map_err(|_| GpuError::Runtime("reading back the counters: a poisoned lock".into()))?
+            .take();
+        match state {
+            Some(Ok(())) => {}
+            Some(Err(e)) => return Err(GpuError::Runtime(format!("reading back: {e}"))),
+            None => {
+                return Err(GpuError::Runtime(
+                    "reading back the counters: not mapped after the frame finished".into(),
+                ));
+            }
+        }
+        let staging = &self.staging[buffer];
+        let counters: Vec<u32> =
+            bytemuck::cast_slice(&staging.slice(..).get_mapped_range()).to_vec();
+        staging.unmap();
+        let mut stats = self.frame_stats(&counters, gpu, frame)?;
+        stats.wall = wall;
+        Ok(Some(stats))
+    }
+
+    /// Checks `dt` and `camera`, tabulates `policy` when needed, writes every page's frame
+    /// uniform and counter resets, and records the frame's first round (a split frame: as many
+    /// rounds as expected in one submission) and, when not split, the pose pass. Counts the
+    /// frame.
+    fn encode_frame<P: LevelPolicy + ?Sized>(
+        &mut self,
+        policy: &P,
+        camera: &Camera,
+        dt: f32,
+    ) -> Result<Encoded, GpuError> {
         if !(dt.is_finite() && (0.0..=MAX_DT).contains(&dt)) {
             return Err(crowd_sim::CrowdError::BadTimeStep { dt }.into());
         }
@@ -1062,9 +1257,21 @@ impl GpuCrowd {
                 None => self.record_pose(&mut pass, page),
             }
         }
-        let submitted = Instant::now();
+        self.frame += 1;
+        Ok(Encoded {
+            encoder,
+            split: catch_up.map(|advance| (advance, per_submit)),
+            dt,
+        })
+    }
+
+    /// Submits a frame `encode_frame` recorded and waits for it; a split frame's catch-up rounds
+    /// and pose pass follow until no walker is behind. Returns the counters after the frame.
+    fn run_frame(&self, encoded: Encoded) -> Result<Vec<u32>, GpuError> {
+        let Encoded { encoder, split, dt } = encoded;
         let mut counters = self.submit_and_read(encoder)?;
-        if let Some(advance) = &catch_up {
+        if let Some((advance, per_submit)) = &split {
+            let (advance, per_submit) = (advance, *per_submit);
             let mut rounds = per_submit;
             loop {
                 let behind: Vec<&Page> = counters
@@ -1080,7 +1287,7 @@ impl GpuCrowd {
                     return Err(GpuError::Runtime(format!(
                         "frame {}: walkers still behind their clips after {rounds} rounds of \
                          cycle ends (dt = {dt} s)",
-                        self.frame + 1
+                        self.frame
                     )));
                 }
                 let mut encoder = self.device.create_command_encoder(&Default::default());
@@ -1100,7 +1307,18 @@ impl GpuCrowd {
             }
             counters = self.submit_and_read(encoder)?;
         }
-        let gpu = submitted.elapsed();
+        Ok(counters)
+    }
+
+    /// The statistics of frame number `frame` from its counters (`gpu` its device time; `wall`
+    /// left for the caller), the shortest clip updated; `GpuError::NonFinite` when a walker's
+    /// positions came out NaN or infinite.
+    fn frame_stats(
+        &mut self,
+        counters: &[u32],
+        gpu: Duration,
+        frame: u64,
+    ) -> Result<GpuFrameStats, GpuError> {
         let mut stats = GpuFrameStats {
             level_histogram: vec![0; self.levels + 1],
             gpu,
@@ -1124,16 +1342,14 @@ impl GpuCrowd {
                 *h += v;
             }
         }
-        self.min_dur = self.shortest_clip(&counters);
-        self.frame += 1;
+        self.min_dur = self.min_dur.min(self.shortest_clip(counters));
         if let Some(first) = first {
             return Err(GpuError::NonFinite {
-                frame: self.frame,
+                frame,
                 walkers: nonfinite,
                 first,
             });
         }
-        stats.wall = started.elapsed();
         Ok(stats)
     }
 

@@ -52,9 +52,11 @@ pub const DRAW_WGSL: &str = include_str!("shaders/draw.wgsl");
 
 /// One page of the crowd's walkers as an engine's shaders bind them ([`GpuCrowd::draw_pages`]).
 ///
-/// Both buffers are storage buffers of the crowd's device, written by [`GpuCrowd::step`] and
-/// valid until the next step: bind them read-only (`var<storage, read>`) in a render or compute
-/// pass submitted after the step, on the same queue.
+/// Both buffers are storage buffers of the crowd's device, written by [`GpuCrowd::step`] (or
+/// [`GpuCrowd::submit`]) and valid until the next frame: bind them read-only
+/// (`var<storage, read>`) in a render or compute pass submitted after the frame, on the same
+/// queue (after `submit`, the pass runs once the frame in flight is done, without the host
+/// waiting for it).
 #[derive(Debug, Clone, Copy)]
 pub struct DrawPage<'a> {
     /// Index of the page's first walker in the crowd (`crowd_sim::Crowd`'s walker order).
@@ -95,7 +97,7 @@ impl GpuCrowd {
     }
 
     /// The queue the crowd submits its frames to: submit passes that read its buffers here, after
-    /// [`GpuCrowd::step`].
+    /// [`GpuCrowd::step`] or [`GpuCrowd::submit`].
     pub fn queue(&self) -> &wgpu::Queue {
         &self.queue
     }

@@ -19,7 +19,9 @@
 //! its shaders read the walkers' roots and joints from after each step, [`DRAW_WGSL`] the
 //! declarations they include, [`Gpu::from_wgpu`] runs the crowd on the engine's own device, and
 //! [`Preview`] is such a reader: a render pass that draws the stick figures from the buffers into
-//! an image (`motion-lod crowd --gpu --render`). It is not for: an engine's rendering (meshes,
+//! an image (`motion-lod crowd --gpu --render`). [`GpuCrowd::submit`] leaves a frame in flight
+//! (its statistics come with the next call), so that the engine's draw follows it on the queue
+//! and the host prepares the next frame meanwhile; [`GpuCrowd::step`] waits for it. It is not for: an engine's rendering (meshes,
 //! skinning, materials are the engine's; `Preview` draws lines for checks and previews), or
 //! building models (see `motion-lod`). Seam state costs each joint slot `4 (3 P + 3)` bytes,
 //! and nothing with `seam_levels = 0`; foot lock state 216 bytes, and nothing with

@@ -37,8 +37,9 @@ struct Frame {
 // walkers whose positions came out NaN or infinite (how many, the first), the walkers inside a
 // running seam transition, the walkers whose foot lock corrected a leg, the rounds run this frame,
 // the walkers whose clock is still past their clip's end after the last round, the builds of the
-// frame (every round's), the round's grant threshold (`grant`: a key, high and low word) and the
-// level histogram. The host resets the frame's counts before each
+// frame (every round's), the round's grant threshold (`grant`: a key, high and low word), the
+// round's builds with joints of walkers without a slot (askers, counted by `advance` for `grant`)
+// and the level histogram. The host resets the frame's counts before each
 // frame (all but the free-stack top and the shortest duration).
 const C_BUILDS: u32 = 3u;
 const C_VISIBLE: u32 = 4u;
@@ -54,7 +55,8 @@ const C_BEHIND: u32 = 13u;
 const C_BUILT: u32 = 14u;
 const C_GRANT_HI: u32 = 15u;
 const C_GRANT_LO: u32 = 16u;
-const C_HIST: u32 = 17u;
+const C_ASKERS: u32 = 17u;
+const C_HIST: u32 = 18u;
 // Walker flags: in view (set by a frame's first round), slot fault counted this frame.
 const F_VISIBLE: u32 = 1u;
 const F_SLOT_FAULT: u32 = 2u;
@@ -291,6 +293,7 @@ fn walker_index(gid: vec3<u32>, nw: vec3<u32>) -> u32 {
 }
 
 var<workgroup> wg_visible: atomic<u32>;
+var<workgroup> wg_askers: atomic<u32>;
 
 // Whether `advance` runs a catch-up round: the host makes a second pipeline of `advance` with it
 // set, so that the frame's first round compiles to the pass it always was.
@@ -310,6 +313,7 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
            @builtin(local_invocation_index) lid: u32) {
     if (lid == 0u) {
         atomicStore(&wg_visible, 0u);
+        atomicStore(&wg_askers, 0u);
     }
     workgroupBarrier();
     let i = walker_index(gid, nw);
@@ -398,6 +402,9 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
                 free_stack[top] = w.slot;
                 w.slot = NONE;
             }
+            if (d.y > 0u && w.slot == NONE) {
+                atomicAdd(&wg_askers, 1u);
+            }
             let k = atomicAdd(&counters[C_BUILDS], 1u);
             build_list[k] = i;
             build_list[frame.n + k] = grant_key(dist, vis);
@@ -415,6 +422,10 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
         let v = atomicLoad(&wg_visible);
         if (v > 0u) {
             atomicAdd(&counters[C_VISIBLE], v);
+        }
+        let a = atomicLoad(&wg_askers);
+        if (a > 0u) {
+            atomicAdd(&counters[C_ASKERS], a);
         }
     }
 }
@@ -459,7 +470,6 @@ fn grant_wins(hi: u32, lo: u32) -> bool {
 
 const GRANT_WG: u32 = 256u;
 var<workgroup> gr_holders: atomic<u32>;
-var<workgroup> gr_askers: atomic<u32>;
 var<workgroup> gr_hist: array<atomic<u32>, 256>;
 // Selection state: [0] whether to select, [1] the rank still sought among the keys matching the
 // prefix, [2] the prefix's high word, [3] its low word.
@@ -470,38 +480,36 @@ var<workgroup> gr_sel: array<u32, 4>;
 // back. One workgroup (per page).
 @compute @workgroup_size(256)
 fn grant(@builtin(local_invocation_index) lid: u32) {
-    if (lid == 0u) {
-        atomicStore(&gr_holders, 0u);
-        atomicStore(&gr_askers, 0u);
-    }
-    workgroupBarrier();
-    let count = atomicLoad(&counters[C_BUILDS]);
-    for (var e = lid; e < count; e += GRANT_WG) {
-        let w = walkers[build_list[e]];
-        if (w.pend_joints > 0u) {
-            if (w.slot != NONE) {
-                atomicAdd(&gr_holders, 1u);
-            } else {
-                atomicAdd(&gr_askers, 1u);
-            }
-        }
-    }
-    workgroupBarrier();
+    // Most rounds: the free slots cover the askers (`advance` counted them), decided at once.
     if (lid == 0u) {
         let free = u32(max(bitcast<i32>(atomicLoad(&counters[C_FREE_TOP])), 0));
-        let askers = atomicLoad(&gr_askers);
+        let askers = atomicLoad(&counters[C_ASKERS]);
         gr_sel[0] = select(0u, 1u, askers > free);
-        gr_sel[1] = atomicLoad(&gr_holders) + free;
+        gr_sel[1] = free;
         gr_sel[2] = 0u;
         gr_sel[3] = 0u;
         if (askers <= free) {
             atomicStore(&counters[C_GRANT_HI], NONE);
             atomicStore(&counters[C_GRANT_LO], NONE);
         }
+        atomicStore(&gr_holders, 0u);
     }
     if (workgroupUniformLoad(&gr_sel[0]) == 0u) {
         return;
     }
+    // Too few: the holders competing add their slots to the free ones.
+    let count = atomicLoad(&counters[C_BUILDS]);
+    for (var e = lid; e < count; e += GRANT_WG) {
+        let w = walkers[build_list[e]];
+        if (w.pend_joints > 0u && w.slot != NONE) {
+            atomicAdd(&gr_holders, 1u);
+        }
+    }
+    workgroupBarrier();
+    if (lid == 0u) {
+        gr_sel[1] += atomicLoad(&gr_holders);
+    }
+    workgroupBarrier();
     // Eight passes of eight bits, from the top: the keys matching the prefix found so far are
     // counted by their next digit, and the digit holding the rank sought extends the prefix.
     for (var round_digit = 0u; round_digit < 8u; round_digit++) {
@@ -576,8 +584,8 @@ fn grant(@builtin(local_invocation_index) lid: u32) {
     }
 }
 
-// The end of a round: the joint-slot stack after its pops, the build list emptied for the next
-// round, the round counted.
+// The end of a round: the joint-slot stack after its pops, the build list and the askers emptied
+// for the next round, the round counted.
 @compute @workgroup_size(1)
 fn fix_free() {
     let top = bitcast<i32>(atomicLoad(&counters[C_FREE_TOP]));
@@ -585,6 +593,7 @@ fn fix_free() {
         atomicStore(&counters[C_FREE_TOP], 0u);
     }
     atomicStore(&counters[C_BUILDS], 0u);
+    atomicStore(&counters[C_ASKERS], 0u);
     atomicAdd(&counters[C_ROUND], 1u);
 }
 
