@@ -4,37 +4,16 @@
 //! the one `Gpu::new` opens. Without a GPU adapter the tests print `skipped: no GPU adapter
 //! (...)`, or fail when `MOTION_LOD_REQUIRE_GPU=1` (CI, lavapipe).
 
-use std::sync::OnceLock;
-
 use crowd_sim::render::{Image, RenderStyle, render_frame};
 use crowd_sim::{Camera, ClipSource, Crowd, CrowdConfig, Scene};
 use gpu_crowd::{DRAW_WGSL, Gpu, GpuCrowd, GpuError, GpuOptions, Preview, WalkerJoints};
-use lod_policy::{DistancePolicy, RuntimeModel};
-use motion_lod::dataset::DataSpec;
-use motion_lod::progress::NoProgress;
-use motion_lod::{LodSource, MotionModel};
+use lod_policy::DistancePolicy;
+use motion_lod::LodSource;
+
+mod common;
+use common::{model, motion_model};
 
 const DT: f32 = 1.0 / 30.0;
-
-/// The fixture model, built once for every test of this file.
-fn motion_model() -> &'static MotionModel {
-    static MODEL: OnceLock<MotionModel> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let loaded = DataSpec::default()
-            .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
-            .expect("fixture takes");
-        MotionModel::build(
-            &loaded.training,
-            &motion_lod::BuildConfig::default(),
-            &NoProgress,
-        )
-        .expect("model")
-    })
-}
-
-fn model() -> &'static RuntimeModel {
-    motion_model().runtime()
-}
 
 /// A crowd of `walkers` on `gpu` in small pages, stepped `frames` frames along the ground
 /// camera's path under the distance policy; returns the last frame's visible count.

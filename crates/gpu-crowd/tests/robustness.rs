@@ -5,36 +5,15 @@
 //! `skipped: no GPU adapter (...)`, or fail when `MOTION_LOD_REQUIRE_GPU=1` (CI, lavapipe).
 
 use std::cell::Cell;
-use std::sync::OnceLock;
 
 use crowd_sim::{Camera, CrowdConfig, Scene};
 use gpu_crowd::{Gpu, GpuCrowd, GpuError, GpuOptions, PolicyTable};
 use lod_policy::{Detail, FullDetail, LevelPolicy, LodModel, RuntimeModel, ViewParams};
-use motion_lod::dataset::DataSpec;
-use motion_lod::progress::NoProgress;
-use motion_lod::{BuildConfig, MotionModel};
+
+mod common;
+use common::{gpu, model};
 
 const DT: f32 = 1.0 / 30.0;
-
-/// The fixture model, built once for every test of this file.
-fn model() -> &'static RuntimeModel {
-    static MODEL: OnceLock<MotionModel> = OnceLock::new();
-    MODEL
-        .get_or_init(|| {
-            let loaded = DataSpec::default()
-                .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
-                .expect("fixture takes");
-            MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress)
-                .expect("model")
-        })
-        .runtime()
-}
-
-/// The adapter, opened once (`None`: no adapter, the test is skipped).
-fn gpu() -> Option<&'static Gpu> {
-    static GPU: OnceLock<Option<Gpu>> = OnceLock::new();
-    GPU.get_or_init(Gpu::open_or_skip).as_ref()
-}
 
 fn config(walkers: usize) -> CrowdConfig {
     CrowdConfig {

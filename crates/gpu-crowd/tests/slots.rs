@@ -2,37 +2,15 @@
 //! the walkers in view nearest the eye, move to the nearest within a cycle when the camera moves,
 //! and the same walkers get them in every run. On any adapter (lavapipe in CI).
 
-use std::sync::OnceLock;
-
 use crowd_sim::{Camera, CrowdConfig, Frustum, Scene};
 use glam::Vec3;
 use gpu_crowd::{Gpu, GpuCrowd, GpuOptions, WalkerJoints};
-use lod_policy::{FullDetail, RuntimeModel};
-use motion_lod::dataset::DataSpec;
-use motion_lod::progress::NoProgress;
-use motion_lod::{BuildConfig, MotionModel};
+use lod_policy::FullDetail;
+
+mod common;
+use common::{gpu, model};
 
 const DT: f32 = 1.0 / 30.0;
-
-/// The fixture model, built once for every test of this file.
-fn model() -> &'static RuntimeModel {
-    static MODEL: OnceLock<MotionModel> = OnceLock::new();
-    MODEL
-        .get_or_init(|| {
-            let loaded = DataSpec::default()
-                .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
-                .expect("fixture takes");
-            MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress)
-                .expect("model")
-        })
-        .runtime()
-}
-
-/// The adapter, opened once (`None`: no adapter, the test is skipped).
-fn gpu() -> Option<&'static Gpu> {
-    static GPU: OnceLock<Option<Gpu>> = OnceLock::new();
-    GPU.get_or_init(Gpu::open_or_skip).as_ref()
-}
 
 /// `walkers` walkers at 0.2 a square metre, seams and the foot lock on (a holder that loses its
 /// slot releases both), every walker asking for its detail from the first frame.

@@ -2,36 +2,14 @@
 //! call later, and a split frame or a refused one keeps that order. On any adapter (lavapipe in
 //! CI).
 
-use std::sync::OnceLock;
-
 use crowd_sim::{Camera, CrowdConfig, Scene};
 use gpu_crowd::{Gpu, GpuCrowd, GpuFrameStats, GpuOptions, WalkerJoints};
-use lod_policy::{DistancePolicy, RuntimeModel};
-use motion_lod::dataset::DataSpec;
-use motion_lod::progress::NoProgress;
-use motion_lod::{BuildConfig, MotionModel};
+use lod_policy::DistancePolicy;
+
+mod common;
+use common::{gpu, model};
 
 const DT: f32 = 1.0 / 30.0;
-
-/// The fixture model, built once for every test of this file.
-fn model() -> &'static RuntimeModel {
-    static MODEL: OnceLock<MotionModel> = OnceLock::new();
-    MODEL
-        .get_or_init(|| {
-            let loaded = DataSpec::default()
-                .load_with_default(motion_io::test_data::fixture_takes(), &|_, _| {})
-                .expect("fixture takes");
-            MotionModel::build(&loaded.training, &BuildConfig::default(), &NoProgress)
-                .expect("model")
-        })
-        .runtime()
-}
-
-/// The adapter, opened once (`None`: no adapter, the test is skipped).
-fn gpu() -> Option<&'static Gpu> {
-    static GPU: OnceLock<Option<Gpu>> = OnceLock::new();
-    GPU.get_or_init(Gpu::open_or_skip).as_ref()
-}
 
 /// A crowd of 600 walkers at 0.2 a square metre with the CPU crowd's defaults (seams and the
 /// foot lock at every level) and 60 joint slots, so that every pass runs.
