@@ -1011,6 +1011,9 @@ impl GpuCrowd {
     /// The policy is tabulated over distance ([`PolicyTable`]) when the view, the policy or its
     /// answers change, and the table kept otherwise.
     ///
+    /// A frame [`GpuCrowd::submit`] left in flight is finished first; its statistics are dropped
+    /// (call [`GpuCrowd::finish`] before to have them), and an error it shows is this call's.
+    ///
     /// Errors: a `dt` outside `[0, crowd_sim::MAX_DT]` or a camera the CPU crowd refuses
     /// ([`GpuError::Crowd`]); a policy giving a detail the model does not have
     /// ([`GpuError::Policy`]) or changing detail more often than tabulated

@@ -3,12 +3,12 @@
 // bounded by those constants.
 //
 // Passes per frame: `advance` (cull, detail from the tabulated policy, clock, cycle ends with the
-// path controller, clip builds scheduled), `build_args` (indirect dispatch size), `seam_capture`
-// (with seams on: one workgroup per scheduled clip, the outgoing clip's displayed state before the
-// build overwrites it), `build` (one workgroup per scheduled clip: kriging weights, core, G(c),
-// time table, root motion), `seam_start` (with seams on: the seam transition into the new clip),
-// `grant` (with fewer joint slots free than walkers asking for one: which get one, nearest first),
-// `fix_free` (the joint-slot stack after its pops, the end of a round), `pose_fk` (pose at the
+// path controller, clip builds scheduled), `build_args` (indirect dispatch size), `grant` (with
+// fewer joint slots free than walkers asking for one: which get one, nearest first),
+// `seam_capture` (with seams on: one workgroup per scheduled clip, the outgoing clip's displayed
+// state before the build overwrites it), `build` (one workgroup per scheduled clip: kriging
+// weights, core, G(c), time table, root motion), `seam_start` (with seams on: the seam transition
+// into the new clip), `fix_free` (the joint-slot stack after its pops, the end of a round), `pose_fk` (pose at the
 // clip's phase with the running seam and the foot lock, forward kinematics, placement in the
 // world). The passes from `advance` to `fix_free` are one round of cycle ends and clip builds; a
 // frame whose step is long enough that a walker may end several cycles in it (the host decides,
