@@ -433,6 +433,51 @@ fn scoped_raw<R>(device: &wgpu::Device, f: impl FnOnce() -> R) -> Result<R, wgpu
     }
 }
 
+/// The model packed for the shaders and the shader source for a crowd of `config` over `model`,
+/// and the model's control range: what [`GpuCrowd::new`] checks and makes before it needs a device.
+fn tables_for(
+    model: &RuntimeModel,
+    config: &CrowdConfig,
+) -> Result<(Tables, lod_policy::ControlRange), GpuError> {
+    check_config(config)?;
+    let range = model
+        .lod()
+        .controls()
+        .range()
+        .ok_or_else(|| GpuError::Model("the control space is not a walk's".into()))?;
+    check_control_range(&range)?;
+    // Style rows: one per style alone, then the config's blend (or the data's mix).
+    let mut styles = Vec::new();
+    for j in 0..model.styles().len() {
+        styles.push(style_row(model, StyleMix::one(j))?);
+    }
+    styles.push(style_row(
+        model,
+        match config.style {
+            CrowdStyle::Each(s) => s,
+            CrowdStyle::DataMix => StyleMix::DATA_MIX,
+        },
+    )?);
+    let seam = SeamParams::new(config.seam_levels, config.seam_halflife_s);
+    Ok((
+        Tables::new(model, &styles, seam, config.foot_lock_levels)?,
+        range,
+    ))
+}
+
+/// The compute shaders of a GPU crowd of `config` over `model`, as [`GpuCrowd::new`] compiles them
+/// (WGSL: the model's sizes and numbers as constants, then the double-float library, the
+/// [`crate::DRAW_WGSL`] declarations and the passes; entry points `advance`, `build_args`,
+/// `grant`, `seam_capture`, `build`, `seam_start`, `fix_free` and `pose_fk`). No device needed:
+/// for checking the shaders with another WGSL compiler (CI compiles them with Chromium's WebGPU)
+/// or running them on another host.
+///
+/// Errors: those of [`GpuCrowd::new`] that come before a device is needed (the config, a model
+/// the shaders cannot take).
+pub fn crowd_wgsl(model: &RuntimeModel, config: &CrowdConfig) -> Result<String, GpuError> {
+    Ok(tables_for(model, config)?.0.source)
+}
+
 impl GpuCrowd {
     /// Places `config.walkers` walkers as `crowd_sim::Crowd::new` does for a source over `model`
     /// (the same paths, phases, strides, heights and styles; the field enlarged likewise), uploads
@@ -460,28 +505,9 @@ impl GpuCrowd {
         options: GpuOptions,
     ) -> Result<GpuCrowd, GpuError> {
         let mut config = config;
-        check_config(&config)?;
-        let lod = model.lod();
-        let range = lod
-            .controls()
-            .range()
-            .ok_or_else(|| GpuError::Model("the control space is not a walk's".into()))?;
-        check_control_range(&range)?;
-        let n_styles = model.styles().len();
-        // Style rows: one per style alone, then the config's blend (or the data's mix).
-        let mut styles = Vec::new();
-        for j in 0..n_styles {
-            styles.push(style_row(model, StyleMix::one(j))?);
-        }
-        styles.push(style_row(
-            model,
-            match config.style {
-                CrowdStyle::Each(s) => s,
-                CrowdStyle::DataMix => StyleMix::DATA_MIX,
-            },
-        )?);
+        let (tables, range) = tables_for(model, &config)?;
         let seam = SeamParams::new(config.seam_levels, config.seam_halflife_s);
-        let tables = Tables::new(model, &styles, seam, config.foot_lock_levels)?;
+        let n_styles = model.styles().len();
         let limits = &gpu.limits;
         if tables.workgroup_bytes > u64::from(limits.max_compute_workgroup_storage_size) {
             return Err(GpuError::Limit {

@@ -21,7 +21,9 @@
 //! [`Preview`] is such a reader: a render pass that draws the stick figures from the buffers into
 //! an image (`motion-lod crowd --gpu --render`). [`GpuCrowd::submit`] leaves a frame in flight
 //! (its statistics come with the next call), so that the engine's draw follows it on the queue
-//! and the host prepares the next frame meanwhile; [`GpuCrowd::step`] waits for it. It is not for: an engine's rendering (meshes,
+//! and the host prepares the next frame meanwhile; [`GpuCrowd::step`] waits for it.
+//! [`crowd_wgsl`] and [`Preview::wgsl`] give the shaders' source without a device (CI compiles
+//! them with Chromium's WebGPU too). It is not for: an engine's rendering (meshes,
 //! skinning, materials are the engine's; `Preview` draws lines for checks and previews), or
 //! building models (see `motion-lod`). Seam state costs each joint slot `4 (3 P + 3)` bytes,
 //! and nothing with `seam_levels = 0`; foot lock state 216 bytes, and nothing with
@@ -56,7 +58,7 @@ mod policy;
 mod preview;
 mod tables;
 
-pub use crowd::{GpuCrowd, GpuFrameStats, GpuOptions, WalkerJoints};
+pub use crowd::{GpuCrowd, GpuFrameStats, GpuOptions, WalkerJoints, crowd_wgsl};
 pub use device::{Gpu, ICD_ENV};
 pub use draw::{DRAW_WGSL, DrawPage};
 pub use error::GpuError;

@@ -105,7 +105,7 @@ impl Preview {
         scoped(device, "making the preview renderer", || {
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("preview"),
-                source: wgpu::ShaderSource::Wgsl(format!("{}\n{SHADER}", crate::DRAW_WGSL).into()),
+                source: wgpu::ShaderSource::Wgsl(Preview::wgsl().into()),
             });
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("preview"),
@@ -303,6 +303,13 @@ impl Preview {
                 padded_row,
             }
         })
+    }
+
+    /// The preview's shader as it compiles it (WGSL: [`crate::DRAW_WGSL`], then the vertex and
+    /// fragment stages `grid_vs`, `walker_vs` and `fs`), for checking it with
+    /// another WGSL compiler (CI compiles it with Chromium's WebGPU).
+    pub fn wgsl() -> String {
+        format!("{}\n{SHADER}", crate::DRAW_WGSL)
     }
 
     /// Draws `crowd` as `camera` sees it after its last [`GpuCrowd::step`] and returns the image

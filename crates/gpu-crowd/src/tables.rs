@@ -64,6 +64,19 @@ pub(crate) struct Tables {
     pub workgroup_bytes: u64,
 }
 
+/// A finite `v` as a WGSL `f32` literal that every WGSL compiler takes: the shortest decimal that
+/// reads back as `v` (Rust's `{:?}`), except for the largest finite values, whose shortest decimal
+/// (`3.4028235e38`) lies beyond them; Tint, Chromium's compiler, refuses a literal beyond the
+/// largest f32 (naga rounds it), so those are written exactly, in hexadecimal.
+pub(crate) fn wgsl_f32(v: f32) -> String {
+    if v.abs() == f32::MAX {
+        let sign = if v < 0.0 { "-" } else { "" };
+        format!("{sign}0x1.fffffep+127f")
+    } else {
+        format!("{v:?}")
+    }
+}
+
 fn push(md: &mut Vec<f32>, v: &[f32]) -> usize {
     let off = md.len();
     md.extend_from_slice(v);
@@ -239,11 +252,15 @@ impl Tables {
                 )));
             }
         }
-        let lit = |x: f64| format!("{:?}", x as f32);
+        let lit = |x: f64| wgsl_f32(x as f32);
         // A double-float constant: the f64 value as a high and a low f32.
         let df = |x: f64| {
             let hi = x as f32;
-            format!("vec2<f32>({:?}, {:?})", hi, (x - f64::from(hi)) as f32)
+            format!(
+                "vec2<f32>({}, {})",
+                wgsl_f32(hi),
+                wgsl_f32((x - f64::from(hi)) as f32)
+            )
         };
         let consts = [
             ("POLICY_MAX", format!("{POLICY_MAX}u")),
@@ -457,4 +474,32 @@ fn lock_legs(rig: &lod_policy::Rig, feet: &lod_policy::FootRig) -> Result<LockLe
         rows,
         nj: last + 1,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wgsl_f32;
+
+    #[test]
+    fn the_largest_floats_are_written_exactly_and_others_shortest() {
+        assert_eq!(wgsl_f32(f32::MAX), "0x1.fffffep+127f");
+        assert_eq!(wgsl_f32(-f32::MAX), "-0x1.fffffep+127f");
+        // The shortest decimal of f32::MAX is beyond it (why it is not used).
+        assert!("3.4028235e38".parse::<f64>().unwrap() > f64::from(f32::MAX));
+        for v in [
+            0.0f32,
+            1.5,
+            -2.25e-7,
+            6.2831855,
+            f32::MIN_POSITIVE,
+            3.4028233e38,
+        ] {
+            let s = wgsl_f32(v);
+            assert_eq!(s.parse::<f32>().unwrap().to_bits(), v.to_bits(), "{s}");
+            assert!(
+                s.parse::<f64>().unwrap().abs() <= f64::from(f32::MAX),
+                "{s}"
+            );
+        }
+    }
 }

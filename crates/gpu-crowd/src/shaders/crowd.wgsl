@@ -1193,7 +1193,10 @@ const SB_BASE: u32 = SB_OFF + 2u * P;
 const SB_ROWS: u32 = SB_OFF + 3u * P;
 const SB_START: u32 = SB_ROWS + 1u;
 const SB_CAPT: u32 = SB_ROWS + 2u;
-const F32_MAX: f32 = 3.4028235e38;
+// The largest finite f32, written exactly (hexadecimal): 3.4028235 x 10^38, the shortest decimal
+// that rounds to it, is above it, and Tint (Chromium's WebGPU) refuses such a literal as out of
+// range.
+const F32_MAX: f32 = 0x1.fffffep+127f;
 const TAU: f32 = 6.2831855;
 
 fn seam_get(k: u32, slot: u32) -> f32 {
