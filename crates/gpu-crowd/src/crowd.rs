@@ -21,7 +21,7 @@ const WG: u32 = 64;
 const MAX_X: u32 = 65535;
 /// The counters' layout (the shaders' `C_*`): the round's builds, the walkers in view, the slot
 /// faults, the free-slot stack's top.
-const C_BUILDS: usize = 3;
+pub(crate) const C_BUILDS: usize = 3;
 const C_VISIBLE: usize = 4;
 const C_SLOT_FAULTS: usize = 5;
 const C_FREE_TOP: usize = 6;
@@ -30,7 +30,7 @@ const C_FREE_TOP: usize = 6;
 const C_MIN_DUR: usize = 7;
 /// Walkers whose root or joint positions came out NaN or infinite this frame, and the first of
 /// them (the shaders' `C_NONFINITE`, `C_NONFINITE_FIRST`).
-const C_NONFINITE: usize = 8;
+pub(crate) const C_NONFINITE: usize = 8;
 const C_NONFINITE_FIRST: usize = 9;
 /// Walkers inside a running seam transition this frame (the shaders' `C_SEAMS`).
 const C_SEAMS: usize = 10;
@@ -115,13 +115,13 @@ pub(crate) struct GpuWalker {
 /// The per-frame uniform (`struct Frame` of `crowd.wgsl`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
-struct FrameUniform {
+pub(crate) struct FrameUniform {
     planes: [[f32; 4]; 6],
     eye: [f32; 4],
     dt: f32,
     margin: f32,
-    n: u32,
-    n_slots: u32,
+    pub(crate) n: u32,
+    pub(crate) n_slots: u32,
     vis_entries: u32,
     hid_entries: u32,
     /// 0: the double-float library's `df_zero()`, bits the shader compiler cannot see through
@@ -208,8 +208,15 @@ pub(crate) struct Page {
     pub(crate) slots: usize,
     frame: wgpu::Buffer,
     pub(crate) walkers: wgpu::Buffer,
-    counters: wgpu::Buffer,
+    pub(crate) counters: wgpu::Buffer,
     pub(crate) joints: wgpu::Buffer,
+    /// The bind group's other storage buffers, in binding order: the build list (4), the free
+    /// slots (5), the root-only clips (7) and the clips with joints (8).
+    pub(crate) lists: [wgpu::Buffer; 4],
+    /// The arguments of the round's indirect dispatches (`dispatch_args`, binding 10), and the
+    /// bind group of `build_args`, which writes them (the counters and them).
+    pub(crate) args: wgpu::Buffer,
+    args_bind: wgpu::BindGroup,
     bind: wgpu::BindGroup,
     bytes: u64,
 }
@@ -278,14 +285,19 @@ pub struct GpuCrowd {
     /// Read-back buffers of the counters: `step` uses the first; frames of `submit` alternate,
     /// so that one can be in flight while the next is recorded.
     staging: [wgpu::Buffer; 2],
+    /// The compute shaders' source and the model's packed numbers and table, as uploaded (for
+    /// [`GpuCrowd::host_state`]).
+    pub(crate) wgsl: String,
+    pub(crate) md: Vec<f32>,
+    pub(crate) mtab: Vec<u32>,
+    pub(crate) counters_len: usize,
     /// The frame `submit` left in flight, or a frame it ran to the end whose statistics the next
     /// call returns.
     pending: Option<Pending>,
-    counters_len: usize,
     /// What `step` writes over the counters from [`C_NONFINITE`] to the end before each frame:
     /// no walker not finite (the first at `u32::MAX`, the shaders' `atomicMin`), no seam, no
     /// lock, an empty histogram. Made once (no allocation per frame).
-    counters_reset: Vec<u32>,
+    pub(crate) counters_reset: Vec<u32>,
     levels: usize,
     joints: usize,
     walkers: usize,
@@ -357,7 +369,7 @@ struct Pipelines {
 }
 
 /// Workgroups for `n` walkers: `(x, y)` with `x y WG >= n`.
-fn groups(n: usize) -> (u32, u32) {
+pub(crate) fn groups(n: usize) -> (u32, u32) {
     let g = n.div_ceil(WG as usize).max(1) as u32;
     let x = g.min(MAX_X);
     (x, g.div_ceil(x))
@@ -633,11 +645,22 @@ impl GpuCrowd {
             bind_group_layouts: &[&layout],
             push_constant_ranges: &[],
         });
+        // `build_args` binds the counters and the indirect dispatch's arguments, which no other
+        // pass binds (the indirect dispatches read them).
+        let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gpu-crowd dispatch arguments"),
+            entries: &[storage_entry(3, false), storage_entry(10, false)],
+        });
+        let args_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gpu-crowd dispatch arguments"),
+            bind_group_layouts: &[&args_layout],
+            push_constant_ranges: &[],
+        });
         let pipeline = |entry: &str| compute_pipeline(&device, &module, &pl, entry, &[]);
         let pipelines = scoped(&device, "creating the crowd pipelines", || Pipelines {
             advance: pipeline("advance"),
             catch_up: None,
-            build_args: pipeline("build_args"),
+            build_args: compute_pipeline(&device, &module, &args_pl, "build_args", &[]),
             build: pipeline("build"),
             grant: pipeline("grant"),
             fix_free: pipeline("fix_free"),
@@ -726,7 +749,8 @@ impl GpuCrowd {
                     + (big_per_slot * sa).max(4)
                     + (joints_per_slot * sa).max(4)
                     + frame_bytes
-                    + 4 * counters_len as u64;
+                    + 4 * counters_len as u64
+                    + 12;
                 start += pn as usize;
             }
         }
@@ -782,19 +806,17 @@ impl GpuCrowd {
                 let walkers_buf = init("walkers", bytemuck::cast_slice(ws), storage);
                 let mut counters = vec![0u32; counters_len];
                 let (gx, gy) = (pn.min(MAX_X as usize) as u32, (pn as u32).div_ceil(MAX_X));
-                counters[0] = gx;
-                counters[1] = gy;
-                counters[2] = 1;
+                let args = init(
+                    "dispatch arguments",
+                    bytemuck::cast_slice(&[gx, gy, 1u32]),
+                    storage | wgpu::BufferUsages::INDIRECT,
+                );
                 counters[C_BUILDS] = pn as u32;
                 counters[C_FREE_TOP] = slots as u32;
                 counters[C_MIN_DUR] = f32::INFINITY.to_bits();
                 counters[C_GRANT_HI] = NONE;
                 counters[C_GRANT_LO] = NONE;
-                let counters_buf = init(
-                    "counters",
-                    bytemuck::cast_slice(&counters),
-                    storage | wgpu::BufferUsages::INDIRECT,
-                );
+                let counters_buf = init("counters", bytemuck::cast_slice(&counters), storage);
                 // The first builds' walker indices, then room for the grant keys.
                 let list: Vec<u32> = (0..pn as u32).chain(std::iter::repeat_n(0, pn)).collect();
                 let build_list = init("build list", bytemuck::cast_slice(&list), storage);
@@ -844,6 +866,7 @@ impl GpuCrowd {
                 let bytes = [
                     &walkers_buf,
                     &counters_buf,
+                    &args,
                     &build_list,
                     &free_stack,
                     &small,
@@ -854,12 +877,26 @@ impl GpuCrowd {
                 .iter()
                 .map(|b| b.size())
                 .sum();
+                let args_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("gpu-crowd dispatch arguments"),
+                    layout: &args_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: counters_buf.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 10,
+                            resource: args.as_entire_binding(),
+                        },
+                    ],
+                });
                 // The first clips: every walker root only, built on the GPU.
                 {
                     let mut pass = encoder.begin_compute_pass(&Default::default());
                     pass.set_bind_group(0, &bind, &[]);
                     pass.set_pipeline(&pipelines.build);
-                    pass.dispatch_workgroups_indirect(&counters_buf, 0);
+                    pass.dispatch_workgroups_indirect(&args, 0);
                     pass.set_pipeline(&pipelines.fix_free);
                     pass.dispatch_workgroups(1, 1, 1);
                 }
@@ -870,6 +907,9 @@ impl GpuCrowd {
                     walkers: walkers_buf,
                     counters: counters_buf,
                     joints,
+                    lists: [build_list, free_stack, small, big],
+                    args_bind,
+                    args,
                     bind,
                     bytes,
                 });
@@ -893,6 +933,9 @@ impl GpuCrowd {
             pages,
             staging,
             pending: None,
+            wgsl: tables.source.clone(),
+            md: tables.md.clone(),
+            mtab: tables.mtab.clone(),
             counters_len,
             counters_reset: {
                 let mut reset = vec![0u32; counters_len - C_NONFINITE];
@@ -947,6 +990,11 @@ impl GpuCrowd {
             .fold(f32::INFINITY, f32::min)
     }
 
+    /// Whether the crowd runs the seam passes (`seam_levels > 0`).
+    pub(crate) fn seams(&self) -> bool {
+        self.pipelines.seam.is_some()
+    }
+
     /// The `advance` pipeline of catch-up rounds, made at the first call.
     fn catch_up_pipeline(&mut self) -> Result<wgpu::ComputePipeline, GpuError> {
         if let Some(made) = &self.pipelines.catch_up {
@@ -980,8 +1028,10 @@ impl GpuCrowd {
         pass.set_bind_group(0, &page.bind, &[]);
         pass.set_pipeline(advance);
         pass.dispatch_workgroups(gx, gy, 1);
+        pass.set_bind_group(0, &page.args_bind, &[]);
         pass.set_pipeline(&self.pipelines.build_args);
         pass.dispatch_workgroups(1, 1, 1);
+        pass.set_bind_group(0, &page.bind, &[]);
         // Which walkers competing for joint slots get them, before a losing holder's outgoing
         // clip would be captured for a seam.
         pass.set_pipeline(&self.pipelines.grant);
@@ -989,13 +1039,13 @@ impl GpuCrowd {
         if let Some((capture, _)) = &self.pipelines.seam {
             // The outgoing clips' displayed states, before `build` overwrites them.
             pass.set_pipeline(capture);
-            pass.dispatch_workgroups_indirect(&page.counters, 0);
+            pass.dispatch_workgroups_indirect(&page.args, 0);
         }
         pass.set_pipeline(&self.pipelines.build);
-        pass.dispatch_workgroups_indirect(&page.counters, 0);
+        pass.dispatch_workgroups_indirect(&page.args, 0);
         if let Some((_, start)) = &self.pipelines.seam {
             pass.set_pipeline(start);
-            pass.dispatch_workgroups_indirect(&page.counters, 0);
+            pass.dispatch_workgroups_indirect(&page.args, 0);
         }
         pass.set_pipeline(&self.pipelines.fix_free);
         pass.dispatch_workgroups(1, 1, 1);
@@ -1189,16 +1239,15 @@ impl GpuCrowd {
         Ok(Some(stats))
     }
 
-    /// Checks `dt` and `camera`, tabulates `policy` when needed, writes every page's frame
-    /// uniform and counter resets, and records the frame's first round (a split frame: as many
-    /// rounds as expected in one submission) and, when not split, the pose pass. Counts the
-    /// frame.
-    fn encode_frame<P: LevelPolicy + ?Sized>(
+    /// Checks `dt` and `camera`, tabulates `policy` when needed (the table kept while the view,
+    /// the policy and its answers stay the same) and returns the frame's uniform (its `n` and
+    /// `n_slots` left for each page).
+    pub(crate) fn frame_uniform<P: LevelPolicy + ?Sized>(
         &mut self,
         policy: &P,
         camera: &Camera,
         dt: f32,
-    ) -> Result<Encoded, GpuError> {
+    ) -> Result<FrameUniform, GpuError> {
         if !(dt.is_finite() && (0.0..=MAX_DT).contains(&dt)) {
             return Err(crowd_sim::CrowdError::BadTimeStep { dt }.into());
         }
@@ -1241,6 +1290,20 @@ impl GpuCrowd {
         uniform.vis_entries = vis;
         uniform.hid_entries = hid;
         uniform.policy[..entries.len()].copy_from_slice(entries);
+        Ok(uniform)
+    }
+
+    /// Checks `dt` and `camera`, tabulates `policy` when needed, writes every page's frame
+    /// uniform and counter resets, and records the frame's first round (a split frame: as many
+    /// rounds as expected in one submission) and, when not split, the pose pass. Counts the
+    /// frame.
+    fn encode_frame<P: LevelPolicy + ?Sized>(
+        &mut self,
+        policy: &P,
+        camera: &Camera,
+        dt: f32,
+    ) -> Result<Encoded, GpuError> {
+        let mut uniform = self.frame_uniform(policy, camera, dt)?;
         // A frame whose `dt` may hold more than one cycle end of a walker is split (see
         // `SPLIT_MARGIN`): its rounds first, as many as expected in one submission, then, once
         // every walker is caught up, the pose pass. Any other frame is one submission, as always.
@@ -1401,7 +1464,7 @@ impl GpuCrowd {
     }
 
     /// Copies `buffer` into a new read-back buffer and returns its contents.
-    fn read_buffer<T: Pod>(&self, buffer: &wgpu::Buffer) -> Result<Vec<T>, GpuError> {
+    pub(crate) fn read_buffer<T: Pod>(&self, buffer: &wgpu::Buffer) -> Result<Vec<T>, GpuError> {
         let staging = scoped_raw(&self.device, || {
             self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("read-back"),

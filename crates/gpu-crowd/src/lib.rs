@@ -54,6 +54,7 @@ mod device;
 mod df;
 mod draw;
 mod error;
+mod host;
 mod policy;
 mod preview;
 mod tables;
@@ -62,6 +63,7 @@ pub use crowd::{GpuCrowd, GpuFrameStats, GpuOptions, WalkerJoints, crowd_wgsl};
 pub use device::{Gpu, ICD_ENV};
 pub use draw::{DRAW_WGSL, DrawPage};
 pub use error::GpuError;
+pub use host::{HostBinding, HostBuffer, HostDispatch, HostPage, HostState};
 pub use policy::PolicyTable;
 pub use preview::Preview;
 

@@ -32,7 +32,8 @@ struct Frame {
     policy: array<vec4<u32>, POLICY_MAX>,
 }
 
-// Counters: [0..3] indirect build dispatch, then the round's builds, the frame's counts, the
+// Counters: [0..3] unused (the indirect dispatch's arguments are `dispatch_args`), then the round's
+// builds, the frame's counts, the
 // free-stack top, the shortest clip duration ever built (its f32 bits: kept across frames), the
 // walkers whose positions came out NaN or infinite (how many, the first), the walkers inside a
 // running seam transition, the walkers whose foot lock corrected a leg, the rounds run this frame,
@@ -430,14 +431,20 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>,
     }
 }
 
+// The arguments of the round's indirect dispatches (x, y, z workgroups), written by `build_args`.
+// A buffer of its own, bound only with `build_args`'s bind group (the counters and it): WebGPU
+// forbids a dispatch to read its arguments from a buffer it also binds for writing (Chromium
+// refuses such a pass; wgpu let the counters serve as both).
+@group(0) @binding(10) var<storage, read_write> dispatch_args: array<u32, 3>;
+
 // The round's build dispatch, its builds added to the frame's; the walkers left behind are
 // counted afresh by this round's builds.
 @compute @workgroup_size(1)
 fn build_args() {
     let n = atomicLoad(&counters[C_BUILDS]);
-    atomicStore(&counters[0], min(n, MAX_X));
-    atomicStore(&counters[1], (n + MAX_X - 1u) / MAX_X);
-    atomicStore(&counters[2], 1u);
+    dispatch_args[0] = min(n, MAX_X);
+    dispatch_args[1] = (n + MAX_X - 1u) / MAX_X;
+    dispatch_args[2] = 1u;
     atomicAdd(&counters[C_BUILT], n);
     atomicStore(&counters[C_BEHIND], 0u);
 }
@@ -907,16 +914,37 @@ fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
     return v * (w * w - b2) + b * (dot(v, b) * 2.0) + cross(b, v) * (w * 2.0);
 }
 
+// (sin x, cos x) to about one unit in the last place wherever the shaders run. WGSL lets `sin`
+// and `cos` err by 2^-11 absolute, and SwiftShader's WebGPU does: its joints came out millimetres
+// away from lavapipe's. Cody-Waite reduction by pi/2 (in three parts), then Cephes' sinf and cosf
+// polynomials on [-pi/4, pi/4].
+fn sincos_f32(x: f32) -> vec2<f32> {
+    let q = round(x * 0.636619772);
+    let r = ((x - q * 1.5703125) - q * 4.837512969970703e-4) - q * 7.549789954891882e-8;
+    let z = r * r;
+    let s = r + r * z * (-1.6666654611e-1 + z * (8.3321608736e-3 + z * -1.9515295891e-4));
+    let c = 1.0 - 0.5 * z
+        + z * z * (4.166664568298827e-2 + z * (-1.388731625493765e-3 + z * 2.443315711809948e-5));
+    let k = ((i32(q) % 4) + 4) % 4;
+    switch (k) {
+        case 0: { return vec2<f32>(s, c); }
+        case 1: { return vec2<f32>(c, -s); }
+        case 2: { return vec2<f32>(-s, -c); }
+        default: { return vec2<f32>(-c, s); }
+    }
+}
+
 fn exp_to_quat(v: vec3<f32>) -> vec4<f32> {
     let theta = length(v);
     let hf = 0.5 * theta;
+    let sc = sincos_f32(hf);
     var k = 0.0;
     if (theta < 1e-3) {
         k = 0.5 - theta * theta / 48.0;
     } else {
-        k = sin(hf) / theta;
+        k = sc.x / theta;
     }
-    return vec4<f32>(v * k, cos(hf));
+    return vec4<f32>(v * k, sc.y);
 }
 
 var<workgroup> wg_hist: array<atomic<u32>, HIST_BINS>;
@@ -1235,8 +1263,8 @@ fn exp_map_quat(v: vec3<f32>) -> vec4<f32> {
     let angle = length(v);
     if (angle > 1e-12) {
         let axis = v / angle;
-        let hf = angle * 0.5;
-        return vec4<f32>(axis * sin(hf), cos(hf));
+        let sc = sincos_f32(angle * 0.5);
+        return vec4<f32>(axis * sc.x, sc.y);
     }
     return vec4<f32>(0.0, 0.0, 0.0, 1.0);
 }
@@ -1437,7 +1465,8 @@ fn seam_capture(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
             if (ws_u[5] == 1u) {
                 // PoseState::into_next_frame: into the cycle frame after the clip's root motion.
                 let hf = -ws_f[5] * 0.5;
-                let q = vec4<f32>(0.0, sin(hf), 0.0, cos(hf));
+                let hsc = sincos_f32(hf);
+                let q = vec4<f32>(0.0, hsc.x, 0.0, hsc.y);
                 pos = quat_rotate(q, pos - vec3<f32>(ws_f[3], 0.0, ws_f[4]));
                 orient = quat_exp_map(quat_mul(q, exp_map_quat(orient)));
                 vel = quat_rotate(q, vel);
@@ -1849,7 +1878,8 @@ fn rotation_arc(a: vec3<f32>, b: vec3<f32>) -> vec4<f32> {
         let k = -1.0 / (sg + a.z);
         let m = a.x * a.y * k;
         let axis = vec3<f32>(m, sg + a.y * a.y * k, -a.y);
-        return vec4<f32>(axis * sin(HALF_PI), cos(HALF_PI));
+        let sc = sincos_f32(HALF_PI);
+        return vec4<f32>(axis * sc.x, sc.y);
     }
     let c = cross(a, b);
     return quat_normalize(vec4<f32>(c, 1.0 + d));
@@ -1938,7 +1968,8 @@ fn foot_lock(pose: ptr<function, array<f32, P>>, slot: u32, joints: u32, scale: 
     }
     // CycleFrame::rotation (single precision) and to_world (the origin added in double).
     let hf = 0.5 * h;
-    let fq = vec4<f32>(0.0, sin(hf), 0.0, cos(hf));
+    let fsc = sincos_f32(hf);
+    let fq = vec4<f32>(0.0, fsc.x, 0.0, fsc.y);
     for (var f = 0u; f < 2u; f++) {
         var state = foot_load(slot, f);
         if (f == 0u) {
