@@ -1,5 +1,6 @@
-//! The shaders' double-float library (`shaders/df.wgsl`), placed before the crowd shaders, and its
-//! check against the CPU's f64 and f32 functions on whatever adapter there is.
+//! The shaders' double-float library (`shaders/df.wgsl`, with the single-precision `sincos_f32` and
+//! `atan2_f32` that do not lean on WGSL's loose `sin`, `cos` and `atan2`), placed before the crowd
+//! shaders, and its check against the CPU's f64 and f32 functions on whatever adapter there is.
 
 /// Double-float arithmetic, sine and cosine, and angle wrapping in WGSL (no host constants).
 pub(crate) const DF_WGSL: &str = include_str!("shaders/df.wgsl");
@@ -195,6 +196,90 @@ fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
         assert!(
             worst <= 1e-13,
             "g at the root: {worst:e} of its terms' size"
+        );
+    }
+
+    /// Per argument `(a, b)`: `sincos_f32(a)` and `atan2_f32(a, b)`.
+    const F32_KERNEL: &str = r#"
+@compute @workgroup_size(64)
+fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= arrayLength(&args)) {
+        return;
+    }
+    let a = args[i];
+    // (df_zero() binds the uniform every kernel of this module binds.)
+    out[4u * i] = vec4<f32>(sincos_f32(a.x), atan2_f32(a.x, a.y), f32(df_zero()));
+}
+"#;
+
+    /// `sincos_f32` and `atan2_f32` (the rotations of forward kinematics, seams and the foot lock)
+    /// within 2 and 3 ulps of f64's values rounded (or 2^-24 and 3 2^-24 where those are below 1
+    /// in magnitude: next to the zeros of sine and cosine), for angles up to 16 rad (the crowd's are half-angles of
+    /// rotations), next to multiples of pi / 2, and for `atan2` in every octant: what WGSL's own
+    /// functions do not promise (2^-11 absolute; 4096 ulps).
+    #[test]
+    fn single_precision_sine_cosine_and_atan2_are_within_a_few_ulps() {
+        let Some(gpu) = Gpu::open_or_skip() else {
+            return;
+        };
+        let mut g = SplitMix64::new(5);
+        let mut args: Vec<[f32; 2]> = Vec::new();
+        for _ in 0..100_000 {
+            args.push([g.uniform(-16.0, 16.0) as f32, g.uniform(-16.0, 16.0) as f32]);
+        }
+        for _ in 0..20_000 {
+            args.push([g.uniform(-1e-3, 1e-3) as f32, g.uniform(-1.0, 1.0) as f32]);
+            args.push([g.uniform(-1.0, 1.0) as f32, g.uniform(-1e-3, 1e-3) as f32]);
+        }
+        for k in -10..=10 {
+            let c = (f64::from(k) * std::f64::consts::FRAC_PI_2) as f32;
+            let mut x = c;
+            for _ in 0..20 {
+                args.push([x, if k == 0 { 1.0 } else { c }]);
+                x = f32::from_bits(x.to_bits() + 1);
+            }
+        }
+        args.retain(|a| a[0] != 0.0 || a[1] != 0.0);
+        let out = run_kernel(&gpu, F32_KERNEL, &args);
+        let err = |got: f32, want: f64| {
+            let rounded = want as f32;
+            if want.abs() < 1.0 {
+                ((f64::from(got) - want).abs() / 2f64.powi(-24))
+                    .max(0.0)
+                    .min(f64::from(ulps(got, rounded)))
+            } else {
+                f64::from(ulps(got, rounded))
+            }
+        };
+        let (mut worst_sc, mut worst_at) = (0.0f64, 0.0f64);
+        for (a, o) in args.iter().zip(&out) {
+            let (s, c) = f64::from(a[0]).sin_cos();
+            let t = f64::from(a[0]).atan2(f64::from(a[1]));
+            let esc = err(o[0], s).max(err(o[1], c));
+            let eat = err(o[2], t);
+            assert!(
+                esc <= 2.0,
+                "sincos_f32({}): ({}, {}) against ({s}, {c})",
+                a[0],
+                o[0],
+                o[1]
+            );
+            assert!(
+                eat <= 3.0,
+                "atan2_f32({}, {}): {} against {t}",
+                a[0],
+                a[1],
+                o[2]
+            );
+            worst_sc = worst_sc.max(esc);
+            worst_at = worst_at.max(eat);
+        }
+        println!(
+            "{} arguments on {}: sincos_f32 within {worst_sc} and atan2_f32 within {worst_at} ulps \
+             (or 2^-24 below 1)",
+            args.len(),
+            gpu.adapter_name()
         );
     }
 

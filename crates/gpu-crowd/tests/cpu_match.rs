@@ -26,13 +26,13 @@ use motion_lod::progress::NoProgress;
 use motion_lod::{BuildConfig, LodSource, MotionModel};
 
 /// Largest distance (m) allowed between a GPU joint and the CPU's: 1e-4 m, as issue 32 asks.
-/// Measured on lavapipe: 3.8e-6 m at worst over the 600 frames with seams off (2026-11-28), 6.2e-6 m
-/// with seams on (2026-11-29: the seam's finite differences and quaternions in f32 on both sides),
-/// 5.7e-5 m with seams and the foot lock on (2026-11-29: the IK turns leg rotations by the f32
-/// differences of the joints it starts from, the roots staying within 2.7e-6 m) but for the
-/// walker-frames at one of the lock's thresholds ([`LOCK_FLIP_M`]: 13 of 122,736 walker-frames with
-/// joints in the ground scene, up to 1.2e-2 m, and 37 of 289,347 in the overview, up to 3.4e-4 m),
-/// not growing with time:
+/// Measured on lavapipe, 2026-11-29, with the shaders' own `sincos_f32` and `atan2_f32`: 3.9e-6 m
+/// at worst over the 600 frames with seams off and with seams on (the seam's finite differences
+/// and quaternions in f32 on both sides), 3.2e-5 m with seams and the foot lock on (the IK turns leg
+/// rotations by the f32 differences of the joints it starts from, the roots staying within
+/// 2.7e-6 m) but for the walker-frames at one of the lock's thresholds ([`LOCK_FLIP_M`]: 7 of
+/// 122,736 walker-frames with joints in the ground scene, up to 2.3e-3 m, and 45 of 289,347 in the
+/// overview, up to 3.5e-4 m), not growing with time:
 /// the walkers' cycle frames, path parameters and path controller are computed in double-float
 /// arithmetic (`df.wgsl`) as the CPU's in f64 and rounded once, so both crowds steer by the same
 /// controls, clip durations and clocks; what remains is the f32 sums of the clip and the pose in

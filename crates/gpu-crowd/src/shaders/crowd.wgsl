@@ -914,26 +914,6 @@ fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
     return v * (w * w - b2) + b * (dot(v, b) * 2.0) + cross(b, v) * (w * 2.0);
 }
 
-// (sin x, cos x) to about one unit in the last place wherever the shaders run. WGSL lets `sin`
-// and `cos` err by 2^-11 absolute, and SwiftShader's WebGPU does: its joints came out millimetres
-// away from lavapipe's. Cody-Waite reduction by pi/2 (in three parts), then Cephes' sinf and cosf
-// polynomials on [-pi/4, pi/4].
-fn sincos_f32(x: f32) -> vec2<f32> {
-    let q = round(x * 0.636619772);
-    let r = ((x - q * 1.5703125) - q * 4.837512969970703e-4) - q * 7.549789954891882e-8;
-    let z = r * r;
-    let s = r + r * z * (-1.6666654611e-1 + z * (8.3321608736e-3 + z * -1.9515295891e-4));
-    let c = 1.0 - 0.5 * z
-        + z * z * (4.166664568298827e-2 + z * (-1.388731625493765e-3 + z * 2.443315711809948e-5));
-    let k = ((i32(q) % 4) + 4) % 4;
-    switch (k) {
-        case 0: { return vec2<f32>(s, c); }
-        case 1: { return vec2<f32>(c, -s); }
-        case 2: { return vec2<f32>(-s, -c); }
-        default: { return vec2<f32>(-c, s); }
-    }
-}
-
 fn exp_to_quat(v: vec3<f32>) -> vec4<f32> {
     let theta = length(v);
     let hf = 0.5 * theta;
@@ -1277,7 +1257,7 @@ fn quat_exp_map(q_in: vec4<f32>) -> vec3<f32> {
     }
     let len = length(q.xyz);
     if (len >= 1e-8) {
-        let angle = 2.0 * atan2(len, q.w);
+        let angle = 2.0 * atan2_f32(len, q.w);
         if (abs(angle) >= 1e-12) {
             return (q.xyz / len) * angle;
         }

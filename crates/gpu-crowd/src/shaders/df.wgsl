@@ -197,3 +197,55 @@ fn df_wrap_angle(a: vec2<f32>) -> vec2<f32> {
     }
     return w;
 }
+
+// ---------------------------------------------------------------------------------------------
+// Single precision, within a few ulps on any WGSL implementation (WGSL's own `sin`, `cos` and
+// `atan2` may err by 2^-11 absolute and 4096 ulps).
+
+// (sin x, cos x) to about one unit in the last place wherever the shaders run. WGSL lets `sin`
+// and `cos` err by 2^-11 absolute, and SwiftShader's WebGPU does: its joints came out millimetres
+// away from lavapipe's. Cody-Waite reduction by pi/2 (in three parts), then Cephes' sinf and cosf
+// polynomials on [-pi/4, pi/4].
+fn sincos_f32(x: f32) -> vec2<f32> {
+    let q = round(x * 0.636619772);
+    let r = ((x - q * 1.5703125) - q * 4.837512969970703e-4) - q * 7.549789954891882e-8;
+    let z = r * r;
+    let s = r + r * z * (-1.6666654611e-1 + z * (8.3321608736e-3 + z * -1.9515295891e-4));
+    let c = 1.0 - 0.5 * z
+        + z * z * (4.166664568298827e-2 + z * (-1.388731625493765e-3 + z * 2.443315711809948e-5));
+    let k = ((i32(q) % 4) + 4) % 4;
+    switch (k) {
+        case 0: { return vec2<f32>(s, c); }
+        case 1: { return vec2<f32>(c, -s); }
+        case 2: { return vec2<f32>(-s, -c); }
+        default: { return vec2<f32>(-c, s); }
+    }
+}
+
+// atan2(y, x) to two or three ulps wherever the shaders run (WGSL lets `atan2` err by 4096 ulps):
+// Cephes' atanf polynomial on min / max of |x| and |y| reduced below tan(pi/8), then the octant.
+// Not both zero (the caller's).
+fn atan2_f32(y: f32, x: f32) -> f32 {
+    let ax = abs(x);
+    let ay = abs(y);
+    var t = min(ax, ay) / max(ax, ay);
+    var r0 = 0.0;
+    if (t > 0.41421356) {
+        r0 = 0.78539816;
+        t = (t - 1.0) / (t + 1.0);
+    }
+    let z = t * t;
+    var r = r0
+        + ((((8.05374449538e-2 * z - 1.38776856032e-1) * z + 1.99777106478e-1) * z
+            - 3.33329491539e-1) * z * t + t);
+    if (ay > ax) {
+        r = 1.5707964 - r;
+    }
+    if (x < 0.0) {
+        r = 3.1415927 - r;
+    }
+    if (y < 0.0) {
+        r = -r;
+    }
+    return r;
+}
