@@ -215,10 +215,8 @@ try {
     return { error: error ? error.message : null, walkers, joints };
   }, handed);
   check(ran.error === null, `the handed-over crowd runs ${run.frames} frames in the page${ran.error ? ': ' + ran.error : ''}`);
-  // Every walker's detail and positions, from either side's walker and joint buffers.
-  const decode = (walkersB64, jointsB64) => {
-    const wb = Buffer.from(walkersB64, 'base64');
-    const jb = Buffer.from(jointsB64, 'base64');
+  // Every walker's detail and positions, from either side's walker and joint buffers (bytes).
+  const decode = (wb, jb) => {
     const w = new Uint32Array(wb.buffer, wb.byteOffset, wb.byteLength / 4);
     const wf = new Float32Array(wb.buffer, wb.byteOffset, wb.byteLength / 4);
     const j = new Float32Array(jb.buffer, jb.byteOffset, jb.byteLength / 4);
@@ -237,9 +235,9 @@ try {
     }
     return out;
   };
-  const native = decode(readFileSync(join(runDir, 'expected-walkers.bin')).toString('base64'),
-    readFileSync(join(runDir, 'expected-joints.bin')).toString('base64'));
-  const browserSide = decode(ran.walkers, ran.joints);
+  const native = decode(readFileSync(join(runDir, 'expected-walkers.bin')),
+    readFileSync(join(runDir, 'expected-joints.bin')));
+  const browserSide = decode(Buffer.from(ran.walkers, 'base64'), Buffer.from(ran.joints, 'base64'));
   let details = 0;
   let worst = 0;
   let at = null;

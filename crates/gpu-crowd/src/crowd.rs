@@ -10,6 +10,7 @@ use lod_policy::{Detail, LevelPolicy, RuntimeModel, SplitMix64, StyleMix, ViewPa
 
 use crate::device::Gpu;
 use crate::error::GpuError;
+use crate::host::HostDispatch;
 use crate::policy::PolicyTable;
 use crate::tables::{LOCK_FLOATS, POLICY_MAX, SeamParams, Tables, style_row};
 
@@ -285,11 +286,12 @@ pub struct GpuCrowd {
     /// Read-back buffers of the counters: `step` uses the first; frames of `submit` alternate,
     /// so that one can be in flight while the next is recorded.
     staging: [wgpu::Buffer; 2],
-    /// The compute shaders' source and the model's packed numbers and table, as uploaded (for
-    /// [`GpuCrowd::host_state`]).
+    /// Set by `map_async` when `staging[k]` is mapped for `submit` (made once).
+    mapped: [MapSignal; 2],
+    /// The compute shaders' source (for [`GpuCrowd::host_state`]).
     pub(crate) wgsl: String,
-    pub(crate) md: Vec<f32>,
-    pub(crate) mtab: Vec<u32>,
+    /// The model's packed numbers (binding 6) and table (binding 1), shared by the pages.
+    pub(crate) model_buffers: [wgpu::Buffer; 2],
     pub(crate) counters_len: usize,
     /// The frame `submit` left in flight, or a frame it ran to the end whose statistics the next
     /// call returns.
@@ -314,11 +316,11 @@ pub struct GpuCrowd {
 /// A frame of [`GpuCrowd::submit`] not yet returned.
 #[derive(Debug)]
 enum Pending {
-    /// Submitted; its counters are copied into `staging[buffer]`, mapped once `mapped` is set.
+    /// Submitted; its counters are copied into `staging[buffer]`, mapped once `mapped[buffer]`
+    /// is set.
     InFlight {
         buffer: usize,
         submission: wgpu::SubmissionIndex,
-        mapped: MapSignal,
         submitted: Instant,
         wall: Duration,
         frame: u64,
@@ -779,12 +781,12 @@ impl GpuCrowd {
                 init(
                     "model",
                     bytemuck::cast_slice(&tables.md),
-                    wgpu::BufferUsages::STORAGE,
+                    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 ),
                 init(
                     "model table",
                     bytemuck::cast_slice(&tables.mtab),
-                    wgpu::BufferUsages::UNIFORM,
+                    wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_SRC,
                 ),
             )
         })
@@ -932,10 +934,10 @@ impl GpuCrowd {
             pipelines,
             pages,
             staging,
+            mapped: Default::default(),
             pending: None,
             wgsl: tables.source.clone(),
-            md: tables.md.clone(),
-            mtab: tables.mtab.clone(),
+            model_buffers: [md, mtab],
             counters_len,
             counters_reset: {
                 let mut reset = vec![0u32; counters_len - C_NONFINITE];
@@ -990,11 +992,6 @@ impl GpuCrowd {
             .fold(f32::INFINITY, f32::min)
     }
 
-    /// Whether the crowd runs the seam passes (`seam_levels > 0`).
-    pub(crate) fn seams(&self) -> bool {
-        self.pipelines.seam.is_some()
-    }
-
     /// The `advance` pipeline of catch-up rounds, made at the first call.
     fn catch_up_pipeline(&mut self) -> Result<wgpu::ComputePipeline, GpuError> {
         if let Some(made) = &self.pipelines.catch_up {
@@ -1026,29 +1023,43 @@ impl GpuCrowd {
     ) {
         let (gx, gy) = groups(page.n);
         pass.set_bind_group(0, &page.bind, &[]);
-        pass.set_pipeline(advance);
-        pass.dispatch_workgroups(gx, gy, 1);
-        pass.set_bind_group(0, &page.args_bind, &[]);
-        pass.set_pipeline(&self.pipelines.build_args);
-        pass.dispatch_workgroups(1, 1, 1);
-        pass.set_bind_group(0, &page.bind, &[]);
-        // Which walkers competing for joint slots get them, before a losing holder's outgoing
-        // clip would be captured for a seam.
-        pass.set_pipeline(&self.pipelines.grant);
-        pass.dispatch_workgroups(1, 1, 1);
-        if let Some((capture, _)) = &self.pipelines.seam {
-            // The outgoing clips' displayed states, before `build` overwrites them.
-            pass.set_pipeline(capture);
-            pass.dispatch_workgroups_indirect(&page.args, 0);
+        for (_, pipeline, dispatch) in self.round_passes(Some(advance)).into_iter().flatten() {
+            pass.set_pipeline(pipeline);
+            match dispatch {
+                HostDispatch::Walkers => pass.dispatch_workgroups(gx, gy, 1),
+                HostDispatch::One => pass.dispatch_workgroups(1, 1, 1),
+                HostDispatch::Arguments => {
+                    pass.set_bind_group(0, &page.args_bind, &[]);
+                    pass.dispatch_workgroups(1, 1, 1);
+                    pass.set_bind_group(0, &page.bind, &[]);
+                }
+                HostDispatch::Indirect => pass.dispatch_workgroups_indirect(&page.args, 0),
+            }
         }
-        pass.set_pipeline(&self.pipelines.build);
-        pass.dispatch_workgroups_indirect(&page.args, 0);
-        if let Some((_, start)) = &self.pipelines.seam {
-            pass.set_pipeline(start);
-            pass.dispatch_workgroups_indirect(&page.args, 0);
-        }
-        pass.set_pipeline(&self.pipelines.fix_free);
-        pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// The passes of a round in order (`advance` the frame's first round's, `None`, or a catch-up
+    /// round's), each with its entry point and how it is dispatched: what `record_round` records
+    /// and [`GpuCrowd::host_state`] tells another host. `grant` decides which walkers competing
+    /// for joint slots get them before a losing holder's outgoing clip would be captured for a
+    /// seam, and `seam_capture` (with seams on) keeps the outgoing clips' displayed states before
+    /// `build` overwrites them.
+    pub(crate) fn round_passes<'a>(
+        &'a self,
+        advance: Option<&'a wgpu::ComputePipeline>,
+    ) -> [Option<(&'static str, &'a wgpu::ComputePipeline, HostDispatch)>; 7] {
+        let p = &self.pipelines;
+        let advance = advance.unwrap_or(&p.advance);
+        let seam = p.seam.as_ref();
+        [
+            Some(("advance", advance, HostDispatch::Walkers)),
+            Some(("build_args", &p.build_args, HostDispatch::Arguments)),
+            Some(("grant", &p.grant, HostDispatch::One)),
+            seam.map(|(capture, _)| ("seam_capture", capture, HostDispatch::Indirect)),
+            Some(("build", &p.build, HostDispatch::Indirect)),
+            seam.map(|(_, start)| ("seam_start", start, HostDispatch::Indirect)),
+            Some(("fix_free", &p.fix_free, HostDispatch::One)),
+        ]
     }
 
     /// Records the pose pass of `page` into `pass`.
@@ -1165,8 +1176,7 @@ impl GpuCrowd {
         self.copy_counters(&mut encoder, buffer);
         let submission = self.queue.submit([encoder.finish()]);
         let submitted = Instant::now();
-        let mapped: MapSignal = Default::default();
-        let signal = mapped.clone();
+        let signal = self.mapped[buffer].clone();
         self.staging[buffer]
             .slice(..)
             .map_async(wgpu::MapMode::Read, move |r| {
@@ -1177,7 +1187,6 @@ impl GpuCrowd {
         let before = self.pending.replace(Pending::InFlight {
             buffer,
             submission,
-            mapped,
             submitted,
             wall: started.elapsed(),
             frame: self.frame,
@@ -1198,17 +1207,16 @@ impl GpuCrowd {
 
     /// The statistics of `pending`, waiting for it when in flight.
     fn resolve(&mut self, pending: Option<Pending>) -> Result<Option<GpuFrameStats>, GpuError> {
-        let (buffer, submission, mapped, submitted, wall, frame) = match pending {
+        let (buffer, submission, submitted, wall, frame) = match pending {
             None => return Ok(None),
             Some(Pending::Done(stats)) => return stats.map(Some),
             Some(Pending::InFlight {
                 buffer,
                 submission,
-                mapped,
                 submitted,
                 wall,
                 frame,
-            }) => (buffer, submission, mapped, submitted, wall, frame),
+            }) => (buffer, submission, submitted, wall, frame),
         };
         self.device
             .poll(wgpu::PollType::Wait {
@@ -1217,7 +1225,7 @@ impl GpuCrowd {
             })
             .map_err(|e| GpuError::Runtime(e.to_string()))?;
         let gpu = submitted.elapsed();
-        let state = mapped
+        let state = self.mapped[buffer]
             .lock()
             .map_err(|_| GpuError::Runtime("reading back the counters: a poisoned lock".into()))?
             .take();

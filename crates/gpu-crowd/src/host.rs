@@ -78,42 +78,35 @@ pub struct HostState {
 
 impl GpuCrowd {
     /// The crowd as it stands after its last frame, for another host to run the next frames with
-    /// the same shaders (reads every buffer back: slow, for tests and hand-overs).
+    /// the same shaders (reads every buffer back: slow, for tests and hand-overs). A frame
+    /// [`GpuCrowd::submit`] left in flight is finished first, its statistics dropped.
     ///
     /// Errors: [`GpuError::Memory`] and [`GpuError::Runtime`] from the device.
     pub fn host_state(&mut self) -> Result<HostState, GpuError> {
+        // A frame `submit` left in flight ends first (its statistics are not returned).
         self.finish()?;
-        let mut passes = vec![
-            ("advance", HostDispatch::Walkers),
-            ("build_args", HostDispatch::Arguments),
-            ("grant", HostDispatch::One),
-        ];
-        let seams = self.seams();
-        if seams {
-            passes.push(("seam_capture", HostDispatch::Indirect));
-        }
-        passes.push(("build", HostDispatch::Indirect));
-        if seams {
-            passes.push(("seam_start", HostDispatch::Indirect));
-        }
-        passes.push(("fix_free", HostDispatch::One));
-        passes.push(("pose_fk", HostDispatch::Walkers));
+        let passes = self
+            .round_passes(None)
+            .into_iter()
+            .flatten()
+            .map(|(entry, _, dispatch)| (entry, dispatch))
+            .chain([("pose_fk", HostDispatch::Walkers)])
+            .collect();
+        let read = |b: &wgpu::Buffer| self.read_buffer::<u8>(b);
+        let [md, mtab] = &self.model_buffers;
+        let (md, mtab) = (read(md)?, read(mtab)?);
+        let frame_bytes = std::mem::size_of::<crate::crowd::FrameUniform>();
         let mut pages = Vec::new();
         for page in &self.pages {
             use HostBinding::*;
-            let read = |b: &wgpu::Buffer| self.read_buffer::<u8>(b);
-            let mut buffers = vec![
-                (
-                    0,
-                    Uniform,
-                    vec![0u8; std::mem::size_of::<crate::crowd::FrameUniform>()],
-                ),
-                (1, Uniform, bytemuck::cast_slice(&self.mtab).to_vec()),
+            let buffers = [
+                (0, Uniform, vec![0u8; frame_bytes]),
+                (1, Uniform, mtab.clone()),
                 (2, Storage, read(&page.walkers)?),
                 (3, Storage, read(&page.counters)?),
                 (4, Storage, read(&page.lists[0])?),
                 (5, Storage, read(&page.lists[1])?),
-                (6, ReadOnlyStorage, bytemuck::cast_slice(&self.md).to_vec()),
+                (6, ReadOnlyStorage, md.clone()),
                 (7, Storage, read(&page.lists[2])?),
                 (8, Storage, read(&page.lists[3])?),
                 (9, Storage, read(&page.joints)?),
@@ -124,7 +117,7 @@ impl GpuCrowd {
                 walkers: page.n,
                 workgroups: [gx, gy],
                 buffers: buffers
-                    .drain(..)
+                    .into_iter()
                     .map(|(binding, kind, bytes)| HostBuffer {
                         binding,
                         kind,

@@ -507,8 +507,8 @@ fn grant(@builtin(local_invocation_index) lid: u32) {
     // Too few: the holders competing add their slots to the free ones.
     let count = atomicLoad(&counters[C_BUILDS]);
     for (var e = lid; e < count; e += GRANT_WG) {
-        let w = walkers[build_list[e]];
-        if (w.pend_joints > 0u && w.slot != NONE) {
+        let i = build_list[e];
+        if (walkers[i].pend_joints > 0u && walkers[i].slot != NONE) {
             atomicAdd(&gr_holders, 1u);
         }
     }
@@ -571,11 +571,11 @@ fn grant(@builtin(local_invocation_index) lid: u32) {
     let thr_lo = gr_sel[3];
     for (var e = lid; e < count; e += GRANT_WG) {
         let i = build_list[e];
-        var w = walkers[i];
         let hi = build_list[frame.n + e];
         let wins = hi < thr_hi || (hi == thr_hi && i < thr_lo);
-        if (w.pend_joints > 0u && w.slot != NONE && !wins) {
+        if (!wins && walkers[i].pend_joints > 0u && walkers[i].slot != NONE) {
             // A holder that loses: root only until its policy asks again (as `advance` releases).
+            var w = walkers[i];
             lock_clear(w.slot);
             let top = atomicAdd(&counters[C_FREE_TOP], 1u);
             free_stack[top] = w.slot;
